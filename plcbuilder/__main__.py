@@ -1,0 +1,3 @@
+from plcbuilder.cli.main import main
+
+raise SystemExit(main())

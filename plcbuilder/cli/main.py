@@ -1,0 +1,49 @@
+"""``plcbuilder``: the command line. Thin: each subcommand is a module of this
+package with ``add_parser(subparsers)`` and ``run(args) -> int``."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+#: Subcommand modules, in the order ``--help`` lists them.
+COMMANDS = ("gui", "check", "compile", "disasm", "run", "new", "build",
+            "controller", "upload", "start", "stop", "input", "state")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="plcbuilder",
+        description="PLC Builder: edit, compile and simulate myCNC PLC procedures.")
+    from plcbuilder import __version__
+    parser.add_argument("--version", action="version", version=f"plcbuilder {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMANDS:
+        try:
+            mod = importlib.import_module(f"plcbuilder.cli.cmd_{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"plcbuilder.cli.cmd_{name}":
+                continue
+            raise
+        p = mod.add_parser(sub)
+        p.set_defaults(_run=mod.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    if getattr(args, "_run", None) is None:
+        try:
+            mod = importlib.import_module("plcbuilder.cli.cmd_gui")
+        except ModuleNotFoundError:
+            parser.print_help()
+            return 2
+        return mod.run(parser.parse_args(["gui"]))
+    try:
+        return int(args._run(args) or 0)
+    except KeyboardInterrupt:
+        return 130
+    except BrokenPipeError:
+        return 0

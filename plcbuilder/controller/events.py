@@ -1,0 +1,108 @@
+"""What the simulated controller reports: events and per-tick telemetry samples.
+
+These are plain data, shared by the controller, ``plcbuilder run`` (JSON and the
+CSV trace), the TCP link (serialised with :func:`to_dict`) and the IDE panels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Optional
+
+
+@dataclass(frozen=True)
+class Started:
+    t_ms: int
+    name: str
+    kind: str            # "hardware" | "software"
+    eparam: int
+    type: str = "started"
+
+
+@dataclass(frozen=True)
+class Ended:
+    t_ms: int
+    name: str
+    kind: str
+    exit_code: int
+    exit_name: Optional[str]   # from abi.exit_name, None when not in the table
+    vexit: int
+    type: str = "ended"
+
+
+@dataclass(frozen=True)
+class Message:
+    t_ms: int
+    message: int
+    name: Optional[str]        # abi.message_name
+    command: int               # var00 at the end of the tick
+    parameter: int             # var01
+    source: str                # procedure name ("from" in JSON)
+    type: str = "message"
+
+
+@dataclass(frozen=True)
+class Print:
+    t_ms: int
+    register: int              # 20000..20100
+    value: int
+    source: str
+    type: str = "print"
+
+
+@dataclass(frozen=True)
+class Fault:
+    t_ms: int
+    source: str                # procedure name
+    file: Optional[str]
+    line: Optional[int]
+    text: str
+    type: str = "fault"
+
+
+@dataclass(frozen=True)
+class Note:
+    """Anything else worth a line in the log (a limit hit, a jog watchdog stop, a refused start)."""
+    t_ms: int
+    text: str
+    level: str = "info"        # "info" | "warning" | "error"
+    type: str = "note"
+
+
+Event = Started | Ended | Message | Print | Fault | Note
+
+
+@dataclass
+class Sample:
+    """The controller's state at the end of one tick (after the message is sent,
+    before motion advances)."""
+    t_ms: int
+    running: Optional[str]          # hardware procedure running, or None
+    proc: int                       # the hardware PLC's proc value (kept after a procedure ends)
+    message: int                    # message sent this tick (0 if none)
+    inputs: tuple[int, ...]         # 8 input words (32 pins each, pin n = word n//32 bit n%32)
+    outputs: tuple[int, ...]        # 8 output words
+    pwm: tuple[int, ...]            # 8 PWM values
+    dac: tuple[int, ...]            # 8 DAC values
+    adc: tuple[int, ...]            # 8 ADC values
+    axes: tuple[int, ...]           # machine positions X..W in 0.01 mm (9 values)
+    velocities: tuple[int, ...] = field(default=())   # 0.01 mm/s per axis (9 values)
+
+
+def to_dict(obj) -> dict:
+    """A JSON-ready dict of an event or sample."""
+    return asdict(obj)
+
+
+def from_dict(d: dict):
+    """The inverse of :func:`to_dict` for events (by their ``type``) and samples."""
+    kinds = {"started": Started, "ended": Ended, "message": Message, "print": Print,
+             "fault": Fault, "note": Note}
+    t = d.get("type")
+    if t in kinds:
+        return kinds[t](**d)
+    s = dict(d)
+    for k in ("inputs", "outputs", "pwm", "dac", "adc", "axes", "velocities"):
+        if k in s:
+            s[k] = tuple(s[k])
+    return Sample(**s)

@@ -1,0 +1,161 @@
+"""Diagnostics: the data every stage of the pipeline adds to.
+
+A :class:`Diagnostic` is shaped like an LSP diagnostic (a span, a severity, a
+code, a message) plus hints. The core never prints: the CLI and the IDE render
+diagnostics with the helpers at the bottom of this module.
+
+Lines and columns are 1-based; ``end_col`` is exclusive. Columns count
+characters (not bytes): the IDE converts to Scintilla's byte offsets itself.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from typing import Callable, Iterable, Optional
+
+
+class Severity(enum.IntEnum):
+    ERROR = 1
+    WARNING = 2
+    NOTE = 3
+
+    @property
+    def label(self) -> str:
+        return self.name.lower()
+
+
+@dataclass(frozen=True, order=True)
+class Span:
+    file: str
+    line: int
+    col: int
+    end_line: int
+    end_col: int
+
+    @classmethod
+    def point(cls, file: str, line: int, col: int, length: int = 1) -> "Span":
+        return cls(file, line, col, line, col + max(length, 1))
+
+    def cover(self, other: "Span") -> "Span":
+        """The smallest span from the start of self to the end of other (same file)."""
+        if other.file != self.file:
+            return self
+        start = min((self.line, self.col), (other.line, other.col))
+        end = max((self.end_line, self.end_col), (other.end_line, other.end_col))
+        return Span(self.file, start[0], start[1], end[0], end[1])
+
+
+@dataclass(frozen=True)
+class Related:
+    span: Span
+    message: str
+
+
+@dataclass(frozen=True)
+class Diagnostic:
+    severity: Severity
+    code: str
+    message: str
+    span: Optional[Span]
+    hints: tuple[str, ...] = ()
+    related: tuple[Related, ...] = ()
+
+    @property
+    def is_error(self) -> bool:
+        return self.severity == Severity.ERROR
+
+    def sort_key(self):
+        s = self.span
+        return (s.file, s.line, s.col) if s else ("", 0, 0)
+
+
+def error(code: str, message: str, span: Optional[Span], *hints: str,
+          related: Iterable[Related] = ()) -> Diagnostic:
+    return Diagnostic(Severity.ERROR, code, message, span, tuple(hints), tuple(related))
+
+
+def warning(code: str, message: str, span: Optional[Span], *hints: str,
+            related: Iterable[Related] = ()) -> Diagnostic:
+    return Diagnostic(Severity.WARNING, code, message, span, tuple(hints), tuple(related))
+
+
+@dataclass
+class DiagnosticBag:
+    """Collects diagnostics, dropping exact repeats and capping the count."""
+
+    limit: int = 100
+    items: list[Diagnostic] = field(default_factory=list)
+    _seen: set = field(default_factory=set)
+    truncated: int = 0
+
+    def add(self, diag: Diagnostic) -> None:
+        key = (diag.severity, diag.code, diag.message, diag.span)
+        if key in self._seen:
+            return
+        self._seen.add(key)
+        if len(self.items) >= self.limit:
+            self.truncated += 1
+            return
+        self.items.append(diag)
+
+    def extend(self, diags: Iterable[Diagnostic]) -> None:
+        for d in diags:
+            self.add(d)
+
+    @property
+    def has_errors(self) -> bool:
+        return any(d.is_error for d in self.items)
+
+    def sorted(self) -> list[Diagnostic]:
+        return sorted(self.items, key=lambda d: (d.sort_key(), d.severity))
+
+
+def has_errors(diags: Iterable[Diagnostic]) -> bool:
+    return any(d.is_error for d in diags)
+
+
+# ---------------------------------------------------------------- rendering
+
+def render_text(diag: Diagnostic, source_line: Callable[[str, int], Optional[str]] | None = None,
+                colorize: Callable[[str, str], str] | None = None) -> str:
+    """Render one diagnostic the way compilers do::
+
+        file:line:col: error: text
+            the source line
+            ^~~~
+          hint: ...
+
+    ``source_line(file, line)`` returns the text of a line (or None);
+    ``colorize(kind, text)`` may wrap pieces in terminal colours
+    (kinds: "location", "error", "warning", "note", "caret", "hint", "source").
+    """
+    c = colorize or (lambda _kind, text: text)
+    s = diag.span
+    loc = f"{s.file}:{s.line}:{s.col}" if s else "plcbuilder"
+    out = [f"{c('location', loc + ':')} {c(diag.severity.label, diag.severity.label + ':')} {diag.message}"]
+    if s and source_line is not None:
+        text = source_line(s.file, s.line)
+        if text is not None:
+            text = text.rstrip("\n").replace("\t", " ")
+            out.append("    " + c("source", text))
+            start = max(s.col - 1, 0)
+            if s.end_line == s.line:
+                width = max(s.end_col - s.col, 1)
+            else:
+                width = max(len(text) - start, 1)
+            out.append("    " + " " * start + c("caret", "^" + "~" * (width - 1)))
+    for h in diag.hints:
+        out.append("  " + c("hint", "hint:") + " " + h)
+    for r in diag.related:
+        rs = r.span
+        out.append(f"  {c('note', 'note:')} {rs.file}:{rs.line}:{rs.col}: {r.message}")
+    return "\n".join(out)
+
+
+def summary(diags: Iterable[Diagnostic]) -> str:
+    diags = list(diags)
+    e = sum(1 for d in diags if d.severity == Severity.ERROR)
+    w = sum(1 for d in diags if d.severity == Severity.WARNING)
+    part = lambda n, word: f"{n} {word}{'' if n == 1 else 's'}"  # noqa: E731
+    return f"{part(e, 'error')}, {part(w, 'warning')}"

@@ -1,0 +1,461 @@
+"""The tokenizer and preprocessor.
+
+The preprocessor runs first and hands the parser a flat list of tokens, each
+carrying the :class:`Span` it came from (its own file, line and column, headers
+included). That list *is* the origin map: every later diagnostic points at the
+right place. Macro uses carry the span of the use and the name of the define.
+
+- ``#include pins.h`` / ``"pins.h"`` / ``<pins.h>``: searched in the
+  procedure's folder, then each include folder, then the built-in headers.
+  A header is read once per compilation, however often it is included.
+- ``#define NAME tokens…`` (object-like), substituted by whole token,
+  rescanned, never recursively. ``#undef``, ``#ifdef``, ``#ifndef``, ``#else``
+  and ``#endif`` work as in C (header guards).
+- Every pair of define names where one contains the other gets a warning: the
+  controller's own preprocessor substitutes substrings and rejects such pairs.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Optional, Sequence
+
+from plcbuilder.diagnostics import Diagnostic, Related, Span, error, warning
+from plcbuilder.lang.source import SourceFile, SourceSet, decode_source, normalise, read_source
+
+BUILTIN_PREFIX = "<builtin>/"
+MAX_INCLUDE_DEPTH = 32
+MAX_TOKENS = 200_000
+MAX_EXPANSION = 1_000_000
+
+KEYWORDS = {"if": "IF", "else": "ELSE", "do": "DO", "while": "WHILE"}
+PUNCT = {
+    "<<": "SHL", ">>": "SHR", "<=": "LE", ">=": "GE", "==": "EQ", "!=": "NE",
+    "&&": "ANDAND", "||": "OROR", "++": "INC", "--": "DEC",
+    "(": "LPAR", ")": "RPAR", "{": "LBRACE", "}": "RBRACE", ";": "SEMI", ",": "COMMA",
+    "=": "ASSIGN", "+": "PLUS", "-": "MINUS", "*": "STAR", "/": "SLASH", "%": "PERCENT",
+    "<": "LT", ">": "GT", "&": "AMP", "|": "PIPE", "^": "CARET", "!": "BANG", "~": "TILDE",
+}
+#: terminal name -> its text, for messages ("expected ';'")
+TERMINAL_TEXT = {v: k for k, v in PUNCT.items()}
+TERMINAL_TEXT.update({v: k for k, v in KEYWORDS.items()})
+TERMINAL_TEXT.update({"NAME": "a name", "NUMBER": "a number", "$END": "the end of the file"})
+
+_TOKEN_RE = re.compile(r"""
+    (?P<ws>[ \t\f\v]+)
+  | (?P<nl>\n)
+  | (?P<lc>//[^\n]*)
+  | (?P<bc>/\*)
+  | (?P<num>0[xX][0-9A-Fa-f]*[0-9A-Za-z_]*|[0-9][0-9A-Za-z_]*)
+  | (?P<name>[A-Za-z_][A-Za-z0-9_]*)
+  | (?P<punct><<|>>|<=|>=|==|!=|&&|\|\||\+\+|--|[(){};,=+\-*/%<>&|^!~])
+  | (?P<hash>\#)
+  | (?P<bad>.)
+""", re.VERBOSE)
+_HEX_RE = re.compile(r"0[xX][0-9A-Fa-f]+")
+_DEC_RE = re.compile(r"[0-9]+")
+
+
+@dataclass(slots=True)
+class Tok:
+    kind: str                 # a parser terminal name (NAME, NUMBER, SEMI, ...)
+    value: str                # the text
+    span: Span
+    number: int = 0           # the value of a NUMBER
+    macro: Optional[str] = None   # the define this token was expanded from
+    synthetic: bool = False   # made up by error recovery
+
+
+@dataclass
+class Define:
+    name: str
+    tokens: list[Tok]
+    span: Span
+    text: str                 # the replacement as written
+
+    @property
+    def value(self) -> Optional[int]:
+        """The numeric value when the replacement is one number (or minus one)."""
+        t = self.tokens
+        if len(t) == 1 and t[0].kind == "NUMBER":
+            return t[0].number
+        return None
+
+
+@dataclass
+class Preprocessed:
+    tokens: list[Tok]
+    diagnostics: list[Diagnostic]
+    sources: SourceSet
+    defines: dict[str, Define]
+    includes: list[str]                        # display names of headers read, in order
+    block_comments: list[Span] = field(default_factory=list)   # for --strict
+    directives: list[tuple[str, Span]] = field(default_factory=list)   # for --strict
+
+
+def builtin_header(name: str) -> Optional[str]:
+    """The text of a built-in header (resources/include/NAME), or None."""
+    if "/" in name or "\\" in name or name.startswith("."):
+        return None
+    try:
+        ref = resources.files("plcbuilder") / "resources" / "include" / name
+        if ref.is_file():
+            return normalise(ref.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError):
+        return None
+    return None
+
+
+def builtin_header_names() -> list[str]:
+    try:
+        d = resources.files("plcbuilder") / "resources" / "include"
+        return sorted(p.name for p in d.iterdir() if p.name.endswith(".h"))
+    except OSError:
+        return []
+
+
+def parse_number(text: str) -> Optional[int]:
+    """The value of a literal as a 32-bit two's complement int, or None if malformed/too big."""
+    if _HEX_RE.fullmatch(text):
+        v = int(text, 16)
+    elif _DEC_RE.fullmatch(text):
+        v = int(text, 10)
+    else:
+        return None
+    if v > 0xFFFFFFFF:
+        return None
+    return v - (1 << 32) if v >= 1 << 31 else v
+
+
+class _Lexer:
+    """Tokens of one file, with directives split out line by line."""
+
+    def __init__(self, text: str, name: str, diags: list[Diagnostic], block_comments: list[Span]):
+        self.text, self.name, self.diags = text, name, diags
+        self.block_comments = block_comments
+
+    def lines(self):
+        """Yield (is_directive, tokens, hash_span, raw_rest) per logical line."""
+        text, name = self.text, self.name
+        pos, line, line_start = 0, 1, 0
+        current: list[Tok] = []
+        directive = False
+        hash_span = None
+        raw_start = 0
+        first_on_line = True
+        n = len(text)
+        bad_run_end = -1
+        while pos < n:
+            m = _TOKEN_RE.match(text, pos)
+            kind = m.lastgroup
+            s, e = m.start(), m.end()
+            col = s - line_start + 1
+            if kind == "ws" or kind == "lc":
+                pos = e
+                continue
+            if kind == "nl":
+                yield directive, current, hash_span, text[raw_start:s] if directive else ""
+                current, directive, hash_span = [], False, None
+                pos, line, line_start, first_on_line = e, line + 1, e, True
+                continue
+            if kind == "bc":
+                end = text.find("*/", e)
+                span_end = n if end < 0 else end + 2
+                start_line, start_col = line, col
+                nls = text.count("\n", s, span_end)
+                if nls:
+                    line += nls
+                    line_start = text.rfind("\n", s, span_end) + 1
+                sp = Span(name, start_line, start_col, line, span_end - line_start + 1)
+                self.block_comments.append(sp)
+                if end < 0:
+                    self.diags.append(error("unterminated-comment", "unterminated /* comment",
+                                            Span.point(name, start_line, start_col, 2),
+                                            "close it with */"))
+                pos = span_end
+                continue
+            span = Span(name, line, col, line, col + (e - s))
+            if kind == "hash" and first_on_line:
+                directive, hash_span, raw_start = True, span, e
+                first_on_line = False
+                pos = e
+                continue
+            first_on_line = False
+            if kind == "name":
+                v = m.group()
+                current.append(Tok(KEYWORDS.get(v, "NAME"), v, span))
+            elif kind == "num":
+                v = m.group()
+                num = parse_number(v)
+                if num is None:
+                    if not directive:
+                        self.diags.append(error("bad-number", f"malformed number '{v}'", span,
+                                                "numbers are decimal (123) or hex (0x7b), "
+                                                "at most 0xffffffff"))
+                    num = 0
+                current.append(Tok("NUMBER", v, span, num))
+            elif kind == "punct":
+                v = m.group()
+                current.append(Tok(PUNCT[v], v, span))
+            else:  # bad character or a stray '#'
+                if not directive:
+                    if s > bad_run_end:
+                        run = re.match(r"[^\sA-Za-z0-9_(){};,=+\-*/%<>&|^!~]+", text[s:])
+                        length = len(run.group()) if run else 1
+                        bad_run_end = s + length
+                        ch = text[s]
+                        what = "'#' (directives start a line)" if ch == "#" else repr(ch)
+                        self.diags.append(error("bad-char", f"unexpected character {what}",
+                                                Span(name, line, col, line, col + length)))
+                    current.append(Tok("BAD", m.group(), span))
+                else:
+                    current.append(Tok("BAD", m.group(), span))
+            pos = e
+        yield directive, current, hash_span, text[raw_start:] if directive else ""
+
+
+class Preprocessor:
+    def __init__(self, include_dirs: Sequence[Path] = (), read_file=read_source):
+        self.include_dirs = [Path(p) for p in include_dirs]
+        self.read_file = read_file
+        self.diags: list[Diagnostic] = []
+        self.sources = SourceSet()
+        self.defines: dict[str, Define] = {}
+        self.all_defines: list[Define] = []
+        self.includes: list[str] = []
+        self.seen_files: set[str] = set()
+        self.block_comments: list[Span] = []
+        self.directives: list[tuple[str, Span]] = []
+        self.out: list[Tok] = []
+        self.expanded = 0
+        self.too_many = False
+
+    # ------------------------------------------------------------ entry
+    def run_text(self, text: str, name: str, path: Optional[Path]) -> Preprocessed:
+        f = SourceFile(name, path, normalise(text))
+        self.sources.add(f)
+        self.seen_files.add(self._key(f))
+        self._file(f, [f.name], path.parent if path else None)
+        self._substring_warnings()
+        return Preprocessed(self.out, self.diags, self.sources, self.defines, self.includes,
+                            self.block_comments, self.directives)
+
+    @staticmethod
+    def _key(f: SourceFile) -> str:
+        return str(f.path.resolve()) if f.path else f.name
+
+    # ------------------------------------------------------------ files
+    def _file(self, f: SourceFile, stack: list[str], folder: Optional[Path]) -> None:
+        lexer = _Lexer(f.text, f.name, self.diags, self.block_comments)
+        cond: list[list] = []   # [active, seen_else, parent_active, span]
+        for is_dir, toks, hash_span, raw in lexer.lines():
+            active = all(c[0] for c in cond)
+            if is_dir:
+                self._directive(toks, hash_span, raw, f, stack, folder, cond, active)
+                continue
+            if active and toks:
+                self._emit(toks)
+        for c in cond:
+            self.diags.append(error("unterminated-conditional", "#if without #endif", c[3]))
+
+    def _directive(self, toks, hash_span, raw, f, stack, folder, cond, active) -> None:
+        if not toks:
+            return  # a lone '#' is a null directive
+        head = toks[0]
+        word = head.value
+        span = hash_span.cover(head.span)
+        self.directives.append((word, span))
+        if word in ("ifdef", "ifndef"):
+            if len(toks) < 2 or toks[1].kind != "NAME":
+                self.diags.append(error("bad-directive", f"#{word} needs a name", span))
+                cond.append([False, False, active, span])
+                return
+            defined = toks[1].value in self.defines
+            cond.append([defined if word == "ifdef" else not defined, False, active, span])
+            return
+        if word == "else":
+            if not cond or cond[-1][1]:
+                self.diags.append(error("bad-directive", "#else without #ifdef/#ifndef", span))
+                return
+            cond[-1][0] = not cond[-1][0]
+            cond[-1][1] = True
+            return
+        if word == "endif":
+            if not cond:
+                self.diags.append(error("bad-directive", "#endif without #ifdef/#ifndef", span))
+                return
+            cond.pop()
+            return
+        if not active:
+            return
+        if word == "include":
+            self._include(raw, span, f, stack, folder)
+        elif word == "define":
+            self._define(toks, raw, span)
+        elif word == "undef":
+            if len(toks) >= 2 and toks[1].kind == "NAME":
+                self.defines.pop(toks[1].value, None)
+            else:
+                self.diags.append(error("bad-directive", "#undef needs a name", span))
+        else:
+            self.diags.append(error("bad-directive", f"unknown directive #{word}", span,
+                                    "directives are #include and #define (and #ifdef/#ifndef/"
+                                    "#else/#endif, #undef)"))
+
+    def _include(self, raw: str, span: Span, f: SourceFile, stack, folder) -> None:
+        arg = re.sub(r"//.*|/\*.*?\*/", "", raw).strip()[len("include"):].strip()
+        m = re.fullmatch(r'"([^"]+)"|<([^>]+)>|([^\s"<>]+)', arg)
+        if not m:
+            self.diags.append(error("bad-include", "#include needs a file name", span,
+                                    "write #include pins.h, #include \"pins.h\" or #include <pins.h>"))
+            return
+        target = next(g for g in m.groups() if g)
+        if len(stack) > MAX_INCLUDE_DEPTH:
+            self.diags.append(error("include-depth", f"includes nest deeper than {MAX_INCLUDE_DEPTH}",
+                                    span))
+            return
+        found = self._find(target, folder)
+        if found is None:
+            where = [str(folder) if folder else "the procedure's folder"]
+            where += [str(d) for d in self.include_dirs] + ["the built-in headers"]
+            self.diags.append(error("include-not-found", f"cannot find header '{target}'", span,
+                                    "searched " + ", ".join(where)))
+            return
+        hf, hfolder = found
+        key = self._key(hf)
+        if hf.name in stack or key in {self._key(self.sources.files[s]) for s in stack
+                                       if s in self.sources.files}:
+            self.diags.append(error("include-cycle",
+                                    f"'{hf.name}' includes itself: " + " -> ".join(stack + [hf.name]),
+                                    span))
+            return
+        if key in self.seen_files:
+            return
+        self.seen_files.add(key)
+        self.sources.add(hf)
+        self.includes.append(hf.name)
+        self._file(hf, stack + [hf.name], hfolder)
+
+    def _find(self, target: str, folder: Optional[Path]):
+        target_path = Path(target)
+        candidates = ([folder] if folder else []) + self.include_dirs
+        for d in candidates:
+            p = d / target_path
+            if p.is_file():
+                text, diags = self.read_file(p, self._display(p))
+                self.diags.extend(diags)
+                if text is None:
+                    return None
+                return SourceFile(self._display(p), p, text), p.parent
+        text = builtin_header(target)
+        if text is not None:
+            return SourceFile(BUILTIN_PREFIX + target, None, text), None
+        return None
+
+    def _display(self, p: Path) -> str:
+        try:
+            return str(p.resolve().relative_to(Path.cwd().resolve()))
+        except (ValueError, OSError):
+            return str(p)
+
+    def _define(self, toks: list[Tok], raw: str, span: Span) -> None:
+        if len(toks) < 2 or toks[1].kind not in ("NAME", "IF", "ELSE", "DO", "WHILE"):
+            self.diags.append(error("bad-define", "#define needs a name", span))
+            return
+        name_tok = toks[1]
+        name = name_tok.value
+        body = toks[2:]
+        # function-like: NAME immediately followed by '('
+        if body and body[0].kind == "LPAR" and body[0].span.col == name_tok.span.end_col \
+                and body[0].span.line == name_tok.span.line:
+            self.diags.append(error("bad-define", f"function-like macro {name}(...) is not supported",
+                                    name_tok.span, "only object-like defines: #define NAME value"))
+            return
+        text = raw.split(name, 1)[1] if name in raw else ""
+        text = re.sub(r"//.*|/\*.*?\*/", "", text).strip()
+        d = Define(name, body, name_tok.span, text)
+        old = self.defines.get(name)
+        if old is not None and [t.value for t in old.tokens] != [t.value for t in body]:
+            self.diags.append(warning("define-redefined", f"'{name}' redefined", name_tok.span,
+                                      related=[Related(old.span, "previous definition")]))
+        self.defines[name] = d
+        self.all_defines.append(d)
+
+    # ------------------------------------------------------------ expansion
+    def _emit(self, toks: list[Tok]) -> None:
+        if self.too_many:
+            return
+        out = self.out
+        defines = self.defines
+        for t in toks:
+            if t.kind == "NAME" and t.value in defines:
+                self._expand(t, t.span, frozenset())
+            else:
+                out.append(t)
+        if len(out) > MAX_TOKENS:
+            self.too_many = True
+            self.diags.append(error("too-large", f"more than {MAX_TOKENS} tokens after preprocessing",
+                                    out[-1].span))
+
+    def _expand(self, t: Tok, use_span: Span, hidden: frozenset) -> None:
+        d = self.defines[t.value]
+        hidden = hidden | {t.value}
+        self.expanded += len(d.tokens)
+        if self.expanded > MAX_EXPANSION:
+            if not self.too_many:
+                self.too_many = True
+                self.diags.append(error("too-large", "define expansion is too large", use_span))
+            return
+        for r in d.tokens:
+            if r.kind == "NAME" and r.value in self.defines and r.value not in hidden:
+                self._expand(r, use_span, hidden)
+            else:
+                self.out.append(Tok(r.kind, r.value, use_span, r.number, t.macro or t.value))
+
+    # ------------------------------------------------------------ checks
+    def _substring_warnings(self) -> None:
+        seen: dict[str, Define] = {}
+        for d in self.all_defines:
+            seen.setdefault(d.name, d)
+        names = sorted(seen, key=len)
+        for i, short in enumerate(names):
+            for long in names[i + 1:]:
+                if len(long) > len(short) and short in long:
+                    ds, dl = seen[short], seen[long]
+                    self.diags.append(warning(
+                        "define-substring",
+                        f"define '{long}' contains define '{short}'; the controller's preprocessor "
+                        "substitutes substrings and rejects this pair (\"syntax error, unexpected ID\")",
+                        dl.span,
+                        f"rename '{long}' so it does not contain '{short}' "
+                        f"(e.g. put the extra word first)",
+                        related=[Related(ds.span, f"'{short}' is defined here")]))
+
+
+def preprocess_text(text: str, name: str = "<input>", path: Optional[Path] = None,
+                    include_dirs: Sequence[Path] = ()) -> Preprocessed:
+    return Preprocessor(include_dirs).run_text(text, name, path)
+
+
+def preprocess_file(path: Path, name: Optional[str] = None,
+                    include_dirs: Sequence[Path] = ()) -> Preprocessed:
+    name = name or str(path)
+    text, diags = read_source(path, name)
+    if text is None:
+        return Preprocessed([], diags, SourceSet(), {}, [])
+    pp = Preprocessor(include_dirs)
+    pp.diags.extend(diags)
+    return pp.run_text(text, name, path)
+
+
+def decode_and_preprocess(data: bytes, name: str, path: Optional[Path] = None,
+                          include_dirs: Sequence[Path] = ()) -> Preprocessed:
+    text, diags = decode_source(data, name)
+    if text is None:
+        return Preprocessed([], diags, SourceSet(), {}, [])
+    pp = Preprocessor(include_dirs)
+    pp.diags.extend(diags)
+    return pp.run_text(text, name, path)
