@@ -261,6 +261,40 @@ class _Recovery:
             return Span(s.file, s.end_line, s.end_col, s.end_line, s.end_col + 1)
         return Span("<input>", 1, 1, 1, 2)
 
+    def _statement_start(self, i: int) -> int:
+        j = min(i, len(self.toks)) - 1
+        depth = 0
+        while j >= 0:
+            k = self.toks[j].kind
+            if k == "RPAR":
+                depth += 1
+            elif k == "LPAR":
+                if depth == 0:
+                    pass
+                else:
+                    depth -= 1
+            elif depth == 0 and k in ("SEMI", "LBRACE", "RBRACE"):
+                break
+            j -= 1
+        return j + 1
+
+    def _c_statement_header(self, i: int) -> int:
+        """For a C statement the language lacks (for, switch), the index of the
+        ')' closing its header: errors up to there are one mistake."""
+        s = self._statement_start(i)
+        toks = self.toks
+        if s < len(toks) and toks[s].kind == "NAME" and toks[s].value in ("for", "switch") \
+                and s + 1 < len(toks) and toks[s + 1].kind == "LPAR":
+            depth = 0
+            for j in range(s + 1, len(toks)):
+                if toks[j].kind == "LPAR":
+                    depth += 1
+                elif toks[j].kind == "RPAR":
+                    depth -= 1
+                    if depth == 0:
+                        return j
+        return -1
+
     def _prev_real(self, i: int) -> int:
         j = i - 1
         while j >= 0 and self.toks[j].kind == "BAD":
@@ -281,6 +315,15 @@ class _Recovery:
             return error("syntax", f"unexpected '{tok.value}' after '{prev.value}'", prev.span,
                          "variables need no declaration: write the name and assign it "
                          f"(e.g. {tok.value}=0;)", "procedures are written name() { ... }")
+        start = self._statement_start(i)
+        first = toks[start] if start < len(toks) else None
+        if first is not None and first.kind == "NAME" and first.value in ("for", "switch") \
+                and start + 1 < len(toks) and toks[start + 1].kind == "LPAR":
+            if first.value == "for":
+                return error("syntax", "'for' loops are not part of the PLC language", first.span,
+                             "write i=0; do { ...; i++; } while (i<N);")
+            return error("syntax", "'switch' is not part of the PLC language", first.span,
+                         "use if (...) { ... } else if (...) { ... }")
         if prev is not None and prev.kind == "NAME" and tok is not None:
             word = prev.value
             if word == "return":
@@ -290,12 +333,6 @@ class _Recovery:
             if word in ("break", "continue"):
                 return error("syntax", f"'{word}' is not part of the PLC language", prev.span,
                              "leave a loop by making its condition false (e.g. set a flag)")
-            if word == "for" and tok.kind != "RPAR":
-                return error("syntax", "'for' loops are not part of the PLC language", prev.span,
-                             "write i=0; do { ...; i++; } while (i<N);")
-            if word == "switch":
-                return error("syntax", "'switch' is not part of the PLC language", prev.span,
-                             "use if (...) { ... } else if (...) { ... }")
         nxt = toks[i + 1] if i + 1 < len(toks) else None
         if tok is not None and nxt is not None and nxt.kind == "ASSIGN" \
                 and tok.kind in ("PLUS", "MINUS", "STAR", "SLASH", "PERCENT", "AMP", "PIPE",
@@ -347,7 +384,8 @@ class _Recovery:
             self.stream.pos = idx + 1
             self.last_error_idx = idx
             return True
-        if idx > self.quiet_until:
+        after_bad = 0 < idx <= len(self.toks) and self.toks[idx - 1].kind == "BAD"
+        if idx > self.quiet_until and not after_bad:
             self.count += 1
             if self.count > MAX_SYNTAX_ERRORS:
                 self.diags.append(error("too-many-errors",
@@ -356,6 +394,7 @@ class _Recovery:
                 return False
             self.diags.append(self._message(idx, set(ip.accepts())))
         self.last_error_idx = idx
+        header_end = self._c_statement_header(idx)
         # find a synchronising token at or after the error
         j = idx
         toks = self.toks
@@ -365,7 +404,7 @@ class _Recovery:
             target = "$END" if j >= len(toks) else toks[j].kind
             if self._fixup(ip, target, j):
                 self.stream.pos = j
-                self.quiet_until = j
+                self.quiet_until = max(self.quiet_until, j, header_end)
                 return True
             if j >= len(toks):
                 return False
@@ -392,12 +431,13 @@ class _Recovery:
     @staticmethod
     def _plan(trial, target: str) -> Optional[list[str]]:
         plan: list[str] = []
+        order = ("RBRACE", "NUMBER", "RPAR", "SEMI") if target in ("RBRACE", "$END") else FIXUPS
         for _ in range(8):
             acc = trial.accepts()
             if target in acc:
                 return plan
-            for kind in FIXUPS:
-                if kind in acc:
+            for kind in order:
+                if kind in acc and not (kind in ("SEMI", "NUMBER") and plan and plan[-1] == kind):
                     trial.feed_token(Token(kind, "", 0))
                     plan.append(kind)
                     break

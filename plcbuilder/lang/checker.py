@@ -1,0 +1,586 @@
+"""The checker: names, calls, variables, control flow and the warnings of SPEC §1.
+
+It resolves every name once (predefined slot, mapped register, built-in
+constant, user variable) and hands the compiler a :class:`Resolved` table, so
+the code generator never has to guess.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass, field
+from typing import Optional
+
+from plcbuilder.bytecode import abi
+from plcbuilder.bytecode.opcodes import Op
+from plcbuilder.bytecode.program import Kind
+from plcbuilder.diagnostics import Diagnostic, Related, Span, error, warning
+from plcbuilder.lang import ast as A
+
+
+@dataclass(frozen=True)
+class Builtin:
+    name: str
+    params: tuple[str, ...]
+    returns: bool
+    op: Optional[Op]
+    doc: str
+
+    @property
+    def arity(self) -> int:
+        return len(self.params)
+
+    @property
+    def signature(self) -> str:
+        ret = "value = " if self.returns else ""
+        return f"{ret}{self.name}({', '.join(self.params)})"
+
+
+BUILTINS: dict[str, Builtin] = {b.name: b for b in (
+    Builtin("portset", ("pin",), False, Op.PORTSET, "Set output pin to 1."),
+    Builtin("portclear", ("pin",), False, Op.PORTCLR, "Clear output pin to 0."),
+    Builtin("portclr", ("pin",), False, Op.PORTCLR, "Clear output pin to 0 (same as portclear)."),
+    Builtin("portget", ("pin",), True, Op.PORTGET, "The state of input pin (0 or 1)."),
+    Builtin("gvarget", ("addr",), True, Op.GVARGET, "Read global variable register addr."),
+    Builtin("gvarset", ("addr", "value"), False, Op.GVARSET, "Write value to global register addr."),
+    Builtin("g0moveA", ("flags", "axis_mask", "distance"), False, Op.G0MOVE,
+            "Positioning move: flags bit0 absolute, bit1 machine coordinates, bit7 delayed start; "
+            "axis_mask X=1 Y=2 Z=4 ...; distance in 0.01 mm."),
+    Builtin("exit", ("code",), False, Op.EXIT, "End the procedure with an exit code (99 = normal)."),
+)}
+#: what to suggest when a function that returns nothing is used as a value
+VALUE_TWIN = {"gvarset": "gvarget", "portset": "portget", "portclear": "portget", "portclr": "portget"}
+
+SHIFT_OPS = {"<<", ">>"}
+ADD_OPS = {"+", "-"}
+BIT_OPS = {"&", "|", "^"}
+CMP_OPS = {"==", "!=", "<", "<=", ">", ">="}
+STRICT_BINARY = {"%", "^", "&&", "||"}
+
+
+@dataclass
+class VarInfo:
+    name: str
+    first: Span
+    assigned: Optional[Span] = None
+    read: Optional[Span] = None
+
+
+@dataclass
+class Resolved:
+    """What every name means, for the compiler."""
+    slots: dict[str, int] = field(default_factory=dict)        # variable name -> slot
+    mapped: dict[str, int] = field(default_factory=dict)       # pwm01.. -> register address
+    constants: dict[str, int] = field(default_factory=dict)    # built-in names used
+    user_vars: list[str] = field(default_factory=list)         # in slot order
+    reachable: list[str] = field(default_factory=list)         # procedures to emit, main first
+    procs: dict[str, A.ProcDef] = field(default_factory=dict)
+
+
+@dataclass
+class Symbols:
+    """What the IDE needs for completion and hover."""
+    variables: list[str] = field(default_factory=list)
+    procedures: dict[str, Span] = field(default_factory=dict)
+    defines: dict = field(default_factory=dict)
+
+
+class Checker:
+    def __init__(self, module: A.Module, kind: Kind, strict: bool, main_file: str,
+                 source_line=None, syntax_errors: bool = False):
+        self.syntax_errors = syntax_errors
+        self.module = module
+        self.kind = kind
+        self.strict = strict
+        self.main_file = main_file
+        self.source_line = source_line
+        self.diags: list[Diagnostic] = []
+        self.res = Resolved()
+        self.vars: dict[str, VarInfo] = {}
+        self.calls: dict[str, list[tuple[str, Span]]] = {}
+        self.slot_names = dict(abi.SLOT_NAMES)
+        if kind is Kind.SOFTWARE:
+            self.slot_names.update(abi.SOFTWARE_SLOT_NAMES)
+        self._falls_cache: dict[str, bool] = {}
+        self._in_progress: set[str] = set()
+
+    # ================================================================ driver
+    def run(self) -> tuple[list[Diagnostic], Resolved, Symbols]:
+        procs = self.res.procs
+        for p in self.module.procs:
+            if p.name in procs:
+                self.diags.append(error("duplicate-procedure", f"procedure '{p.name}' is defined twice",
+                                        p.name_span,
+                                        related=[Related(procs[p.name].name_span, "first defined here")]))
+                continue
+            if p.name in BUILTINS:
+                self.diags.append(error("reserved-name", f"'{p.name}' is a built-in function; "
+                                        "a procedure cannot have its name", p.name_span))
+                continue
+            if p.name in self.slot_names or p.name in abi.MAPPED_VARIABLES \
+                    or p.name in abi.BUILTIN_NAMES:
+                self.diags.append(error("reserved-name", f"'{p.name}' is a predefined name; "
+                                        "a procedure cannot have its name", p.name_span))
+                continue
+            procs[p.name] = p
+        for p in procs.values():
+            self.calls[p.name] = []
+            self._current = p.name
+            self._stmt(p.body)
+        if "main" not in procs and not (self.syntax_errors and not procs):
+            first = self.module.procs[0].name_span if self.module.procs else Span(self.main_file, 1, 1, 1, 2)
+            self.diags.append(error("no-main", "no main() procedure: it is where the procedure starts",
+                                    first, "add main() { ... exit(99); }"))
+        self._reachability()
+        self._recursion()
+        self._variables()
+        if not self.syntax_errors:
+            # with syntax errors the tree is incomplete: flow warnings would be noise
+            self._flow()
+        syms = Symbols(variables=list(self.res.user_vars),
+                       procedures={n: p.name_span for n, p in procs.items()})
+        return self.diags, self.res, syms
+
+    # ================================================================ statements
+    def _stmt(self, s) -> None:
+        t = type(s)
+        if t is A.Block:
+            for x in s.stmts:
+                self._stmt(x)
+        elif t is A.Assign:
+            self._expr(s.value)
+            self._target(s.target)
+        elif t is A.IncDec:
+            self._target(s.target, incdec=True)
+        elif t is A.CallStmt:
+            self._call(s.call, as_value=False)
+        elif t is A.If:
+            self._expr(s.cond)
+            self._stmt(s.then)
+            if s.orelse is not None:
+                if self.strict:
+                    self._strict(s.else_span or s.span, "'else'",
+                                 "use a second if with the opposite condition")
+                self._stmt(s.orelse)
+        elif t is A.DoWhile:
+            self._stmt(s.body)
+            self._expr(s.cond)
+        elif t is A.While:
+            if self.strict:
+                self._strict(s.while_span, "a 'while' loop",
+                             "write do { ... } while (condition); behind an if")
+            self._expr(s.cond)
+            self._stmt(s.body)
+
+    def _strict(self, span: Span, what: str, hint: str) -> None:
+        self.diags.append(error("strict", f"{what} is not accepted by the controller's compiler (--strict)",
+                                span, hint))
+
+    def _target(self, name: A.Name, incdec: bool = False) -> None:
+        n = name.id
+        if n in self.slot_names:
+            self.res.slots[n] = self.slot_names[n]
+            return
+        if n in abi.MAPPED_VARIABLES:
+            if n in abi.READ_ONLY_VARIABLES:
+                self.diags.append(error("read-only", f"'{n}' is read-only (it reads ADC{n[-1:]})",
+                                        name.span))
+            self.res.mapped[n] = abi.MAPPED_VARIABLES[n]
+            return
+        if n in abi.BUILTIN_NAMES:
+            self.diags.append(error("assign-constant",
+                                    f"'{n}' is a built-in constant ({abi.BUILTIN_NAMES[n]}); "
+                                    "it cannot be assigned", name.span))
+            return
+        if n in self.res.procs or n in BUILTINS:
+            self.diags.append(error("assign-procedure", f"'{n}' is a procedure, not a variable",
+                                    name.span))
+            return
+        v = self._user_var(n, name.span)
+        if v.assigned is None:
+            v.assigned = name.span
+
+    def _user_var(self, n: str, span: Span) -> VarInfo:
+        v = self.vars.get(n)
+        if v is None:
+            v = self.vars[n] = VarInfo(n, span)
+            v.proc = self._current  # type: ignore[attr-defined]
+        return v
+
+    # ================================================================ expressions
+    def _expr(self, e) -> None:
+        t = type(e)
+        if t is A.Num:
+            return
+        if t is A.Name:
+            n = e.id
+            if n in self.slot_names:
+                self.res.slots[n] = self.slot_names[n]
+            elif n in abi.MAPPED_VARIABLES:
+                self.res.mapped[n] = abi.MAPPED_VARIABLES[n]
+            elif n in abi.BUILTIN_NAMES:
+                self.res.constants[n] = abi.BUILTIN_NAMES[n]
+            elif n in self.res.procs or n in BUILTINS:
+                self.diags.append(error("procedure-as-value",
+                                        f"'{n}' is a procedure; call it as a statement: {n}();",
+                                        e.span))
+            else:
+                v = self._user_var(n, e.span)
+                if v.read is None:
+                    v.read = e.span
+            return
+        if t is A.Binary:
+            self._expr(e.left)
+            self._expr(e.right)
+            if self.strict and e.op in STRICT_BINARY:
+                hints = {"%": "compute a - (a/b)*b", "^": "use (a|b) - (a&b)",
+                         "&&": "nest two ifs", "||": "use two ifs or (a!=0)|(b!=0)"}
+                self._strict(e.op_span, f"the operator '{e.op}'", hints[e.op])
+            self._precedence(e)
+            return
+        if t is A.Unary:
+            if self.strict:
+                hint = {"-": "write 0-X (the controller's compiler has no negative literals)",
+                        "!": "write (X==0)", "~": "write (0-1)^X or 0xffffffff-X"}[e.op]
+                self._strict(e.span, f"unary '{e.op}'", hint)
+            self._expr(e.operand)
+            return
+        if t is A.Paren:
+            self._expr(e.expr)
+            return
+        if t is A.Call:
+            self._call(e, as_value=True)
+
+    def _call(self, c: A.Call, as_value: bool) -> None:
+        for a in c.args:
+            self._expr(a)
+        b = BUILTINS.get(c.name)
+        if b is not None:
+            if as_value and not b.returns:
+                if c.name == "exit":
+                    self.diags.append(error("void-value", "exit() ends the procedure and has no value",
+                                            c.span))
+                    return
+                twin = VALUE_TWIN.get(c.name)
+                msg = (f"{c.name} takes {b.arity} argument{'s' if b.arity != 1 else ''} "
+                       "and returns nothing")
+                if twin:
+                    args = self._args_text(c)
+                    if c.name == "gvarset" and len(c.args) == 2:
+                        args = self._text(c.args[0].span) or "addr"
+                    msg += f"; did you mean {twin}({args})?"
+                self.diags.append(error("void-value", msg, c.span,
+                                        f"{BUILTINS[twin].signature if twin else b.signature}"))
+                return
+            if len(c.args) != b.arity:
+                self.diags.append(error(
+                    "arity", f"{c.name} takes {b.arity} argument{'s' if b.arity != 1 else ''} "
+                             f"({', '.join(b.params)}), got {len(c.args)}", c.span, b.signature))
+            if c.name == "g0moveA" and len(c.args) == 3:
+                f = c.args[0]
+                if isinstance(f, A.Num) and f.value & ~0x83:
+                    self.diags.append(warning("g0move-flags",
+                                              f"g0moveA flags 0x{f.value & 0xffffffff:x} use bits the "
+                                              "controller ignores (bit0 absolute, bit1 machine "
+                                              "coordinates, bit7 delayed start)", f.span))
+            return
+        p = self.res.procs.get(c.name)
+        if p is None and self.syntax_errors and c.name in ("for", "switch", "while", "if", "return",
+                                                           "sizeof"):
+            return
+        if p is None:
+            close = difflib.get_close_matches(c.name, list(self.res.procs) + list(BUILTINS), n=1)
+            hints = [f"did you mean {close[0]}()?"] if close else []
+            self.diags.append(error("undefined-procedure", f"no procedure or function named '{c.name}'",
+                                    c.name_span, *hints))
+            return
+        if as_value:
+            self.diags.append(error("void-value", f"procedure {c.name}() returns no value", c.span,
+                                    "procedures take no parameters and return nothing; share "
+                                    "results through variables"))
+        if c.args:
+            self.diags.append(error("arity", f"procedure {c.name}() takes no arguments, "
+                                             f"got {len(c.args)}", c.span,
+                                    "pass values through variables (all procedures of a file share them)"))
+        self.calls.setdefault(self._current, []).append((c.name, c.span))
+
+    def _text(self, span: Span) -> Optional[str]:
+        if self.source_line is None or span.line != span.end_line:
+            return None
+        line = self.source_line(span.file, span.line)
+        if line is None:
+            return None
+        return line[span.col - 1:span.end_col - 1]
+
+    def _args_text(self, c: A.Call) -> str:
+        parts = [self._text(a.span) for a in c.args]
+        if all(p is not None for p in parts):
+            return ", ".join(parts)
+        return "..."
+
+    # ================================================================ warnings
+    def _precedence(self, e: A.Binary) -> None:
+        if e.op in SHIFT_OPS:
+            for side, child in (("left", e.left), ("right", e.right)):
+                if type(child) is A.Binary and child.op in ADD_OPS:
+                    lt, rt = self._text(e.left.span), self._text(e.right.span)
+                    whole = self._text(e.span)
+                    value = _const(e)
+                    said = f"'{whole}' is " if whole else ""
+                    if side == "left":
+                        means = f"({lt}){e.op}{rt}" if lt and rt else f"(a{child.op}b){e.op}c"
+                    else:
+                        means = f"{lt}{e.op}({rt})" if lt and rt else f"a{e.op}(b{child.op}c)"
+                    val = f" = {value}" if value is not None else ""
+                    self.diags.append(warning(
+                        "precedence", f"{said}{means}{val}: '{child.op}' binds tighter than '{e.op}'",
+                        e.span, "add parentheses to say which you mean"))
+                    return
+        if e.op in BIT_OPS:
+            for child in (e.left, e.right):
+                if type(child) is A.Binary and child.op in CMP_OPS:
+                    whole = self._text(e.span)
+                    said = f"'{whole}' " if whole else ""
+                    self.diags.append(warning(
+                        "precedence", f"{said}compares before '{e.op}': '{child.op}' binds tighter "
+                                      f"than '{e.op}'",
+                        e.span, f"write ({self._text(child.left.span) or 'a'} {e.op} ...) "
+                                f"{child.op} ... if that is what you mean; add parentheses either way"))
+                    return
+
+    def _reachability(self) -> None:
+        procs = self.res.procs
+        start = "main" if "main" in procs else None
+        order: list[str] = []
+        if start is None:
+            order = list(procs)
+        else:
+            seen = {start}
+            stack = [start]
+            while stack:
+                n = stack.pop()
+                order.append(n)
+                for callee, _ in reversed(self.calls.get(n, [])):
+                    if callee in procs and callee not in seen:
+                        seen.add(callee)
+                        stack.append(callee)
+            for n, p in procs.items():
+                if n not in seen and p.name_span.file == self.main_file:
+                    self.diags.append(warning("unused-procedure",
+                                              f"procedure {n}() is never called from main()",
+                                              p.name_span))
+        # main first, then the rest in source order
+        rank = {p.name: i for i, p in enumerate(self.module.procs)}
+        rest = sorted((n for n in order if n != "main"), key=lambda n: rank.get(n, 0))
+        self.res.reachable = (["main"] if start else []) + rest
+
+    def _recursion(self) -> None:
+        graph = {n: [c for c, _ in self.calls.get(n, []) if c in self.res.procs] for n in self.res.procs}
+        reported: set[frozenset] = set()
+        # iterative DFS looking for back edges
+        color = {n: 0 for n in graph}
+        for root in graph:
+            if color[root]:
+                continue
+            stack = [(root, iter(graph[root]))]
+            path = [root]
+            color[root] = 1
+            while stack:
+                node, it = stack[-1]
+                nxt = next(it, None)
+                if nxt is None:
+                    stack.pop()
+                    path.pop()
+                    color[node] = 2
+                    continue
+                if color[nxt] == 1:
+                    cycle = path[path.index(nxt):] + [nxt]
+                    key = frozenset(cycle)
+                    if key not in reported:
+                        reported.add(key)
+                        span = next(s for c, s in self.calls[node] if c == nxt)
+                        chain = " -> ".join(f"{c}()" for c in cycle)
+                        self.diags.append(warning(
+                            "recursion", f"recursion: {chain}", span,
+                            "calls nest at most 16 deep at run time; deeper is a runtime fault"))
+                elif color[nxt] == 0:
+                    color[nxt] = 1
+                    path.append(nxt)
+                    stack.append((nxt, iter(graph[nxt])))
+
+    def _variables(self) -> None:
+        live = set(self.res.reachable)
+        used = [v for v in self.vars.values() if getattr(v, "proc", None) in live or not live]
+        # variables of unreachable procedures still get slots if they are used elsewhere
+        names = [v.name for v in used]
+        self.res.user_vars = names
+        if len(names) > abi.MAX_USER_VARS:
+            extra = used[abi.MAX_USER_VARS]
+            self.diags.append(error(
+                "too-many-variables",
+                f"too many variables: {len(names)} used, the controller has room for "
+                f"{abi.MAX_USER_VARS}", extra.first,
+                "the variables are: " + ", ".join(names),
+                "reuse variables, or move work to another procedure file"))
+        for i, n in enumerate(names):
+            self.res.slots[n] = abi.FIRST_USER_SLOT + i
+        if self.syntax_errors:
+            return
+        for v in used:
+            if v.read is not None and v.assigned is None:
+                self.diags.append(warning("never-assigned",
+                                          f"'{v.name}' is read but never assigned (it is always 0)",
+                                          v.read, "variables start at 0; assign it first, "
+                                                  "or use a #define for a constant"))
+            elif v.assigned is not None and v.read is None:
+                self.diags.append(warning("never-read", f"'{v.name}' is assigned but never read",
+                                          v.assigned))
+
+    # ================================================================ control flow
+    def _flow(self) -> None:
+        for n in self.res.reachable or list(self.res.procs):
+            p = self.res.procs[n]
+            self._current = n
+            falls = self._falls(p.body, report=True)
+            if n == "main" and falls:
+                self.diags.append(warning(
+                    "main-no-exit", "main() can reach its end without exit(); "
+                                    "the procedure then ends with exit code 0",
+                    p.body.end_span, "end it with exit(99); (plc_exit_normal)"))
+
+    def _proc_falls(self, name: str) -> bool:
+        if name in self._falls_cache:
+            return self._falls_cache[name]
+        if name in self._in_progress or name not in self.res.procs:
+            return True
+        self._in_progress.add(name)
+        r = self._falls(self.res.procs[name].body, report=False)
+        self._in_progress.discard(name)
+        self._falls_cache[name] = r
+        return r
+
+    def _falls(self, s, report: bool) -> bool:
+        """Can control pass the end of statement s?"""
+        t = type(s)
+        if t is A.Block:
+            for i, x in enumerate(s.stmts):
+                if not self._falls(x, report):
+                    rest = [y for y in s.stmts[i + 1:] if type(y) is not A.Empty]
+                    if rest and report:
+                        self.diags.append(warning("unreachable", "this code never runs: it comes "
+                                                  "after exit()", rest[0].span.cover(rest[-1].span)))
+                    return False
+            return True
+        if t is A.CallStmt:
+            if s.call.name == "exit":
+                return False
+            if s.call.name in self.res.procs:
+                return self._proc_falls(s.call.name)
+            return True
+        if t is A.If:
+            c = _const(s.cond)
+            then_falls = self._falls(s.then, report)
+            else_falls = self._falls(s.orelse, report) if s.orelse is not None else True
+            if c is not None:
+                return then_falls if c else else_falls
+            return then_falls or else_falls
+        if t is A.DoWhile:
+            if not self._falls(s.body, report):
+                return False
+            c = _const(s.cond)
+            return not (c is not None and c != 0)
+        if t is A.While:
+            self._falls(s.body, report)
+            c = _const(s.cond)
+            return not (c is not None and c != 0)
+        return True
+
+
+# ==================================================================== constants
+def _wrap(v: int) -> int:
+    v &= 0xFFFFFFFF
+    return v - (1 << 32) if v & 0x80000000 else v
+
+
+def _tdiv(a: int, b: int) -> int:
+    q = abs(a) // abs(b)
+    return q if (a >= 0) == (b >= 0) else -q
+
+
+def fold_binary(op: str, a: int, b: int) -> Optional[int]:
+    """C semantics on 32-bit values; None for division by zero."""
+    if op == "+":
+        return _wrap(a + b)
+    if op == "-":
+        return _wrap(a - b)
+    if op == "*":
+        return _wrap(a * b)
+    if op == "/":
+        return None if b == 0 else _wrap(_tdiv(a, b))
+    if op == "%":
+        return None if b == 0 else _wrap(a - _tdiv(a, b) * b)
+    if op == "<<":
+        return _wrap(a << (b & 31))
+    if op == ">>":
+        return _wrap(a >> (b & 31))
+    if op == "&":
+        return _wrap(a & b)
+    if op == "|":
+        return _wrap(a | b)
+    if op == "^":
+        return _wrap(a ^ b)
+    if op == "==":
+        return int(a == b)
+    if op == "!=":
+        return int(a != b)
+    if op == "<":
+        return int(a < b)
+    if op == "<=":
+        return int(a <= b)
+    if op == ">":
+        return int(a > b)
+    if op == ">=":
+        return int(a >= b)
+    if op == "&&":
+        return int(bool(a) and bool(b))
+    if op == "||":
+        return int(bool(a) or bool(b))
+    raise ValueError(op)
+
+
+def fold_unary(op: str, a: int) -> int:
+    if op == "-":
+        return _wrap(-a)
+    if op == "!":
+        return int(a == 0)
+    return _wrap(~a)
+
+
+def _const(e) -> Optional[int]:
+    """The value of a constant expression (numbers and built-in names), or None."""
+    t = type(e)
+    if t is A.Num:
+        return e.value
+    if t is A.Name:
+        return abi.BUILTIN_NAMES.get(e.id)
+    if t is A.Paren:
+        return _const(e.expr)
+    if t is A.Unary:
+        v = _const(e.operand)
+        return None if v is None else fold_unary(e.op, v)
+    if t is A.Binary:
+        a = _const(e.left)
+        if a is None:
+            return None
+        if e.op == "&&" and a == 0:
+            return 0
+        if e.op == "||" and a != 0:
+            return 1
+        b = _const(e.right)
+        if b is None:
+            return None
+        return fold_binary(e.op, a, b)
+    return None
+
+
+const_value = _const
