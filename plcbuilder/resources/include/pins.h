@@ -9,7 +9,7 @@
 // ---- inputs
 #define INPUT_HOME_X        0   // X home switch, active 1 at X <= 0
 #define INPUT_HOME_Y        1   // Y home switch, active 1 at Y <= 0
-#define INPUT_HOME_Z        2   // Z home switch, active 1 at the top of Z
+#define INPUT_HOME_Z        2   // Z home switch, active 1 at Z <= 0 (found by jogging Z-)
 #define INPUT_PROBE         3   // touch probe, active 1 on the workpiece
 #define INPUT_IHC           4   // plasma initial height control, reads 0 on contact
 #define INPUT_ARC_OK        5   // plasma arc-OK, 1 a while after OUTPUT_PLASMA
