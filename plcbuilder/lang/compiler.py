@@ -30,6 +30,11 @@ from plcbuilder.lang.source import SourceSet, decode_source, read_source
 
 COMPILER_VERSION = "1"
 
+# The checker and generator recurse over the tree, whose depth the parser caps
+# at MAX_DEPTH (256) levels; a few frames a level need more than Python's default.
+if sys.getrecursionlimit() < 4000:
+    sys.setrecursionlimit(4000)
+
 
 # ====================================================================== options
 @dataclass(frozen=True)
@@ -132,34 +137,28 @@ def _compile(pre: Preprocessed, path: str, file_path: Optional[Path],
             if word not in ("include", "define"):
                 diags.append(error("strict", f"#{word} is not accepted by the controller's "
                                              "compiler (--strict)", span))
-    old_limit = sys.getrecursionlimit()
-    if old_limit < 4000:
-        sys.setrecursionlimit(4000)
-    try:
-        module, parse_diags = parse_tokens(pre.tokens)
-        diags += parse_diags
-        checker = Checker(module, options.kind, options.strict, path, pre.sources.line,
-                          syntax_errors=any(d.is_error for d in diags))
-        check_diags, resolved, symbols = checker.run()
-        diags += check_diags
-        symbols.defines = {n: (d.text, d.span) for n, d in pre.defines.items()}
-        program = None
-        size = None
-        if not any(d.is_error for d in diags):
-            program = Generator(resolved, name, options.kind, _file_namer(path, file_path)).run()
-            size = program.code_size
-            if size > options.limit:
-                main = resolved.procs.get("main")
-                diags.append(error(
-                    "size-limit",
-                    f"procedure {name} is {size} bytes of code; the limit for a "
-                    f"{options.kind.label} procedure is {options.limit} ({size}/{options.limit} bytes)",
-                    main.name_span if main else Span.point(path, 1, 1),
-                    "move work into a software procedure, or split it into procedures started "
-                    "one after another"))
-                program = None
-    finally:
-        sys.setrecursionlimit(old_limit)
+    module, parse_diags = parse_tokens(pre.tokens)
+    diags += parse_diags
+    checker = Checker(module, options.kind, options.strict, path, pre.sources.line,
+                      syntax_errors=any(d.is_error for d in diags))
+    check_diags, resolved, symbols = checker.run()
+    diags += check_diags
+    symbols.defines = {n: (d.text, d.span) for n, d in pre.defines.items()}
+    program = None
+    size = None
+    if not any(d.is_error for d in diags):
+        program = Generator(resolved, name, options.kind, _file_namer(path, file_path)).run()
+        size = program.code_size
+        if size > options.limit:
+            main = resolved.procs.get("main")
+            diags.append(error(
+                "size-limit",
+                f"procedure {name} is {size} bytes of code; the limit for a "
+                f"{options.kind.label} procedure is {options.limit} ({size}/{options.limit} bytes)",
+                main.name_span if main else Span.point(path, 1, 1),
+                "move work into a software procedure, or split it into procedures started "
+                "one after another"))
+            program = None
     diags.sort(key=lambda d: (d.sort_key(), d.severity))
     return CompileResult(name, path, options.kind, program, diags, pre.sources, size, options.limit,
                          symbols, module, list(pre.includes))

@@ -1,0 +1,49 @@
+"""The package works from an installed wheel: resources and the grammar are
+package data, and the pygments lexer is registered as an entry point."""
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("wheel")
+    r = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
+                        "-q", "-w", str(out), str(ROOT)], capture_output=True, text=True)
+    if r.returncode != 0:
+        pytest.fail(f"building the wheel failed:\n{r.stdout}\n{r.stderr}")
+    (whl,) = out.glob("plcbuilder-*.whl")
+    return whl
+
+
+def test_wheel_ships_resources_and_grammar(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    assert "plcbuilder/resources/include/pins.h" in names
+    assert "plcbuilder/lang/grammar.lark" in names
+    assert "plcbuilder/resources/machine/default.toml" in names
+
+
+def test_wheel_declares_the_console_script_and_lexer(wheel):
+    z = zipfile.ZipFile(wheel)
+    (ep,) = [n for n in z.namelist() if n.endswith("entry_points.txt")]
+    text = z.read(ep).decode()
+    assert "plcbuilder = plcbuilder.cli.main:main" in text
+    assert "plc = plcbuilder.lang.lexer:PlcLexer" in text
+
+
+def test_installed_wheel_compiles_with_builtin_headers(wheel, tmp_path):
+    target = tmp_path / "site"
+    with zipfile.ZipFile(wheel) as z:
+        z.extractall(target)
+    code = ("import sys; sys.path.insert(0, %r); import plcbuilder.api as a; "
+            "r=a.compile_source('#include pins.h\\nmain(){ portset(OUTPUT_SPINDLE); exit(99); };');"
+            "print(a.__file__); raise SystemExit(0 if r.ok else 1)" % str(target))
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert str(target) in r.stdout
