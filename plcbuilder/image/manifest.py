@@ -1,0 +1,342 @@
+"""``eeprom.rom``: the ROMFS image of a built project, and its manifest.
+
+The image holds, in its root directory, one file per compiled procedure,
+``NAME.bin`` (the binary of :mod:`plcbuilder.bytecode.program`), and a file
+``MANIFEST``: UTF-8 JSON, keys sorted, one procedure a line::
+
+    {"format": "plcbuilder-image", "limits": {"hw_proc": 512, "hw_total": 8192, "sw_proc": 16384}, "version": 1,
+     "procedures": [
+     {"code_size": 57, "crc32": "1c291ca3", "file": "M03.bin", "file_size": 312, "kind": "hardware", "name": "M03"},
+     {"code_size": 90, "crc32": "ca7ed3a4", "file": "LUBE.bin", "file_size": 172, "kind": "software", "name": "LUBE"}
+    ]}
+
+Procedures are sorted by name. The reader accepts the manifest only in exactly
+this form (it regenerates the text and compares), so a damaged byte that would
+still parse as the same JSON (a tab for a space) is refused too.
+
+``crc32`` is the zlib CRC-32 of the whole ``.bin`` file, as 8 lower-case hex
+digits (ROMFS checksums protect the headers only, so these CRCs are what
+protects the code). ``limits`` are the size limits the image was built for.
+
+:func:`read_image` accepts an image only whole and valid: the ROMFS structure,
+the manifest, every listed file (present, size, CRC, loadable, kind, code
+size) and the size limits; nothing else may be in the image. Any failure
+raises :class:`ImageError` naming the procedure where there is one.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import zlib
+from dataclasses import dataclass, field
+from typing import Iterable, Sequence, Union
+
+from plcbuilder.bytecode import abi
+from plcbuilder.bytecode.program import Kind, LoadError, Program
+from plcbuilder.image.romfs import REGULAR, ImageError, read_romfs, write_romfs
+
+MANIFEST_NAME = "MANIFEST"
+FORMAT = "plcbuilder-image"
+VERSION = 1
+VOLUME = "plcbuilder"
+SUFFIX = ".bin"
+MAX_MANIFEST = 256 * 1024
+MAX_PROCEDURES = 4096
+MAX_LIMIT = 1 << 24
+NAME_RE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_\-]{0,63}\Z")
+_KINDS = {"hardware": Kind.HARDWARE, "software": Kind.SOFTWARE}
+_ENTRY_KEYS = {"name", "kind", "file", "code_size", "file_size", "crc32"}
+_TOP_KEYS = {"format", "version", "limits", "procedures"}
+
+__all__ = ["ImageError", "Limits", "Image", "ImageProcedure", "write_image", "read_image",
+           "valid_name", "MANIFEST_NAME"]
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Code size limits in bytes (defaults from the myCNC manual)."""
+
+    hw_proc: int = abi.HW_PROC_LIMIT
+    hw_total: int = abi.HW_TOTAL_LIMIT
+    sw_proc: int = abi.SW_PROC_LIMIT
+
+    def proc_limit(self, kind: Kind) -> int:
+        return self.hw_proc if Kind(kind) is Kind.HARDWARE else self.sw_proc
+
+    def as_dict(self) -> dict[str, int]:
+        return {"hw_proc": self.hw_proc, "hw_total": self.hw_total, "sw_proc": self.sw_proc}
+
+    def check(self) -> None:
+        for key, value in self.as_dict().items():
+            if type(value) is not int or not 0 < value <= MAX_LIMIT:
+                raise ImageError(f"limit {key} must be a whole number from 1 to {MAX_LIMIT}, "
+                                 f"is {value!r}")
+
+
+@dataclass(frozen=True)
+class ImageProcedure:
+    name: str
+    kind: Kind
+    code_size: int
+    file_size: int
+    crc32: int
+    data: bytes = field(repr=False)
+    program: Program = field(repr=False)
+
+    @property
+    def file(self) -> str:
+        return self.name + SUFFIX
+
+
+@dataclass(frozen=True)
+class Image:
+    limits: Limits                          # the limits the image was checked against
+    built_for: Limits                       # the limits its manifest names
+    procedures: tuple[ImageProcedure, ...]  # sorted by name
+    volume: str = VOLUME
+
+    def get(self, name: str) -> ImageProcedure | None:
+        for p in self.procedures:
+            if p.name == name:
+                return p
+        return None
+
+    def names(self, kind: Kind | None = None) -> list[str]:
+        return [p.name for p in self.procedures if kind is None or p.kind is kind]
+
+    @property
+    def hw_total(self) -> int:
+        return sum(p.code_size for p in self.procedures if p.kind is Kind.HARDWARE)
+
+
+def valid_name(name: str) -> bool:
+    """Whether a procedure name can go into an image (letters, digits, _ and -)."""
+    return isinstance(name, str) and bool(NAME_RE.match(name))
+
+
+def _kind_label(kind: Kind) -> str:
+    return Kind(kind).label
+
+
+def _check_limits(procs: Sequence[tuple[str, Kind, int]], limits: Limits) -> None:
+    """Per-procedure and hardware-total limits; procs are (name, kind, code_size)."""
+    for name, kind, size in procs:
+        limit = limits.proc_limit(kind)
+        if size > limit:
+            raise ImageError(f"procedure {name} ({_kind_label(kind)}): code is {size} bytes, "
+                             f"over the {limit}-byte limit of a {_kind_label(kind)} procedure")
+    hw = [(size, name) for name, kind, size in procs if kind is Kind.HARDWARE]
+    total = sum(s for s, _ in hw)
+    if total > limits.hw_total:
+        biggest = ", ".join(f"{n} {s}" for s, n in sorted(hw, key=lambda x: (-x[0], x[1]))[:3])
+        raise ImageError(f"hardware procedures together are {total} bytes, over the "
+                         f"{limits.hw_total}-byte limit (largest: {biggest})")
+
+
+def _load(name: str, kind: Kind, data: bytes) -> Program:
+    try:
+        program = Program.from_bytes(data)
+    except LoadError as exc:
+        raise ImageError(f"procedure {name}: {name}{SUFFIX} does not load: {exc}") from None
+    except Exception as exc:  # a loader bug must still read as a refused image
+        raise ImageError(f"procedure {name}: {name}{SUFFIX} does not load: "
+                         f"{type(exc).__name__}: {exc}") from None
+    if program.name != name:
+        raise ImageError(f"procedure {name}: {name}{SUFFIX} holds the procedure "
+                         f"{program.name!r}")
+    if program.kind is not kind:
+        raise ImageError(f"procedure {name}: the manifest says {_kind_label(kind)}, "
+                         f"{name}{SUFFIX} is a {_kind_label(program.kind)} procedure")
+    return program
+
+
+def manifest_text(entries: Iterable[dict], limits: Limits) -> bytes:
+    """The MANIFEST file: deterministic JSON, one procedure a line."""
+    head = json.dumps({"format": FORMAT, "version": VERSION, "limits": limits.as_dict()},
+                      sort_keys=True)
+    lines = [json.dumps(e, sort_keys=True) for e in entries]
+    body = ",\n ".join(lines)
+    text = head[:-1] + ',\n "procedures": [' + ("\n " + body + "\n" if lines else "") + "]}\n"
+    return text.encode("utf-8")
+
+
+ProgramInput = tuple[str, Union[Kind, str], bytes]
+
+
+def write_image(programs: Sequence[ProgramInput], limits: Limits | None = None) -> bytes:
+    """The eeprom.rom image of compiled procedures: [(name, kind, bin_bytes)].
+
+    Checks everything read_image checks (names, loadable binaries, kinds,
+    limits) and raises ImageError instead of writing an image the controller
+    would refuse. The output depends only on the inputs (sorted by name).
+    """
+    limits = limits or Limits()
+    limits.check()
+    if len(programs) > MAX_PROCEDURES:
+        raise ImageError(f"{len(programs)} procedures, at most {MAX_PROCEDURES} fit an image")
+    seen: set[str] = set()
+    rows = []
+    for item in programs:
+        try:
+            name, kind, data = item
+        except (TypeError, ValueError):
+            raise ImageError(f"expected (name, kind, bin_bytes), got {item!r}") from None
+        if not valid_name(name):
+            raise ImageError(f"procedure name {name!r} cannot go into an image: use letters, "
+                             "digits, '_' and '-' (at most 64)")
+        if name in seen:
+            raise ImageError(f"procedure {name} is given twice")
+        seen.add(name)
+        if isinstance(kind, str):
+            if kind not in _KINDS:
+                raise ImageError(f"procedure {name}: unknown kind {kind!r}")
+            kind = _KINDS[kind]
+        kind = Kind(kind)
+        if not isinstance(data, (bytes, bytearray)):
+            raise ImageError(f"procedure {name}: the binary must be bytes")
+        data = bytes(data)
+        program = _load(name, kind, data)
+        rows.append((name, kind, data, program))
+    rows.sort(key=lambda r: r[0])
+    _check_limits([(n, k, p.code_size) for n, k, _d, p in rows], limits)
+    entries = [{"name": n, "kind": _kind_label(k), "file": n + SUFFIX, "code_size": p.code_size,
+                "file_size": len(d), "crc32": f"{zlib.crc32(d):08x}"} for n, k, d, p in rows]
+    files: dict[str, bytes] = {n + SUFFIX: d for n, _k, d, _p in rows}
+    files[MANIFEST_NAME] = manifest_text(entries, limits)
+    image = write_romfs(files, VOLUME)
+    read_image(image, limits)   # never hand out an image the reader would refuse
+    return image
+
+
+# ------------------------------------------------------------------ reading
+
+def _reject_constant(name: str):
+    raise ValueError(f"{name} is not allowed")
+
+
+def _no_duplicates(pairs):
+    out = {}
+    for k, v in pairs:
+        if k in out:
+            raise ValueError(f"key {k!r} appears twice")
+        out[k] = v
+    return out
+
+
+def _int(value, what: str, lo: int = 0, hi: int = 1 << 32) -> int:
+    if type(value) is not int or not lo <= value <= hi:
+        raise ImageError(f"manifest: {what} must be a whole number from {lo} to {hi}, is {value!r}")
+    return value
+
+
+def parse_manifest(raw: bytes) -> tuple[Limits, list[dict]]:
+    """Validate the MANIFEST file; returns (limits, entries)."""
+    if len(raw) > MAX_MANIFEST:
+        raise ImageError(f"manifest is {len(raw)} bytes, more than {MAX_MANIFEST}")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ImageError(f"manifest is not UTF-8 text (byte {exc.start})") from None
+    try:
+        doc = json.loads(text, object_pairs_hook=_no_duplicates, parse_constant=_reject_constant)
+    except (ValueError, RecursionError) as exc:
+        raise ImageError(f"manifest is not valid JSON: {exc}") from None
+    if not isinstance(doc, dict):
+        raise ImageError("manifest: expected a JSON object")
+    if set(doc) != _TOP_KEYS:
+        extra, missing = sorted(set(doc) - _TOP_KEYS), sorted(_TOP_KEYS - set(doc))
+        raise ImageError(f"manifest: unexpected keys {extra}" if extra else
+                         f"manifest: missing keys {missing}")
+    if doc["format"] != FORMAT:
+        raise ImageError(f"manifest: format is {doc['format']!r}, expected {FORMAT!r}")
+    if doc["version"] != VERSION or type(doc["version"]) is not int:
+        raise ImageError(f"manifest: format version {doc['version']!r}, this reader reads "
+                         f"version {VERSION}")
+    lim = doc["limits"]
+    if not isinstance(lim, dict) or set(lim) != {"hw_proc", "hw_total", "sw_proc"}:
+        raise ImageError("manifest: limits must hold exactly hw_proc, hw_total and sw_proc")
+    limits = Limits(**{k: _int(v, f"limits.{k}", 1, MAX_LIMIT) for k, v in lim.items()})
+    procs = doc["procedures"]
+    if not isinstance(procs, list):
+        raise ImageError("manifest: procedures must be a list")
+    if len(procs) > MAX_PROCEDURES:
+        raise ImageError(f"manifest lists {len(procs)} procedures, at most {MAX_PROCEDURES}")
+    seen: set[str] = set()
+    for i, e in enumerate(procs):
+        if not isinstance(e, dict):
+            raise ImageError(f"manifest: procedure #{i + 1} is not an object")
+        name = e.get("name")
+        label = f"procedure {name}" if isinstance(name, str) else f"procedure #{i + 1}"
+        if set(e) != _ENTRY_KEYS:
+            extra, missing = sorted(set(e) - _ENTRY_KEYS), sorted(_ENTRY_KEYS - set(e))
+            raise ImageError(f"manifest: {label}: unexpected keys {extra}" if extra else
+                             f"manifest: {label}: missing keys {missing}")
+        if not valid_name(name):
+            raise ImageError(f"manifest: {label}: invalid procedure name {name!r}")
+        if name in seen:
+            raise ImageError(f"manifest: procedure {name} is listed twice")
+        seen.add(name)
+        if e["kind"] not in _KINDS:
+            raise ImageError(f"manifest: {label}: unknown kind {e['kind']!r}")
+        if e["file"] != name + SUFFIX:
+            raise ImageError(f"manifest: {label}: file is {e['file']!r}, expected {name + SUFFIX!r}")
+        _int(e["code_size"], f"{label}: code_size")
+        _int(e["file_size"], f"{label}: file_size")
+        crc = e["crc32"]
+        if not isinstance(crc, str) or not re.fullmatch(r"[0-9a-f]{8}", crc):
+            raise ImageError(f"manifest: {label}: crc32 must be 8 lower-case hex digits, is {crc!r}")
+    if manifest_text(procs, limits) != raw:
+        # Same meaning, other bytes (a tab for a space, an escaped letter): the
+        # manifest was not written by write_image, or a byte of it was damaged.
+        raise ImageError("manifest is not in the canonical form write_image gives it "
+                         "(damaged or edited)")
+    return limits, procs
+
+
+def read_image(data: bytes | bytearray | memoryview, limits: Limits | None = None) -> Image:
+    """Validate a whole eeprom.rom image and load its procedures.
+
+    limits: the controller's limits; None checks against the limits the
+    manifest names. Raises ImageError with the reason, naming the procedure.
+    """
+    if limits is not None:
+        limits.check()
+    fs = read_romfs(data, strict=True)
+    if fs.volume != VOLUME:
+        raise ImageError(f"volume name is {fs.volume!r}, a PLC Builder image has {VOLUME!r}")
+    files: dict[str, bytes] = {}
+    for node in fs.root.entries():
+        if node.type != REGULAR:
+            raise ImageError(f"unexpected {node.type_name} {node.name!r} in the image "
+                             "(only procedure files and the manifest belong there)")
+        files[node.name] = node.data
+    if MANIFEST_NAME not in files:
+        raise ImageError(f"no {MANIFEST_NAME} in the image")
+    built_for, entries = parse_manifest(files.pop(MANIFEST_NAME))
+    procedures = []
+    for e in entries:
+        name, kind = e["name"], _KINDS[e["kind"]]
+        blob = files.pop(e["file"], None)
+        if blob is None:
+            raise ImageError(f"procedure {name}: the manifest lists {e['file']}, "
+                             "the image has no such file")
+        if len(blob) != e["file_size"]:
+            raise ImageError(f"procedure {name}: {e['file']} is {len(blob)} bytes, "
+                             f"the manifest says {e['file_size']}")
+        crc = zlib.crc32(blob)
+        if f"{crc:08x}" != e["crc32"]:
+            raise ImageError(f"procedure {name}: CRC-32 of {e['file']} is {crc:08x}, "
+                             f"the manifest says {e['crc32']} (corrupt file)")
+        program = _load(name, kind, blob)
+        if program.code_size != e["code_size"]:
+            raise ImageError(f"procedure {name}: code is {program.code_size} bytes, "
+                             f"the manifest says {e['code_size']}")
+        procedures.append(ImageProcedure(name, kind, program.code_size, len(blob), crc,
+                                         blob, program))
+    if files:
+        raise ImageError(f"file {sorted(files)[0]!r} in the image is not in the manifest")
+    check = limits or built_for
+    _check_limits([(p.name, p.kind, p.code_size) for p in procedures], check)
+    procedures.sort(key=lambda p: p.name)
+    return Image(check, built_for, tuple(procedures), fs.volume)

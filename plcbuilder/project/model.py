@@ -1,0 +1,395 @@
+"""The project folder (SPEC §4) and its settings file.
+
+A project is a folder::
+
+    plcbuilder.toml        settings (optional: defaults when missing)
+    hardware/*.plc         hardware procedures (M03.plc is what M03 starts)
+    software/*.plc         software procedures (__NAME: system procedures)
+    include/pins.h         headers searched by #include (after the procedure's folder)
+    plc-variables.xml      initial values of var00..var15
+    machine.toml           the simulated machine (path set in the settings)
+    build/                 Build All's output: NAME.bin, eeprom.rom, .cache.json
+
+The settings file::
+
+    name = "my machine"            # default: the folder's name
+    machine = "machine.toml"       # relative to the project folder
+
+    [limits]                       # code size limits in bytes
+    hw_proc = 512
+    hw_total = 8192
+    sw_proc = 16384
+
+    [controller]
+    address = "127.0.0.1:5700"     # the controller the IDE/CLI talk to ("" = the embedded one)
+
+    [build]
+    strict = false                 # build with --strict (controller compatibility)
+
+Every problem with the settings raises :class:`ProjectError` naming the file,
+the line and the key. :func:`atomic_write` is how the IDE saves files.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import secrets
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Optional, Union
+
+from plcbuilder.bytecode.program import Kind
+from plcbuilder.image.manifest import MAX_LIMIT, Limits
+
+SETTINGS_FILE = "plcbuilder.toml"
+HARDWARE_DIR = "hardware"
+SOFTWARE_DIR = "software"
+INCLUDE_DIR = "include"
+BUILD_DIR = "build"
+VARIABLES_FILE = "plc-variables.xml"
+DEFAULT_MACHINE = "machine.toml"
+IMAGE_FILE = "eeprom.rom"
+SOURCE_SUFFIX = ".plc"
+MAX_SETTINGS_BYTES = 1 << 20
+
+
+class ProjectError(ValueError):
+    """A project that cannot be opened or used; ``str()`` reads ``FILE:LINE: what``."""
+
+    def __init__(self, message: str, file: Optional[Union[str, Path]] = None,
+                 line: Optional[int] = None, key: Optional[str] = None):
+        self.message = message
+        self.file = str(file) if file is not None else None
+        self.line = line
+        self.key = key
+        where = ""
+        if self.file is not None:
+            where = f"{self.file}:{line}: " if line is not None else f"{self.file}: "
+        super().__init__(f"{where}{key + ': ' if key else ''}{message}")
+
+
+# ------------------------------------------------------------ atomic writes
+
+def atomic_write(path: Union[str, Path], data: Union[bytes, str]) -> None:
+    """Replace path's contents all at once: write a temporary file in the same
+    folder, fsync it, os.replace it over path (then fsync the folder). Readers
+    see the old file or the new one, never a half-written one. str is written
+    as UTF-8. The file keeps its permissions when it existed."""
+    path = Path(path)
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    elif not isinstance(data, (bytes, bytearray, memoryview)):
+        raise TypeError(f"atomic_write takes bytes or str, not {type(data).__name__}")
+    try:
+        mode = path.stat().st_mode & 0o7777
+    except FileNotFoundError:
+        mode = None
+    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        if mode is not None:
+            os.chmod(tmp, mode)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    _fsync_dir(path.parent)
+
+
+def _fsync_dir(folder: Path) -> None:
+    if not hasattr(os, "O_DIRECTORY"):
+        return
+    try:
+        fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+# ---------------------------------------------------------------- settings
+
+@dataclass(frozen=True)
+class Settings:
+    name: str = ""
+    machine: str = DEFAULT_MACHINE
+    limits: Limits = field(default_factory=Limits)
+    controller_address: str = ""
+    strict: bool = False
+
+    def to_toml(self) -> str:
+        """The settings file's text (every key written, with comments)."""
+        def line(key: str, value: str, comment: str) -> str:
+            return f"{key} = {value}".ljust(27) + f"# {comment}\n"
+        lim = self.limits
+        return ("# PLC Builder project settings (see docs/project.md)\n"
+                + line("name", _toml_str(self.name), "the project's name")
+                + line("machine", _toml_str(self.machine), "the simulated machine's file")
+                + "\n[limits]\n"
+                + line("hw_proc", str(lim.hw_proc), "bytes of code of one hardware procedure")
+                + line("hw_total", str(lim.hw_total), "... of all hardware procedures together")
+                + line("sw_proc", str(lim.sw_proc), "... of one software procedure")
+                + "\n[controller]\n"
+                + line("address", _toml_str(self.controller_address),
+                       "HOST:PORT of a running controller; empty: the embedded one")
+                + "\n[build]\n"
+                + line("strict", "true" if self.strict else "false",
+                       "controller compatibility: only what the myCNC manual shows"))
+
+
+def _toml_str(s: str) -> str:
+    out = ['"']
+    for ch in s:
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(ch)
+    out.append('"')
+    return "".join(out)
+
+
+_SCHEMA: dict[str, dict[str, type]] = {
+    "": {"name": str, "machine": str},
+    "limits": {"hw_proc": int, "hw_total": int, "sw_proc": int},
+    "controller": {"address": str},
+    "build": {"strict": bool},
+}
+
+
+def _line_of(text: str, table: str, key: Optional[str]) -> Optional[int]:
+    """The line where [table] key = … is (or the table header), for messages."""
+    current = ""
+    header_line = None
+    for i, raw in enumerate(text.splitlines(), 1):
+        line = raw.strip()
+        m = re.match(r"\[\s*([A-Za-z0-9_\-\"'. ]+?)\s*\]\s*(#.*)?$", line)
+        if m:
+            current = m.group(1).strip().strip("\"'")
+            if current == table and key is None:
+                return i
+            if current == table:
+                header_line = i
+            continue
+        if key is not None and current == table:
+            if re.match(rf"""["']?{re.escape(key)}["']?\s*=""", line):
+                return i
+    return header_line
+
+
+def parse_settings(text: str, file: Union[str, Path] = SETTINGS_FILE,
+                   default_name: str = "") -> Settings:
+    """Settings from the text of a plcbuilder.toml; raises ProjectError."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        msg = str(exc)
+        m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
+        line = int(m.group(1)) if m else None
+        msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", msg) if m else msg
+        if not m and "end of document" in msg:
+            line = text.count("\n") + 1
+        raise ProjectError(f"not valid TOML: {msg}", file, line) from None
+    values: dict[str, object] = {}
+    for key, value in doc.items():
+        if key in _SCHEMA and key != "":
+            if not isinstance(value, dict):
+                raise ProjectError(f"[{key}] must be a table", file, _line_of(text, "", key), key)
+            for sub, v in value.items():
+                _check(text, file, key, sub, v)
+                values[f"{key}.{sub}"] = v
+        else:
+            _check(text, file, "", key, value)
+            values[key] = value
+    lim = Limits()
+    limits = Limits(hw_proc=values.get("limits.hw_proc", lim.hw_proc),
+                    hw_total=values.get("limits.hw_total", lim.hw_total),
+                    sw_proc=values.get("limits.sw_proc", lim.sw_proc))
+    machine = values.get("machine", DEFAULT_MACHINE)
+    if not machine.strip():
+        raise ProjectError("machine must name a file", file, _line_of(text, "", "machine"),
+                           "machine")
+    address = values.get("controller.address", "")
+    if address and not re.fullmatch(r"\[?[A-Za-z0-9_.:\-]+\]?:\d{1,5}", address):
+        raise ProjectError(f"address must be HOST:PORT, is {address!r}", file,
+                           _line_of(text, "controller", "address"), "controller.address")
+    return Settings(name=values.get("name", default_name) or default_name, machine=machine,
+                    limits=limits, controller_address=address,
+                    strict=values.get("build.strict", False))
+
+
+def _check(text: str, file, table: str, key: str, value) -> None:
+    label = f"{table}.{key}" if table else key
+    schema = _SCHEMA[table]
+    if key not in schema:
+        known = ", ".join(sorted((f"{table}.{k}" if table else k) for k in schema))
+        where = f"[{table}] " if table else ""
+        raise ProjectError(f"unknown setting {where}{key!r} (known here: {known})", file,
+                           _line_of(text, table, key), label)
+    want = schema[key]
+    if type(value) is not want:
+        raise ProjectError(f"must be {_type_word(want)}, is {_type_word(type(value))} {value!r}",
+                           file, _line_of(text, table, key), label)
+    if want is int and not 0 < value <= MAX_LIMIT:
+        raise ProjectError(f"must be from 1 to {MAX_LIMIT} bytes, is {value}", file,
+                           _line_of(text, table, key), label)
+
+
+def _type_word(t: type) -> str:
+    return {str: "a string", int: "a whole number", bool: "true or false",
+            float: "a number", dict: "a table", list: "a list"}.get(t, t.__name__)
+
+
+# ----------------------------------------------------------------- project
+
+@dataclass(frozen=True)
+class Procedure:
+    name: str          # the file stem: what the M-code / the name starts
+    kind: Kind
+    path: Path
+
+    @property
+    def system(self) -> bool:
+        """A software procedure started only by an event or by hand (__NAME)."""
+        return self.name.startswith("__")
+
+
+@dataclass
+class Project:
+    root: Path
+    settings: Settings
+    settings_found: bool = True
+
+    # --------------------------------------------------------------- open
+    @classmethod
+    def open(cls, path: Union[str, Path]) -> "Project":
+        """Open a project folder (or its plcbuilder.toml). A missing settings
+        file means the defaults; a bad one raises ProjectError (file, line)."""
+        p = Path(path)
+        if p.name == SETTINGS_FILE and p.is_file():
+            p = p.parent
+        if not p.exists():
+            raise ProjectError("no such folder", p)
+        if not p.is_dir():
+            raise ProjectError("a project is a folder (with hardware/ and software/), "
+                               "this is a file", p)
+        default_name = p.resolve().name
+        sp = p / SETTINGS_FILE
+        if not sp.exists():
+            return cls(p, Settings(name=default_name), settings_found=False)
+        try:
+            raw = sp.read_bytes()
+        except OSError as exc:
+            raise ProjectError(f"cannot read: {exc.strerror or exc}", sp) from None
+        if len(raw) > MAX_SETTINGS_BYTES:
+            raise ProjectError(f"the file is too large ({len(raw)} bytes)", sp)
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            line = raw[:exc.start].count(b"\n") + 1
+            raise ProjectError("not UTF-8 text", sp, line) from None
+        return cls(p, parse_settings(text, sp, default_name))
+
+    # -------------------------------------------------------------- paths
+    @property
+    def name(self) -> str:
+        return self.settings.name
+
+    @property
+    def settings_path(self) -> Path:
+        return self.root / SETTINGS_FILE
+
+    @property
+    def hardware_dir(self) -> Path:
+        return self.root / HARDWARE_DIR
+
+    @property
+    def software_dir(self) -> Path:
+        return self.root / SOFTWARE_DIR
+
+    @property
+    def include_dir(self) -> Path:
+        return self.root / INCLUDE_DIR
+
+    @property
+    def build_dir(self) -> Path:
+        return self.root / BUILD_DIR
+
+    @property
+    def image_path(self) -> Path:
+        return self.build_dir / IMAGE_FILE
+
+    @property
+    def variables_path(self) -> Path:
+        return self.root / VARIABLES_FILE
+
+    @property
+    def machine_path(self) -> Path:
+        return self.root / self.settings.machine
+
+    @property
+    def limits(self) -> Limits:
+        return self.settings.limits
+
+    def dir_for(self, kind: Kind) -> Path:
+        return self.hardware_dir if Kind(kind) is Kind.HARDWARE else self.software_dir
+
+    def include_dirs(self) -> tuple[Path, ...]:
+        """Folders #include searches after the procedure's own folder (the built-in
+        headers come last, by the compiler)."""
+        return (self.include_dir,) if self.include_dir.is_dir() else ()
+
+    # --------------------------------------------------------- procedures
+    def procedures(self, kind: Optional[Kind] = None) -> list[Procedure]:
+        """Every *.plc of hardware/ and software/ (read from disk on each call),
+        hardware first, each sorted by name."""
+        out = []
+        for k in (Kind.HARDWARE, Kind.SOFTWARE):
+            if kind is not None and Kind(kind) is not k:
+                continue
+            folder = self.dir_for(k)
+            try:
+                entries = list(folder.iterdir())
+            except (FileNotFoundError, NotADirectoryError):
+                continue
+            except OSError as exc:
+                raise ProjectError(f"cannot list: {exc.strerror or exc}", folder) from None
+            for p in entries:
+                if p.suffix == SOURCE_SUFFIX and not p.name.startswith(".") and p.is_file():
+                    out.append(Procedure(p.stem, k, p))
+        out.sort(key=lambda pr: (pr.kind, pr.name))
+        return out
+
+    def procedure(self, name: str, kind: Optional[Kind] = None) -> Optional[Procedure]:
+        for p in self.procedures(kind):
+            if p.name == name:
+                return p
+        return None
+
+    def new_procedure_path(self, name: str, kind: Kind) -> Path:
+        return self.dir_for(kind) / f"{name}{SOURCE_SUFFIX}"
+
+    # ------------------------------------------------------------- saving
+    def save_settings(self, settings: Optional[Settings] = None) -> None:
+        """Write the settings file atomically (every key, with comments)."""
+        if settings is not None:
+            self.settings = settings
+        atomic_write(self.settings_path, self.settings.to_toml())
+        self.settings_found = True
+
+    def with_settings(self, **changes) -> "Project":
+        return Project(self.root, replace(self.settings, **changes), self.settings_found)

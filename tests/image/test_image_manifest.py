@@ -1,0 +1,205 @@
+"""eeprom.rom: write_image / read_image and the manifest."""
+
+import json
+import os
+import subprocess
+import zlib
+
+import pytest
+
+from plcbuilder.bytecode.program import Kind
+from plcbuilder.image import ImageError, Limits, read_image, read_romfs, write_image, write_romfs
+from plcbuilder.image.manifest import MANIFEST_NAME, manifest_text
+
+
+def entries_of(programs):
+    from plcbuilder.bytecode.program import Program
+    out = []
+    for name, kind, data in sorted(programs):
+        out.append({"name": name, "kind": Kind(kind).label, "file": name + ".bin",
+                    "code_size": Program.from_bytes(data).code_size, "file_size": len(data),
+                    "crc32": f"{zlib.crc32(data):08x}"})
+    return out
+
+
+def forge(files, entries, limits=Limits(), volume="plcbuilder"):
+    """An image whose ROMFS layer is valid, with whatever manifest we like."""
+    files = dict(files)
+    if entries is not None:
+        files[MANIFEST_NAME] = manifest_text(entries, limits)
+    return write_romfs(files, volume)
+
+
+def files_of(programs):
+    return {name + ".bin": data for name, _k, data in programs}
+
+
+def test_round_trip(sample_programs):
+    img = write_image(sample_programs)
+    assert len(img) % 1024 == 0
+    image = read_image(img)
+    assert [p.name for p in image.procedures] == sorted(n for n, _k, _d in sample_programs)
+    by = {n: (k, d) for n, k, d in sample_programs}
+    for p in image.procedures:
+        kind, data = by[p.name]
+        assert p.kind is kind and p.data == data and p.crc32 == zlib.crc32(data)
+        assert p.program.code_size == p.code_size and p.file_size == len(data)
+    assert image.hw_total == 120 + 40 + 480 + 60
+    assert image.names(Kind.SOFTWARE) == ["LUBE", "__HANDLER_INIT"]
+    assert image.limits == image.built_for == Limits()
+    names = set(read_romfs(img).files())
+    assert names == {n + ".bin" for n, _k, _d in sample_programs} | {"MANIFEST"}
+
+
+def test_deterministic(sample_programs):
+    assert write_image(sample_programs) == write_image(list(reversed(sample_programs)))
+    assert write_image([(n, k.label, d) for n, k, d in sample_programs]) == write_image(sample_programs)
+
+
+def test_manifest_is_readable_json(sample_programs):
+    raw = read_romfs(write_image(sample_programs)).files()["MANIFEST"]
+    doc = json.loads(raw)
+    assert doc["format"] == "plcbuilder-image" and doc["version"] == 1
+    assert doc["limits"] == {"hw_proc": 512, "hw_total": 8192, "sw_proc": 16384}
+    m03 = [e for e in doc["procedures"] if e["name"] == "M03"][0]
+    assert m03["kind"] == "hardware" and m03["code_size"] == 120 and m03["file"] == "M03.bin"
+    assert len(raw.splitlines()) == 3 + len(doc["procedures"])    # one procedure a line
+
+
+def test_empty_image():
+    image = read_image(write_image([]))
+    assert image.procedures == () and image.hw_total == 0
+
+
+def test_image_from_genromfs_reads_the_same(sample_programs, genromfs, tmp_path):
+    ours = write_image(sample_programs)
+    folder = tmp_path / "img"
+    folder.mkdir()
+    for name, data in read_romfs(ours).files().items():
+        (folder / name).write_bytes(data)
+        os.chmod(folder / name, 0o644)
+    out = tmp_path / "eeprom.rom"
+    subprocess.run([genromfs, "-f", str(out), "-d", str(folder), "-V", "plcbuilder"], check=True)
+    theirs = read_image(out.read_bytes())
+    assert read_image(ours) == theirs
+
+
+# ------------------------------------------------------------ write refusals
+
+def test_write_refuses_what_the_controller_would(make_program):
+    big = make_program("M80", Kind.HARDWARE, 513)
+    with pytest.raises(ImageError, match=r"procedure M80 \(hardware\): code is 513 bytes"):
+        write_image([("M80", Kind.HARDWARE, big)])
+    assert read_image(write_image([("M80", Kind.HARDWARE, big)], Limits(hw_proc=600)),
+                      Limits(hw_proc=600)).get("M80").code_size == 513
+    many = [(f"M{i}", Kind.HARDWARE, make_program(f"M{i}", Kind.HARDWARE, 500)) for i in range(17)]
+    with pytest.raises(ImageError, match=r"together are 8500 bytes, over the 8192-byte limit"):
+        write_image(many)
+    with pytest.raises(ImageError, match="cannot go into an image"):
+        write_image([("a b", Kind.HARDWARE, make_program("x", Kind.HARDWARE))])
+    p = make_program("M03", Kind.HARDWARE)
+    with pytest.raises(ImageError, match="given twice"):
+        write_image([("M03", Kind.HARDWARE, p), ("M03", Kind.HARDWARE, p)])
+    with pytest.raises(ImageError, match="procedure M03: M03.bin does not load"):
+        write_image([("M03", Kind.HARDWARE, p[:-1])])
+    with pytest.raises(ImageError, match="manifest says software, M03.bin is a hardware"):
+        write_image([("M03", "software", p)])
+    with pytest.raises(ImageError, match="unknown kind"):
+        write_image([("M03", "firmware", p)])
+    with pytest.raises(ImageError, match="limit hw_proc"):
+        write_image([], Limits(hw_proc=0))
+
+
+def test_software_limit(make_program):
+    big = make_program("BIG", Kind.SOFTWARE, 16385)
+    with pytest.raises(ImageError, match=r"BIG \(software\): code is 16385 bytes, over the 16384"):
+        write_image([("BIG", Kind.SOFTWARE, big)])
+
+
+# ------------------------------------------------------------- read refusals
+
+def test_manifest_lies_are_refused(sample_programs, make_program):
+    files = files_of(sample_programs)
+    good = entries_of(sample_programs)
+    assert read_image(forge(files, good))          # the forge itself is sound
+
+    def lie(**change):
+        name = change.pop("who", "M03")
+        out = [dict(e) for e in good]
+        for e in out:
+            if e["name"] == name:
+                e.update(change)
+        return out
+
+    cases = [
+        (forge(files, None), "no MANIFEST"),
+        (forge(files, lie(crc32="00000000")), "procedure M03: CRC-32 of M03.bin is"),
+        (forge(files, lie(file_size=5)), "procedure M03: M03.bin is .* bytes, the manifest says 5"),
+        (forge(files, lie(code_size=7)), "procedure M03: code is 120 bytes, the manifest says 7"),
+        (forge(files, lie(kind="software")), "procedure M03: the manifest says software"),
+        (forge(files, lie(file="M04.bin")), "procedure M03: file is 'M04.bin'"),
+        (forge(files, [e for e in good if e["name"] != "M05"]), "'M05.bin' .* is not in the manifest"),
+        (forge({k: v for k, v in files.items() if k != "OFF.bin"}, good),
+         "procedure OFF: the manifest lists OFF.bin, the image has no such file"),
+        (forge({**files, "M03.bin": files["M05.bin"]}, good), "procedure M03"),
+        (forge({**files, "junk": {"x": b"1"}}, good), "unexpected directory 'junk'"),
+        (forge(files, good + [good[0]]), "listed twice"),
+        (forge(files, good, volume="other"), "volume name"),
+        (forge(files, good, Limits(hw_proc=100)), r"procedure M03 \(hardware\): code is 120 bytes"),
+        (forge(files, good, Limits(hw_total=600)), "together are 700 bytes"),
+    ]
+    bad_m03 = bytearray(files["M03.bin"])
+    bad_m03[30] ^= 0xFF
+    fixed = lie(crc32=f"{zlib.crc32(bytes(bad_m03)):08x}")
+    cases.append((forge({**files, "M03.bin": bytes(bad_m03)}, fixed), "procedure M03: M03.bin does not load"))
+    for img, why in cases:
+        with pytest.raises(ImageError, match=why):
+            read_image(img)
+
+
+@pytest.mark.parametrize("text, why", [
+    (b"\xff\xfe", "not UTF-8"),
+    (b"{", "not valid JSON"),
+    (b"[]", "expected a JSON object"),
+    (b'{"format": "plcbuilder-image", "version": 1, "limits": {}, "procedures": [], "x": 1}',
+     "unexpected keys"),
+    (b'{"format": "other", "version": 1, "limits": {}, "procedures": []}', "format is 'other'"),
+    (b'{"format": "plcbuilder-image", "version": 2, "limits": {}, "procedures": []}',
+     "format version 2"),
+    (b'{"format": "plcbuilder-image", "version": 1, "limits": {"hw_proc": NaN, "hw_total": 1,'
+     b' "sw_proc": 1}, "procedures": []}', "not valid JSON"),
+    (b'{"format": "plcbuilder-image", "version": 1, "version": 1, "limits": {}, "procedures": []}',
+     "appears twice"),
+    (b'{"format": "plcbuilder-image", "version": 1, "limits": {"hw_proc": true, "hw_total": 1,'
+     b' "sw_proc": 1}, "procedures": []}', "limits.hw_proc"),
+    (b'{"format": "plcbuilder-image", "version": 1, "limits": {"hw_proc": 1, "hw_total": 1,'
+     b' "sw_proc": 1}, "procedures": [{"name": "M03"}]}', "procedure M03: missing keys"),
+    (b"[" * 100000 + b"]" * 100000, "not valid JSON|more than"),
+])
+def test_bad_manifests(text, why):
+    with pytest.raises(ImageError, match=why):
+        read_image(write_romfs({"MANIFEST": text}, "plcbuilder"))
+
+
+def test_manifest_must_be_canonical(sample_programs):
+    files = files_of(sample_programs)
+    raw = manifest_text(entries_of(sample_programs), Limits())
+    for variant in (raw.replace(b'"kind"', b'"\\u006bind"', 1),
+                    raw.replace(b", ", b",\t", 1),
+                    raw + b"\n"):
+        assert json.loads(variant) == json.loads(raw)
+        with pytest.raises(ImageError, match="canonical"):
+            read_image(write_romfs({**files, "MANIFEST": variant}, "plcbuilder"))
+
+
+def test_controller_limits_override_the_manifest(make_program):
+    img = write_image([("M80", Kind.HARDWARE, make_program("M80", Kind.HARDWARE, 700))],
+                      Limits(hw_proc=1024))
+    assert read_image(img).get("M80").code_size == 700
+    with pytest.raises(ImageError, match=r"M80 \(hardware\): code is 700 bytes, over the 512"):
+        read_image(img, Limits())
+
+
+def test_read_image_refuses_non_bytes():
+    with pytest.raises(ImageError):
+        read_image("not bytes")

@@ -1,0 +1,225 @@
+"""Build All: outputs, errors, limits, determinism and the incremental cache."""
+
+import json
+import shutil
+
+import pytest
+
+from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.image import Limits, read_image, read_romfs
+from plcbuilder.project import Project, build_project, create_project
+from plcbuilder.project.build import CACHE_FILE
+
+EXAMPLE_HW = ["M02", "M03", "M05", "M07", "M08", "M09", "M71", "M80", "M81", "OFF"]
+EXAMPLE_SW = ["LUBE", "__HANDLER_INIT"]
+
+
+@pytest.fixture
+def example(tmp_path):
+    return create_project(tmp_path / "proj")
+
+
+def small_project(root, files, settings=None):
+    root.mkdir(parents=True, exist_ok=True)
+    for rel, text in files.items():
+        p = root / rel
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_text(text)
+    if settings is not None:
+        (root / "plcbuilder.toml").write_text(settings)
+    return Project.open(root)
+
+
+def outputs(project):
+    b = project.build_dir
+    return {p.name: p.read_bytes() for p in sorted(b.iterdir()) if p.name != CACHE_FILE}
+
+
+def test_example_project_builds(example):
+    calls = []
+    r = build_project(example, lambda *a: calls.append(a))
+    assert r.ok, [str(d) for d in r.all_diagnostics]
+    assert r.all_diagnostics == []                       # not even a warning
+    assert [p.name for p in r.procedures] == EXAMPLE_HW + EXAMPLE_SW
+    assert calls[0] == (0, 12, "") and calls[-1] == (12, 12, "__HANDLER_INIT")
+    assert [c[0] for c in calls] == list(range(13))
+    assert r.image_written and r.image_path.exists() and "wrote" in r.image_message
+    image = read_image(r.image_path.read_bytes())
+    assert image.names(Kind.HARDWARE) == sorted(EXAMPLE_HW)
+    assert image.names(Kind.SOFTWARE) == EXAMPLE_SW
+    assert image.hw_total == r.hw_total == sum(p.size for p in r.procedures if p.kind is Kind.HARDWARE)
+    for pb in r.procedures:
+        assert pb.ok and pb.size <= pb.limit
+        data = (example.build_dir / f"{pb.name}.bin").read_bytes()
+        assert data == pb.binary == image.get(pb.name).data
+        assert Program.from_bytes(data).name == pb.name
+    assert set(read_romfs(r.image_path.read_bytes()).files()) == \
+        {f"{n}.bin" for n in EXAMPLE_HW + EXAMPLE_SW} | {"MANIFEST"}
+
+
+def test_same_sources_give_identical_outputs(example, tmp_path):
+    build_project(example, use_cache=False)
+    first = outputs(example)
+    build_project(example, use_cache=False)
+    assert outputs(example) == first
+    # elsewhere, under another name: still the same bytes
+    other = tmp_path / "elsewhere" / "copy"
+    shutil.copytree(example.root, other, ignore=shutil.ignore_patterns("build"))
+    build_project(Project.open(other))
+    assert outputs(Project.open(other)) == first
+
+
+def test_incremental_build_reuses_unchanged_procedures(example):
+    r1 = build_project(example)
+    first = outputs(example)
+    assert (r1.compiled, r1.reused) == (12, 0)
+    r2 = build_project(example)
+    assert (r2.compiled, r2.reused) == (0, 12)
+    assert all(p.cached for p in r2.procedures) and r2.ok and r2.image_written
+    assert outputs(example) == first
+    # change one procedure: only it is compiled again
+    m07 = example.hardware_dir / "M07.plc"
+    m07.write_text(m07.read_text().replace("portset(OUTPUT_MIST);", "portset(OUTPUT_MIST);\n  a=1;"))
+    r3 = build_project(example)
+    assert (r3.compiled, r3.reused) == (1, 11)
+    assert not r3.get("M07").cached and r3.get("M03").cached
+    assert outputs(example)["M07.bin"] != first["M07.bin"]
+    # its warning (a assigned, never read) comes back from the cache next time
+    r4 = build_project(example)
+    assert r4.compiled == 0 and [d.code for d in r4.get("M07").diagnostics] == \
+        [d.code for d in r3.get("M07").diagnostics] != []
+    # a fresh build gives the same bytes as the incremental one
+    incremental = outputs(example)
+    build_project(example, use_cache=False)
+    assert outputs(example) == incremental
+
+
+def test_headers_are_part_of_the_cache_key(example):
+    build_project(example)
+    pins = example.include_dir / "pins.h"
+    pins.write_text(pins.read_text().replace("#define OUTPUT_MIST         2",
+                                             "#define OUTPUT_MIST         12"))
+    r = build_project(example)
+    assert r.compiled == 12                    # every example procedure includes pins.h
+    m07 = Program.from_bytes((example.build_dir / "M07.bin").read_bytes())
+    fresh = build_project(example, use_cache=False)
+    assert fresh.get("M07").binary == m07.to_bytes()
+    # a header that shadows include/pins.h (the procedure's folder is searched first)
+    (example.hardware_dir / "pins.h").write_text(pins.read_text())
+    r = build_project(example)
+    assert r.compiled == 10 and r.reused == 2  # the hardware ones
+
+
+def test_broken_cache_or_missing_binary_is_rebuilt(example):
+    build_project(example)
+    good = outputs(example)
+    (example.build_dir / CACHE_FILE).write_text("{not json")
+    r = build_project(example)
+    assert r.compiled == 12 and outputs(example) == good
+    (example.build_dir / "M03.bin").unlink()
+    r = build_project(example)
+    assert (r.compiled, r.reused) == (1, 11) and outputs(example) == good
+    (example.build_dir / "M05.bin").write_bytes(b"garbage")
+    r = build_project(example)
+    assert not r.get("M05").cached and outputs(example) == good
+    doc = json.loads((example.build_dir / CACHE_FILE).read_text())
+    doc["procedures"]["hardware/M08"]["diagnostics"] = [{"severity": "bogus"}]
+    (example.build_dir / CACHE_FILE).write_text(json.dumps(doc))
+    r = build_project(example)
+    assert (r.compiled, r.reused) == (1, 11) and outputs(example) == good
+
+
+def test_errors_keep_the_previous_image(example):
+    r = build_project(example)
+    image = example.image_path.read_bytes()
+    (example.hardware_dir / "M07.plc").write_text("main() { x = ; }\n")
+    (example.software_dir / "BIN.plc").write_bytes(b"\x00\x01binary")
+    r = build_project(example)
+    assert not r.ok and not r.image_written
+    assert "not written" in r.image_message and "previous eeprom.rom is kept" in r.image_message
+    assert example.image_path.read_bytes() == image
+    assert not r.get("M07").ok and r.get("M07").diagnostics[0].span.line == 1
+    assert [d.code for d in r.get("BIN").diagnostics] == ["file-binary"]
+    assert not (example.build_dir / "M07.bin").exists()           # no stale binary
+    assert (example.build_dir / "M03.bin").exists()               # the others are written
+    assert r.get("M03").ok and r.error_count == 2
+
+
+def test_no_image_yet_is_said(tmp_path):
+    p = small_project(tmp_path / "p", {"hardware/M03.plc": "main() { exit(99) }\n"})
+    r = build_project(p)
+    assert not r.ok and "there is no eeprom.rom yet" in r.image_message
+    assert not p.image_path.exists()
+
+
+def test_removed_procedures_lose_their_binary(example):
+    build_project(example)
+    (example.hardware_dir / "M09.plc").unlink()
+    r = build_project(example)
+    assert r.ok and not (example.build_dir / "M09.bin").exists()
+    assert "M09" not in read_image(example.image_path.read_bytes()).names()
+    (example.hardware_dir / "M08.plc").unlink()
+    build_project(example, use_cache=False)
+    assert not (example.build_dir / "M08.bin").exists()
+    (example.build_dir / "mine.bin").write_bytes(b"not ours")   # never listed: left alone
+    build_project(example)
+    assert (example.build_dir / "mine.bin").exists()
+
+
+def test_limits_come_from_the_settings(tmp_path):
+    body = "main() { a=1; b=a+2; c=b*a; exit(c); };\n"
+    files = {f"hardware/M{i}.plc": body for i in range(10, 14)}
+    p = small_project(tmp_path / "p", files, "[limits]\nhw_total = 40\n")
+    r = build_project(p)
+    size = r.get("M10").size
+    assert r.hw_total == 4 * size > 40
+    assert not r.ok and not r.image_written
+    assert [d.code for d in r.diagnostics] == ["size-limit"]
+    assert f"together are {4 * size} bytes of code; the limit is 40" in r.diagnostics[0].message
+    p = small_project(tmp_path / "q", files, f"[limits]\nhw_proc = {size - 1}\n")
+    r = build_project(p)
+    assert not r.ok and all(pb.diagnostics[0].code == "size-limit" for pb in r.procedures)
+    assert all(pb.limit == size - 1 for pb in r.procedures)
+    p = small_project(tmp_path / "r", files, f"[limits]\nhw_proc = {size}\nhw_total = {4 * size}\n")
+    r = build_project(p)
+    assert r.ok and read_image(p.image_path.read_bytes()).limits == Limits(size, 4 * size, 16384)
+
+
+def test_names_must_be_unique_and_valid(tmp_path):
+    ok = "main() { exit(99); };\n"
+    p = small_project(tmp_path / "p", {"hardware/LUBE.plc": ok, "software/LUBE.plc": ok,
+                                       "hardware/bad name.plc": ok, "hardware/M03.plc": ok})
+    r = build_project(p)
+    codes = {(pb.name, pb.kind): [d.code for d in pb.diagnostics] for pb in r.procedures}
+    assert codes[("LUBE", Kind.SOFTWARE)] == ["duplicate-procedure"]
+    assert codes[("bad name", Kind.HARDWARE)] == ["procedure-name"]
+    assert codes[("M03", Kind.HARDWARE)] == [] and not r.ok
+
+
+def test_strict_from_settings_or_argument(tmp_path):
+    src = {"hardware/M03.plc": "main() { if (eparam) { a=1; } else { a=2; }; exit(a); };\n"}
+    p = small_project(tmp_path / "p", src)
+    assert build_project(p).ok
+    assert not build_project(p, strict=True).ok
+    p = small_project(tmp_path / "q", src, "[build]\nstrict = true\n")
+    r = build_project(p)
+    assert not r.ok and any(d.code == "strict" for d in r.get("M03").diagnostics)
+    assert build_project(p, strict=False).ok
+
+
+def test_source_lines_for_cached_diagnostics(example):
+    m05 = example.hardware_dir / "M05.plc"
+    m05.write_text(m05.read_text().replace("pwm01=0;", "pwm01=0; unused=3;"))
+    r1 = build_project(example)
+    r2 = build_project(example)
+    d1, d2 = r1.get("M05").diagnostics[0], r2.get("M05").diagnostics[0]
+    assert d1 == d2 and r2.get("M05").cached
+    assert r2.get("M05").source_line(d2.span.file, d2.span.line) == \
+        r1.get("M05").source_line(d1.span.file, d1.span.line)
+    assert "unused=3" in r2.get("M05").source_line(d2.span.file, d2.span.line)
+
+
+def test_empty_project_builds_an_empty_image(tmp_path):
+    p = small_project(tmp_path / "empty", {})
+    r = build_project(p)
+    assert r.ok and r.image_written and read_image(p.image_path.read_bytes()).procedures == ()

@@ -1,0 +1,149 @@
+"""The project folder model, its settings file and atomic_write."""
+
+import os
+import stat
+
+import pytest
+
+from plcbuilder.bytecode.program import Kind
+from plcbuilder.image import Limits
+from plcbuilder.project import Project, ProjectError, Settings, atomic_write, parse_settings
+
+
+def write(path, text):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return path
+
+
+def test_missing_settings_means_defaults(tmp_path):
+    root = tmp_path / "mill"
+    root.mkdir()
+    p = Project.open(root)
+    assert not p.settings_found
+    assert p.name == "mill" and p.limits == Limits() and p.settings.machine == "machine.toml"
+    assert p.procedures() == [] and p.include_dirs() == ()
+    assert p.image_path == root / "build" / "eeprom.rom"
+    assert p.machine_path == root / "machine.toml"
+    assert p.variables_path == root / "plc-variables.xml"
+
+
+def test_open_the_settings_file_itself(tmp_path):
+    sp = write(tmp_path / "plcbuilder.toml", 'name = "x"\n')
+    assert Project.open(sp).root == tmp_path
+
+
+def test_open_refuses_what_is_not_a_folder(tmp_path):
+    with pytest.raises(ProjectError, match="no such folder"):
+        Project.open(tmp_path / "nope")
+    f = write(tmp_path / "file.plc", "")
+    with pytest.raises(ProjectError, match="this is a file"):
+        Project.open(f)
+
+
+def test_settings_are_read(tmp_path):
+    write(tmp_path / "plcbuilder.toml", """
+name = "Plasma table"
+machine = "machines/table.toml"
+
+[limits]
+hw_proc = 600
+hw_total = 9000
+
+[controller]
+address = "192.168.0.10:5700"
+
+[build]
+strict = true
+""")
+    p = Project.open(tmp_path)
+    assert p.settings_found and p.name == "Plasma table"
+    assert p.limits == Limits(hw_proc=600, hw_total=9000, sw_proc=16384)
+    assert p.settings.controller_address == "192.168.0.10:5700"
+    assert p.settings.strict is True
+    assert p.machine_path == tmp_path / "machines" / "table.toml"
+
+
+@pytest.mark.parametrize("text, line, what", [
+    ('name = "x"\nmachine = \n', 2, "not valid TOML"),
+    ('name = "x"\n\n[limits]\nhw_proc = 600\nhw_totl = 5\n', 5, "unknown setting \\[limits\\] 'hw_totl'"),
+    ('colour = "red"\n', 1, "unknown setting 'colour'"),
+    ('name = "x"\n[limits]\nhw_proc = "512"\n', 3, "limits.hw_proc: must be a whole number"),
+    ('[limits]\nsw_proc = 0\n', 2, "must be from 1 to"),
+    ('[limits]\nhw_total = true\n', 2, "must be a whole number, is true or false"),
+    ('name = "x"\n[controller]\naddress = "no port"\n', 3, "address must be HOST:PORT"),
+    ('name = "x"\nlimits = 5\n', 2, r"\[limits\] must be a table"),
+    ('[build]\nstrict = "yes"\n', 2, "build.strict: must be true or false"),
+    ('machine = ""\n', 1, "machine must name a file"),
+    ('name = "a"\nname = "b"\n', 2, "not valid TOML"),
+])
+def test_bad_settings_name_file_and_line(tmp_path, text, line, what):
+    sp = write(tmp_path / "plcbuilder.toml", text)
+    with pytest.raises(ProjectError, match=what) as info:
+        Project.open(tmp_path)
+    err = info.value
+    assert err.file == str(sp) and err.line == line
+    assert str(err).startswith(f"{sp}:{line}: ")
+
+
+def test_settings_that_are_not_text(tmp_path):
+    (tmp_path / "plcbuilder.toml").write_bytes(b'name = "x"\nmachine = "\xff"\n')
+    with pytest.raises(ProjectError, match="not UTF-8") as info:
+        Project.open(tmp_path)
+    assert info.value.line == 2
+
+
+def test_settings_round_trip_and_save(tmp_path):
+    s = Settings(name='odd "name" \\ here', machine="m.toml", limits=Limits(500, 8000, 16000),
+                 controller_address="localhost:5700", strict=True)
+    assert parse_settings(s.to_toml()) == s
+    p = Project.open(tmp_path)
+    p.save_settings(s)
+    assert Project.open(tmp_path).settings == s
+    assert [n for n in os.listdir(tmp_path) if n.endswith(".tmp")] == []
+
+
+def test_procedures_are_listed_by_kind_and_name(tmp_path):
+    for rel in ("hardware/M05.plc", "hardware/M03.plc", "hardware/notes.txt",
+                "hardware/.hidden.plc", "software/LUBE.plc", "software/__HANDLER_INIT.plc",
+                "include/pins.h"):
+        write(tmp_path / rel, "main(){exit(99);};\n")
+    (tmp_path / "hardware" / "dir.plc").mkdir()
+    p = Project.open(tmp_path)
+    got = [(x.name, x.kind) for x in p.procedures()]
+    assert got == [("M03", Kind.HARDWARE), ("M05", Kind.HARDWARE),
+                   ("LUBE", Kind.SOFTWARE), ("__HANDLER_INIT", Kind.SOFTWARE)]
+    assert [x.name for x in p.procedures(Kind.SOFTWARE)] == ["LUBE", "__HANDLER_INIT"]
+    init = p.procedure("__HANDLER_INIT")
+    assert init.system and init.path == tmp_path / "software" / "__HANDLER_INIT.plc"
+    assert not p.procedure("M03").system
+    assert p.procedure("M99") is None
+    assert p.include_dirs() == (tmp_path / "include",)
+    assert p.new_procedure_path("M04", Kind.HARDWARE) == tmp_path / "hardware" / "M04.plc"
+
+
+def test_atomic_write(tmp_path):
+    f = tmp_path / "M03.plc"
+    atomic_write(f, "main(){};\n")
+    assert f.read_text() == "main(){};\n"
+    atomic_write(f, b"\x00\x01")
+    assert f.read_bytes() == b"\x00\x01"
+    os.chmod(f, 0o600)
+    atomic_write(f, "é")
+    assert f.read_bytes() == "é".encode() and stat.S_IMODE(f.stat().st_mode) == 0o600
+    assert sorted(os.listdir(tmp_path)) == ["M03.plc"]
+    with pytest.raises(TypeError):
+        atomic_write(f, 42)
+
+
+def test_atomic_write_failure_keeps_the_old_file(tmp_path, monkeypatch):
+    f = tmp_path / "M03.plc"
+    f.write_text("old")
+
+    def boom(src, dst):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(os, "replace", boom)
+    with pytest.raises(OSError):
+        atomic_write(f, "new")
+    assert f.read_text() == "old"
+    assert sorted(os.listdir(tmp_path)) == ["M03.plc"]
