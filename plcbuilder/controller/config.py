@@ -1,0 +1,653 @@
+"""The machine description (a TOML file) and ``plc-variables.xml``.
+
+A machine description says what the simulated controller is wired to: its axes
+(speeds, accelerations, soft limits, start position, work offset), what each
+input pin reads (a switch at an axis position, a sensor that follows an output
+after a delay, a constant), and what each ADC channel reads. The format is
+documented for users in ``docs/machine.md``; the default machine is package data
+(``resources/machine/default.toml``).
+
+Lengths in the file are in mm (degrees for rotary axes), speeds in mm/min,
+accelerations in mm/s², times in ms. The machine works in the PLC's units
+(0.01 mm) and converts on load.
+
+Every problem with a file raises :class:`ConfigError`, whose message names the
+file, the line (where it can be found) and the key.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Mapping, Optional
+
+from plcbuilder.bytecode.abi import AXES
+
+MAX_PINS = 256          # 8 words of 32 pins
+ADC_CHANNELS = 8
+VARIABLE_COUNT = 16
+_VARIABLES_MAX_BYTES = 1 << 20
+
+
+class ConfigError(ValueError):
+    """A machine description or plc-variables.xml that cannot be used.
+
+    ``str(err)`` reads ``FILE:LINE: KEY: what is wrong`` (the parts that are known).
+    """
+
+    def __init__(self, message: str, file: Optional[str] = None, line: Optional[int] = None,
+                 key: Optional[str] = None):
+        self.message = message
+        self.file = file
+        self.line = line
+        self.key = key
+        where = ""
+        if file is not None:
+            where = f"{file}:{line}: " if line is not None else f"{file}: "
+        elif line is not None:
+            where = f"line {line}: "
+        super().__init__(f"{where}{key + ': ' if key else ''}{message}")
+
+
+# ----------------------------------------------------------------- dataclasses
+@dataclass(frozen=True)
+class AxisConfig:
+    """One axis. Lengths in mm (degrees when rotary), as in the file."""
+    name: str                       # "X" .. "W"
+    rapid: float = 5000.0           # rapid (g0moveA) speed, mm/min; also the jog speed cap
+    accel: float = 500.0            # acceleration, mm/s²
+    jog: float = 1000.0             # jog speed before the PLC writes 8634, mm/min
+    soft_min: Optional[float] = None   # soft limits, mm (None: unlimited)
+    soft_max: Optional[float] = None
+    start: float = 0.0              # machine position at power-on and reset, mm
+    offset: float = 0.0             # work offset: program position = machine − offset
+    rotary: bool = False
+
+    @property
+    def index(self) -> int:
+        return AXES.index(self.name)
+
+
+@dataclass(frozen=True)
+class InputConfig:
+    """What one input pin reads when nobody has set it by hand.
+
+    kind "axis": ``active`` while the axis position is <= ``below`` and/or
+    >= ``above`` (both given: while above <= position <= below);
+    kind "output": ``active`` ``delay_ms`` after output ``output`` turns on,
+    the other level ``off_delay_ms`` after it turns off;
+    kind "constant": always ``value``.
+    """
+    pin: int
+    kind: str                       # "axis" | "output" | "constant"
+    name: str = ""
+    active: int = 1                 # the level the pin reads when active
+    axis: Optional[str] = None
+    below: Optional[float] = None   # mm
+    above: Optional[float] = None   # mm
+    output: Optional[int] = None
+    delay_ms: int = 0
+    off_delay_ms: int = 0
+    value: int = 0
+    hard_limit: bool = False        # a limit switch: motion into it stops with an error
+
+
+@dataclass(frozen=True)
+class OutputConfig:
+    pin: int
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class AdcConfig:
+    """What one ADC channel reads (before a manual override).
+
+    source "constant": ``value``; "ramp": from ``start`` to ``end`` over
+    ``period_ms``, then again (``repeat``) or holding ``end``; "axis":
+    ``offset + scale × position in mm`` of ``axis``. Any source may add
+    deterministic noise of ±``noise`` counts drawn from ``seed``, and is clamped
+    to ``min``/``max`` when they are given.
+    """
+    channel: int
+    source: str = "constant"
+    name: str = ""
+    value: int = 0
+    start: float = 0.0
+    end: float = 0.0
+    period_ms: int = 1000
+    repeat: bool = True
+    axis: Optional[str] = None
+    scale: float = 1.0
+    offset: float = 0.0
+    noise: int = 0
+    seed: int = 0
+    min: Optional[int] = None
+    max: Optional[int] = None
+
+
+@dataclass(frozen=True)
+class MachineConfig:
+    """A whole machine description. ``MachineConfig()`` is a bare board: 64
+    inputs and outputs, no axes, nothing wired."""
+    name: str = "machine"
+    description: str = ""
+    source: Optional[str] = None    # the file it came from, if any
+    input_count: int = 64
+    output_count: int = 64
+    start_latency_ms: int = 2
+    jog_watchdog_ms: int = 1000
+    axes: Mapping[str, AxisConfig] = field(default_factory=dict)   # in X..W order (read-only)
+    inputs: tuple[InputConfig, ...] = ()
+    outputs: tuple[OutputConfig, ...] = ()
+    adc: tuple[AdcConfig, ...] = ()
+
+    def input_names(self) -> dict[int, str]:
+        return {i.pin: i.name for i in self.inputs if i.name}
+
+    def output_names(self) -> dict[int, str]:
+        return {o.pin: o.name for o in self.outputs if o.name}
+
+
+# ----------------------------------------------------------- line locator
+_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+
+
+def _split_key(text: str) -> tuple[str, ...]:
+    parts = []
+    for p in re.findall(r'"[^"]*"|\'[^\']*\'|[^.]+', text):
+        p = p.strip()
+        if len(p) >= 2 and p[0] == p[-1] and p[0] in "\"'":
+            p = p[1:-1]
+        parts.append(p)
+    return tuple(parts)
+
+
+class _Locator:
+    """Finds the line of a key in TOML text (best effort: plain tables,
+    arrays of tables and ``key = value`` lines; None when not found)."""
+
+    def __init__(self, text: str):
+        self.lines = text.splitlines()
+        # one entry per header: (line number, table path with array indexes)
+        self.headers: list[tuple[int, tuple]] = [(0, ())]
+        counts: dict[tuple, int] = {}
+        for n, line in enumerate(self.lines, 1):
+            m = _HEADER.match(line)
+            if not m:
+                continue
+            path = _split_key(m.group(2))
+            if m.group(1) == "[[":
+                k = counts.get(path, 0)
+                counts[path] = k + 1
+                self.headers.append((n, path + (k,)))
+            else:
+                self.headers.append((n, path))
+
+    def line_of(self, path: tuple) -> Optional[int]:
+        best: Optional[int] = None
+        for i, (hline, hpath) in enumerate(self.headers):
+            if hpath and hpath == path:
+                return hline
+            if path[:len(hpath)] == hpath and len(path) > len(hpath):
+                rest = [p for p in path[len(hpath):] if not isinstance(p, int)]
+                end = self.headers[i + 1][0] if i + 1 < len(self.headers) else len(self.lines) + 1
+                found = self._key_line(rest, hline + 1, end)
+                if found is not None:
+                    return found
+                if hpath:
+                    best = hline
+        return best
+
+    def _key_line(self, rest: list, start: int, end: int) -> Optional[int]:
+        if not rest:
+            return None
+        dotted = r"\s*\.\s*".join(
+            r"(?:%s|\"%s\"|'%s')" % ((re.escape(str(p)),) * 3) for p in rest)
+        pat = re.compile(r"^\s*(?:%s)\s*=" % dotted)
+        first = re.compile(r"^\s*(?:%s|\"%s\"|'%s')\s*=" % ((re.escape(str(rest[0])),) * 3))
+        fallback = None
+        for n in range(start, end):
+            line = self.lines[n - 1]
+            if pat.match(line):
+                return n
+            if fallback is None and first.match(line):
+                fallback = n
+        return fallback
+
+
+# ----------------------------------------------------------------- parsing
+class _Reader:
+    def __init__(self, file: str, text: str):
+        self.file = file
+        self.loc = _Locator(text)
+
+    def error(self, path: tuple, message: str) -> ConfigError:
+        key = ".".join(str(p) if not isinstance(p, int) else f"[{p}]" for p in path)
+        key = key.replace(".[", "[")
+        return ConfigError(message, self.file, self.loc.line_of(path) if path else None, key or None)
+
+    def table(self, d: Any, path: tuple) -> dict:
+        if not isinstance(d, dict):
+            raise self.error(path, f"expected a table, got {_kind(d)}")
+        return d
+
+    def known(self, d: dict, path: tuple, allowed: set[str]) -> None:
+        for k in d:
+            if k not in allowed:
+                hint = ", ".join(sorted(allowed))
+                raise self.error(path + (k,), f"unknown key (known keys here: {hint})")
+
+    def integer(self, d: dict, key: str, path: tuple, default=None, lo=None, hi=None):
+        if key not in d:
+            return default
+        v = d[key]
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise self.error(path + (key,), f"expected an integer, got {_kind(v)}")
+        self._range(v, key, path, lo, hi)
+        return v
+
+    def number(self, d: dict, key: str, path: tuple, default=None, lo=None, hi=None,
+               positive=False):
+        if key not in d:
+            return default
+        v = d[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise self.error(path + (key,), f"expected a number, got {_kind(v)}")
+        if not math.isfinite(v):
+            raise self.error(path + (key,), "expected a finite number")
+        if positive and v <= 0:
+            raise self.error(path + (key,), f"must be greater than 0, got {v}")
+        self._range(v, key, path, lo, hi)
+        return float(v)
+
+    def string(self, d: dict, key: str, path: tuple, default=None, choices=None):
+        if key not in d:
+            return default
+        v = d[key]
+        if not isinstance(v, str):
+            raise self.error(path + (key,), f"expected a string, got {_kind(v)}")
+        if choices is not None and v not in choices:
+            raise self.error(path + (key,), f"{v!r} is not one of {', '.join(choices)}")
+        return v
+
+    def boolean(self, d: dict, key: str, path: tuple, default=None):
+        if key not in d:
+            return default
+        v = d[key]
+        if not isinstance(v, bool):
+            raise self.error(path + (key,), f"expected true or false, got {_kind(v)}")
+        return v
+
+    def _range(self, v, key, path, lo, hi):
+        if lo is not None and v < lo or hi is not None and v > hi:
+            raise self.error(path + (key,), f"{v} is out of range ({lo}..{hi})")
+
+
+def _kind(v: Any) -> str:
+    if isinstance(v, bool):
+        return f"boolean {str(v).lower()}"
+    if isinstance(v, int):
+        return f"integer {v}"
+    if isinstance(v, float):
+        return f"number {v}"
+    if isinstance(v, str):
+        return f"string {v!r}"
+    if isinstance(v, dict):
+        return "a table"
+    if isinstance(v, list):
+        return "an array"
+    return type(v).__name__
+
+
+_TOP_KEYS = {"name", "description", "io", "motion", "axes", "inputs", "outputs", "adc"}
+_AXIS_KEYS = {"rapid", "accel", "jog", "min", "max", "start", "offset", "rotary"}
+_INPUT_KEYS = {"pin", "name", "active", "axis", "below", "above", "output", "delay_ms",
+               "off_delay_ms", "value", "hard_limit"}
+_ADC_KEYS = {"channel", "name", "source", "value", "start", "end", "period_ms", "repeat",
+             "axis", "scale", "offset", "noise", "seed", "min", "max"}
+_I32 = (-(1 << 31), (1 << 31) - 1)
+_BIG_MM = 1e7       # 10 km: a position beyond this is certainly a typo
+
+
+def parse_machine(text: str, name: str = "<machine>") -> MachineConfig:
+    """Parse a machine description from TOML text. ``name`` is the file name
+    used in error messages."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        msg = str(e)
+        m = re.search(r"\(at line (\d+), column \d+\)", msg)
+        line = int(m.group(1)) if m else None
+        msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", msg)
+        m2 = re.search(r"\(at end of document\)", msg)
+        if m2:
+            line = max(1, len(text.splitlines()))
+            msg = msg.replace(" (at end of document)", "")
+        raise ConfigError(f"TOML syntax error: {msg}", name, line) from None
+    r = _Reader(name, text)
+    r.known(data, (), _TOP_KEYS)
+    mname = r.string(data, "name", (), "machine")
+    desc = r.string(data, "description", (), "")
+
+    io = r.table(data.get("io", {}), ("io",))
+    r.known(io, ("io",), {"inputs", "outputs"})
+    n_in = r.integer(io, "inputs", ("io",), 64, 1, MAX_PINS)
+    n_out = r.integer(io, "outputs", ("io",), 64, 1, MAX_PINS)
+
+    mo = r.table(data.get("motion", {}), ("motion",))
+    r.known(mo, ("motion",), {"start_latency_ms", "jog_watchdog_ms"})
+    latency = r.integer(mo, "start_latency_ms", ("motion",), 2, 0, 60000)
+    watchdog = r.integer(mo, "jog_watchdog_ms", ("motion",), 1000, 1, 3600000)
+
+    axes: dict[str, AxisConfig] = {}
+    ax_tab = r.table(data.get("axes", {}), ("axes",))
+    for key in ax_tab:
+        if key not in AXES:
+            raise r.error(("axes", key), f"unknown axis (axes are {', '.join(AXES)})")
+    for aname in AXES:
+        if aname not in ax_tab:
+            continue
+        p = ("axes", aname)
+        a = r.table(ax_tab[aname], p)
+        r.known(a, p, _AXIS_KEYS)
+        rotary = r.boolean(a, "rotary", p, aname in ("A", "B", "C"))
+        lo = r.number(a, "min", p, None, -_BIG_MM, _BIG_MM)
+        hi = r.number(a, "max", p, None, -_BIG_MM, _BIG_MM)
+        if lo is not None and hi is not None and lo > hi:
+            raise r.error(p + ("min",), f"min {lo} is above max {hi}")
+        axes[aname] = AxisConfig(
+            name=aname,
+            rapid=r.number(a, "rapid", p, 5000.0, hi=1e7, positive=True),
+            accel=r.number(a, "accel", p, 500.0, hi=1e7, positive=True),
+            jog=r.number(a, "jog", p, 1000.0, 0, 1e7),
+            soft_min=lo, soft_max=hi,
+            start=r.number(a, "start", p, 0.0, -_BIG_MM, _BIG_MM),
+            offset=r.number(a, "offset", p, 0.0, -_BIG_MM, _BIG_MM),
+            rotary=rotary,
+        )
+
+    inputs = []
+    seen: dict[int, int] = {}
+    in_list = data.get("inputs", [])
+    if not isinstance(in_list, list):
+        raise r.error(("inputs",), "expected an array of tables ([[inputs]])")
+    for k, item in enumerate(in_list):
+        p = ("inputs", k)
+        d = r.table(item, p)
+        r.known(d, p, _INPUT_KEYS)
+        if "pin" not in d:
+            raise r.error(p, "missing key 'pin'")
+        pin = r.integer(d, "pin", p, None, 0, n_in - 1)
+        if pin in seen:
+            raise r.error(p + ("pin",), f"input {pin} is already wired (inputs[{seen[pin]}])")
+        seen[pin] = k
+        has = [w for w in ("axis", "output", "value") if w in d]
+        if len(has) != 1:
+            raise r.error(p, "give exactly one of 'axis' (a position switch), 'output' "
+                             "(follows an output) or 'value' (a constant)"
+                             + (f"; found {', '.join(has)}" if has else ""))
+        kind = {"axis": "axis", "output": "output", "value": "constant"}[has[0]]
+        common = dict(pin=pin, name=r.string(d, "name", p, ""),
+                      active=r.integer(d, "active", p, 1, 0, 1),
+                      hard_limit=r.boolean(d, "hard_limit", p, False))
+        for only, kinds in (("below", "axis"), ("above", "axis"), ("hard_limit", "axis"),
+                            ("delay_ms", "output"), ("off_delay_ms", "output")):
+            if only in d and kind != kinds:
+                raise r.error(p + (only,), f"only for an input tied to an {kinds}")
+        if kind == "axis":
+            ax = r.string(d, "axis", p, choices=AXES)
+            if ax not in axes:
+                raise r.error(p + ("axis",), f"axis {ax} is not configured in [axes.{ax}]")
+            below = r.number(d, "below", p, None, -_BIG_MM, _BIG_MM)
+            above = r.number(d, "above", p, None, -_BIG_MM, _BIG_MM)
+            if below is None and above is None:
+                raise r.error(p, "an input tied to an axis needs 'below' and/or 'above' (mm)")
+            if below is not None and above is not None and above > below:
+                raise r.error(p + ("above",), f"above {above} is over below {below}: "
+                                              "the switch could never be active")
+            inputs.append(InputConfig(kind="axis", axis=ax, below=below, above=above, **common))
+        elif kind == "output":
+            out = r.integer(d, "output", p, None, 0, n_out - 1)
+            inputs.append(InputConfig(
+                kind="output", output=out,
+                delay_ms=r.integer(d, "delay_ms", p, 0, 0, 3600000),
+                off_delay_ms=r.integer(d, "off_delay_ms", p, 0, 0, 3600000), **common))
+        else:
+            if "active" in d:
+                raise r.error(p + ("active",), "not for a constant input (give its 'value')")
+            inputs.append(InputConfig(kind="constant", value=r.integer(d, "value", p, 0, 0, 1),
+                                      **common))
+
+    outputs = []
+    out_list = data.get("outputs", [])
+    if not isinstance(out_list, list):
+        raise r.error(("outputs",), "expected an array of tables ([[outputs]])")
+    seen = {}
+    for k, item in enumerate(out_list):
+        p = ("outputs", k)
+        d = r.table(item, p)
+        r.known(d, p, {"pin", "name"})
+        if "pin" not in d:
+            raise r.error(p, "missing key 'pin'")
+        pin = r.integer(d, "pin", p, None, 0, n_out - 1)
+        if pin in seen:
+            raise r.error(p + ("pin",), f"output {pin} is already named (outputs[{seen[pin]}])")
+        seen[pin] = k
+        outputs.append(OutputConfig(pin=pin, name=r.string(d, "name", p, "")))
+
+    adcs = []
+    adc_list = data.get("adc", [])
+    if not isinstance(adc_list, list):
+        raise r.error(("adc",), "expected an array of tables ([[adc]])")
+    seen = {}
+    for k, item in enumerate(adc_list):
+        p = ("adc", k)
+        d = r.table(item, p)
+        r.known(d, p, _ADC_KEYS)
+        if "channel" not in d:
+            raise r.error(p, "missing key 'channel'")
+        ch = r.integer(d, "channel", p, None, 0, ADC_CHANNELS - 1)
+        if ch in seen:
+            raise r.error(p + ("channel",), f"ADC{ch} already has a source (adc[{seen[ch]}])")
+        seen[ch] = k
+        src = r.string(d, "source", p, "constant", ("constant", "ramp", "axis"))
+        allowed = {"constant": {"value"}, "ramp": {"start", "end", "period_ms", "repeat"},
+                   "axis": {"axis", "scale", "offset"}}[src]
+        for key in ("value", "start", "end", "period_ms", "repeat", "axis", "scale", "offset"):
+            if key in d and key not in allowed:
+                raise r.error(p + (key,), f"not used by source {src!r}")
+        ax = None
+        if src == "axis":
+            if "axis" not in d:
+                raise r.error(p, "source 'axis' needs 'axis'")
+            ax = r.string(d, "axis", p, choices=AXES)
+            if ax not in axes:
+                raise r.error(p + ("axis",), f"axis {ax} is not configured in [axes.{ax}]")
+        lo = r.integer(d, "min", p, None, *_I32)
+        hi = r.integer(d, "max", p, None, *_I32)
+        if lo is not None and hi is not None and lo > hi:
+            raise r.error(p + ("min",), f"min {lo} is above max {hi}")
+        adcs.append(AdcConfig(
+            channel=ch, source=src, name=r.string(d, "name", p, ""),
+            value=r.integer(d, "value", p, 0, *_I32),
+            start=r.number(d, "start", p, 0.0, *_I32), end=r.number(d, "end", p, 0.0, *_I32),
+            period_ms=r.integer(d, "period_ms", p, 1000, 1, 1 << 30),
+            repeat=r.boolean(d, "repeat", p, True), axis=ax,
+            scale=r.number(d, "scale", p, 1.0, -1e9, 1e9),
+            offset=r.number(d, "offset", p, 0.0, *_I32),
+            noise=r.integer(d, "noise", p, 0, 0, 1 << 30),
+            seed=r.integer(d, "seed", p, 0, 0, (1 << 63) - 1),
+            min=lo, max=hi))
+
+    return MachineConfig(name=mname, description=desc, source=name, input_count=n_in,
+                         output_count=n_out, start_latency_ms=latency, jog_watchdog_ms=watchdog,
+                         axes=MappingProxyType(axes), inputs=tuple(inputs), outputs=tuple(outputs),
+                         adc=tuple(adcs))
+
+
+def load_machine(path) -> MachineConfig:
+    """Read and parse a machine description file (TOML)."""
+    p = Path(path)
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except OSError as e:
+        raise ConfigError(f"cannot read the machine file: {e.strerror or e}", str(p)) from None
+    except UnicodeDecodeError as e:
+        raise ConfigError(f"not UTF-8 text ({e.reason} at byte {e.start})", str(p)) from None
+    return parse_machine(text, str(p))
+
+
+DEFAULT_MACHINE_RESOURCE = ("resources", "machine", "default.toml")
+
+
+def default_machine_text() -> str:
+    """The text of the built-in default machine description."""
+    res = resources.files("plcbuilder")
+    for part in DEFAULT_MACHINE_RESOURCE:
+        res = res / part
+    return res.read_text(encoding="utf-8")
+
+
+_default_cache: Optional[MachineConfig] = None
+
+
+def default_machine() -> MachineConfig:
+    """The default machine (package data ``resources/machine/default.toml``)."""
+    global _default_cache
+    if _default_cache is None:
+        _default_cache = parse_machine(default_machine_text(), "<default machine>")
+    return _default_cache
+
+
+# ------------------------------------------------------- plc-variables.xml
+_NUMBER = re.compile(r"^\s*(-?)(0[xX][0-9a-fA-F]+|[0-9]+)\s*$")
+
+
+def parse_int_value(text: str) -> int:
+    """A decimal or 0x-hex integer (optionally negative) as a signed 32-bit value.
+
+    Raises ValueError for anything else or for a value that does not fit 32 bits
+    (-2147483648 .. 4294967295; hex above 0x7fffffff wraps, as in C).
+    """
+    m = _NUMBER.match(text)
+    if not m:
+        raise ValueError(f"{text!r} is not a decimal or 0x-hex integer")
+    v = int(m.group(2), 0) if not re.fullmatch(r"0[0-9]+", m.group(2)) else int(m.group(2), 10)
+    if m.group(1):
+        v = -v
+    if v < -(1 << 31) or v > 0xFFFFFFFF:
+        raise ValueError(f"{text.strip()} does not fit in 32 bits")
+    if v > 0x7FFFFFFF:
+        v -= 1 << 32
+    return v
+
+
+def load_variables(path) -> list[int]:
+    """Read ``plc-variables.xml``: the initial values of var00..var15.
+
+    The format (see docs/machine.md)::
+
+        <plc-variables>
+          <var name="var00" value="5"/>
+          <var name="var03" value="0x10"/>
+        </plc-variables>
+
+    Variables not listed are 0. Raises :class:`ConfigError` naming the file and
+    line for a bad file; a DTD, entity declaration (XML bomb) or external
+    entity is refused.
+    """
+    p = Path(path)
+    try:
+        data = p.read_bytes()
+    except OSError as e:
+        raise ConfigError(f"cannot read the variables file: {e.strerror or e}", str(p)) from None
+    return parse_variables(data, str(p))
+
+
+def parse_variables(data: bytes | str, name: str = "plc-variables.xml") -> list[int]:
+    """Parse the text of a plc-variables.xml (see :func:`load_variables`)."""
+    import xml.sax
+    import xml.sax.handler
+
+    import defusedxml
+    import defusedxml.sax
+
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    if len(data) > _VARIABLES_MAX_BYTES:
+        raise ConfigError(f"the file is too large ({len(data)} bytes; at most "
+                          f"{_VARIABLES_MAX_BYTES})", name)
+    values = [0] * VARIABLE_COUNT
+    seen: dict[int, int] = {}
+
+    class Handler(xml.sax.handler.ContentHandler):
+        def __init__(self):
+            super().__init__()
+            self.locator = None
+            self.depth = 0
+
+        def setDocumentLocator(self, locator):
+            self.locator = locator
+
+        def line(self):
+            return self.locator.getLineNumber() if self.locator else None
+
+        def fail(self, msg, key=None):
+            raise ConfigError(msg, name, self.line(), key)
+
+        def startElement(self, tag, attrs):
+            self.depth += 1
+            if self.depth == 1:
+                if tag != "plc-variables":
+                    self.fail(f"the root element must be <plc-variables>, not <{tag}>")
+                if attrs.getNames():
+                    self.fail(f"<plc-variables> takes no attributes "
+                              f"(found {', '.join(attrs.getNames())})")
+                return
+            if self.depth > 2 or tag != "var":
+                self.fail(f"unexpected element <{tag}> (expected <var name=\"varNN\" value=\"N\"/>)")
+            names = set(attrs.getNames())
+            extra = names - {"name", "value"}
+            if extra:
+                self.fail(f"<var> has unknown attribute(s) {', '.join(sorted(extra))}")
+            if "name" not in names or "value" not in names:
+                self.fail("<var> needs both name=\"varNN\" and value=\"N\"")
+            vname = attrs.getValue("name").strip()
+            m = re.fullmatch(r"var(\d\d)", vname)
+            if not m or int(m.group(1)) >= VARIABLE_COUNT:
+                self.fail(f"unknown variable {vname!r} (var00..var15)", vname or "name")
+            idx = int(m.group(1))
+            if idx in seen:
+                self.fail(f"{vname} is given twice (first on line {seen[idx]})", vname)
+            try:
+                values[idx] = parse_int_value(attrs.getValue("value"))
+            except ValueError as e:
+                self.fail(str(e), vname)
+            seen[idx] = self.line()
+
+        def endElement(self, tag):
+            self.depth -= 1
+
+        def characters(self, content):
+            if content.strip():
+                self.fail(f"unexpected text {content.strip()[:20]!r}")
+
+    handler = Handler()
+    try:
+        defusedxml.sax.parseString(data, handler, forbid_dtd=True, forbid_entities=True,
+                                   forbid_external=True)
+    except ConfigError:
+        raise
+    except defusedxml.DefusedXmlException as e:
+        raise ConfigError(
+            f"refused: the file contains a DTD, entity declaration or external reference "
+            f"({type(e).__name__}); plc-variables.xml must be plain XML (this protects "
+            f"against XML bombs and external entities)", name, handler.line()) from None
+    except xml.sax.SAXParseException as e:
+        raise ConfigError(f"XML syntax error: {e.getMessage()}", name, e.getLineNumber()) from None
+    return values

@@ -1,0 +1,411 @@
+"""The simulated machine: I/O, PWM, DAC, ADC, the global registers, motion and sensors.
+
+The PLC (hardware or software) reaches it through ``portset``/``portclear``/
+``portget``/``gvarget``/``gvarset``/``g0moveA`` and the messages it sends; the host
+(scenarios, the IDE, the server) through ``set_input``, ``set_adc``, ``advance``
+and the sampling methods. One ``advance()`` is 1 ms of machine time.
+
+Register map (SPEC §2 "I/O and registers"; decisions in docs/machine.md):
+
+=====================  ==================================================
+0x400 + n              state of output n (read-only)
+7180..7183, 7188..91   input words 0..7 (read-only)
+7184..7187, 7192..95   output words 0..7 (writing one sets its 32 outputs)
+7196..7203             ADC0..7 (read-only)
+7270..7277             DAC0..7 (stored as written)
+7278..7285             PWM0..7 (stored as written; no clamping)
+6060                   0 while a PLC move or jog runs, 0x4d when idle
+5021..5026, 5041..46   machine / program position X..C (0.01 mm)
+17001..09, 17021..29   program / machine position X..W
+5521, 5525             non-zero disables hardware / software limits
+8631, 8632, 8634, 8635 jog: acceleration time, speed units, axis speed, direction
+everything else        plain register: keeps what was written, reads 0 before
+=====================  ==================================================
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Optional
+
+from plcbuilder.bytecode import abi
+from plcbuilder.bytecode.abi import AXES
+
+from .config import ADC_CHANNELS, MachineConfig, default_machine
+from .motion import N_AXES, Motion, fmt_mm
+from .sensors import Sensors
+
+STOP_MESSAGES = frozenset(abi.PLCCMD[n] for n in (
+    "PLCCMD_LINE_STOP", "PLCCMD_LINE_SOFT_STOP", "PLCCMD_MOTION_SKIP",
+    "PLCCMD_MOTION_ABORT", "PLCCMD_MOTION_BREAK"))
+
+_M32 = 0xFFFFFFFF
+_WORD_SHIFTS = tuple(range(0, 256, 32))
+
+
+def _s32(v: int) -> int:
+    v &= _M32
+    return v - (1 << 32) if v & 0x80000000 else v
+
+
+class Machine:
+    """The simulated machine. ``Machine()`` is the default machine."""
+
+    def __init__(self, config: Optional[MachineConfig] = None):
+        self.config = config if config is not None else default_machine()
+        cfg = self.config
+        self.input_count = cfg.input_count
+        self.output_count = cfg.output_count
+        self._in_mask = (1 << cfg.input_count) - 1
+        self._out_mask = (1 << cfg.output_count) - 1
+        self._notes: list[tuple[str, str]] = []
+        self.motion = Motion(cfg, self._notes)
+        self.sensors = Sensors(cfg)
+        self._input_names = cfg.input_names()
+        self._get: dict[int, Callable[[int], int]] = {}
+        self._set: dict[int, Callable[[int, int], None]] = {}
+        self._build_register_map()
+        self.reset()
+
+    # ------------------------------------------------------------ setup
+    def reset(self) -> None:
+        """Power-on state: start positions, outputs off, no overrides, registers
+        cleared, t_ms = 0."""
+        self.t_ms = 0
+        self._notes.clear()
+        self.motion.reset()
+        self._outputs = 0
+        self._ov_mask = 0
+        self._ov_val = 0
+        self.sensors.reset(self.motion.ipos, 0)
+        self._inputs = 0
+        self._regs: dict[int, int] = {}
+        self._special: dict[int, int] = {}
+        self._pwm = [0] * 8
+        self._dac = [0] * 8
+        self._adc_override: dict[int, int] = {}
+        self._adc = list(self.sensors.adc)
+        self._hw_limits = True
+        self._warned: set = set()
+        self._recompute_inputs()
+        self._sample: Optional[dict] = None
+
+    def _build_register_map(self) -> None:
+        g, s = self._get, self._set
+        ro = self._read_only
+        for n in range(256):
+            g[abi.OUTPUT_STATE_BASE + n] = self._get_output_bit
+            s[abi.OUTPUT_STATE_BASE + n] = ro
+        for k, a in enumerate(abi.GVAR_HW_INPUTS):
+            g[a] = (lambda _a, k=k: _s32(self._inputs >> (32 * k)))
+            s[a] = ro
+        for k, a in enumerate(abi.GVAR_HW_OUTPUTS):
+            g[a] = (lambda _a, k=k: _s32(self._outputs >> (32 * k)))
+            s[a] = (lambda _a, v, k=k: self._set_output_word(k, v))
+        for ch in range(ADC_CHANNELS):
+            g[abi.GVAR_HW_ADC0 + ch] = (lambda _a, ch=ch: self._adc[ch])
+            s[abi.GVAR_HW_ADC0 + ch] = ro
+        for ch in range(8):
+            g[abi.GVAR_HW_DAC0 + ch] = (lambda _a, ch=ch: self._dac[ch])
+            s[abi.GVAR_HW_DAC0 + ch] = (lambda _a, v, ch=ch: self._write_list(self._dac, ch, v))
+            g[abi.GVAR_HW_PWM0 + ch] = (lambda _a, ch=ch: self._pwm[ch])
+            s[abi.GVAR_HW_PWM0 + ch] = (lambda _a, v, ch=ch: self._write_list(self._pwm, ch, v))
+        g[abi.MOTION_CODE] = lambda _a: 0 if self.motion.busy else abi.MOTION_CODE_IDLE
+        s[abi.MOTION_CODE] = ro
+        for i in range(6):
+            g[abi.MACHINE_POS_BASE + i] = (lambda _a, i=i: self.motion.ipos[i])
+            g[abi.PROGRAM_POS_BASE + i] = (lambda _a, i=i: self.motion.program_position(i))
+            s[abi.MACHINE_POS_BASE + i] = ro
+            s[abi.PROGRAM_POS_BASE + i] = ro
+        for i in range(N_AXES):
+            g[abi.MACHINE_POS9_BASE + i] = (lambda _a, i=i: self.motion.ipos[i])
+            g[abi.PROGRAM_POS9_BASE + i] = (lambda _a, i=i: self.motion.program_position(i))
+            s[abi.MACHINE_POS9_BASE + i] = ro
+            s[abi.PROGRAM_POS9_BASE + i] = ro
+        stored = lambda a: self._special.get(a, 0)  # noqa: E731
+        for a in (abi.DISABLE_HW_LIMITS, abi.DISABLE_SW_LIMITS, abi.JOG_ACCEL_TIME,
+                  abi.JOG_SPEED_UNITS, abi.JOG_AXIS_SPEED, abi.JOG):
+            g[a] = stored
+        s[abi.DISABLE_HW_LIMITS] = self._set_hw_limits
+        s[abi.DISABLE_SW_LIMITS] = self._set_sw_limits
+        s[abi.JOG_ACCEL_TIME] = self._set_jog_time
+        s[abi.JOG_SPEED_UNITS] = self._set_jog_units
+        s[abi.JOG_AXIS_SPEED] = self._set_jog_speed
+        s[abi.JOG] = self._set_jog
+
+    # ------------------------------------------------------- PLC-facing
+    def portset(self, pin: int) -> None:
+        """Turn output ``pin`` on (at once)."""
+        if 0 <= pin < self.output_count:
+            self._set_outputs(self._outputs | (1 << pin))
+        else:
+            self._bad_pin("portset", pin, self.output_count, "outputs")
+
+    def portclear(self, pin: int) -> None:
+        """Turn output ``pin`` off (at once)."""
+        if 0 <= pin < self.output_count:
+            self._set_outputs(self._outputs & ~(1 << pin))
+        else:
+            self._bad_pin("portclear", pin, self.output_count, "outputs")
+
+    def portget(self, pin: int) -> int:
+        """The state of input ``pin``, 0 or 1 (a manual override wins over the wiring)."""
+        if 0 <= pin < self.input_count:
+            return (self._inputs >> pin) & 1
+        self._bad_pin("portget", pin, self.input_count, "inputs")
+        return 0
+
+    def gvarget(self, addr: int) -> int:
+        f = self._get.get(addr)
+        if f is None:
+            return self._regs.get(addr, 0)
+        return f(addr)
+
+    def gvarset(self, addr: int, value: int) -> None:
+        f = self._set.get(addr)
+        if f is None:
+            self._regs[addr] = value
+        else:
+            f(addr, value)
+
+    def is_plain_register(self, addr: int) -> bool:
+        """True when gvarget(addr) reads the plain global register store."""
+        return addr not in self._get
+
+    def g0move(self, flags: int, mask: int, distance: int) -> None:
+        """g0moveA(flags, mask, distance): bit 0 absolute, bit 1 machine coordinates,
+        bit 7 delayed start; distance in 0.01 mm."""
+        self.motion.g0move(self.t_ms, flags, mask, distance)
+
+    def on_message(self, code: int) -> None:
+        """A PLC message; the stop messages stop the motion in progress (decelerating)."""
+        if code in STOP_MESSAGES:
+            self.motion.stop()
+
+    def soft_jog(self, axis_index: int, speed: int) -> None:
+        """The software PLC's gvarset(100020 + axis, speed): jog one axis (negative
+        speed: negative direction) until it is set to 0. Speed is in jog speed
+        units (mm/min while 8632 is 0 or 1000). No watchdog."""
+        self.motion.soft_jog(axis_index, speed)
+
+    # ------------------------------------------------------ host-facing
+    def set_input(self, pin: int, value: int) -> None:
+        """Set input ``pin`` by hand; it overrides the wiring from then on."""
+        if not 0 <= pin < self.input_count:
+            raise ValueError(f"no input {pin} (the machine has inputs 0..{self.input_count - 1})")
+        bit = 1 << pin
+        self._ov_mask |= bit
+        if value:
+            self._ov_val |= bit
+        else:
+            self._ov_val &= ~bit
+        self._recompute_inputs()
+
+    def clear_override(self, pin: int) -> None:
+        """Give input ``pin`` back to the machine's wiring."""
+        if not 0 <= pin < self.input_count:
+            raise ValueError(f"no input {pin} (the machine has inputs 0..{self.input_count - 1})")
+        bit = 1 << pin
+        self._ov_mask &= ~bit
+        self._ov_val &= ~bit
+        self._recompute_inputs()
+
+    def overrides(self) -> dict[int, int]:
+        """The inputs set by hand: {pin: value}."""
+        out, m, n = {}, self._ov_mask, 0
+        while m:
+            if m & 1:
+                out[n] = (self._ov_val >> n) & 1
+            m >>= 1
+            n += 1
+        return out
+
+    def set_adc(self, channel: int, value: int) -> None:
+        """Set ADC ``channel`` by hand; it overrides its source from then on."""
+        if not 0 <= channel < ADC_CHANNELS:
+            raise ValueError(f"no ADC channel {channel} (0..{ADC_CHANNELS - 1})")
+        self._adc_override[channel] = int(value)
+        self._refresh_adc()
+
+    def clear_adc(self, channel: int) -> None:
+        """Give ADC ``channel`` back to its source."""
+        self._adc_override.pop(channel, None)
+        self._refresh_adc()
+
+    def advance(self) -> list[tuple[str, str]]:
+        """Advance 1 ms: motion, jog watchdog, delayed inputs, ADC sources, limits.
+        Returns the notes of this ms (and of the PLC calls since the last advance)
+        as (level, text), level "info", "warning" or "error"."""
+        t = self.t_ms = self.t_ms + 1
+        if not (self.motion.needs_advance or self.sensors.pending or self.sensors.dynamic_adc
+                or self._notes):
+            return []
+        return self._advance(t)
+
+    def _advance(self, t: int) -> list[tuple[str, str]]:
+        m, sens = self.motion, self.sensors
+        moved = m.advance(t)
+        wired_changed = False
+        if moved:
+            self._sample = None
+            wired_changed = sens.update_positions(m.ipos)
+        if sens.pending:
+            wired_changed |= sens.apply_due(t)
+        if (sens.dynamic_adc or (moved and sens.axis_adc)) and sens.update_adc(t, m.ipos, moved):
+            self._refresh_adc()
+        if wired_changed:
+            self._recompute_inputs()
+        if moved and self._hw_limits and sens.hard_limits:
+            self._check_hard_limits()
+        if not self._notes:
+            return []
+        notes = list(self._notes)
+        self._notes.clear()
+        return notes
+
+    def sample_fields(self) -> dict:
+        """inputs/outputs (8 words each), pwm, dac, adc (8 each), axes (9 machine
+        positions, 0.01 mm) and velocities (9, 0.01 mm/s), all tuples of ints.
+        The same dict is returned until something changes: do not modify it."""
+        s = self._sample
+        if s is None:
+            ins, outs = self._inputs, self._outputs
+            m = self.motion
+            s = self._sample = {
+                "inputs": tuple((ins >> k) & _M32 for k in _WORD_SHIFTS),
+                "outputs": tuple((outs >> k) & _M32 for k in _WORD_SHIFTS),
+                "pwm": tuple(self._pwm),
+                "dac": tuple(self._dac),
+                "adc": tuple(self._adc),
+                "axes": tuple(m.ipos),
+                "velocities": m.velocity_report(),
+            }
+        return s
+
+    def outputs_on(self) -> list[int]:
+        """The output pins that are on, sorted."""
+        out, v, n = [], self._outputs, 0
+        while v:
+            if v & 1:
+                out.append(n)
+            v >>= 1
+            n += 1
+        return out
+
+    def inputs_on(self) -> list[int]:
+        """The input pins that read 1, sorted."""
+        out, v, n = [], self._inputs, 0
+        while v:
+            if v & 1:
+                out.append(n)
+            v >>= 1
+            n += 1
+        return out
+
+    def axis_positions(self) -> dict[str, int]:
+        """Machine positions (0.01 mm) of the configured axes, in X..W order."""
+        ipos = self.motion.ipos
+        return {AXES[i]: ipos[i] for i in self.motion.present_idx}
+
+    def program_positions(self) -> dict[str, int]:
+        """Program positions (machine − work offset) of the configured axes."""
+        m = self.motion
+        return {AXES[i]: m.program_position(i) for i in m.present_idx}
+
+    @property
+    def motion_code(self) -> int:
+        """What 6060 reads now."""
+        return 0 if self.motion.busy else abi.MOTION_CODE_IDLE
+
+    # --------------------------------------------------------- internals
+    def _recompute_inputs(self) -> None:
+        m = self._ov_mask
+        v = ((self.sensors.wired & ~m) | (self._ov_val & m)) & self._in_mask
+        if v != self._inputs:
+            self._inputs = v
+            self._sample = None
+
+    def _set_outputs(self, new: int) -> None:
+        old = self._outputs
+        if new == old:
+            return
+        self._outputs = new
+        self._sample = None
+        if (old ^ new) & self.sensors.followed_mask:
+            if self.sensors.output_changed(self.t_ms, old, new):
+                self._recompute_inputs()
+
+    def _set_output_word(self, k: int, value: int) -> None:
+        shift = 32 * k
+        new = (self._outputs & ~(_M32 << shift)) | ((value & _M32) << shift)
+        self._set_outputs(new & self._out_mask)
+
+    def _get_output_bit(self, addr: int) -> int:
+        return (self._outputs >> (addr - abi.OUTPUT_STATE_BASE)) & 1
+
+    def _write_list(self, lst: list, ch: int, value: int) -> None:
+        if lst[ch] != value:
+            lst[ch] = value
+            self._sample = None
+
+    def _refresh_adc(self) -> None:
+        adc = list(self.sensors.adc)
+        for ch, v in self._adc_override.items():
+            adc[ch] = v
+        if adc != self._adc:
+            self._adc = adc
+            self._sample = None
+
+    def _read_only(self, addr: int, value: int) -> None:
+        if ("ro", addr) not in self._warned:
+            self._warned.add(("ro", addr))
+            what = abi.describe_register(addr) or str(addr)
+            self._notes.append(("warning", f"gvarset({addr}, {value}) ignored: {what} is "
+                                           f"read-only"))
+
+    def _bad_pin(self, func: str, pin: int, count: int, what: str) -> None:
+        if (func, pin) not in self._warned:
+            self._warned.add((func, pin))
+            self._notes.append(("warning", f"{func}({pin}): no such pin (the machine has "
+                                           f"{what} 0..{count - 1})"))
+
+    def _set_hw_limits(self, addr: int, value: int) -> None:
+        self._special[addr] = value
+        self._hw_limits = value == 0
+
+    def _set_sw_limits(self, addr: int, value: int) -> None:
+        self._special[addr] = value
+        self.motion.soft_limits = value == 0
+
+    def _set_jog_time(self, addr: int, value: int) -> None:
+        self._special[addr] = value
+        self.motion.set_jog_time(max(0, value))
+
+    def _set_jog_units(self, addr: int, value: int) -> None:
+        self._special[addr] = value
+        self.motion.set_jog_units(max(0, value))
+
+    def _set_jog_speed(self, addr: int, value: int) -> None:
+        self._special[addr] = value
+        self.motion.set_jog_speed(value)
+
+    def _set_jog(self, addr: int, value: int) -> None:
+        self._special[addr] = value
+        self.motion.jog_write(self.t_ms, value)
+
+    def _check_hard_limits(self) -> None:
+        m = self.motion
+        vel = m.vel
+        ins = self._inputs
+        for sw in self.sensors.hard_limits:
+            v = vel[sw.axis]
+            if v == 0.0 or ((ins >> sw.pin) & 1) != sw.active:
+                continue
+            if sw.toward == 0 or (v < 0) == (sw.toward < 0):
+                name = f" {sw.name}" if sw.name else ""
+                self._notes.append((
+                    "error", f"hard limit: input {sw.pin}{name} tripped with "
+                             f"{AXES[sw.axis]} at {fmt_mm(m.pos[sw.axis])} "
+                             f"{m.unit[sw.axis]}; motion stopped"))
+                m.halt()
+                self._sample = None
+                return
