@@ -17,9 +17,12 @@ from plcbuilder.bytecode import disasm
 from plcbuilder.bytecode.program import Kind, LoadError, Program
 from plcbuilder.lang.compiler import (CompileOptions, CompileResult, compile_bytes, compile_file,
                                       compile_source)
+from plcbuilder.project import (BuildResult, Project, ProjectError, build_project,
+                                create_project)
 
-__all__ = ["CompileOptions", "CompileResult", "Kind", "LoadError", "Program", "compile_bytes",
-           "compile_file", "compile_source", "load_program", "disassemble", "kind_for_path"]
+__all__ = ["BuildResult", "CompileOptions", "CompileResult", "Kind", "LoadError", "Program",
+           "Project", "ProjectError", "build_project", "compile_bytes", "compile_file",
+           "compile_source", "create_project", "disassemble", "kind_for_path", "load_program"]
 
 
 def load_program(path) -> Program:
