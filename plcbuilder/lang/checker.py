@@ -64,6 +64,7 @@ class VarInfo:
     first: Span
     assigned: Optional[Span] = None
     read: Optional[Span] = None
+    procs: set = field(default_factory=set)      # procedures that use it
 
 
 @dataclass
@@ -204,7 +205,7 @@ class Checker:
         v = self.vars.get(n)
         if v is None:
             v = self.vars[n] = VarInfo(n, span)
-            v.proc = self._current  # type: ignore[attr-defined]
+        v.procs.add(self._current)
         return v
 
     # ================================================================ expressions
@@ -410,8 +411,8 @@ class Checker:
 
     def _variables(self) -> None:
         live = set(self.res.reachable)
-        used = [v for v in self.vars.values() if getattr(v, "proc", None) in live or not live]
-        # variables of unreachable procedures still get slots if they are used elsewhere
+        # a variable gets a slot when code that is emitted uses it
+        used = [v for v in self.vars.values() if v.procs & live or not live]
         names = [v.name for v in used]
         self.res.user_vars = names
         if len(names) > abi.MAX_USER_VARS:
