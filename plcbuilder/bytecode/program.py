@@ -153,6 +153,8 @@ class Program:
             raise LoadError(f"format version {version}, this controller reads version {FORMAT_VERSION}")
         if kind not in (0, 1):
             raise LoadError(f"unknown procedure kind {kind}")
+        if _flags != 0:
+            raise LoadError(f"reserved header flags are 0x{_flags:02x}, must be 0")
         body = data[HEADER_SIZE:]
         if zlib.crc32(body) != crc:
             raise LoadError(f"CRC mismatch: header says {crc:08x}, contents give {zlib.crc32(body):08x}"
@@ -187,6 +189,9 @@ class Program:
             raise LoadError(f"invalid code: {exc}") from None
         if code and not 0 <= entry < len(code):
             raise LoadError(f"entry point {entry} is outside the code")
+        starts = dict(procs)
+        if "main" in starts and starts["main"] != entry:
+            raise LoadError(f"entry point {entry} is not main() (at {starts['main']})")
         return cls(name, Kind(kind), code, entry, var_names, files, lines, procs)
 
 

@@ -103,3 +103,19 @@ def test_location_and_procedure_lookup():
     file, line = p.location(0)
     assert file == "M10.plc" and line == 3
     assert p.proc_at(p.procs[1][1]) == "helper"
+
+
+def test_every_single_header_byte_change_is_refused():
+    """Header bytes are not covered by the CRC: each one is checked on its own.
+    (Hardware <-> software is a valid kind either way; in an image the manifest
+    says which it must be.)"""
+    raw = program().to_bytes()
+    for i in range(HEADER_SIZE):
+        for delta in (1, 0x80):
+            if (i, delta) == (5, 1):
+                assert Program.from_bytes(raw[:5] + b"\x01" + raw[6:]).kind is Kind.SOFTWARE
+                continue
+            b = bytearray(raw)
+            b[i] ^= delta
+            with pytest.raises(LoadError):
+                Program.from_bytes(bytes(b))

@@ -1,0 +1,213 @@
+"""``plcbuilder controller``: the simulated controller as a server.
+
+Listens on 127.0.0.1 (``--host`` to change; anything but loopback sends the
+token in clear over the network, so a warning says so), on ``--port`` (0, the
+default: a free port). A fresh random token is made each time; the address and
+token go to the runtime file (0600) where ``plcbuilder upload/start/stop/
+input/state`` and the IDE find them, and the file is removed on exit. SIGINT
+(Ctrl+C) and SIGTERM run ``__HANDLER_EXIT`` and stop cleanly (exit 0).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+import threading
+from pathlib import Path
+
+from plcbuilder.cli._link_opts import EXIT_FAIL, EXIT_USAGE
+
+
+def parse_speed(text: str) -> tuple[str, float]:
+    """realtime | max | pause | N (a factor of real time, also ``Nx``)."""
+    t = text.strip().lower()
+    if t in ("realtime", "max", "pause"):
+        return t, 1.0
+    try:
+        f = float(t[:-1] if t.endswith("x") else t)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected realtime, max, pause or a factor such as 10, got {text!r}") from None
+    from plcbuilder.link.protocol import MAX_FACTOR, MIN_FACTOR
+    if not MIN_FACTOR <= f <= MAX_FACTOR:
+        raise argparse.ArgumentTypeError(f"a speed factor must be from {MIN_FACTOR:g} to "
+                                         f"{MAX_FACTOR:g}")
+    return ("realtime", 1.0) if f == 1.0 else ("factor", f)
+
+
+def _loopback(host: str) -> bool:
+    import ipaddress
+    try:
+        return ipaddress.ip_address(host.split("%")[0]).is_loopback
+    except ValueError:
+        return False
+
+
+def parse_limits(text: str):
+    from plcbuilder.link.server import Limits
+    parts = text.split(",")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        lim = Limits(*(int(p, 0) for p in parts))
+        lim.check()
+    except Exception:  # noqa: BLE001
+        raise argparse.ArgumentTypeError(
+            f"expected HW_PROC,HW_TOTAL,SW_PROC (bytes, such as 512,8192,16384), got {text!r}"
+        ) from None
+    return lim
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "controller", help="run the simulated controller as a server",
+        description="Serve the simulated controller over TCP (loopback unless --host says "
+                    "otherwise). Its address and a fresh token go to a runtime file only the "
+                    "user can read, where the CLI and the IDE find them. Ctrl+C or SIGTERM "
+                    "runs __HANDLER_EXIT and stops.")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1; other addresses expose "
+                        "the controller to the network)")
+    p.add_argument("--port", type=int, default=0, metavar="N",
+                   help="TCP port (default 0: a free port, printed and written to the "
+                        "runtime file)")
+    p.add_argument("--machine", type=Path, metavar="FILE",
+                   help="machine description (default: the built-in default machine)")
+    p.add_argument("--variables", type=Path, metavar="FILE",
+                   help="plc-variables.xml: initial values of var00..var15")
+    p.add_argument("--image", type=Path, metavar="FILE",
+                   help="an eeprom.rom image to load at start")
+    p.add_argument("--speed", type=parse_speed, default=("realtime", 1.0),
+                   metavar="realtime|N|max|pause",
+                   help="pace: real time (default), N times real time, as fast as possible, "
+                        "or paused")
+    p.add_argument("--limits", type=parse_limits, default=None, metavar="HW,TOTAL,SW",
+                   help="code size limits an uploaded image is checked against "
+                        "(default 512,8192,16384 bytes)")
+    p.add_argument("--backend", choices=("fast", "reference"), default="fast",
+                   help="the VM implementation (default fast)")
+    p.add_argument("--gvarget-latency", type=int, default=0, metavar="MS",
+                   help="host round-trip latency of gvarget on plain registers (default 0)")
+    p.add_argument("--runtime-file", type=Path, metavar="FILE",
+                   help="where to write the address and token (default: the user's runtime "
+                        "folder; see docs/controller-server.md)")
+    p.add_argument("--parent", type=int, metavar="PID",
+                   help="stop (as on SIGTERM) when process PID has ended: the IDE passes its "
+                        "own id for the controller it starts")
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from plcbuilder.link import runtime
+    from plcbuilder.link.server import ConfigError, ControllerServer, Refused, make_controller
+
+    def say(text: str, err: bool = False) -> None:
+        stream = sys.stderr if err else sys.stdout
+        try:
+            stream.write(text + "\n")
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+
+    if not 0 <= args.port <= 65535:
+        say(f"plcbuilder controller: --port must be from 0 to 65535, is {args.port}", True)
+        return EXIT_USAGE
+    try:
+        factory = make_controller(args.machine, args.variables, backend=args.backend,
+                                  gvarget_latency_ms=max(0, args.gvarget_latency))
+    except ConfigError as exc:
+        say(f"plcbuilder controller: {exc}", True)
+        return EXIT_FAIL
+    except OSError as exc:
+        say(f"plcbuilder controller: {exc}", True)
+        return EXIT_FAIL
+    image = None
+    if args.image is not None:
+        try:
+            image = args.image.read_bytes()
+        except OSError as exc:
+            say(f"plcbuilder controller: cannot read {args.image}: {exc.strerror or exc}", True)
+            return EXIT_FAIL
+    path = args.runtime_file or runtime.default_path()
+    mode, factor = args.speed
+    try:
+        srv = ControllerServer(controller_factory=factory, host=args.host, port=args.port,
+                               speed=mode, factor=factor, limits=args.limits, image=image,
+                               runtime_file=path)
+    except Refused as exc:
+        say(f"plcbuilder controller: {args.image}: {exc.reason}", True)
+        return EXIT_FAIL
+    except OSError as exc:
+        say(f"plcbuilder controller: cannot listen on {args.host}:{args.port}: "
+            f"{exc.strerror or exc}", True)
+        return EXIT_FAIL
+    try:
+        old = runtime.read(path)
+        if old.pid != os.getpid() and runtime.pid_alive(old.pid):
+            say(f"plcbuilder controller: note: the controller of process {old.pid} "
+                f"({old.host}:{old.port}) is still running; clients will find this one "
+                "instead", True)
+    except runtime.RuntimeFileError:
+        pass
+
+    ppid = os.getppid()
+    stop = threading.Event()
+    received: list[int] = []
+    status = 0
+
+    def on_signal(signum, _frame):
+        received.append(signum)
+        stop.set()
+
+    previous = {}
+    for name in ("SIGINT", "SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is not None:
+            try:
+                previous[sig] = signal.signal(sig, on_signal)
+            except (ValueError, OSError):      # not the main thread
+                pass
+    try:
+        try:
+            srv.start()
+        except OSError as exc:
+            srv.close(shutdown=False)
+            say(f"plcbuilder controller: cannot write the runtime file {path}: "
+                f"{exc.strerror or exc}", True)
+            return EXIT_FAIL
+        host, port = srv.address
+        if not _loopback(host):
+            say(f"plcbuilder controller: warning: listening on {host}, not loopback: anyone who "
+                "can reach this port and learns the token can drive the controller, and the "
+                "token travels unencrypted", True)
+        speed = mode if mode != "factor" else f"{factor:g}x real time"
+        say(f"plcbuilder controller: listening on {host}:{port} ({speed}); "
+            f"runtime file {path}")
+        if image is not None:
+            n = len(srv.service.image.procedures) if srv.service.image else 0
+            say(f"plcbuilder controller: loaded {args.image} ({n} procedures)")
+        say("plcbuilder controller: Ctrl+C or SIGTERM stops it")
+        while not stop.wait(0.5):
+            if args.parent is not None and (not runtime.pid_alive(args.parent) or
+                                            (args.parent == ppid and os.getppid() != ppid)):
+                say(f"plcbuilder controller: process {args.parent} has ended", True)
+                break
+            if not srv.sim.running or not (srv.server._thread and srv.server._thread.is_alive()):
+                say("plcbuilder controller: the server stopped unexpectedly", True)
+                status = EXIT_FAIL
+                break
+    finally:
+        srv.close(shutdown=True)
+        t = srv.controller.t_ms
+        for sig, handler in previous.items():
+            try:
+                signal.signal(sig, handler)
+            except (ValueError, OSError, TypeError):
+                pass
+    why = {getattr(signal, "SIGINT", -1): "interrupted", getattr(signal, "SIGTERM", -1):
+           "terminated", getattr(signal, "SIGHUP", -2): "hung up"}
+    reason = why.get(received[0], "stopped") if received else "stopped"
+    say(f"plcbuilder controller: {reason}; ran __HANDLER_EXIT and stopped at t = {t} ms")
+    return status

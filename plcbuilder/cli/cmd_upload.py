@@ -1,0 +1,52 @@
+"""``plcbuilder upload IMAGE``: send an eeprom.rom image to the running controller.
+
+The controller accepts an image only whole and valid (ROMFS structure,
+manifest, every CRC, the size limits); otherwise it refuses it with the reason,
+which is printed, exit status 1, and the previous image keeps running.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from plcbuilder.cli._link_opts import EXIT_FAIL, add_link_options, run_client
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "upload", help="upload an eeprom.rom image to the running controller",
+        description="Upload IMAGE (build/eeprom.rom) to the controller. A refused image "
+                    "prints the controller's reason and exits 1; the previous image keeps "
+                    "running.")
+    p.add_argument("image", type=Path, metavar="IMAGE", help="the image (build/eeprom.rom)")
+    add_link_options(p)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from plcbuilder.link.protocol import MAX_IMAGE
+    try:
+        with open(args.image, "rb") as f:
+            data = f.read(MAX_IMAGE + 1)
+    except OSError as exc:
+        import sys
+        print(f"plcbuilder upload: cannot read {args.image}: {exc.strerror or exc}",
+              file=sys.stderr)
+        return EXIT_FAIL
+    if len(data) > MAX_IMAGE:
+        import sys
+        print(f"plcbuilder upload: {args.image} is larger than {MAX_IMAGE} bytes: "
+              "not an image the controller accepts", file=sys.stderr)
+        return EXIT_FAIL
+
+    def body(client, out) -> int:
+        r = client.upload(data)
+        procs = r.get("procedures", [])
+        hw = [p for p in procs if p.get("kind") == "hardware"]
+        out.print(f"uploaded {args.image}: {len(procs)} procedures ({len(hw)} hardware, "
+                  f"{len(procs) - len(hw)} software), hardware code {r.get('hw_total', 0)} bytes, "
+                  f"image CRC-32 {r.get('image_crc32')}")
+        return 0
+
+    return run_client(args, body, "upload")

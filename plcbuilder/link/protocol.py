@@ -1,0 +1,362 @@
+"""The wire protocol between the simulated controller (server) and its clients.
+
+Framing
+    Every message is one frame: a 4-byte big-endian unsigned length, then that
+    many bytes of UTF-8 JSON holding one object. A frame longer than
+    :data:`MAX_FRAME` is refused before its payload is read. Binary payloads
+    (the image) travel as base64 text.
+
+Messages
+    Every message is a JSON object with a string ``type``; a request also has an
+    ``id`` (an integer or a short string) that its answer repeats. The first
+    message on a connection must be ``hello {version, token}``.
+
+    client -> server (requests):
+        hello {version, token}          upload {image: base64}
+        start {name | mcode, eparam}    stop {}
+        input {pin, value}              adc {channel, value}
+        state {}                        variables {}
+        subscribe {samples?, events?}   unsubscribe {}
+        speed {mode, factor?}           step {ms}
+        reset {}                        event {handler}
+        ping {}
+
+    server -> client:
+        welcome {id, version, server, pid, t_ms, speed}   the answer to hello
+        result {id, result: {...}}                        a request done
+        error {id, code, reason}                          a request refused
+        telemetry {seq, t_ms, sample_fields, samples, events, missed, missed_events}
+        bye {reason}                                      the server is going away
+
+    Both ends dispatch a message by its type to a method named ``handle_<type>``
+    (server) or ``on_<type>`` (client) after checking the type against the
+    catalogue below; nothing is ever evaluated.
+
+This module holds what both ends share: constants, the frame encoder and an
+incremental decoder, the field checks, and the compact sample encoding.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import dataclasses
+import enum
+import json
+import math
+import re
+import socket
+import struct
+from typing import Any, Iterable, Optional
+
+from plcbuilder.controller.events import Sample, from_dict, to_dict
+
+#: Bumped on any incompatible change; hello carries it and the server checks it.
+PROTOCOL_VERSION = 1
+#: Largest frame payload accepted, in bytes (an image of MAX_IMAGE bytes fits as base64).
+MAX_FRAME = 4 * 1024 * 1024
+#: Largest image accepted by upload, in bytes (before base64).
+MAX_IMAGE = (MAX_FRAME - 4096) // 4 * 3
+#: The frame header: payload length, u32 big-endian.
+HEADER = struct.Struct(">I")
+#: Server name reported in welcome.
+SERVER_NAME = "plcbuilder-controller"
+
+_TYPE_RE = re.compile(r"[a-z][a-z_]{0,31}\Z")
+_MAX_ID_TEXT = 64
+
+#: Requests a client may send, and the messages a server may send. Dispatch
+#: only ever looks a type up in these sets.
+REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state", "variables",
+                      "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping"})
+REPLIES = frozenset({"welcome", "result", "error", "telemetry", "bye"})
+
+#: Speed modes of the ``speed`` request.
+SPEED_MODES = ("realtime", "factor", "max", "pause")
+MAX_FACTOR = 10000.0
+MIN_FACTOR = 0.001
+
+
+class ErrorCode(str, enum.Enum):
+    """The ``code`` of an error message."""
+
+    BAD_FRAME = "bad_frame"          # framing or JSON: the connection is closed
+    UNAUTHORIZED = "unauthorized"    # no hello, or a wrong token: the connection is closed
+    VERSION = "version"              # hello with another protocol version: closed
+    UNKNOWN_TYPE = "unknown_type"    # a request type this server does not know
+    BAD_REQUEST = "bad_request"      # a field missing or of the wrong type or range
+    REFUSED = "refused"              # the controller refused (bad image, unknown procedure...)
+    BUSY = "busy"                    # too many connections
+    INTERNAL = "internal"            # a bug in the server; the request had no effect it knows of
+
+    def __str__(self) -> str:
+        return self.value
+
+
+#: Error codes after which the server closes the connection.
+FATAL_CODES = frozenset({ErrorCode.BAD_FRAME, ErrorCode.UNAUTHORIZED, ErrorCode.VERSION,
+                         ErrorCode.BUSY})
+
+
+class ProtocolError(ValueError):
+    """A frame that breaks the protocol; ``code`` is the ErrorCode to answer with."""
+
+    def __init__(self, reason: str, code: ErrorCode = ErrorCode.BAD_FRAME):
+        super().__init__(reason)
+        self.reason = reason
+        self.code = code
+
+
+class BadRequest(ProtocolError):
+    """A well-formed request with a missing or wrong field (the connection stays open)."""
+
+    def __init__(self, reason: str):
+        super().__init__(reason, ErrorCode.BAD_REQUEST)
+
+
+# ------------------------------------------------------------------ frames
+
+def _json_default(obj: Any):
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return dataclasses.asdict(obj)
+    if isinstance(obj, enum.Enum):
+        return obj.value
+    if isinstance(obj, (tuple, set, frozenset)):
+        return list(obj)
+    if isinstance(obj, (bytes, bytearray, memoryview)):
+        return base64.b64encode(bytes(obj)).decode("ascii")
+    if hasattr(obj, "item"):          # numpy scalars, should one slip in
+        return obj.item()
+    raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
+
+
+def encode_payload(msg: dict) -> bytes:
+    """The JSON bytes of one message (compact, no NaN or infinities)."""
+    return json.dumps(msg, separators=(",", ":"), ensure_ascii=False, allow_nan=False,
+                      default=_json_default).encode("utf-8")
+
+
+def encode_frame(msg: dict, max_frame: int = MAX_FRAME) -> bytes:
+    """Length prefix + payload. Raises ProtocolError when the message is too big."""
+    payload = encode_payload(msg)
+    if len(payload) > max_frame:
+        raise ProtocolError(f"message of {len(payload)} bytes is larger than the "
+                            f"{max_frame}-byte frame limit")
+    return HEADER.pack(len(payload)) + payload
+
+
+def _no_constant(name: str):
+    raise ValueError(f"{name} is not allowed")
+
+
+def _pairs(pairs):
+    out = {}
+    for k, v in pairs:
+        if k in out:
+            raise ValueError(f"key {k!r} appears twice")
+        out[k] = v
+    return out
+
+
+def decode_payload(payload: bytes, allowed: Optional[frozenset] = None) -> dict:
+    """Parse and check one frame's payload. Raises ProtocolError.
+
+    The result is a dict with a valid ``type`` (one of ``allowed`` when given;
+    otherwise any well-formed name) and, when present, a valid ``id``.
+    """
+    try:
+        text = bytes(payload).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ProtocolError(f"frame is not UTF-8 (byte {exc.start})") from None
+    try:
+        msg = json.loads(text, object_pairs_hook=_pairs, parse_constant=_no_constant)
+    except RecursionError:
+        raise ProtocolError("frame is not valid JSON: nested too deeply") from None
+    except ValueError as exc:
+        raise ProtocolError(f"frame is not valid JSON: {exc}") from None
+    if not isinstance(msg, dict):
+        raise ProtocolError(f"a message must be a JSON object, got {type(msg).__name__}")
+    mtype = msg.get("type")
+    if not isinstance(mtype, str) or not _TYPE_RE.match(mtype):
+        raise ProtocolError("a message needs a 'type' naming it (lower-case letters and _)")
+    if "id" in msg:
+        check_id(msg["id"])
+    if allowed is not None and mtype not in allowed:
+        raise ProtocolError(f"unknown message type {mtype!r}", ErrorCode.UNKNOWN_TYPE)
+    return msg
+
+
+def check_id(value: Any) -> None:
+    if type(value) is int and -(1 << 53) <= value <= 1 << 53:
+        return
+    if isinstance(value, str) and len(value) <= _MAX_ID_TEXT:
+        return
+    if value is None:
+        return
+    raise ProtocolError("a request 'id' must be an integer or a string of at most "
+                        f"{_MAX_ID_TEXT} characters")
+
+
+class FrameDecoder:
+    """Incremental frame reader: feed bytes as they come, get whole payloads.
+
+    Raises ProtocolError as soon as a length prefix announces more than
+    ``max_frame`` bytes, so an oversize frame is never buffered.
+    """
+
+    def __init__(self, max_frame: int = MAX_FRAME):
+        self.max_frame = max_frame
+        self._buf = bytearray()
+        self._need: Optional[int] = None
+
+    @property
+    def pending(self) -> int:
+        """Bytes of an unfinished frame held (0 between frames)."""
+        return len(self._buf)
+
+    def feed(self, data: bytes) -> list[bytes]:
+        self._buf += data
+        out = []
+        while True:
+            if self._need is None:
+                if len(self._buf) < HEADER.size:
+                    break
+                (n,) = HEADER.unpack_from(self._buf)
+                if n > self.max_frame:
+                    raise ProtocolError(f"frame of {n} bytes announced, more than the "
+                                        f"{self.max_frame}-byte limit")
+                self._need = n
+                del self._buf[:HEADER.size]
+            if len(self._buf) < self._need:
+                break
+            out.append(bytes(self._buf[:self._need]))
+            del self._buf[:self._need]
+            self._need = None
+        return out
+
+    @property
+    def mid_frame(self) -> bool:
+        """True when part of a frame (header or payload) has arrived."""
+        return bool(self._buf) or self._need is not None
+
+
+# ------------------------------------------------------------------ blocking helpers
+
+def send_msg(sock: socket.socket, msg: dict, max_frame: int = MAX_FRAME) -> None:
+    sock.sendall(encode_frame(msg, max_frame))
+
+
+def _recv_exact(sock: socket.socket, n: int) -> bytes:
+    chunks = []
+    while n:
+        chunk = sock.recv(min(n, 1 << 20))
+        if not chunk:
+            raise ConnectionError("the connection was closed")
+        chunks.append(chunk)
+        n -= len(chunk)
+    return b"".join(chunks)
+
+
+def recv_msg(sock: socket.socket, max_frame: int = MAX_FRAME,
+             allowed: Optional[frozenset] = None) -> dict:
+    """Read one whole message from a blocking socket (ConnectionError at EOF)."""
+    (n,) = HEADER.unpack(_recv_exact(sock, HEADER.size))
+    if n > max_frame:
+        raise ProtocolError(f"frame of {n} bytes announced, more than the {max_frame}-byte limit")
+    return decode_payload(_recv_exact(sock, n), allowed)
+
+
+# ------------------------------------------------------------------ fields
+
+def field_int(msg: dict, name: str, default: Any = ..., lo: int = -(1 << 31),
+              hi: int = (1 << 31) - 1) -> int:
+    """An integer field (bool is not an integer here) in [lo, hi]."""
+    if name not in msg:
+        if default is ...:
+            raise BadRequest(f"{msg.get('type')}: missing field {name!r}")
+        return default
+    v = msg[name]
+    if type(v) is not int:
+        raise BadRequest(f"{msg.get('type')}: {name!r} must be an integer, is {v!r}"[:200])
+    if not lo <= v <= hi:
+        raise BadRequest(f"{msg.get('type')}: {name!r} must be from {lo} to {hi}, is {v}")
+    return v
+
+
+def field_str(msg: dict, name: str, default: Any = ..., max_len: int = 128) -> str:
+    if name not in msg:
+        if default is ...:
+            raise BadRequest(f"{msg.get('type')}: missing field {name!r}")
+        return default
+    v = msg[name]
+    if not isinstance(v, str):
+        raise BadRequest(f"{msg.get('type')}: {name!r} must be a string")
+    if len(v) > max_len:
+        raise BadRequest(f"{msg.get('type')}: {name!r} is longer than {max_len} characters")
+    return v
+
+
+def field_bool(msg: dict, name: str, default: bool) -> bool:
+    v = msg.get(name, default)
+    if not isinstance(v, bool):
+        raise BadRequest(f"{msg.get('type')}: {name!r} must be true or false")
+    return v
+
+
+def field_number(msg: dict, name: str, lo: float, hi: float) -> float:
+    if name not in msg:
+        raise BadRequest(f"{msg.get('type')}: missing field {name!r}")
+    v = msg[name]
+    if type(v) not in (int, float) or not math.isfinite(v) or not lo <= v <= hi:
+        raise BadRequest(f"{msg.get('type')}: {name!r} must be a number from {lo:g} to {hi:g}")
+    return float(v)
+
+
+def encode_image(data: bytes) -> str:
+    return base64.b64encode(bytes(data)).decode("ascii")
+
+
+def decode_image(msg: dict, max_image: int = MAX_IMAGE) -> bytes:
+    """The image bytes of an upload request (strict base64). Raises BadRequest."""
+    text = msg.get("image")
+    if not isinstance(text, str):
+        raise BadRequest("upload: 'image' must be the image as base64 text")
+    if len(text) > (max_image + 2) // 3 * 4:
+        raise BadRequest(f"upload: the image is larger than {max_image} bytes")
+    try:
+        data = base64.b64decode(text.encode("ascii"), validate=True)
+    except (binascii.Error, UnicodeEncodeError, ValueError):
+        raise BadRequest("upload: 'image' is not valid base64") from None
+    if len(data) > max_image:
+        raise BadRequest(f"upload: the image is {len(data)} bytes, more than {max_image}")
+    return data
+
+
+# ------------------------------------------------------------------ telemetry encoding
+
+#: The order of a sample's values on the wire (a row per sample).
+SAMPLE_FIELDS: tuple[str, ...] = tuple(f.name for f in dataclasses.fields(Sample))
+
+
+def sample_row(sample: Sample) -> list:
+    """A Sample as a compact list in SAMPLE_FIELDS order."""
+    return [getattr(sample, name) for name in SAMPLE_FIELDS]
+
+
+def sample_from_row(row: Iterable, fields: Iterable[str] = SAMPLE_FIELDS) -> Sample:
+    """The inverse of :func:`sample_row`; unknown fields (a newer server) are dropped."""
+    known = set(SAMPLE_FIELDS)
+    d = {k: v for k, v in zip(fields, row) if k in known}
+    return from_dict(d)
+
+
+def event_dict(event) -> dict:
+    return to_dict(event)
+
+
+def event_from_dict(d: dict):
+    """An Event from its dict, or the dict itself when it is of a kind this side does not know."""
+    try:
+        return from_dict(d)
+    except (TypeError, ValueError, KeyError):
+        return d

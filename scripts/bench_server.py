@@ -1,0 +1,215 @@
+"""Controller server benchmark: real-time pacing drift, request latency and
+telemetry while paced, simulation speed with and without a subscriber, and
+upload time, all over a real loopback socket, with the controller in its own
+process (``plcbuilder controller``), as the IDE runs it.
+
+    .venv/bin/python scripts/bench.py server
+    PLCB_BENCH_SERVER_SECONDS=10 .venv/bin/python scripts/bench.py server   # shorter
+
+The drift run lasts 60 s by default (the goal is stated over 60 s).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+from plcbuilder import api
+from plcbuilder.bytecode.program import Kind
+from plcbuilder.image.manifest import write_image
+from plcbuilder.link import runtime
+from plcbuilder.link.client import Client, RefusedError
+
+SOURCES = {
+    "M03": (Kind.HARDWARE, "main(){ do{ timer++; a = portget(5); if (a) { portset(4); } "
+                           "else { portclear(4); } }while(1); }"),
+    "M05": (Kind.HARDWARE, "main(){ portclear(3); exit(99); }"),
+    "LUBE": (Kind.SOFTWARE, "main(){ do{ var02++; gvarset(7184, var02 & 255); }while(1); }"),
+    "WATCH": (Kind.SOFTWARE, "main(){ do{ a = gvarget(7180); b = b + a; }while(1); }"),
+}
+
+
+def _image() -> bytes:
+    progs = []
+    for name, (kind, text) in SOURCES.items():
+        r = api.compile_source(text, f"{name}.plc", api.CompileOptions(kind=kind))
+        assert r.ok, [str(d) for d in r.diagnostics]
+        progs.append((name, kind, r.program.to_bytes()))
+    return write_image(progs)
+
+
+@contextlib.contextmanager
+def controller_process(image: bytes, speed: str):
+    """``plcbuilder controller`` in a child process; yields a connect() function."""
+    with tempfile.TemporaryDirectory() as tmp:
+        rt = Path(tmp) / "controller.json"
+        img = Path(tmp) / "eeprom.rom"
+        img.write_bytes(image)
+        proc = subprocess.Popen([sys.executable, "-m", "plcbuilder", "controller", "--port", "0",
+                                 "--speed", speed, "--image", str(img), "--runtime-file", str(rt)],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        try:
+            deadline = time.monotonic() + 30
+            while not rt.exists():
+                if proc.poll() is not None or time.monotonic() > deadline:
+                    raise RuntimeError("the controller did not start: " + proc.stderr.read().decode())
+                time.sleep(0.02)
+            ep = runtime.read(rt)
+            yield lambda: Client.connect(ep.host, ep.port, ep.token)
+        finally:
+            proc.terminate()
+            try:
+                proc.wait(30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+
+
+def _pct(values: list[float], q: float) -> float:
+    values = sorted(values)
+    return values[min(len(values) - 1, int(q * len(values)))]
+
+
+def _timed_t(c: Client) -> tuple[float, int]:
+    """(wall time in s at the middle of the request, controller t_ms)."""
+    a = time.monotonic()
+    t = c.state()["t_ms"]
+    b = time.monotonic()
+    return (a + b) / 2, t
+
+
+def realtime(seconds: float, image: bytes) -> list[str]:
+    lines = []
+    with controller_process(image, "realtime") as connect:
+        c = connect()
+        sub = connect()
+        received = {"samples": 0, "missed": 0, "batches": 0}
+
+        def on_batch(b):
+            received["samples"] += len(b.samples)
+            received["missed"] += b.missed
+            received["batches"] += 1
+
+        c.start("M03")
+        sub.subscribe(on_batch)
+        stop = threading.Event()
+        lat: list[float] = []
+
+        def pinger():
+            p = connect()
+            while not stop.is_set():
+                a = time.perf_counter()
+                p.set_input(5, int(a * 10) & 1)
+                lat.append(time.perf_counter() - a)
+                time.sleep(0.01)
+            p.close()
+
+        th = threading.Thread(target=pinger)
+        th.start()
+        time.sleep(0.5)
+        w0, t0 = _timed_t(c)
+        s0 = received["samples"]
+        time.sleep(seconds)
+        w1, t1 = _timed_t(c)
+        s1 = received["samples"]
+        stop.set()
+        th.join()
+        wall_ms = (w1 - w0) * 1000.0
+        sim_ms = t1 - t0
+        drift = (sim_ms - wall_ms) / wall_ms * 100.0
+        lines.append(f"real-time drift over {wall_ms / 1000:.1f} s: {drift:+.4f}% "
+                     f"(simulated {sim_ms} ms, wall {wall_ms:.1f} ms; goal |drift| < 0.1%) "
+                     f"{'OK' if abs(drift) < 0.1 else 'MISSED'}")
+        lines.append(f"dropped backlog: {c.state()['speed']['dropped_ms']} ms (goal 0)")
+        got = s1 - s0
+        lines.append(f"telemetry at real time: {got / (w1 - w0):.0f} samples/s received "
+                     f"(1000 expected), {received['batches'] / (w1 - w0 + 0.5):.1f} batches/s "
+                     f"(<= 50 by design), {received['missed']} missed")
+        lines.append(f"request round trip while paced (input, {len(lat)} requests): median "
+                     f"{statistics.median(lat) * 1e3:.2f} ms, p99 {_pct(lat, 0.99) * 1e3:.2f} ms, "
+                     f"max {max(lat) * 1e3:.2f} ms (goal p99 < 10 ms)")
+        sub.close()
+        c.close()
+    return lines
+
+
+def speed(image: bytes) -> list[str]:
+    lines = []
+    with controller_process(image, "pause") as connect:
+        c = connect()
+        c.start("M03")
+        for label, subscribe in (("no subscriber", False), ("one subscriber (samples)", True)):
+            sub = None
+            if subscribe:
+                sub = connect()
+                counts = {"n": 0, "missed": 0}
+
+                def on_batch(b, counts=counts):
+                    counts["n"] += len(b.samples)
+                    counts["missed"] += b.missed
+                sub.subscribe(on_batch)
+            w0, t0 = _timed_t(c)
+            c.speed("max")
+            time.sleep(2.0)
+            c.speed("pause")
+            w1, t1 = _timed_t(c)
+            rate = (t1 - t0) / (w1 - w0)
+            extra = ""
+            if sub is not None:
+                time.sleep(0.1)
+                extra = f"; subscriber got {counts['n']} samples, told of {counts['missed']} missed"
+                sub.close()
+            lines.append(f"max speed, {label}: {rate / 1000:.0f}x real time "
+                         f"({rate:,.0f} ticks/s){extra}")
+        # latency while running flat out
+        c.speed("max")
+        lat = []
+        for _ in range(300):
+            a = time.perf_counter()
+            c.ping()
+            lat.append(time.perf_counter() - a)
+        st = []
+        for _ in range(300):
+            a = time.perf_counter()
+            c.state()
+            st.append(time.perf_counter() - a)
+        c.speed("pause")
+        lines.append(f"at max speed: ping median {statistics.median(lat) * 1e3:.2f} ms; state "
+                     f"median {statistics.median(st) * 1e3:.2f} ms, p99 {_pct(st, 0.99) * 1e3:.2f} ms")
+        # uploads
+        up = []
+        for _ in range(50):
+            a = time.perf_counter()
+            c.upload(image)
+            up.append(time.perf_counter() - a)
+        bad = image[:-9]
+        ref = []
+        for _ in range(50):
+            a = time.perf_counter()
+            try:
+                c.upload(bad)
+            except RefusedError:
+                pass
+            ref.append(time.perf_counter() - a)
+        lines.append(f"upload of a {len(image)}-byte image: median {statistics.median(up) * 1e3:.2f}"
+                     f" ms; refused upload median {statistics.median(ref) * 1e3:.2f} ms")
+        c.close()
+    return lines
+
+
+def run() -> list[str]:
+    seconds = float(os.environ.get("PLCB_BENCH_SERVER_SECONDS", "60"))
+    image = _image()
+    return speed(image) + realtime(seconds, image)
+
+
+if __name__ == "__main__":
+    for line in run():
+        print(line)
