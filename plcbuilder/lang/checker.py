@@ -184,7 +184,7 @@ class Checker:
             return
         if n in abi.MAPPED_VARIABLES:
             if n in abi.READ_ONLY_VARIABLES:
-                self.diags.append(error("read-only", f"'{n}' is read-only (it reads ADC{n[-1:]})",
+                self.diags.append(error("read-only", f"'{n}' is read-only (it reads ADC{int(n[-2:]) - 1})",
                                         name.span))
             self.res.mapped[n] = abi.MAPPED_VARIABLES[n]
             return
@@ -338,15 +338,22 @@ class Checker:
                         e.span, "add parentheses to say which you mean"))
                     return
         if e.op in BIT_OPS:
-            for child in (e.left, e.right):
+            for side, child in (("left", e.left), ("right", e.right)):
                 if type(child) is A.Binary and child.op in CMP_OPS:
                     whole = self._text(e.span)
                     said = f"'{whole}' " if whole else ""
+                    other = e.right if side == "left" else e.left
+                    # what the writer probably meant: the bit operation first
+                    if side == "right":
+                        inner = f"{self._text(other.span) or 'a'} {e.op} {self._text(child.left.span) or 'b'}"
+                        meant = f"({inner}) {child.op} {self._text(child.right.span) or 'c'}"
+                    else:
+                        inner = f"{self._text(child.right.span) or 'b'} {e.op} {self._text(other.span) or 'c'}"
+                        meant = f"{self._text(child.left.span) or 'a'} {child.op} ({inner})"
                     self.diags.append(warning(
                         "precedence", f"{said}compares before '{e.op}': '{child.op}' binds tighter "
                                       f"than '{e.op}'",
-                        e.span, f"write ({self._text(child.left.span) or 'a'} {e.op} ...) "
-                                f"{child.op} ... if that is what you mean; add parentheses either way"))
+                        e.span, f"write {meant} if that is what you mean; add parentheses either way"))
                     return
 
     def _reachability(self) -> None:

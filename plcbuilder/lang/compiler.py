@@ -338,8 +338,22 @@ class Generator:
             if c:
                 self.jump(Op.JMP8, top)
             return
-        self.expr(cond)
+        self.truth(cond)
         self.jump(Op.LOOP8, top)
+
+    def truth(self, e) -> None:
+        """Push a value that is non-zero exactly when e holds (not always 0/1):
+        ``x != 0`` is just x, ``x == 0`` is !x."""
+        while type(e) is A.Paren:
+            e = e.expr
+        if type(e) is A.Binary and e.op in ("==", "!="):
+            if const_value(e.right) == 0 or const_value(e.left) == 0:
+                other = e.left if const_value(e.right) == 0 else e.right
+                self.expr(other)
+                if e.op == "==":
+                    self.emit(Op.NOT)
+                return
+        self.expr(e)
 
     # --------------------------------------------------------------- conditions
     def cond(self, e, when: bool, label: int) -> None:

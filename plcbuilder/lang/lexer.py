@@ -55,51 +55,34 @@ _WS = r"[ \t\f\v\r\n]*"
 _GAP = r"(?:[ \t\f\v\r\n]|//[^\n]*|/\*[\s\S]*?\*/)*"
 
 
-def _identifier(lexer, match):
-    """Classify one identifier by set lookups (much faster than a word regex)."""
-    text = match.group()
+def _classify(text: str):
+    """The token type of one identifier (set lookups: much faster than word regexes)."""
     if text in KEYWORDS:
-        tok = Keyword
-    elif text in BUILTIN_FUNCTIONS:
-        tok = Name.Builtin
-    elif text in PREDEFINED_VARIABLES:
-        tok = Name.Variable.Magic
-    elif text in BUILTIN_CONSTANTS:
-        tok = Name.Constant
-    else:
-        tok = Name
-    yield match.start(), tok, text
+        return Keyword
+    if text in BUILTIN_FUNCTIONS:
+        return Name.Builtin
+    if text in PREDEFINED_VARIABLES:
+        return Name.Variable.Magic
+    if text in BUILTIN_CONSTANTS:
+        return Name.Constant
+    return Name
+
+
+def _identifier(lexer, match):
+    yield match.start(), _classify(match.group()), match.group()
 
 
 def _definition(lexer, match):
     """``name ( )`` followed by ``{``: a procedure definition."""
     name = match.group(1)
-    if name in KEYWORDS or name in BUILTIN_FUNCTIONS:
-        # ``while () {`` or a misguided ``exit() {``: keep the word's own colour.
-        yield from _identifier(lexer, _Fake(match.start(1), name))
-    else:
-        yield match.start(1), Name.Function, name
+    # ``while () {`` or a misguided ``exit() {`` keep the word's own colour
+    tok = _classify(name) if name in KEYWORDS or name in BUILTIN_FUNCTIONS else Name.Function
+    yield match.start(1), tok, name
     pos = match.end(1)
-    for i in (2, 3, 4, 5):
-        part = match.group(i)
+    for i, part in ((2, match.group(2)), (3, "("), (4, match.group(4)), (5, ")")):
         if part:
-            yield pos, Whitespace if part.isspace() else Punctuation, part
+            yield pos, Whitespace if i in (2, 4) else Punctuation, part
             pos += len(part)
-
-
-class _Fake:
-    """The two methods of a match object that :func:`_identifier` uses."""
-
-    __slots__ = ("_start", "_text")
-
-    def __init__(self, start: int, text: str):
-        self._start, self._text = start, text
-
-    def group(self):
-        return self._text
-
-    def start(self):
-        return self._start
 
 
 def _bygroups_ws(tok):

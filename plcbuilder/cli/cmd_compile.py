@@ -1,0 +1,97 @@
+"""``plcbuilder compile FILE [-o OUT]``: compile one procedure to a binary.
+
+Diagnostics go to stderr; on success one line on stdout names the file written
+and its size against its limit. The binary is written atomically (a temporary
+file in the same folder, then ``os.replace``), so a failed or interrupted
+compile never leaves a half-written OUT. With errors nothing is written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import secrets
+from pathlib import Path
+
+from plcbuilder.cli import term
+from plcbuilder.diagnostics import summary
+from plcbuilder.cli.cmd_check import (add_compile_options, compile_options, guarded,
+                                      print_diagnostics, safe_streams, size_text)
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "compile", help="compile a PLC source file to a binary",
+        description="Compile FILE to a binary procedure (default: FILE with the suffix .bin). "
+                    "Diagnostics go to stderr; exit status 1 on errors, and then nothing "
+                    "is written.")
+    p.add_argument("file", type=Path, metavar="FILE", help="a .plc source file")
+    p.add_argument("-o", "--output", type=Path, metavar="OUT",
+                   help="where to write the binary (a folder: OUT/NAME.bin)")
+    add_compile_options(p)
+    return p
+
+
+def output_path(src: Path, out: Path | None, name: str) -> Path:
+    if out is None:
+        return src.with_suffix(".bin")
+    if out.is_dir():
+        return out / f"{name}.bin"
+    return out
+
+
+def write_atomic(path: Path, data: bytes) -> None:
+    """Write data to path through a temporary file in the same folder and os.replace."""
+    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.resolve() == b.resolve()
+    except OSError:
+        return False
+
+
+def run(args: argparse.Namespace) -> int:
+    safe_streams()
+    out = term.Out(args.color)
+
+    def body() -> int:
+        from plcbuilder import api
+        src: Path = args.file
+        result = api.compile_file(src, compile_options(args, src, out))
+        print_diagnostics(result, out, err=True)
+        if not result.ok or result.program is None:
+            out.print(f"{out.paint('location', str(src) + ':', err=True)} "
+                      f"{out.paint('bad', 'not compiled', err=True)}: {summary(result.diagnostics)}",
+                      err=True)
+            return 1
+        dest = output_path(src, args.output, result.name)
+        if _same_file(dest, src):
+            out.print(f"plcbuilder compile: error: the output {dest} is the source file itself; "
+                      f"choose another with -o", err=True)
+            return 1
+        try:
+            write_atomic(dest, result.program.to_bytes())
+        except OSError as exc:
+            out.print(f"plcbuilder compile: error: cannot write {dest}: {exc.strerror or exc}",
+                      err=True)
+            return 1
+        out.print(f"{out.paint('location', str(dest) + ':')} {result.kind.label} procedure "
+                  f"{result.name}, {size_text(result)}")
+        return 0
+
+    return guarded(body, out)
