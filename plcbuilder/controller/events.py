@@ -52,12 +52,17 @@ class Print:
 
 @dataclass(frozen=True)
 class Fault:
+    """A runtime fault. ``file``/``line`` name the statement of ``main`` that was
+    running (a call, when the fault happened inside a called procedure);
+    ``calls`` is the whole chain, outermost first: (file, line, procedure) of
+    each call and, last, of the instruction that faulted."""
     t_ms: int
     source: str                # procedure name
     file: Optional[str]
     line: Optional[int]
     text: str
     type: str = "fault"
+    calls: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -99,6 +104,8 @@ def from_dict(d: dict):
     kinds = {"started": Started, "ended": Ended, "message": Message, "print": Print,
              "fault": Fault, "note": Note}
     t = d.get("type")
+    if t == "fault" and "calls" in d:
+        d = dict(d, calls=tuple(tuple(c) for c in d["calls"]))
     if t in kinds:
         return kinds[t](**d)
     s = dict(d)

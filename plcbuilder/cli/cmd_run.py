@@ -1,0 +1,165 @@
+"""``plcbuilder run TARGET [options] [--json]``: simulate a procedure or a project.
+
+TARGET is a ``.plc`` file (a hardware procedure; ``--software`` for a software
+one), started at 0 ms with ``--eparam``, or a project folder, whose software
+procedures start by themselves and whose hardware procedures start with
+``--start NAME[:EPARAM]@MS``. The run stops at ``--ms`` or when no procedure
+runs and none is due to start. Exit status: 0 when the run completed (faults
+included), 1 on compile errors, 2 on bad usage.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from plcbuilder.cli import term
+from plcbuilder.cli.cmd_check import guarded, include_dirs, print_diagnostics, safe_streams
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "run", help="simulate a procedure or a project on the simulated controller",
+        description="Compile TARGET (a .plc file or a project folder) and run it on the "
+                    "simulated controller, as fast as it computes. Without --json print a "
+                    "summary; with --json one JSON object (procedures, vars, outputs, pwm, "
+                    "dac, messages, prints, faults, axes, proc, ended_at_ms).",
+        epilog="Scenario lines (--scenario FILE): 'start NAME[:EPARAM] @ MS', "
+               "'input PIN=0|1 @ MS', 'adc CH=VALUE @ MS', 'stop @ MS', "
+               "'event GCODE_START @ MS', 'bind PIN=NAME[:EPARAM] @ MS'; '#' starts a "
+               "comment. See docs/simulator.md.")
+    p.add_argument("target", type=Path, metavar="TARGET",
+                   help="a .plc file (a hardware procedure) or a project folder")
+    p.add_argument("--ms", type=_nonneg, default=None, metavar="N",
+                   help="simulated time limit in ms (default 60000); the run also stops when "
+                        "no procedure runs and none is due to start")
+    p.add_argument("--eparam", type=_int, default=0, metavar="N",
+                   help="the eparam a single-file TARGET starts with (default 0)")
+    p.add_argument("--start", action="append", default=[], metavar="NAME[:EPARAM]@MS",
+                   help="start a procedure at MS (repeatable)")
+    p.add_argument("--input", action="append", default=[], metavar="PIN=0|1@MS",
+                   help="set an input by hand at MS (repeatable; overrides the machine's "
+                        "wiring of that pin from then on)")
+    p.add_argument("--adc", action="append", default=[], metavar="CH=VALUE@MS",
+                   help="set an ADC channel by hand at MS (repeatable)")
+    p.add_argument("--scenario", type=Path, metavar="FILE",
+                   help="a scenario file: one start/input/adc/stop/event line each")
+    p.add_argument("--machine", type=Path, metavar="FILE",
+                   help="the machine description (TOML; default: the project's, else the "
+                        "built-in default machine)")
+    p.add_argument("--software", action="store_true",
+                   help="run a single file as a software procedure")
+    p.add_argument("--strict", action="store_true",
+                   help="compile in controller compatibility mode")
+    p.add_argument("-I", "--include", dest="include", action="append", default=[], type=Path,
+                   metavar="DIR", help="search DIR for #include files (repeatable)")
+    p.add_argument("--trace", type=Path, metavar="FILE.csv",
+                   help="write one CSV row per tick (streamed; gzip if it ends in .gz)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--backend", choices=("fast", "reference"), default="fast",
+                   help=argparse.SUPPRESS)
+    p.add_argument("--gvarget-latency", type=_nonneg, default=0, metavar="MS",
+                   help="host round-trip latency of gvarget of plain registers (default 0)")
+    term.add_color_argument(p)
+    return p
+
+
+def _int(text: str) -> int:
+    try:
+        return int(text, 0)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+
+
+def _nonneg(text: str) -> int:
+    v = _int(text)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"must not be negative: {text!r}")
+    return v
+
+
+def run(args: argparse.Namespace) -> int:
+    safe_streams()
+    out = term.Out(args.color)
+
+    def body() -> int:
+        from plcbuilder.simulate import RunOptions, UsageError, run as simulate
+        target: Path = args.target
+        incs = include_dirs(target, args.include) if not target.is_dir() else tuple(args.include)
+        opts = RunOptions(ms=args.ms, eparam=args.eparam, starts=args.start, inputs=args.input,
+                          adcs=args.adc, scenario=args.scenario, machine=args.machine,
+                          software=args.software, strict=args.strict, include_dirs=incs,
+                          trace=args.trace, backend=args.backend,
+                          gvarget_latency_ms=args.gvarget_latency)
+        try:
+            result = simulate(target, opts)
+        except UsageError as exc:
+            out.print(f"plcbuilder run: error: {exc}", err=True)
+            return 2
+        for r in result.compiled:
+            if r.diagnostics and (not result.ok or not args.json):
+                print_diagnostics(r, out, err=True)
+        if not result.ok:
+            bad = [r.name for r in result.compiled if not r.ok]
+            out.print(f"plcbuilder run: not run: {', '.join(bad)} did not compile", err=True)
+            return 1
+        if args.json:
+            out.print(json.dumps(result.report))
+        else:
+            out.print(summary(result.report, out))
+        return 0
+
+    return guarded(body, out)
+
+
+def summary(rep: dict, out: term.Out) -> str:
+    """A readable account of a run report."""
+    lines = []
+    for p in rep["procedures"]:
+        head = f"{p['name']} ({p['kind']})"
+        if p["eparam"]:
+            head += f" eparam {p['eparam']}"
+        if p["ended_at_ms"] is None:
+            lines.append(f"{head}: started at {p['started_at_ms']} ms, still running")
+        else:
+            code = p["exit_code"]
+            name = f" {p['exit_name']}" if p["exit_name"] else (" (fault)" if code == -1 else "")
+            lines.append(f"{head}: {p['started_at_ms']} -> {p['ended_at_ms']} ms, exit {code}"
+                         f"{name}, vexit {p['vexit']}")
+    if not rep["procedures"]:
+        lines.append("no procedure ran")
+    for f in rep["faults"]:
+        where = f"{f['file']}:{f['line']}: " if f["file"] else ""
+        lines.append(out.paint("bad", f"fault at {f['t_ms']} ms in {f['from']}: {where}{f['text']}"))
+    if rep["messages"]:
+        lines.append("messages:")
+        for m in rep["messages"]:
+            name = f" {m['name']}" if m["name"] else ""
+            lines.append(f"  {m['t_ms']:>7} ms  {m['from']}: {m['message']}{name} "
+                         f"(command {m['command']}, parameter {m['parameter']})")
+    if rep["prints"]:
+        lines.append("prints:")
+        for p in rep["prints"]:
+            lines.append(f"  {p['t_ms']:>7} ms  {p['from']}: [{p['register']}] {p['value']}")
+    notes = [n for n in rep["notes"] if n["level"] != "info"]
+    for n in notes[:50]:
+        lines.append(f"{n['level']} at {n['t_ms']} ms: {n['text']}")
+    if len(notes) > 50:
+        lines.append(f"... {len(notes) - 50} more warnings")
+    lines.append("outputs on: " + (", ".join(map(str, rep["outputs"])) or "none"))
+    for key in ("pwm", "dac"):
+        if any(rep[key]):
+            lines.append(f"{key}: " + " ".join(map(str, rep[key])))
+    if rep["axes"]:
+        lines.append("axes: " + "  ".join(f"{a} {v / 100:.2f}" for a, v in rep["axes"].items()))
+    proc = rep["proc"]
+    lines.append(f"proc: {proc}" + (f" ({rep['proc_name']})" if rep.get("proc_name") else ""))
+    for name, variables in rep["vars"].items():
+        own = {k: v for k, v in variables.items()
+               if not (k.startswith("var") and k[3:].isdigit()) or v}
+        lines.append(f"{name}: " + ", ".join(f"{k}={v}" for k, v in own.items()))
+    still = [p["name"] for p in rep["procedures"] if p["ended_at_ms"] is None]
+    why = "time limit" if still else "nothing left to run"
+    lines.append(f"run ended at {rep['ended_at_ms']} ms ({why})")
+    return "\n".join(lines)

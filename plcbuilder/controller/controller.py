@@ -1,0 +1,323 @@
+"""The simulated controller: the one object the TCP server, the IDE and
+``plcbuilder run`` drive.
+
+It owns a machine (:mod:`plcbuilder.controller.machine`) and the hardware and
+software PLC (:mod:`plcbuilder.controller.plc`). Simulated time only moves in
+:meth:`Controller.step`; everything else (start, stop, inputs) acts "now",
+that is at the beginning of the next tick, ``t_ms``.
+
+Typical use::
+
+    c = Controller()
+    c.load(programs)            # Build All: software procedures (re)start
+    c.start("M03", eparam=12000)
+    c.step(500)
+    for event in c.drain_events(): ...
+"""
+
+from __future__ import annotations
+
+from typing import Iterable, Optional
+
+from plcbuilder.bytecode import abi
+from plcbuilder.bytecode.opcodes import DecodeError, validate
+from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.controller import fastvm
+from plcbuilder.controller.events import Event, Note, Sample
+from plcbuilder.controller.plc import BACKENDS, PLC, mcode_names
+
+HANDLER_INIT = "__HANDLER_INIT"
+HANDLER_EXIT = "__HANDLER_EXIT"
+SHUTDOWN_LIMIT_MS = 10_000
+
+
+class ControllerError(Exception):
+    """A request the controller refuses; the message says why."""
+
+
+class Controller:
+    """A simulated myCNC controller: hardware PLC, software PLC and machine."""
+
+    def __init__(self, machine_config=None, *, backend: str = "fast",
+                 variables: Optional[Iterable[int]] = None, gvarget_latency_ms: int = 0,
+                 record_samples: bool = True, machine=None):
+        if backend not in BACKENDS:
+            raise ControllerError(f"unknown backend {backend!r} (use {' or '.join(BACKENDS)})")
+        if machine is None:
+            from plcbuilder.controller.machine import Machine
+            machine = Machine(machine_config)
+        self.machine = machine
+        try:
+            self._plc = PLC(machine, backend=backend, variables=variables,
+                            gvarget_latency_ms=gvarget_latency_ms, record_samples=record_samples)
+        except (TypeError, ValueError) as exc:
+            raise ControllerError(str(exc)) from None
+        self._loaded_once = False
+        self._stop_presses = 0
+        self._crc: dict[str, int] = {}
+
+    # ------------------------------------------------------------ basics
+    @property
+    def t_ms(self) -> int:
+        """Ticks run so far: the tick that runs next."""
+        return self._plc.t
+
+    @property
+    def backend(self) -> str:
+        return self._plc.backend
+
+    @property
+    def record_samples(self) -> bool:
+        return self._plc.record_samples
+
+    @record_samples.setter
+    def record_samples(self, on: bool) -> None:
+        self._plc.record_samples = bool(on)
+        if not on:
+            self._plc.samples.clear()
+
+    @property
+    def programs(self) -> dict[str, Program]:
+        return dict(self._plc.programs)
+
+    @property
+    def plc(self) -> PLC:
+        return self._plc
+
+    # -------------------------------------------------------------- load
+    def load(self, programs: Iterable[Program], *, autostart: bool = True) -> None:
+        """Replace the loaded procedures with ``programs`` (the whole set), as
+        Build All does: every running procedure ends (100, extern break), the
+        software procedures whose names do not start with ``__`` start at the
+        next software tick, and on the first load ``__HANDLER_INIT`` too
+        (``autostart=False``: nothing starts)."""
+        progs = list(programs)
+        by_name: dict[str, Program] = {}
+        for p in progs:
+            if not isinstance(p, Program):
+                raise ControllerError(f"not a compiled procedure: {p!r}")
+            if not p.name:
+                raise ControllerError("a procedure without a name")
+            if p.name in by_name:
+                raise ControllerError(f"two procedures named {p.name}")
+            try:
+                validate(p.code, p.entry)
+            except DecodeError as exc:
+                raise ControllerError(f"{p.name}: invalid code: {exc}") from None
+            if p.code and not 0 <= p.entry < len(p.code):
+                raise ControllerError(f"{p.name}: entry point {p.entry} is outside the code")
+            by_name[p.name] = p
+        plc = self._plc
+        plc.end_all()
+        plc.programs = by_name
+        for pin, (name, _e) in list(plc.bindings.items()):
+            if name not in by_name:
+                plc.unbind_input(pin)
+        self._crc = {name: p.crc32 for name, p in by_name.items()}
+        if plc.backend == "fast":                    # translate now, not on first start
+            for p in progs:
+                fastvm.factory(p, plc.latency > 0 and p.kind is Kind.HARDWARE)
+        first, self._loaded_once = not self._loaded_once, True
+        if not autostart:
+            return
+        for name in sorted(by_name):
+            if by_name[name].kind is Kind.SOFTWARE and not name.startswith("__"):
+                plc.start_software(name)
+        init = by_name.get(HANDLER_INIT)
+        if first and init is not None and init.kind is Kind.SOFTWARE:
+            plc.start_software(HANDLER_INIT)
+
+    # ------------------------------------------------------------- starts
+    def start(self, name: str, eparam: int = 0) -> None:
+        """Start a procedure by name. A hardware procedure begins in tick
+        ``t_ms`` and ends the running one (exit code 100); a software procedure
+        begins at the next software tick (and restarts if it runs)."""
+        program = self._plc.programs.get(name)
+        if program is None:
+            raise ControllerError(self._unknown(name))
+        eparam = self._int(eparam, "eparam")
+        self._stop_presses = 0
+        if program.kind is Kind.HARDWARE:
+            self._plc.start_hardware(name, eparam)
+        else:
+            self._plc.start_software(name, eparam)
+
+    def start_mcode(self, n: int, eparam: int = 0) -> str:
+        """Start the hardware procedure of M-code ``n`` (3 starts M03); returns its name."""
+        n = self._int(n, "M-code")
+        for name in mcode_names(n):
+            p = self._plc.programs.get(name)
+            if p is not None and p.kind is Kind.HARDWARE:
+                self.start(name, eparam)
+                return name
+        raise ControllerError(f"M{n:02d}: no hardware procedure {mcode_names(n)[0]} is loaded")
+
+    def stop(self) -> Optional[str]:
+        """Press Stop: the first press starts ``M02``, the second ``OFF`` (then
+        M02 again, …). Where the project lacks that procedure the running
+        hardware procedure just ends (100). Outputs stay as they are. Returns
+        the name started, or None."""
+        self._stop_presses += 1
+        name = "M02" if self._stop_presses % 2 == 1 else "OFF"
+        plc = self._plc
+        p = plc.programs.get(name)
+        if p is not None and p.kind is Kind.HARDWARE:
+            plc.start_hardware(name, 0)
+            plc.events.append(Note(plc.t, f"Stop: started {name}"))
+            return name
+        if plc.hw is not None:
+            plc.events.append(Note(plc.t, f"Stop: {plc.hw.name} ended (no {name} loaded)"))
+            plc.end_hardware()
+        return None
+
+    def bind_input(self, pin: int, name: str, eparam: int = 0) -> None:
+        """Bind an input to a procedure: a 0 -> 1 edge of input ``pin`` starts
+        ``name`` (with ``eparam``) at the beginning of the next tick, as an
+        input pin bound to a procedure does on the controller."""
+        pin = self._int(pin, "input pin")
+        if name not in self._plc.programs:
+            raise ControllerError(self._unknown(name))
+        n = getattr(self.machine, "input_count", None)
+        if pin < 0 or (n is not None and pin >= n):
+            raise ControllerError(f"no input {pin}" + (f" (the machine has inputs 0..{n - 1})"
+                                                       if n else ""))
+        self._plc.bind_input(pin, name, self._int(eparam, "eparam"))
+
+    @property
+    def bindings(self) -> dict[int, tuple[str, int]]:
+        """Input pin -> (procedure, eparam) of the inputs bound to procedures."""
+        return dict(self._plc.bindings)
+
+    def unbind_input(self, pin: int) -> None:
+        self._plc.unbind_input(self._int(pin, "input pin"))
+
+    def event(self, handler_name: str) -> bool:
+        """A host event: starts the system procedure that handles it
+        (``"GCODE_START"`` or ``"__HANDLER_GCODE_START"``, likewise STOP, INIT,
+        EXIT). Returns whether one was loaded and started."""
+        key = str(handler_name).strip().upper().lstrip("_")
+        if not key.startswith("HANDLER_"):
+            key = "HANDLER_" + key
+        name = "__" + key
+        p = self._plc.programs.get(name)
+        if p is None or p.kind is not Kind.SOFTWARE:
+            return False
+        self._plc.start_software(name)
+        return True
+
+    def shutdown(self, limit_ms: int = SHUTDOWN_LIMIT_MS) -> None:
+        """Run ``__HANDLER_EXIT`` to its end (at most ``limit_ms`` of simulated
+        time), then end every procedure (100)."""
+        plc = self._plc
+        if self.event("EXIT"):
+            end = plc.t + max(0, int(limit_ms))
+            while plc.t < end:
+                plc.run(1)
+                pending = any(n == HANDLER_EXIT for n, _e in plc._pending_sw)
+                if not pending and HANDLER_EXIT not in plc.sw:
+                    break
+        plc.end_all()
+
+    # ------------------------------------------------------------- inputs
+    def set_input(self, pin: int, value: int) -> None:
+        """Set input ``pin`` by hand from now on (overrides the machine's wiring)."""
+        pin = self._int(pin, "input pin")
+        try:
+            self.machine.set_input(pin, 1 if self._int(value, "input value") else 0)
+        except ValueError as exc:
+            raise ControllerError(str(exc)) from None
+
+    def set_adc(self, ch: int, value: int) -> None:
+        ch = self._int(ch, "ADC channel")
+        try:
+            self.machine.set_adc(ch, self._int(value, "ADC value"))
+        except ValueError as exc:
+            raise ControllerError(str(exc)) from None
+
+    # --------------------------------------------------------------- time
+    def step(self, ms: int = 1) -> None:
+        """Run ``ms`` ticks of 1 ms."""
+        ms = self._int(ms, "ms")
+        if ms < 0:
+            raise ControllerError(f"cannot step {ms} ms")
+        self._plc.run(ms)
+
+    def run_until_idle(self, ms: int) -> int:
+        """Run at most ``ms`` ticks, stopping after the first tick that leaves
+        no procedure running and none due to start. Returns the ticks run."""
+        ms = self._int(ms, "ms")
+        if ms < 0:
+            raise ControllerError(f"cannot step {ms} ms")
+        return self._plc.run(ms, until_idle=True)
+
+    def idle(self) -> bool:
+        """No procedure runs and none is due to start."""
+        return self._plc.idle()
+
+    def next_due(self) -> Optional[int]:
+        """The tick of the next start already scheduled inside the controller."""
+        return self._plc.next_due()
+
+    def drain_events(self) -> list[Event]:
+        ev = self._plc.events
+        out = list(ev)
+        ev.clear()
+        return out
+
+    def drain_samples(self) -> list[Sample]:
+        """The per-tick samples since the last drain (when record_samples is on)."""
+        return self._plc.take_samples()
+
+    def drain_sample_rows(self) -> list[tuple]:
+        """The same as raw rows ``(t_ms, running, proc, message, fields)``, where
+        fields is the machine's sample_fields() dict (shared while nothing
+        changes; do not modify it): cheaper for high-volume consumers."""
+        return self._plc.take_sample_rows()
+
+    # -------------------------------------------------------------- state
+    def state(self) -> dict:
+        plc = self._plc
+        m = self.machine
+        f = m.sample_fields()
+        inputs = [w * 32 + b for w, word in enumerate(f["inputs"]) for b in range(32)
+                  if (word >> b) & 1]
+        return {
+            "t_ms": plc.t,
+            "running": plc.hw.name if plc.hw is not None else None,
+            "software": plc.software_running,
+            "idle": plc.idle(),
+            "proc": plc.proc,
+            "proc_name": abi.proc_name(plc.proc),
+            "inputs": inputs,
+            "outputs": m.outputs_on(),
+            "pwm": list(f["pwm"]),
+            "dac": list(f["dac"]),
+            "adc": list(f["adc"]),
+            "axes": m.axis_positions(),
+            "image": [{"name": p.name, "kind": p.kind.label, "size": p.code_size,
+                       "crc32": self._crc.get(p.name, 0)} for p in sorted(plc.programs.values(),
+                                                          key=lambda q: q.name)],
+        }
+
+    def variables(self) -> dict[str, dict[str, int]]:
+        """Each procedure that has run: its variables' latest values, by name."""
+        return {name: p.variables() for name, p in sorted(self._plc.last.items())}
+
+    # ------------------------------------------------------------ helpers
+    def _unknown(self, name: str) -> str:
+        names = sorted(self._plc.programs)
+        if not names:
+            return f"no procedure named {name!r}: nothing is loaded"
+        shown = ", ".join(names[:20]) + (" …" if len(names) > 20 else "")
+        return f"no procedure named {name!r} is loaded (loaded: {shown})"
+
+    @staticmethod
+    def _int(v, what: str) -> int:
+        if isinstance(v, bool):
+            return int(v)
+        if not isinstance(v, int):
+            try:
+                v = int(str(v), 0)
+            except ValueError:
+                raise ControllerError(f"{what} must be an integer, not {v!r}") from None
+        return v

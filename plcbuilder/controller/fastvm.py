@@ -1,0 +1,856 @@
+"""The fast backend: a procedure's bytecode translated once into Python.
+
+Each procedure of a program (``main`` and every ``CALL`` target) becomes one
+Python function; one that can end a tick is a generator with one ``yield`` per
+tick end, so the controller drives it exactly like the reference interpreter
+(:mod:`plcbuilder.controller.vm`), whose behaviour it must match exactly.
+
+How the code is translated:
+
+- The stack is simulated at translation time: within a basic block stack
+  values are Python expressions, so ``x = x + 1`` becomes one statement. At a
+  block boundary the values are stored in locals named by stack position
+  (``_0``, ``_1``, …). Wrapping to 32 bits is deferred while it cannot change
+  the result (``+ - * & | ^ <<`` are exact modulo 2**32) and applied where a
+  value is stored, compared, divided, shifted right or passed out.
+- Control flow: a block with exactly one predecessor is written inline at its
+  predecessor's branch (``if``/``else``); every other block is a *label*. A
+  function with several labels is a ``while True`` loop dispatching on ``pc``
+  over the labels in address order; a label whose own code jumps back to it
+  (a ``do … while`` loop) is wrapped in its own ``while True`` and loops with
+  ``continue``.
+- Calls are ``yield from`` (or plain calls to procedures that never end a
+  tick). Return addresses are only tracked where the call depth can exceed the
+  limit or the code is recursive.
+- The tick budget (100 000 instructions) is only counted when the program can
+  possibly run that many instructions in one tick (a loop without a tick end,
+  or recursion). Then every block adds its length to a counter, and a block
+  that would cross the budget hands its exact state to the reference
+  interpreter (:class:`~plcbuilder.controller.vm.Handoff`), which finishes the
+  tick instruction by instruction and faults where it must.
+
+Programs whose stack depth is not the same on every path into an instruction,
+that pop an empty stack, or that call or return with values on the stack, are
+not translated: :func:`make_runner` runs them on the reference interpreter.
+"""
+
+from __future__ import annotations
+
+import re
+import zlib
+from dataclasses import dataclass, field
+from typing import Callable, Iterator, Optional
+
+from plcbuilder.bytecode.opcodes import (BINARY, BUILTIN_STACK, HAS_CONST, HAS_JREL,
+                                         NO_FALLTHROUGH, UNARY, Instruction, Op, validate)
+from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.bytecode import abi
+from plcbuilder.controller import vm
+from plcbuilder.controller.vm import (FAULT_DEPTH, FAULT_DIV, FAULT_END, FAULT_MOD,
+                                      IMPLICIT_CONST, MAX_CALL_DEPTH, STACK_LIMIT,
+                                      TICK_BUDGET, Handoff, Host, ProcExit, VMFault)
+
+__all__ = ["Unsupported", "translate", "make_runner", "factory"]
+
+_COND_JUMPS = HAS_JREL - NO_FALLTHROUGH           # JZ, JNZ, LOOP
+_LOOPS = frozenset({Op.LOOP8, Op.LOOP16})
+_JZ = frozenset({Op.JZ8, Op.JZ16})
+_JNZ = frozenset({Op.JNZ8, Op.JNZ16})
+_JMP = HAS_JREL & NO_FALLTHROUGH
+#: Instructions that end a basic block.
+_TERMINATORS = HAS_JREL | {Op.YIELD, Op.CALL, Op.RET, Op.EXIT, Op.GVARGET}
+_MAX_NEST = 40            # deepest inline nesting before a block becomes a label
+_SIMPLE = re.compile(r"^(_?\w+|s\[\d+\]|\(-\d+\))$")
+_BITS_CAP = 62
+_DUP_MAX_INS = 12         # a join block this small is written at each predecessor
+_DUP_MAX_BLOCKS = 400
+_YIELD = re.compile(r"\byield\b")
+
+
+class Unsupported(Exception):
+    """The program cannot be translated (the reason says why)."""
+
+
+def _effect(op: Op) -> tuple[int, int]:
+    """(values popped, values pushed)."""
+    if op in HAS_CONST or op in IMPLICIT_CONST or op is Op.LOAD:
+        return 0, 1
+    if op in (Op.STORE, Op.POP, Op.EXIT) or op in _COND_JUMPS:
+        return 1, 0
+    if op in BINARY:
+        return 2, 1
+    if op in UNARY:
+        return 1, 1
+    if op in BUILTIN_STACK:
+        return BUILTIN_STACK[op]
+    return 0, 0
+
+
+# ------------------------------------------------------------------ analysis
+
+@dataclass
+class _Block:
+    start: int
+    ins: list[Instruction]
+    depth: int
+    succ: list[int] = field(default_factory=list)
+
+    @property
+    def last(self) -> Optional[Instruction]:
+        return self.ins[-1] if self.ins else None
+
+    @property
+    def ends_tick(self) -> bool:
+        last = self.last
+        return last is not None and (last.op in _LOOPS or last.op is Op.YIELD)
+
+
+@dataclass
+class _Func:
+    start: int
+    blocks: dict[int, _Block]
+    callees: set[int]
+    labels: set[int] = field(default_factory=set)
+    gen: bool = False
+
+
+def _analyze(code: bytes, entry: int) -> tuple[dict[int, _Func], int]:
+    instrs = validate(code, entry)
+    at = {i.offset: i for i in instrs}
+    end = len(code)
+    funcs: dict[int, _Func] = {}
+    todo = [entry]
+    while todo:
+        f = todo.pop()
+        if f in funcs:
+            continue
+        funcs[f] = func = _function(f, at, end)
+        todo.extend(c for c in func.callees if c not in funcs)
+    return funcs, end
+
+
+def _function(fstart: int, at: dict[int, Instruction], end: int) -> _Func:
+    depth = {fstart: 0}
+    work = [fstart]
+    callees: set[int] = set()
+    leaders = {fstart}
+    while work:
+        pc = work.pop()
+        if pc == end:
+            continue
+        i = at[pc]
+        d = depth[pc]
+        pops, pushes = _effect(i.op)
+        if d < pops:
+            raise Unsupported(f"stack underflow at {pc}")
+        if i.op in (Op.CALL, Op.RET) and d:
+            raise Unsupported(f"{i.op.name} with values on the stack at {pc}")
+        nd = d - pops + pushes
+        if nd > STACK_LIMIT:
+            raise Unsupported(f"stack deeper than {STACK_LIMIT} at {pc}")
+        succ = []
+        if i.op in HAS_JREL:
+            succ.append(i.target)
+            leaders.add(i.target)
+        if i.op is Op.CALL:
+            callees.add(i.target)
+        if i.op not in NO_FALLTHROUGH:
+            succ.append(i.end)
+        if i.op in _TERMINATORS:
+            leaders.add(i.end)
+        for t in succ:
+            if t == end:
+                leaders.add(end)
+                depth.setdefault(end, nd)
+                continue
+            if t in depth:
+                if depth[t] != nd:
+                    raise Unsupported(f"stack depth {depth[t]} or {nd} at {t}")
+            else:
+                depth[t] = nd
+                work.append(t)
+    blocks: dict[int, _Block] = {}
+    cur: Optional[_Block] = None
+    for pc in sorted(depth):
+        if pc == end:
+            blocks[end] = _Block(end, [], depth[end])
+            if cur is not None and cur.last.op not in _TERMINATORS:
+                cur.succ = [end]
+            cur = None
+            continue
+        i = at[pc]
+        if cur is None or pc in leaders:
+            if cur is not None and cur.last.op not in _TERMINATORS:
+                cur.succ = [pc]         # falls through into a leader
+            cur = blocks[pc] = _Block(pc, [], depth[pc])
+        cur.ins.append(i)
+        if i.op in _TERMINATORS:
+            if i.op in HAS_JREL:
+                cur.succ = [i.target] + ([i.end] if i.op not in NO_FALLTHROUGH else [])
+            elif i.op in (Op.YIELD, Op.CALL, Op.GVARGET):
+                cur.succ = [i.end]
+            cur = None
+    return _Func(fstart, blocks, callees)
+
+
+def _postorder(roots, succ) -> tuple[list, bool]:
+    """Nodes reachable from roots, each after all of its successors; and whether
+    there is a cycle. Iterative (procedures can be long)."""
+    color: dict = {}
+    order: list = []
+    cycle = False
+    for root in roots:
+        if root in color:
+            continue
+        color[root] = 1
+        stack = [(root, iter(succ(root)))]
+        while stack:
+            node, it = stack[-1]
+            for nxt in it:
+                c = color.get(nxt)
+                if c == 1:
+                    cycle = True
+                elif c is None:
+                    color[nxt] = 1
+                    stack.append((nxt, iter(succ(nxt))))
+                    break
+            else:
+                stack.pop()
+                color[node] = 2
+                order.append(node)
+    return order, cycle
+
+
+def _plan(funcs: dict[int, _Func], entry: int, latency: bool) -> tuple[bool, bool]:
+    """Decide (tracked, budget): whether return addresses are tracked and
+    whether the tick budget must be counted at run time."""
+    order, recursive = _postorder([entry], lambda f: sorted(funcs[f].callees))
+    chain: dict[int, int] = {}
+    for f in order:
+        chain[f] = max((1 + chain.get(c, 0) for c in funcs[f].callees), default=0)
+    # generator-ness: ends a tick, or calls something that does (a fixpoint: calls may recurse)
+    for f in funcs.values():
+        f.gen = any(b.ends_tick or (latency and b.last is not None and b.last.op is Op.GVARGET)
+                    for b in f.blocks.values())
+    changed = True
+    while changed:
+        changed = False
+        for f in funcs.values():
+            if not f.gen and any(funcs[c].gen for c in f.callees):
+                f.gen = changed = True
+    funcs[entry].gen = True
+    if recursive:
+        return True, True
+    tracked = chain[entry] > MAX_CALL_DEPTH
+    # The most instructions one frame runs between two tick ends (callees
+    # included); a tick can touch every frame of a call chain.
+    frame: dict[int, int] = {}
+    stacked: dict[int, int] = {}
+    for f in order:
+        blocks = funcs[f].blocks
+
+        def succ(b, blocks=blocks):
+            blk = blocks[b]
+            return () if blk.ends_tick else blk.succ
+
+        border, cycle = _postorder(sorted(blocks), succ)
+        if cycle:
+            return True, True
+        best: dict[int, int] = {}
+        for b in border:
+            blk = blocks[b]
+            w = len(blk.ins)
+            if blk.last is not None and blk.last.op is Op.CALL:
+                w += frame[blk.last.target]
+            best[b] = w + max((best[s] for s in succ(b)), default=0)
+        frame[f] = max(best.values(), default=0)
+        stacked[f] = frame[f] + max((stacked[c] for c in funcs[f].callees), default=0)
+    budget = stacked[entry] > TICK_BUDGET
+    return tracked or budget, budget
+
+
+# ---------------------------------------------------------------- code gen
+
+class _V:
+    """A value on the simulated stack: a Python expression and what is known about it."""
+
+    __slots__ = ("e", "exact", "isbool", "slots", "temps", "bits", "const")
+
+    def __init__(self, e: str, exact: bool = True, isbool: bool = False, slots=frozenset(),
+                 temps=frozenset(), bits: int = 31, const: Optional[int] = None):
+        self.e, self.exact, self.isbool = e, exact, isbool
+        self.slots, self.temps, self.bits, self.const = slots, temps, bits, const
+
+
+def _const(v: int) -> _V:
+    return _V(str(v) if v >= 0 else f"({v})", const=v, bits=max(v.bit_length(), 1))
+
+
+def _pos(k: int) -> _V:
+    name = f"_{k}"
+    return _V(name, temps=frozenset({name}))
+
+
+def _join(*vs: _V) -> tuple[frozenset, frozenset]:
+    slots = frozenset().union(*(v.slots for v in vs))
+    temps = frozenset().union(*(v.temps for v in vs))
+    return slots, temps
+
+
+class _TooDeep(Exception):
+    def __init__(self, block: int):
+        self.block = block
+
+
+@dataclass
+class _Ctx:
+    func: _Func
+    label: int
+    wrapped: bool
+
+
+_ARITH = {Op.ADD: "+", Op.SUB: "-", Op.MUL: "*"}
+_BITWISE = {Op.AND: "&", Op.OR: "|", Op.XOR: "^"}
+_COMPARE = {Op.EQ: "==", Op.NE: "!=", Op.LT: "<", Op.LE: "<=", Op.GT: ">", Op.GE: ">="}
+
+
+class _Gen:
+    def __init__(self, program: Program, latency: bool):
+        self.program = program
+        self.latency = latency
+        self.software = program.kind is Kind.SOFTWARE
+        self.funcs, self.end = _analyze(program.code, program.entry)
+        self.tracked, self.budget = _plan(self.funcs, program.entry, latency)
+        self.out: list[str] = []
+        self.ntemp = 0
+
+    # -------------------------------------------------------------- helpers
+    def emit(self, ind: int, text: str) -> None:
+        self.out.append("    " * ind + text)
+
+    def temp(self, prefix: str = "_t") -> str:
+        self.ntemp += 1
+        return f"{prefix}{self.ntemp}"
+
+    @staticmethod
+    def as_int(v: _V) -> str:
+        """An expression for v's exact 32-bit value."""
+        if v.const is not None:
+            return v.e
+        if v.isbool:
+            return f"(1 if {v.e} else 0)"
+        if v.exact:
+            return v.e
+        return f"(({v.e} + 2147483648 & 4294967295) - 2147483648)"
+
+    @staticmethod
+    def as_cond(v: _V) -> str:
+        if v.isbool or v.exact:
+            return v.e
+        return f"({v.e} & 4294967295)"
+
+    def tight(self, v: _V) -> _V:
+        if v.exact or v.const is not None:
+            return v
+        return _V(self.as_int(v), slots=v.slots, temps=v.temps)
+
+    def materialize(self, v: _V, ind: int) -> _V:
+        if v.const is not None:
+            return v
+        name = self.temp()
+        self.emit(ind, f"{name} = {self.as_int(v)}")
+        return _V(name)
+
+    def invalidate(self, stack: list[_V], slot: int, ind: int) -> None:
+        for k, v in enumerate(stack):
+            if slot in v.slots:
+                stack[k] = self.materialize(v, ind)
+
+    def flush(self, stack: list[_V], ind: int) -> list[_V]:
+        names, values = [], []
+        for k, v in enumerate(stack):
+            name = f"_{k}"
+            if v.e == name and v.exact and not v.isbool:
+                continue
+            names.append(name)
+            values.append(self.as_int(v))
+        if names:
+            self.emit(ind, f"{', '.join(names)} = {', '.join(values)}")
+        return [_pos(k) for k in range(len(stack))]
+
+    def call_args(self, ret: int) -> str:
+        if self.budget:
+            return f"rets + ({ret},), n"
+        if self.tracked:
+            return f"rets + ({ret},)"
+        return ""
+
+    # ------------------------------------------------------------ functions
+    def generate(self) -> str:
+        self.out = []
+        self.emit(0, "def make(s, portset, portclr, portget, gvarget, gvarset, raw_gvarset, g0move,")
+        self.emit(0, "         pr, plain, lat, seteparam, starthw, softjog):")
+        for start in sorted(self.funcs):
+            self.function(self.funcs[start])
+        entry = self.program.entry
+        args = "(), 0" if self.budget else "()" if self.tracked else ""
+        self.emit(1, f"return f_{entry}({args})")
+        return "\n".join(self.out) + "\n"
+
+    def function(self, func: _Func) -> None:
+        blocks = func.blocks
+        indeg = {b: 0 for b in blocks}
+        indeg[func.start] += 1
+        for b in blocks.values():
+            for s in b.succ:
+                indeg[s] += 1
+        func.labels = {b for b, n in indeg.items() if n != 1} | {func.start}
+        self._duplicate_tails(func)
+        while True:
+            mark = len(self.out)
+            try:
+                self._function_body(func)
+                return
+            except _TooDeep as exc:
+                del self.out[mark:]
+                func.labels.add(exc.block)
+
+    def _duplicate_tails(self, func: _Func) -> None:
+        """Write small join blocks inline at each of their predecessors instead
+        of dispatching to them (an ``if`` without ``else`` then loops without
+        going through the dispatcher). Keeps every cycle through a label and
+        the code at most about twice as large."""
+        blocks = func.blocks
+        if len(blocks) > _DUP_MAX_BLOCKS:
+            return
+        size = sum(len(b.ins) for b in blocks.values())
+        budget = 2 * size + 64
+        for b in sorted(func.labels):
+            if b == func.start or len(blocks[b].ins) > _DUP_MAX_INS:
+                continue
+            trial = func.labels - {b}
+            emitted = self._emitted(func, trial)
+            if emitted is not None and emitted <= budget:
+                func.labels = trial
+
+    @staticmethod
+    def _emitted(func: _Func, labels: set[int]) -> Optional[int]:
+        """How many instructions the function's code has with these labels, or
+        None if some cycle would pass through no label."""
+        blocks = func.blocks
+        inline = [b for b in blocks if b not in labels]
+        order, cycle = _postorder(inline, lambda b: [s for s in blocks[b].succ
+                                                     if s not in labels])
+        if cycle:
+            return None
+        preds: dict[int, list[int]] = {b: [] for b in blocks}
+        for b, blk in blocks.items():
+            for s in blk.succ:
+                preds[s].append(b)
+        count = {b: 1 for b in labels}
+        for b in reversed(order):          # predecessors first
+            count[b] = sum(count.get(p, 0) for p in preds[b])
+        return sum(count.get(b, 0) * len(blk.ins) for b, blk in blocks.items())
+
+    def _function_body(self, func: _Func) -> None:
+        params = "rets, n" if self.budget else "rets" if self.tracked else ""
+        self.emit(1, f"def f_{func.start}({params}):")
+        mark = len(self.out)
+        labels = sorted(func.labels)
+        if len(labels) == 1:
+            self.region(func, labels[0], 2)
+        else:
+            self.emit(2, f"pc = {func.start}")
+            self.emit(2, "while True:")
+            for lab in labels:
+                self.emit(3, f"if pc == {lab}:")
+                self.region(func, lab, 4)
+        # a generator even where constant conditions removed every tick end
+        if func.gen and not any(_YIELD.search(line) for line in self.out[mark:]):
+            self.out[mark:mark] = ["        if 0:", "            yield"]
+
+    def region(self, func: _Func, label: int, ind: int) -> None:
+        # does the code under this label jump back to it?
+        seen, todo, wrapped = set(), [label], False
+        while todo:
+            b = todo.pop()
+            if b in seen:
+                continue
+            seen.add(b)
+            for s in func.blocks[b].succ:
+                if s == label:
+                    wrapped = True
+                elif s not in func.labels:
+                    todo.append(s)
+        ctx = _Ctx(func, label, wrapped)
+        if wrapped:
+            self.emit(ind, "while True:")
+            ind += 1
+        depth = func.blocks[label].depth
+        self.known = {}
+        self.block(func.blocks[label], [_pos(k) for k in range(depth)], ind, ctx)
+
+    def edge(self, target: int, stack: list[_V], ind: int, ctx: _Ctx) -> None:
+        func = ctx.func
+        if target not in func.labels:
+            self.block(func.blocks[target], stack, ind, ctx)
+            return
+        self.flush(stack, ind)
+        if target == ctx.label and ctx.wrapped:
+            self.emit(ind, "continue")
+            return
+        self.emit(ind, f"pc = {target}")
+        if ctx.wrapped:
+            self.emit(ind, "break")
+        elif target <= ctx.label:
+            self.emit(ind, "continue")
+
+    def tick_end(self, ind: int) -> None:
+        self.emit(ind, "yield")
+        if self.budget:
+            self.emit(ind, "n = 0")
+        self.known.pop(abi.SLOT_MESSAGE, None)    # the controller clears message at a tick end
+
+    def branch(self, cond: str, on_true: int, on_false: int, stack: list[_V], ind: int,
+               ctx: _Ctx) -> None:
+        known = self.known
+        self.emit(ind, f"if {cond}:")
+        self.known = dict(known)
+        self.edge(on_true, stack, ind + 1, ctx)
+        self.emit(ind, "else:")
+        self.known = dict(known)
+        self.edge(on_false, stack, ind + 1, ctx)
+
+    # --------------------------------------------------------------- blocks
+    def block(self, blk: _Block, stack: list[_V], ind: int, ctx: _Ctx) -> None:
+        """Write blk and, in a loop, every inline block that follows it at the
+        same nesting level (branches recurse one level deeper)."""
+        stack = list(stack)
+        while True:
+            if ind > _MAX_NEST and blk.start not in ctx.func.labels:
+                raise _TooDeep(blk.start)
+            if blk.start == self.end:
+                self.emit(ind, f"raise VMFault({self.end}, {FAULT_END!r})")
+                return
+            if self.budget:
+                k = len(blk.ins)
+                self.emit(ind, f"n += {k}")
+                self.emit(ind, f"if n > {TICK_BUDGET}:")
+                items = ", ".join(self.as_int(v) for v in stack)
+                self.emit(ind + 1, f"raise Handoff({blk.start}, [{items}], rets, n - {k})")
+            last = blk.last
+            body = blk.ins
+            if last is not None and last.op in _TERMINATORS:
+                body = body[:-1]
+            else:
+                last = None
+            for i in body:
+                self.instruction(i, stack, ind)
+            if last is None:
+                tail = blk.succ[0], stack
+            else:
+                tail = self.terminator(last, stack, ind, ctx)
+            if tail is None:
+                return
+            target, stack = tail
+            if target in ctx.func.labels:
+                self.edge(target, stack, ind, ctx)
+                return
+            blk = ctx.func.blocks[target]
+
+    def instruction(self, i: Instruction, stack: list[_V], ind: int) -> None:
+        op = i.op
+        if op in HAS_CONST or op in IMPLICIT_CONST:
+            stack.append(_const(IMPLICIT_CONST.get(op, i.arg)))
+        elif op is Op.LOAD:
+            known = self.known.get(i.arg)
+            stack.append(known if known is not None
+                         else _V(f"s[{i.arg}]", slots=frozenset({i.arg})))
+        elif op is Op.STORE:
+            # the value is also kept in a local, so that loading it again reads the local
+            v = stack.pop()
+            self.invalidate(stack, i.arg, ind)
+            if v.const is not None or (v.e.startswith("_t") and v.exact and not v.isbool):
+                self.emit(ind, f"s[{i.arg}] = {v.e}")
+                self.known[i.arg] = v if v.const is not None else _V(v.e)
+            else:
+                name = self.temp()
+                self.emit(ind, f"s[{i.arg}] = {name} = {self.as_int(v)}")
+                self.known[i.arg] = _V(name)
+        elif op in (Op.INC, Op.DEC):
+            self.invalidate(stack, i.arg, ind)
+            known = self.known.get(i.arg)
+            old = known.e if known is not None else f"s[{i.arg}]"
+            name = self.temp()
+            if op is Op.INC:
+                self.emit(ind, f"{name} = {old} + 1")
+                self.emit(ind, f"if {name} > 2147483647:")
+                self.emit(ind + 1, f"{name} = -2147483648")
+            else:
+                self.emit(ind, f"{name} = {old} - 1")
+                self.emit(ind, f"if {name} < -2147483648:")
+                self.emit(ind + 1, f"{name} = 2147483647")
+            self.emit(ind, f"s[{i.arg}] = {name}")
+            self.known[i.arg] = _V(name)
+        elif op is Op.POP:
+            stack.pop()
+        elif op is Op.NOP:
+            pass
+        elif op in BINARY:
+            b = stack.pop()
+            a = stack.pop()
+            stack.append(self.binary(op, a, b, i.offset, ind))
+        elif op in UNARY:
+            stack.append(self.unary(op, stack.pop()))
+        elif op in (Op.PORTSET, Op.PORTCLR):
+            a = stack.pop()
+            fn = "portset" if op is Op.PORTSET else "portclr"
+            self.emit(ind, f"{fn}({self.as_int(a)})")
+        elif op is Op.PORTGET:
+            a = stack.pop()
+            name = self.temp()
+            self.emit(ind, f"{name} = portget({self.as_int(a)})")
+            stack.append(_V(name))
+        elif op is Op.GVARSET:
+            v = stack.pop()
+            a = stack.pop()
+            self.emit(ind, self.gvarset(a, self.as_int(v)))
+        elif op is Op.G0MOVE:
+            d = stack.pop()
+            m = stack.pop()
+            f = stack.pop()
+            self.emit(ind, f"g0move({self.as_int(f)}, {self.as_int(m)}, {self.as_int(d)})")
+        else:  # pragma: no cover - every opcode is handled above or as a terminator
+            raise Unsupported(f"{op.name} inside a block")
+
+    def gvarset(self, a: _V, value: str) -> str:
+        c = a.const
+        if c is None:
+            return f"gvarset({self.as_int(a)}, {value})"
+        if self.software:
+            if c == abi.SOFT_START_HW:
+                return f"starthw({value})"
+            if c == abi.SOFT_START_EPARAM:
+                return f"seteparam({value})"
+            if abi.SOFT_JOG_BASE <= c < abi.SOFT_JOG_BASE + 8:
+                return f"softjog({c - abi.SOFT_JOG_BASE}, {value})"
+        if abi.PRINT_FIRST <= c <= abi.PRINT_LAST:
+            return f"pr({c}, {value})"
+        return f"raw_gvarset({c}, {value})"
+
+    def binary(self, op: Op, a: _V, b: _V, pc: int, ind: int) -> _V:
+        if a.const is not None and b.const is not None and \
+                not (op in (Op.DIV, Op.MOD) and b.const == 0):
+            return _const(vm.binary(op, a.const, b.const))
+        slots, temps = _join(a, b)
+        if op in _ARITH:
+            if op is Op.MUL:
+                if a.bits + b.bits > _BITS_CAP:
+                    a, b = self.tight(a), self.tight(b)
+                bits = a.bits + b.bits
+            else:
+                if max(a.bits, b.bits) >= _BITS_CAP:
+                    a, b = self.tight(a), self.tight(b)
+                bits = max(a.bits, b.bits) + 1
+            return _V(f"({a.e} {_ARITH[op]} {b.e})", exact=False, slots=slots, temps=temps,
+                      bits=bits)
+        if op in _BITWISE:
+            return _V(f"({a.e} {_BITWISE[op]} {b.e})", exact=a.exact and b.exact,
+                      isbool=a.isbool and b.isbool, slots=slots, temps=temps,
+                      bits=max(a.bits, b.bits))
+        if op is Op.SHL or op is Op.SHR:
+            if op is Op.SHR:
+                a = self.tight(a)
+            if b.const is not None:
+                n = b.const & 31
+                count, shift = str(n), n
+            else:
+                count, shift = f"({b.e} & 31)", 31
+            if op is Op.SHR:
+                return _V(f"({a.e} >> {count})", slots=slots, temps=temps)
+            if a.bits + shift > _BITS_CAP:
+                a = self.tight(a)
+            return _V(f"({a.e} << {count})", exact=False, slots=slots, temps=temps,
+                      bits=a.bits + shift)
+        if op in _COMPARE:
+            a, b = self.tight(a), self.tight(b)
+            return _V(f"({a.e} {_COMPARE[op]} {b.e})", isbool=True, slots=slots, temps=temps,
+                      bits=1)
+        # DIV / MOD: statements, in order, with the zero check
+        fault = FAULT_DIV if op is Op.DIV else FAULT_MOD
+        x = self.as_int(a)
+        if b.const is not None and b.const == 0:
+            self.emit(ind, f"raise VMFault({pc}, {fault!r})")
+            return _const(0)
+        if not _SIMPLE.match(x):
+            t = self.temp()
+            self.emit(ind, f"{t} = {x}")
+            x = t
+        name = self.temp()
+        if b.const is not None and b.const > 0:
+            c = b.const
+            if op is Op.DIV:
+                self.emit(ind, f"{name} = {x} // {c} if {x} >= 0 else -(-{x} // {c})")
+            else:
+                self.emit(ind, f"{name} = {x} % {c} if {x} >= 0 else -(-{x} % {c})")
+            return _V(name)
+        y = self.as_int(b)
+        if not _SIMPLE.match(y):
+            t = self.temp()
+            self.emit(ind, f"{t} = {y}")
+            y = t
+        self.emit(ind, f"if {y} == 0:")
+        self.emit(ind + 1, f"raise VMFault({pc}, {fault!r})")
+        if op is Op.DIV:
+            self.emit(ind, f"{name} = {x} // {y} if ({x} >= 0) == ({y} > 0) else -(-{x} // {y})")
+            return _V(name, exact=False, bits=32)
+        self.emit(ind, f"{name} = c_mod({x}, {y})")
+        return _V(name)
+
+    def unary(self, op: Op, a: _V) -> _V:
+        if a.const is not None:
+            return _const(vm.unary(op, a.const))
+        if op is Op.NEG:
+            return _V(f"(-{a.e})", exact=False, slots=a.slots, temps=a.temps, bits=a.bits + 1)
+        if op is Op.BNOT:
+            return _V(f"(~{a.e})", exact=a.exact, slots=a.slots, temps=a.temps, bits=a.bits + 1)
+        if op is Op.NOT:
+            return _V(f"(not {self.as_cond(a)})", isbool=True, slots=a.slots, temps=a.temps,
+                      bits=1)
+        # BOOL
+        if a.isbool:
+            return a
+        return _V(f"({self.as_cond(a)} != 0)", isbool=True, slots=a.slots, temps=a.temps, bits=1)
+
+    def terminator(self, i: Instruction, stack: list[_V], ind: int,
+                   ctx: _Ctx) -> Optional[tuple[int, list[_V]]]:
+        """Write a block's last instruction; returns the single successor to
+        continue with at the same level, or None when it has been written."""
+        op = i.op
+        if op in _JMP:
+            return i.target, stack
+        if op in _JZ or op in _JNZ:
+            c = stack.pop()
+            taken_if_true = op in _JNZ
+            if c.const is not None:
+                jump = bool(c.const) == taken_if_true
+                return (i.target if jump else i.end), stack
+            on_true, on_false = (i.target, i.end) if taken_if_true else (i.end, i.target)
+            self.branch(self.as_cond(c), on_true, on_false, stack, ind, ctx)
+            return None
+        if op in _LOOPS:
+            c = stack.pop()
+            cond = None
+            if c.const is None:
+                cond = self.temp("_c")
+                self.emit(ind, f"{cond} = {self.as_cond(c)}")
+            stack = self.flush(stack, ind)
+            self.tick_end(ind)
+            if cond is None:
+                return (i.target if c.const else i.end), stack
+            self.branch(cond, i.target, i.end, stack, ind, ctx)
+            return None
+        if op is Op.YIELD:
+            stack = self.flush(stack, ind)
+            self.tick_end(ind)
+            return i.end, stack
+        if op is Op.CALL:
+            callee = self.funcs[i.target]
+            if self.tracked:
+                self.emit(ind, f"if len(rets) >= {MAX_CALL_DEPTH}:")
+                self.emit(ind + 1, f"raise VMFault({i.offset}, {FAULT_DEPTH!r})")
+            call = f"f_{i.target}({self.call_args(i.end)})"
+            if callee.gen:
+                call = f"yield from {call}"
+            self.emit(ind, "try:")
+            self.emit(ind + 1, f"n = {call}" if self.budget else call)
+            self.emit(ind, "except VMFault as _e:")      # a fault names its callers
+            self.emit(ind + 1, f"_e.callers.append({i.offset})")
+            self.emit(ind + 1, "raise")
+            self.known = {}
+            return i.end, stack
+        if op is Op.GVARGET:
+            a = stack.pop()
+            addr = self.as_int(a)
+            if a.const is None:
+                t = self.temp("_a")
+                self.emit(ind, f"{t} = {addr}")
+                addr = t
+            stack = self.flush(stack, ind)
+            if self.latency:
+                self.emit(ind, f"if lat and plain({addr}):")
+                self.emit(ind + 1, "for _ in range(lat):")
+                self.emit(ind + 2, "yield")
+                if self.budget:
+                    self.emit(ind + 1, "n = 0")
+                self.known.pop(abi.SLOT_MESSAGE, None)
+            k = len(stack)
+            self.emit(ind, f"_{k} = gvarget({addr})")
+            stack.append(_pos(k))
+            return i.end, stack
+        if op is Op.RET:
+            if ctx.func.start == self.program.entry:
+                if not self.tracked:
+                    self.emit(ind, "raise ProcExit(0)")
+                    return None
+                self.emit(ind, "if not rets:")
+                self.emit(ind + 1, "raise ProcExit(0)")
+            self.emit(ind, "return n" if self.budget else "return")
+            return None
+        if op is Op.EXIT:
+            c = stack.pop()
+            self.emit(ind, f"raise ProcExit({self.as_int(c)})")
+            return None
+        raise Unsupported(f"terminator {op.name}")  # pragma: no cover
+
+
+# ------------------------------------------------------------------ runtime
+
+_NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff,
+              "c_mod": vm.c_mod, "__builtins__": {"len": len, "range": range}}
+_CACHE: dict[tuple, tuple[bytes, Optional[Callable], str]] = {}
+
+
+def translate(program: Program, latency: bool = False) -> str:
+    """The Python source the fast backend runs for ``program`` (raises Unsupported)."""
+    return _Gen(program, latency).generate()
+
+
+def factory(program: Program, latency: bool = False) -> Optional[Callable]:
+    """The compiled ``make(...)`` of ``program``, or None if it cannot be translated.
+    Translated once per program (by CRC of its code, entry and kind)."""
+    key = (zlib.crc32(program.code), program.entry, int(program.kind), bool(latency))
+    hit = _CACHE.get(key)
+    if hit is not None and hit[0] == program.code:
+        return hit[1]
+    try:
+        src = translate(program, latency)
+    except Unsupported as exc:
+        _CACHE[key] = (program.code, None, str(exc))
+        return None
+    ns = dict(_NAMESPACE)
+    filename = f"<plc {program.name} {key[0]:08x}>"
+    exec(compile(src, filename, "exec"), ns)
+    if len(_CACHE) > 256:
+        _CACHE.clear()
+    _CACHE[key] = (program.code, ns["make"], "")
+    return ns["make"]
+
+
+def unsupported_reason(program: Program, latency: bool = False) -> Optional[str]:
+    """Why ``program`` runs on the reference interpreter, or None if it is translated."""
+    if factory(program, latency) is not None:
+        return None
+    key = (zlib.crc32(program.code), program.entry, int(program.kind), bool(latency))
+    return _CACHE[key][2]
+
+
+def make_runner(program: Program, s: list[int], host: Host) -> Iterator[None]:
+    """A generator running ``program`` on the slots ``s``: translated code, or the
+    reference interpreter where the program cannot be translated."""
+    make = factory(program, host.lat > 0)
+    if make is None:
+        return vm.run_reference(program, s, host)
+    return make(s, host.portset, host.portclr, host.portget, host.gvarget, host.gvarset,
+                host.raw_gvarset, host.g0move, host.pr, host.plain, host.lat, host.seteparam,
+                host.starthw, host.softjog)

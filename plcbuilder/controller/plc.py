@@ -1,0 +1,501 @@
+"""The hardware PLC (1 ms ticks, one procedure at a time) and the software PLC
+(100 ms ticks, every procedure side by side), scheduled together tick by tick.
+
+One tick ``t`` (SPEC §2, §3):
+
+1. starts due at ``t`` (hardware procedures asked for by a software procedure
+   with ``gvarset(100040, N)`` in the previous tick) begin; starts, inputs and
+   ADC values given from outside (:meth:`PLC.start_hardware`, the scenario) were
+   applied before the tick;
+2. the hardware procedure runs until it ends its tick or ends;
+3. when ``t % 100 == 0``: pending software starts begin, then every running
+   software procedure runs its tick, in name order;
+4. end of tick: each procedure that ran whose ``message`` is not 0 sends it
+   (hardware first, then software by name) and its ``message`` becomes 0; the
+   machine sees the message (stop messages stop motion); the state is sampled;
+   the machine advances 1 ms.
+
+Everything is deterministic: the same calls give the same events and samples.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Callable, Iterable, Optional
+
+from plcbuilder.bytecode import abi
+from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.controller import fastvm, vm
+from plcbuilder.controller.events import (Ended, Fault, Message, Note, Print, Sample,
+                                          Started)
+from plcbuilder.controller.vm import Handoff, Host, ProcExit, VMFault
+
+SOFTWARE_PERIOD_MS = 100
+#: Exit code reported for a procedure that ended with a runtime fault (not in the seed's table).
+FAULT_EXIT_CODE = -1
+BACKENDS = ("fast", "reference")
+EVENT_BUFFER = 200_000
+SAMPLE_BUFFER = 120_000
+
+
+class Process:
+    """One run of a procedure."""
+
+    __slots__ = ("name", "program", "kind", "slots", "eparam", "started_at", "resume",
+                 "host", "ended_at", "exit_code")
+
+    def __init__(self, program: Program, slots: list[int], eparam: int, started_at: int,
+                 host: Host):
+        self.name = program.name
+        self.program = program
+        self.kind = program.kind
+        self.slots = slots
+        self.eparam = eparam
+        self.started_at = started_at
+        self.host = host
+        self.resume: Callable[[], None] = lambda: None
+        self.ended_at: Optional[int] = None
+        self.exit_code: Optional[int] = None
+
+    def variables(self) -> dict[str, int]:
+        """Every variable by name (predefined and the program's own)."""
+        s = self.slots
+        return {name: s[slot] for slot, name in sorted(self.program.slot_names().items())
+                if slot < len(s)}
+
+
+def mcode_names(n: int) -> list[str]:
+    """The procedure names M-code ``n`` may start, preferred first (3 -> M03, M3)."""
+    return list(dict.fromkeys([f"M{n:02d}", f"M{n}"]))
+
+
+class PLC:
+    """The hardware and software PLC over one machine. Times are ticks (ms)."""
+
+    def __init__(self, machine, *, backend: str = "fast", variables: Optional[Iterable[int]] = None,
+                 gvarget_latency_ms: int = 0, record_samples: bool = True):
+        if backend not in BACKENDS:
+            raise ValueError(f"unknown backend {backend!r} (one of {', '.join(BACKENDS)})")
+        self.machine = machine
+        self.backend = backend
+        vals = list(variables) if variables is not None else []
+        if len(vals) > 16:
+            raise ValueError(f"{len(vals)} initial variables, var00..var15 are 16")
+        self.var_init = [vm.wrap(int(v)) for v in vals] + [0] * (16 - len(vals))
+        self.latency = max(0, int(gvarget_latency_ms))
+        self.record_samples = record_samples
+        self.events: deque = deque(maxlen=EVENT_BUFFER)
+        self.samples: deque = deque(maxlen=SAMPLE_BUFFER)
+        self.programs: dict[str, Program] = {}
+        self.t = 0
+        self._proc = 0                     # the last hardware procedure's proc, kept after it ends
+        self.hw: Optional[Process] = None
+        self.sw: dict[str, Process] = {}
+        self._sw_order: list[Process] = []
+        self._pending_sw: list[tuple[str, int]] = []
+        self._due_hw: list[tuple[int, str, int]] = []   # (tick, name, eparam)
+        self.soft_eparam = 0               # gvarset(100041, e) from a software procedure
+        self.last: dict[str, Process] = {}  # the latest run of each procedure
+        self.bindings: dict[int, tuple[str, int]] = {}   # input pin -> (procedure, eparam)
+        self._levels: dict[int, int] = {}                # last level seen of each bound pin
+
+    # ------------------------------------------------------------- hosts
+    def _host(self, name: str, kind: Kind) -> Host:
+        m = self.machine
+        events = self.events
+        raw = m.gvarset
+        lo, hi = abi.PRINT_FIRST, abi.PRINT_LAST
+
+        def pr(addr: int, value: int) -> None:
+            events.append(Print(self.t, addr, value, name))
+            raw(addr, value)
+
+        if kind is Kind.HARDWARE:
+            def gvarset(addr: int, value: int) -> None:
+                if lo <= addr <= hi:
+                    pr(addr, value)
+                else:
+                    raw(addr, value)
+
+            return Host(portset=m.portset, portclr=m.portclear, portget=m.portget,
+                        gvarget=m.gvarget, gvarset=gvarset, g0move=m.g0move,
+                        plain=m.is_plain_register, lat=self.latency, pr=pr, raw_gvarset=raw)
+
+        def starthw(n: int) -> None:
+            self._request_hardware(n, name)
+
+        def seteparam(v: int) -> None:
+            self.soft_eparam = v
+
+        softjog = m.soft_jog
+        jog_lo, jog_hi = abi.SOFT_JOG_BASE, abi.SOFT_JOG_BASE + 7
+
+        def sw_gvarset(addr: int, value: int) -> None:
+            if addr == abi.SOFT_START_HW:
+                starthw(value)
+            elif addr == abi.SOFT_START_EPARAM:
+                seteparam(value)
+            elif jog_lo <= addr <= jog_hi:
+                softjog(addr - jog_lo, value)
+            elif lo <= addr <= hi:
+                pr(addr, value)
+            else:
+                raw(addr, value)
+
+        return Host(portset=m.portset, portclr=m.portclear, portget=m.portget,
+                    gvarget=m.gvarget, gvarset=sw_gvarset, g0move=m.g0move,
+                    plain=m.is_plain_register, lat=0, pr=pr, raw_gvarset=raw,
+                    starthw=starthw, seteparam=seteparam, softjog=softjog, software=True)
+
+    def _spawn(self, program: Program, eparam: int) -> Process:
+        eparam = vm.wrap(int(eparam))
+        slots = [0] * 256                  # every slot an instruction can name (a byte)
+        slots[abi.SLOT_EPARAM] = eparam
+        slots[abi.SLOT_VAR00:abi.SLOT_VAR00 + 16] = self.var_init
+        if program.kind is Kind.SOFTWARE:
+            slots[abi.SLOT_PARAM] = eparam
+        host = self._host(program.name, program.kind)
+        p = Process(program, slots, eparam, self.t, host)
+        if self.backend == "fast":
+            gen = fastvm.make_runner(program, slots, host)
+        else:
+            gen = vm.run_reference(program, slots, host)
+        p.resume = gen.__next__
+        self.last[program.name] = p
+        self.events.append(Started(self.t, program.name, program.kind.label, eparam))
+        return p
+
+    # ------------------------------------------------------------ endings
+    def _end(self, p: Process, code: int) -> None:
+        if p.ended_at is not None:
+            return
+        p.ended_at = self.t
+        p.exit_code = code
+        p.resume = _finished
+        self.events.append(Ended(self.t, p.name, p.kind.label, code, abi.exit_name(code),
+                                 p.slots[abi.SLOT_VEXIT]))
+        if p is self.hw:
+            self.hw = None
+            self._proc = p.slots[abi.SLOT_PROC]
+        elif self.sw.get(p.name) is p:
+            del self.sw[p.name]
+            self._sw_order = [q for q in self._sw_order if q is not p]
+
+    def _fault(self, p: Process, pc: Optional[int], text: str, callers=()) -> None:
+        """End p with a fault event and a PLC_MESSAGE_ERR_VM message. The event
+        names main's statement (the outermost call) and lists the whole chain;
+        the text says where inside a called procedure it happened."""
+        prog = p.program
+        chain = []
+        for at in [*reversed(list(callers)), pc] if pc is not None else []:
+            loc = prog.location(at)
+            file, line = loc if loc else (None, None)
+            chain.append((file, line, prog.proc_at(at)))
+        file, line = chain[0][:2] if chain else (None, None)
+        if len(chain) > 1 and chain[-1][1] is not None:
+            f, ln, proc = chain[-1]
+            inside = f"{proc}() at " if proc else ""
+            text = f"{text} (in {inside}{f}:{ln})"
+        self.events.append(Fault(self.t, p.name, file, line, text, calls=tuple(chain)))
+        p.slots[abi.SLOT_MESSAGE] = abi.PLC_MESSAGE["PLC_MESSAGE_ERR_VM"]
+        self._end(p, FAULT_EXIT_CODE)
+
+    def _outcome(self, p: Process, exc: BaseException) -> None:
+        """A procedure's tick raised: it ended, faulted, or hands over to the
+        reference interpreter (which then finishes this tick)."""
+        while True:
+            if isinstance(exc, ProcExit):
+                self._end(p, vm.wrap(exc.code))
+            elif isinstance(exc, VMFault):
+                self._fault(p, exc.pc, exc.text, exc.callers)
+            elif isinstance(exc, StopIteration):
+                self._end(p, 0)
+            elif isinstance(exc, Handoff):
+                gen = vm.run_reference(p.program, p.slots, p.host, pc=exc.pc, stack=exc.stack,
+                                       rets=exc.rets, count=exc.count)
+                p.resume = gen.__next__
+                try:
+                    p.resume()
+                    return
+                except Exception as again:  # noqa: BLE001 - handled by the next round
+                    exc = again
+                    continue
+            else:                           # a bug must not bring the controller down
+                self._fault(p, None, f"internal error: {type(exc).__name__}: {exc}")
+            return
+
+    # ------------------------------------------------------------- starts
+    def start_hardware(self, name: str, eparam: int = 0) -> None:
+        """Start a hardware procedure now: it runs from the next tick (self.t) on;
+        a running one ends with 100 (plc_exit_extern_break)."""
+        program = self.programs[name]
+        if self.hw is not None:
+            self._end(self.hw, abi.EXIT_EXTERN_BREAK)
+        self.hw = self._spawn(program, eparam)
+
+    def start_software(self, name: str, eparam: int = 0) -> None:
+        """Queue a software procedure: it starts at the next software tick
+        (t % 100 == 0; at once if that is this tick)."""
+        if name not in self.programs:
+            raise KeyError(name)
+        self._pending_sw.append((name, int(eparam)))
+
+    def _request_hardware(self, n: int, source: str) -> None:
+        for name in mcode_names(n):
+            p = self.programs.get(name)
+            if p is not None and p.kind is Kind.HARDWARE:
+                self._due_hw.append((self.t + 1, name, self.soft_eparam))
+                return
+        self.events.append(Note(self.t, f"{source}: gvarset({abi.SOFT_START_HW}, {n}) asks for "
+                                        f"hardware procedure {mcode_names(n)[0]}, which is "
+                                        f"not loaded", "warning"))
+
+    def end_all(self, code: int = abi.EXIT_EXTERN_BREAK) -> None:
+        if self.hw is not None:
+            self._end(self.hw, code)
+        for p in list(self._sw_order):
+            self._end(p, code)
+        self._pending_sw.clear()
+        self._due_hw.clear()
+
+    def end_hardware(self, code: int = abi.EXIT_EXTERN_BREAK) -> None:
+        if self.hw is not None:
+            self._end(self.hw, code)
+
+    # -------------------------------------------------------------- state
+    def idle(self) -> bool:
+        """No procedure running and none due to start."""
+        return self.hw is None and not self.sw and not self._pending_sw and not self._due_hw \
+            and not self._edge_due()
+
+    def _edge_due(self) -> bool:
+        """A bound input went 0 -> 1 and the next tick will start its procedure."""
+        if not self.bindings:
+            return False
+        portget = self.machine.portget
+        return any(portget(pin) and not self._levels.get(pin) for pin in self.bindings)
+
+    @property
+    def software_running(self) -> list[str]:
+        return [p.name for p in self._sw_order]
+
+    def next_due(self) -> Optional[int]:
+        """The tick at which a pending start happens, or None."""
+        due = [t for t, _n, _e in self._due_hw]
+        if self._pending_sw:
+            t = self.t
+            due.append(t + (-t) % SOFTWARE_PERIOD_MS)
+        return min(due) if due else None
+
+    # ---------------------------------------------------------------- run
+    def _software_tick(self) -> list[Process]:
+        for name, eparam in self._pending_sw:
+            program = self.programs.get(name)
+            if program is None:
+                continue
+            old = self.sw.get(name)
+            if old is not None:
+                self._end(old, abi.EXIT_EXTERN_BREAK)
+            p = self._spawn(program, eparam)
+            self.sw[name] = p
+        if self._pending_sw:
+            self._pending_sw.clear()
+            self._sw_order = sorted(self.sw.values(), key=lambda q: q.name)
+        ran = list(self._sw_order)
+        for p in ran:
+            try:
+                p.resume()
+            except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                self._outcome(p, exc)
+        return ran
+
+    def _send(self, p: Process, code: int) -> None:
+        s = p.slots
+        self.events.append(Message(self.t, code, abi.message_name(code),
+                                   s[abi.SLOT_VAR00], s[abi.SLOT_VAR00 + 1], p.name))
+        s[abi.SLOT_MESSAGE] = 0
+        self.machine.on_message(code)
+
+    def run(self, ms: int, until_idle: bool = False) -> int:
+        """Run ``ms`` ticks; with ``until_idle``, stop after the first tick that
+        leaves no procedure running and none due. Returns the ticks run.
+
+        Three loops, one tick order: a hardware procedure alone between
+        software ticks (the common case), no procedure at all, and the general
+        tick (software tick, starts due). Samples are kept as raw rows
+        ``(t, running, proc, message, machine fields)``; :meth:`take_samples`
+        turns them into :class:`Sample` objects."""
+        advance = self.machine.advance
+        fields = self.machine.sample_fields
+        events = self.events
+        add_sample = self.samples.append
+        rec = self.record_samples
+        send = self._send
+        period = SOFTWARE_PERIOD_MS
+        t = start = self.t
+        end = t + ms
+        next_sw = t + (-t) % period
+        hw = self.hw
+        resume = hw.resume if hw is not None else None
+        while t < end:
+            if hw is not None and t != next_sw and not self._due_hw and not self.bindings:
+                # the hardware procedure alone until the next software tick
+                stop = min(end, next_sw)
+                slots = hw.slots
+                name = hw.name
+                while t < stop:
+                    self.t = t
+                    try:
+                        resume()
+                    except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                        self._outcome(hw, exc)
+                        code = slots[4]
+                        if code:
+                            send(hw, code)
+                        hw = self.hw
+                        resume = hw.resume if hw is not None else None
+                        if rec:
+                            add_sample((t, hw.name if hw is not None else None, self.proc, code,
+                                        fields()))
+                        notes = advance()
+                        if notes:
+                            for level, text in notes:
+                                events.append(Note(t, text, level))
+                        t += 1
+                        break
+                    code = slots[4]
+                    if code:
+                        send(hw, code)
+                    if rec:
+                        add_sample((t, name, slots[1], code, fields()))
+                    notes = advance()
+                    if notes:
+                        for level, text in notes:
+                            events.append(Note(t, text, level))
+                    t += 1
+                if until_idle and hw is None and not self.sw and not self._pending_sw \
+                        and not self._due_hw:
+                    break
+                continue
+            if hw is None and not self._due_hw and t != next_sw and not self.bindings:
+                # no hardware procedure: only the machine moves until the next software tick
+                stop = min(end, next_sw)
+                idle = until_idle and not self.sw and not self._pending_sw
+                if idle:
+                    stop = t + 1
+                proc = self._proc
+                while t < stop:
+                    if rec:
+                        add_sample((t, None, proc, 0, fields()))
+                    notes = advance()
+                    if notes:
+                        for level, text in notes:
+                            events.append(Note(t, text, level))
+                    t += 1
+                if idle:
+                    break
+                continue
+            # ---- the general tick
+            self.t = t
+            if self._due_hw or self.bindings:
+                if self._due_hw:
+                    self._apply_due(t)
+                if self.bindings:
+                    self._input_edges()
+                hw = self.hw
+                resume = hw.resume if hw is not None else None
+            ran_hw = hw
+            if hw is not None:
+                try:
+                    resume()
+                except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                    self._outcome(hw, exc)
+                    hw = self.hw
+                    resume = hw.resume if hw is not None else None
+            ran = None
+            if t == next_sw:
+                next_sw += period
+                if self.sw or self._pending_sw:
+                    ran = self._software_tick()
+            msg = 0
+            if ran_hw is not None:
+                code = ran_hw.slots[4]
+                if code:
+                    msg = code
+                    send(ran_hw, code)
+            if ran:
+                for p in ran:
+                    code = p.slots[4]
+                    if code:
+                        send(p, code)
+                        if not msg:
+                            msg = code
+            if rec:
+                add_sample((t, hw.name if hw is not None else None, self.proc, msg, fields()))
+            notes = advance()
+            if notes:
+                for level, text in notes:
+                    events.append(Note(t, text, level))
+            t += 1
+            if until_idle and hw is None and not self.sw and not self._pending_sw \
+                    and not self._due_hw and not self._edge_due():
+                break
+        self.t = t
+        return t - start
+
+    def take_sample_rows(self) -> list[tuple]:
+        """The samples recorded so far as raw rows ``(t_ms, running, proc,
+        message, fields)`` (fields: the machine's sample_fields dict; do not
+        modify it), and forget them."""
+        rows = list(self.samples)
+        self.samples.clear()
+        return rows
+
+    def take_samples(self) -> list[Sample]:
+        """The samples recorded so far, and forget them."""
+        out = []
+        for t, running, proc, msg, f in self.take_sample_rows():
+            out.append(Sample(t, running, proc, msg, f["inputs"], f["outputs"], f["pwm"],
+                              f["dac"], f["adc"], f["axes"], f["velocities"]))
+        return out
+
+    @property
+    def proc(self) -> int:
+        """The hardware PLC's ``proc``: the running procedure's, else the last one's."""
+        hw = self.hw
+        return hw.slots[abi.SLOT_PROC] if hw is not None else self._proc
+
+    def bind_input(self, pin: int, name: str, eparam: int = 0) -> None:
+        """Start ``name`` whenever input ``pin`` goes from 0 to 1 (seen at the
+        beginning of a tick, as a start given from outside would be)."""
+        if name not in self.programs:
+            raise KeyError(name)
+        self.bindings[pin] = (name, int(eparam))
+        self._levels[pin] = self.machine.portget(pin)
+
+    def unbind_input(self, pin: int) -> None:
+        self.bindings.pop(pin, None)
+        self._levels.pop(pin, None)
+
+    def _input_edges(self) -> None:
+        portget = self.machine.portget
+        for pin, (name, eparam) in list(self.bindings.items()):
+            level = portget(pin)
+            if level and not self._levels.get(pin):
+                program = self.programs.get(name)
+                if program is not None and program.kind is Kind.HARDWARE:
+                    self.start_hardware(name, eparam)
+                elif program is not None:
+                    self.start_software(name, eparam)
+            self._levels[pin] = level
+
+    def _apply_due(self, t: int) -> None:
+        due = [d for d in self._due_hw if d[0] <= t]
+        self._due_hw = [d for d in self._due_hw if d[0] > t]
+        for _t, name, eparam in due:
+            if name in self.programs:
+                self.start_hardware(name, eparam)
+
+
+def _finished() -> None:
+    raise StopIteration

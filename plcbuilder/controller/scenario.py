@@ -1,0 +1,262 @@
+"""Scenarios: what happens to the controller from outside, and when.
+
+A scenario is a list of actions, each at a tick: start a procedure, set an
+input or an ADC channel, press Stop, raise a host event. ``plcbuilder run``
+builds one from its ``--start``/``--input``/``--adc`` options and a scenario
+file (``--scenario FILE``), whose lines are the same::
+
+    # a comment; blank lines are ignored
+    start M03:12000 @ 0        # NAME[:EPARAM] @ MS
+    input 4=0 @ 150            # PIN=0|1 @ MS
+    adc 0=2048 @ 200           # CH=VALUE @ MS
+    stop @ 5000                # press Stop (M02, then OFF)
+    event GCODE_START @ 100    # __HANDLER_GCODE_START
+    bind 9=M88:0 @ 0           # from then on, input 9 going 0 -> 1 starts M88
+
+Numbers are decimal or hex (``0x…``); ``@ MS`` may be left out (0), and the
+command may also be written as its option (``--start M03@0``).
+
+An action at tick t is applied before tick t runs, in the order given, so a
+procedure started at t runs in tick t and sees an input set at t.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterable, Optional
+
+MAX_SCENARIO_BYTES = 4 << 20
+KINDS = ("start", "input", "adc", "stop", "event", "bind")
+
+
+class ScenarioError(ValueError):
+    """A scenario line or option that cannot be understood; says where and why."""
+
+    def __init__(self, message: str, file: Optional[str] = None, line: Optional[int] = None):
+        self.message, self.file, self.line = message, file, line
+        where = f"{file}:{line}: " if file and line else f"{file}: " if file else ""
+        super().__init__(where + message)
+
+
+@dataclass(frozen=True)
+class Action:
+    t_ms: int
+    kind: str                  # one of KINDS
+    name: str = ""             # start, bind: procedure; event: handler
+    a: int = 0                 # start: eparam; input, bind: pin; adc: channel
+    b: int = 0                 # input/adc: value; bind: eparam
+
+    def describe(self) -> str:
+        if self.kind == "start":
+            return f"start {self.name}:{self.a} @ {self.t_ms}"
+        if self.kind in ("input", "adc"):
+            return f"{self.kind} {self.a}={self.b} @ {self.t_ms}"
+        if self.kind == "event":
+            return f"event {self.name} @ {self.t_ms}"
+        if self.kind == "bind":
+            return f"bind {self.a}={self.name}:{self.b} @ {self.t_ms}"
+        return f"stop @ {self.t_ms}"
+
+
+_NUM = r"[-+]?(?:0[xX][0-9a-fA-F]+|\d+)"
+
+
+def parse_int(text: str, what: str) -> int:
+    t = text.strip()
+    if not re.fullmatch(_NUM, t):
+        raise ScenarioError(f"{what} must be a whole number (decimal or 0x hex), not {text!r}")
+    return int(t, 0)
+
+
+def _split_time(text: str, what: str) -> tuple[str, int]:
+    if "@" not in text:
+        return text.strip(), 0
+    body, _, ms = text.rpartition("@")
+    t = parse_int(ms, f"the time of {what}")
+    if t < 0:
+        raise ScenarioError(f"the time of {what} must not be negative ({t})")
+    return body.strip(), t
+
+
+def parse_start(text: str) -> Action:
+    """``NAME[:EPARAM][@MS]``."""
+    body, t = _split_time(text, "--start")
+    name, sep, ep = body.partition(":")
+    name = name.strip()
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
+        raise ScenarioError(f"--start needs NAME[:EPARAM]@MS, and {name!r} is not a "
+                            "procedure name")
+    eparam = parse_int(ep, "the eparam of --start") if sep else 0
+    return Action(t, "start", name, eparam)
+
+
+def _pin_value(text: str, kind: str, lo: Optional[int] = None, hi: Optional[int] = None) -> Action:
+    body, t = _split_time(text, f"--{kind}")
+    left, sep, right = body.partition("=")
+    if not sep:
+        shape = "PIN=0|1@MS" if kind == "input" else "CH=VALUE@MS"
+        raise ScenarioError(f"--{kind} needs {shape}, not {text!r}")
+    what = "pin" if kind == "input" else "channel"
+    a = parse_int(left, f"the {what} of --{kind}")
+    if a < 0:
+        raise ScenarioError(f"the {what} of --{kind} must not be negative ({a})")
+    b = parse_int(right, f"the value of --{kind}")
+    if lo is not None and not lo <= b <= hi:
+        raise ScenarioError(f"an input is 0 or 1, not {b}")
+    return Action(t, kind, "", a, b)
+
+
+def parse_input(text: str) -> Action:
+    """``PIN=0|1[@MS]``."""
+    return _pin_value(text, "input", 0, 1)
+
+
+def parse_adc(text: str) -> Action:
+    """``CH=VALUE[@MS]``."""
+    return _pin_value(text, "adc")
+
+
+def parse_stop(text: str) -> Action:
+    body, t = _split_time(text, "stop")
+    if body:
+        raise ScenarioError(f"stop takes only a time (stop @ MS), not {body!r}")
+    return Action(t, "stop")
+
+
+def parse_event(text: str) -> Action:
+    body, t = _split_time(text, "event")
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", body):
+        raise ScenarioError(f"event needs a handler name (GCODE_START, GCODE_STOP, …), "
+                            f"not {body!r}")
+    return Action(t, "event", body)
+
+
+def parse_bind(text: str) -> Action:
+    """``PIN=NAME[:EPARAM][@MS]``."""
+    body, t = _split_time(text, "bind")
+    left, sep, right = body.partition("=")
+    if not sep:
+        raise ScenarioError(f"bind needs PIN=NAME[:EPARAM]@MS, not {text!r}")
+    pin = parse_int(left, "the pin of bind")
+    start = parse_start(right)
+    return Action(t, "bind", start.name, pin, start.a)
+
+
+_PARSERS: dict[str, Callable[[str], Action]] = {
+    "start": parse_start, "input": parse_input, "adc": parse_adc,
+    "stop": parse_stop, "event": parse_event, "bind": parse_bind,
+}
+
+
+class Scenario:
+    """Actions in the order they were given; applied by time, then that order."""
+
+    def __init__(self, actions: Iterable[Action] = ()):
+        self.actions: list[Action] = list(actions)
+
+    def add(self, action: Action) -> None:
+        self.actions.append(action)
+
+    def extend(self, actions: Iterable[Action]) -> None:
+        self.actions.extend(actions)
+
+    def ordered(self) -> list[Action]:
+        return sorted(self.actions, key=lambda a: a.t_ms)   # stable: given order within a tick
+
+    @classmethod
+    def parse(cls, text: str, file: str = "<scenario>") -> "Scenario":
+        out = cls()
+        for n, raw in enumerate(text.splitlines(), 1):
+            line = raw.split("#", 1)[0].strip()
+            if not line:
+                continue
+            word, _, rest = line.partition(" ")
+            if "=" in word and word.startswith("--"):      # --input=3=1@5
+                word, _, rest0 = word.partition("=")
+                rest = rest0 + " " + rest
+            kind = word.lower().lstrip("-")
+            if kind not in _PARSERS and "@" in word and word.split("@")[0].lower() == "stop":
+                kind, rest = "stop", "@" + word.split("@", 1)[1] + rest
+            parser = _PARSERS.get(kind)
+            if parser is None:
+                raise ScenarioError(f"unknown action {word!r} (one of {', '.join(KINDS)})",
+                                    file, n)
+            try:
+                out.add(parser(rest))
+            except ScenarioError as exc:
+                raise ScenarioError(exc.message, file, n) from None
+        return out
+
+    @classmethod
+    def load(cls, path) -> "Scenario":
+        p = Path(path)
+        try:
+            data = p.read_bytes()
+        except OSError as exc:
+            raise ScenarioError(f"cannot read the scenario: {exc.strerror or exc}", str(p)) from None
+        if len(data) > MAX_SCENARIO_BYTES:
+            raise ScenarioError(f"the scenario is too large ({len(data)} bytes)", str(p))
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ScenarioError("not UTF-8 text", str(p), data[:exc.start].count(b"\n") + 1) \
+                from None
+        return cls.parse(text, str(p))
+
+
+def apply(controller, action: Action) -> None:
+    """Do one action on a :class:`~plcbuilder.controller.controller.Controller` now."""
+    if action.kind == "start":
+        controller.start(action.name, action.a)
+    elif action.kind == "input":
+        controller.set_input(action.a, action.b)
+    elif action.kind == "adc":
+        controller.set_adc(action.a, action.b)
+    elif action.kind == "stop":
+        controller.stop()
+    elif action.kind == "event":
+        controller.event(action.name)
+    elif action.kind == "bind":
+        controller.bind_input(action.a, action.name, action.b)
+    else:  # pragma: no cover
+        raise ScenarioError(f"unknown action {action.kind!r}")
+
+
+#: Actions that can start a procedure (the run is not over while one is due).
+STARTING = frozenset({"start", "stop", "event", "bind"})
+
+
+def drive(controller, scenario: Scenario, limit_ms: int, *, until_idle: bool = True,
+          chunk_ms: int = 1000, on_chunk: Optional[Callable[[], None]] = None) -> int:
+    """Run ``controller`` with ``scenario`` until ``limit_ms`` ticks have run or,
+    with ``until_idle``, until no procedure runs and none is due to start
+    (scenario actions included). ``on_chunk`` is called after every step of at
+    most ``chunk_ms`` ticks (to drain events and samples). Returns the time the
+    run ended: ``limit_ms``, or the tick in which it became idle."""
+    actions = scenario.ordered()
+    i = 0
+    n = len(actions)
+    c = controller
+    while True:
+        t = c.t_ms
+        while i < n and actions[i].t_ms <= t:
+            apply(c, actions[i])
+            i += 1
+        if t >= limit_ms:
+            return limit_ms
+        bound = bool(c.bindings)           # then an input can start a procedure too
+        more_starts = any(a.kind in STARTING or (bound and a.kind == "input")
+                          for a in actions[i:])
+        if until_idle and not more_starts and c.idle():
+            return max(t - 1, 0) if t else 0
+        stop = limit_ms if i >= n else min(limit_ms, actions[i].t_ms)
+        count = min(stop - t, chunk_ms)
+        ran = c.run_until_idle(count) if (until_idle and not more_starts) else None
+        if ran is None:
+            c.step(count)
+        if on_chunk is not None:
+            on_chunk()
+        if ran is not None and ran < count:
+            return c.t_ms - 1

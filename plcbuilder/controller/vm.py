@@ -1,0 +1,358 @@
+"""The reference interpreter: runs a procedure's bytecode one instruction at a time.
+
+This is the executable definition of the bytecode's meaning. The fast backend
+(:mod:`plcbuilder.controller.fastvm`) must behave identically, and falls back to
+this interpreter for anything it does not translate.
+
+A running procedure is a generator: each ``next()`` runs one tick, until an
+instruction that ends the tick (``yield``), or the procedure ends. It ends by
+raising :class:`ProcExit` (``exit(code)``, or falling off ``main`` with 0) or
+:class:`VMFault` (a runtime fault, with the code offset that caused it).
+
+The meaning of the code, in short (values are 32-bit two's complement; every
+result wraps):
+
+- binary operators pop b, then a, and push ``a OP b``; ``/`` and ``%`` truncate
+  toward zero as in C; a zero divisor is a fault; ``INT_MIN / -1`` wraps to
+  ``INT_MIN`` and ``INT_MIN % -1`` is 0; shift counts are ``b & 31``; ``>>`` is
+  arithmetic; comparisons, ``NOT`` and ``BOOL`` give 0 or 1;
+- jumps are relative to the end of the instruction; ``LOOP`` pops a condition,
+  ends the tick, and when the procedure resumes goes to its target if the
+  condition was not 0; ``YIELD`` ends the tick;
+- ``CALL`` nests at most :data:`MAX_CALL_DEPTH` deep; ``RET`` in ``main`` ends
+  the procedure with exit code 0; ``EXIT`` pops the exit code;
+- built-in calls pop their arguments (first argument pushed first);
+- more than :data:`TICK_BUDGET` instructions in one tick is a fault.
+- ``gvarget`` of a plain register with a host latency of L ms (``Host.lat``)
+  suspends the procedure for L ticks; the register is read when it resumes.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Iterator, Optional
+
+from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, Op, UNARY, size_of,
+                                         validate)
+from plcbuilder.bytecode.program import Program
+
+TICK_BUDGET = 100_000
+MAX_CALL_DEPTH = 16
+STACK_LIMIT = 1024
+
+FAULT_DIV = "division by zero"
+FAULT_MOD = "modulo by zero"
+FAULT_DEPTH = f"call depth over {MAX_CALL_DEPTH}"
+FAULT_BUDGET = f"more than {TICK_BUDGET} instructions in one tick (a loop that never ends an iteration?)"
+FAULT_END = "ran past the end of the code"
+FAULT_UNDERFLOW = "stack underflow"
+FAULT_OVERFLOW = f"stack overflow (more than {STACK_LIMIT} values)"
+
+_CALL_SIZE = size_of(Op.CALL)
+INT_MIN = -0x80000000
+INT_MAX = 0x7FFFFFFF
+
+
+class VMFault(Exception):
+    """A runtime fault at code offset ``pc``."""
+
+    def __init__(self, pc: int, text: str):
+        super().__init__(f"at code offset {pc}: {text}")
+        self.pc = pc
+        self.text = text
+        #: code offsets of the calls that led here, innermost first
+        self.callers: list[int] = []
+
+
+class ProcExit(Exception):
+    """The procedure ended with an exit code."""
+
+    def __init__(self, code: int):
+        super().__init__(code)
+        self.code = code
+
+
+class Handoff(Exception):
+    """Raised by the fast backend when it cannot finish a tick exactly (the tick's
+    instruction budget runs out inside a block): the reference interpreter
+    continues from this state."""
+
+    def __init__(self, pc: int, stack: list[int], rets: tuple[int, ...], count: int):
+        super().__init__(pc)
+        self.pc = pc
+        self.stack = stack
+        self.rets = rets
+        self.count = count
+
+
+class Host:
+    """What a running procedure reaches outside itself.
+
+    ``gvarset`` is the general register write (prints and, for software
+    procedures, the command registers 100020.., 100040, 100041 are handled by
+    it); the fast backend calls the specialised functions (``pr``, ``raw_gvarset``,
+    ``starthw``, ``seteparam``, ``softjog``) directly where the address is a
+    constant, which must have the same effect. ``lat`` is the gvarget latency
+    in ticks for addresses where ``plain(addr)`` is true.
+    """
+
+    __slots__ = ("portset", "portclr", "portget", "gvarget", "gvarset", "g0move", "plain",
+                 "lat", "pr", "raw_gvarset", "starthw", "seteparam", "softjog", "software")
+
+    def __init__(self, *, portset, portclr, portget, gvarget, gvarset, g0move,
+                 plain=None, lat: int = 0, pr=None, raw_gvarset=None, starthw=None,
+                 seteparam=None, softjog=None, software: bool = False):
+        self.portset, self.portclr, self.portget = portset, portclr, portget
+        self.gvarget, self.gvarset, self.g0move = gvarget, gvarset, g0move
+        self.plain = plain or (lambda _addr: True)
+        self.lat = int(lat)
+        self.pr = pr
+        self.raw_gvarset = raw_gvarset or gvarset
+        self.starthw, self.seteparam, self.softjog = starthw, seteparam, softjog
+        self.software = software
+
+
+# ------------------------------------------------------------------ values
+
+def wrap(v: int) -> int:
+    """v as a 32-bit two's complement value."""
+    return ((v + 0x80000000) & 0xFFFFFFFF) - 0x80000000
+
+
+def c_div(a: int, b: int) -> int:
+    """a / b truncated toward zero, wrapped (b != 0)."""
+    q = abs(a) // abs(b)
+    return wrap(-q if (a < 0) != (b < 0) else q)
+
+
+def c_mod(a: int, b: int) -> int:
+    """a % b with the sign of a, as in C (b != 0)."""
+    r = abs(a) % abs(b)
+    return -r if a < 0 else r
+
+
+_BINOPS: dict[int, Callable[[int, int], int]] = {
+    Op.ADD: lambda a, b: wrap(a + b),
+    Op.SUB: lambda a, b: wrap(a - b),
+    Op.MUL: lambda a, b: wrap(a * b),
+    Op.DIV: c_div,
+    Op.MOD: c_mod,
+    Op.SHL: lambda a, b: wrap(a << (b & 31)),
+    Op.SHR: lambda a, b: a >> (b & 31),
+    Op.AND: lambda a, b: a & b,
+    Op.OR: lambda a, b: a | b,
+    Op.XOR: lambda a, b: a ^ b,
+    Op.EQ: lambda a, b: 1 if a == b else 0,
+    Op.NE: lambda a, b: 1 if a != b else 0,
+    Op.LT: lambda a, b: 1 if a < b else 0,
+    Op.LE: lambda a, b: 1 if a <= b else 0,
+    Op.GT: lambda a, b: 1 if a > b else 0,
+    Op.GE: lambda a, b: 1 if a >= b else 0,
+}
+_UNOPS: dict[int, Callable[[int], int]] = {
+    Op.NEG: lambda a: wrap(-a),
+    Op.NOT: lambda a: 0 if a else 1,
+    Op.BNOT: lambda a: ~a,
+    Op.BOOL: lambda a: 1 if a else 0,
+}
+assert set(_BINOPS) == set(BINARY) and set(_UNOPS) == set(UNARY)
+
+#: Constant pushes without an operand.
+IMPLICIT_CONST = {Op.PUSH0: 0, Op.PUSH1: 1}
+
+
+def binary(op: Op, a: int, b: int) -> int:
+    """The result of a binary operator on two 32-bit values (b != 0 for DIV/MOD)."""
+    return _BINOPS[op](a, b)
+
+
+def unary(op: Op, a: int) -> int:
+    return _UNOPS[op](a)
+
+
+# ------------------------------------------------------------- pre-decoding
+# The interpreter walks the bytes once per program into per-offset tables
+# (kind, argument, next offset); the kinds group opcodes by what they do.
+
+(K_CONST, K_LOAD, K_STORE, K_INC, K_DEC, K_POP, K_NOP, K_BIN, K_DIV, K_MOD, K_UN,
+ K_JMP, K_JZ, K_JNZ, K_LOOP, K_YIELD, K_CALL, K_RET, K_EXIT,
+ K_PORTSET, K_PORTCLR, K_PORTGET, K_GVARGET, K_GVARSET, K_G0MOVE, K_END) = range(26)
+
+_KIND_OF: dict[Op, int] = {
+    Op.LOAD: K_LOAD, Op.STORE: K_STORE, Op.INC: K_INC, Op.DEC: K_DEC, Op.POP: K_POP,
+    Op.NOP: K_NOP, Op.DIV: K_DIV, Op.MOD: K_MOD,
+    Op.JMP8: K_JMP, Op.JMP16: K_JMP, Op.JZ8: K_JZ, Op.JZ16: K_JZ, Op.JNZ8: K_JNZ,
+    Op.JNZ16: K_JNZ, Op.LOOP8: K_LOOP, Op.LOOP16: K_LOOP, Op.YIELD: K_YIELD,
+    Op.CALL: K_CALL, Op.RET: K_RET, Op.EXIT: K_EXIT,
+    Op.PORTSET: K_PORTSET, Op.PORTCLR: K_PORTCLR, Op.PORTGET: K_PORTGET,
+    Op.GVARGET: K_GVARGET, Op.GVARSET: K_GVARSET, Op.G0MOVE: K_G0MOVE,
+}
+for _op in HAS_CONST | set(IMPLICIT_CONST):
+    _KIND_OF[_op] = K_CONST
+for _op in BINARY - {Op.DIV, Op.MOD}:
+    _KIND_OF[_op] = K_BIN
+for _op in UNARY:
+    _KIND_OF[_op] = K_UN
+assert set(_KIND_OF) == set(Op), set(Op) - set(_KIND_OF)
+
+_DECODED: dict[tuple[bytes, int], tuple[list, list, list]] = {}
+
+
+def decoded(program: Program) -> tuple[list, list, list]:
+    """(kinds, args, nexts), each indexed by code offset; offset len(code) is K_END."""
+    key = (program.code, program.entry)
+    hit = _DECODED.get(key)
+    if hit is not None:
+        return hit
+    code = program.code
+    n = len(code)
+    kinds: list = [None] * (n + 1)
+    args: list = [None] * (n + 1)
+    nexts: list = [None] * (n + 1)
+    for ins in validate(code, program.entry):
+        k = _KIND_OF[ins.op]
+        kinds[ins.offset] = k
+        nexts[ins.offset] = ins.end
+        if k == K_CONST:
+            args[ins.offset] = IMPLICIT_CONST.get(ins.op, ins.arg)
+        elif ins.op in HAS_JREL or k == K_CALL:
+            args[ins.offset] = ins.target
+        elif k == K_BIN:
+            args[ins.offset] = _BINOPS[ins.op]
+        elif k == K_UN:
+            args[ins.offset] = _UNOPS[ins.op]
+        else:
+            args[ins.offset] = ins.arg
+    kinds[n] = K_END
+    if len(_DECODED) > 512:
+        _DECODED.clear()
+    _DECODED[key] = (kinds, args, nexts)
+    return kinds, args, nexts
+
+
+# ------------------------------------------------------------ interpreter
+
+def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[int] = None,
+                  stack: Optional[list[int]] = None, rets: tuple[int, ...] | list[int] = (),
+                  count: int = 0) -> Iterator[None]:
+    """Run ``program`` over the variable slots ``s``; one ``next()`` per tick.
+
+    The keyword arguments resume a procedure mid-tick from the state the fast
+    backend hands over (see :class:`Handoff`).
+    """
+    kinds, args, nexts = decoded(program)
+    if pc is None:
+        pc = program.entry
+    stack = [] if stack is None else list(stack)
+    calls = list(rets)
+    push, pop = stack.append, stack.pop
+    portset, portclr, portget = host.portset, host.portclr, host.portget
+    gvarget, gvarset, g0move = host.gvarget, host.gvarset, host.g0move
+    plain, lat = host.plain, host.lat
+    budget = TICK_BUDGET
+    try:
+        while True:
+            k = kinds[pc]
+            if count >= budget:            # (running off the end is not an instruction)
+                raise VMFault(pc, FAULT_END if k == K_END else FAULT_BUDGET)
+            count += 1
+            if k == K_LOAD:
+                push(s[args[pc]])
+            elif k == K_CONST:
+                push(args[pc])
+            elif k == K_STORE:
+                s[args[pc]] = pop()
+            elif k == K_BIN:
+                b = pop()
+                push(args[pc](pop(), b))
+            elif k == K_JZ:
+                if not pop():
+                    pc = args[pc]
+                    continue
+            elif k == K_LOOP:
+                cond = pop()
+                if len(stack) > STACK_LIMIT:
+                    raise VMFault(pc, FAULT_OVERFLOW)
+                pc = args[pc] if cond else nexts[pc]
+                yield
+                count = 0
+                continue
+            elif k == K_INC:
+                i = args[pc]
+                s[i] = wrap(s[i] + 1)
+            elif k == K_DEC:
+                i = args[pc]
+                s[i] = wrap(s[i] - 1)
+            elif k == K_JMP:
+                pc = args[pc]
+                continue
+            elif k == K_JNZ:
+                if pop():
+                    pc = args[pc]
+                    continue
+            elif k == K_UN:
+                push(args[pc](pop()))
+            elif k == K_GVARSET:
+                v = pop()
+                gvarset(pop(), v)
+            elif k == K_GVARGET:
+                a = pop()
+                if lat and plain(a):
+                    if len(stack) > STACK_LIMIT:
+                        raise VMFault(pc, FAULT_OVERFLOW)
+                    for _ in range(lat):
+                        yield
+                    count = 0
+                push(gvarget(a))
+            elif k == K_PORTGET:
+                push(portget(pop()))
+            elif k == K_PORTSET:
+                portset(pop())
+            elif k == K_PORTCLR:
+                portclr(pop())
+            elif k == K_POP:
+                pop()
+            elif k == K_YIELD:
+                if len(stack) > STACK_LIMIT:
+                    raise VMFault(pc, FAULT_OVERFLOW)
+                pc = nexts[pc]
+                yield
+                count = 0
+                continue
+            elif k == K_CALL:
+                if len(calls) >= MAX_CALL_DEPTH:
+                    raise VMFault(pc, FAULT_DEPTH)
+                if len(stack) > STACK_LIMIT:
+                    raise VMFault(pc, FAULT_OVERFLOW)
+                calls.append(nexts[pc])
+                pc = args[pc]
+                continue
+            elif k == K_RET:
+                if not calls:
+                    raise ProcExit(0)
+                pc = calls.pop()
+                continue
+            elif k == K_EXIT:
+                raise ProcExit(pop())
+            elif k == K_DIV or k == K_MOD:
+                b = pop()
+                a = pop()
+                if b == 0:
+                    raise VMFault(pc, FAULT_DIV if k == K_DIV else FAULT_MOD)
+                push(c_div(a, b) if k == K_DIV else c_mod(a, b))
+            elif k == K_G0MOVE:
+                d = pop()
+                m = pop()
+                g0move(pop(), m, d)
+            elif k == K_END:
+                raise VMFault(pc, FAULT_END)
+            # K_NOP: nothing
+            pc = nexts[pc]
+    except IndexError:
+        if not stack or kinds[pc] is None:
+            fault = VMFault(pc, FAULT_UNDERFLOW)
+            fault.callers = [r - _CALL_SIZE for r in reversed(calls)]
+            raise fault from None
+        raise
+    except VMFault as fault:
+        fault.callers = [r - _CALL_SIZE for r in reversed(calls)]
+        raise

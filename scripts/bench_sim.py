@@ -1,0 +1,210 @@
+"""Simulator benchmark (section ``sim`` of scripts/bench.py):
+
+1. real-time factor of the controller running 1 hardware and 20 software
+   procedures headless (samples off), on the default machine and with the
+   machine stubbed out (the PLC core alone);               goal >= 3000x
+2. one loop run as a bare generator (no controller) by the fast backend, the
+   reference interpreter and hand-written Python, side by side (best of 5,
+   interleaved), with a stub host:                         goals <= 2x, <= 20x native
+3. a one-hour simulated run of the example project (its software procedures,
+   and a hardware procedure watching an input all the time) with ``--trace``
+   streamed to disk, in a fresh process: wall time, trace size, peak memory
+   (goal < 200 MB).
+
+    .venv/bin/python scripts/bench.py sim
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from plcbuilder import api
+from plcbuilder.controller import fastvm, vm
+from plcbuilder.controller.controller import Controller
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# the seed's M88 shape: watch an input every ms (until it changes)
+HARDWARE = """
+#include pins.h
+main()
+{
+  do
+  {
+    sens=portget(INPUT_PROBE);
+    timer++;
+  }while(sens==0);
+  message=PLCCMD_LINE_STOP;
+  timer=2;do{timer--;}while(timer>0);
+  exit(99);
+};
+"""
+# software procedures like the seed's: a lube timer, a button toggle, a counter
+SOFTWARE = [
+    """main(){ do { portset(5); timer=30; do{timer--;}while(timer>0);
+                 portclear(5); timer=570; do{timer--;}while(timer>0); } while(1); };""",
+    """main(){ last=0; do { b=portget(9); if (b!=0 && last==0) { s=gvarget(0x407);
+                 if (s!=0) {portclear(7);} else {portset(7);}; }; last=b; } while(1); };""",
+    """main(){ do { n++; gvarset(4000+Param, n); if (n>100000) {n=0;}; } while(1); };""",
+    """main(){ do { e=portget(8); if (e!=0) { message=PLC_MESSAGE_PRESSED_ALARM_KEY; }; }
+                 while(1); };""",
+]
+LOOP = """
+main()
+{
+  n=0; hits=0;
+  do
+  {
+    s=portget(3);
+    if (s!=0) { hits++; };
+    n++;
+    if ((n&0xff)==0) { gvarset(8635,hits); };
+  }while(n<1000000000);
+  exit(99);
+};
+"""
+
+
+def native(portget, gvarset):
+    """LOOP written by hand in Python, one yield a tick like the VM."""
+    n = 0
+    hits = 0
+    while True:
+        s = portget(3)
+        if s != 0:
+            hits += 1
+        n += 1
+        if (n & 0xff) == 0:
+            gvarset(8635, hits)
+        yield
+        if not n < 1000000000:
+            break
+
+
+def _compile(src: str, name: str, software: bool = False):
+    kind = api.Kind.SOFTWARE if software else api.Kind.HARDWARE
+    r = api.compile_source(src, f"{name}.plc", api.CompileOptions(kind=kind))
+    assert r.ok, [d.message for d in r.diagnostics]
+    return r.program
+
+
+class _NullMachine:
+    """Every PLC-facing call does nothing: what remains is the PLC core."""
+    input_count = output_count = 64
+    _fields = {"inputs": (0,) * 8, "outputs": (0,) * 8, "pwm": (0,) * 8, "dac": (0,) * 8,
+               "adc": (0,) * 8, "axes": (0,) * 9, "velocities": (0,) * 9}
+
+    def portset(self, pin): pass
+    def portclear(self, pin): pass
+    def portget(self, pin): return 0
+    def gvarget(self, addr): return 0
+    def gvarset(self, addr, value): pass
+    def g0move(self, flags, mask, distance): pass
+    def on_message(self, code): pass
+    def is_plain_register(self, addr): return True
+    def soft_jog(self, axis, speed): pass
+    def advance(self): return ()
+    def sample_fields(self): return self._fields
+    def outputs_on(self): return []
+    def axis_positions(self): return {}
+
+
+def realtime(sim_ms: int, machine=None, backend: str = "fast") -> float:
+    hw = _compile(HARDWARE, "M88")
+    sws = [_compile(SOFTWARE[i % len(SOFTWARE)], f"S{i:02d}", True) for i in range(20)]
+    best = float("inf")
+    for _ in range(3):
+        c = Controller(record_samples=False, backend=backend,
+                       machine=machine() if machine else None)
+        c.load([hw, *sws])
+        c.start("M88")
+        c.step(10)
+        t0 = time.perf_counter()
+        c.step(sim_ms)
+        best = min(best, time.perf_counter() - t0)
+        assert c.state()["running"] == "M88" and len(c.state()["software"]) == 20
+    return sim_ms / 1000 / best
+
+
+def vm_ratios(ticks: int = 200_000) -> tuple[float, float, float]:
+    prog = _compile(LOOP, "L")
+    assert fastvm.unsupported_reason(prog) is None
+
+    def portget(pin):
+        return 0
+
+    def gvarset(addr, value):
+        pass
+
+    host = vm.Host(portset=portget, portclr=portget, portget=portget, gvarget=portget,
+                   gvarset=gvarset, g0move=gvarset)
+    makers = {
+        "native": lambda: native(portget, gvarset),
+        "fast": lambda: fastvm.make_runner(prog, [0] * 40, host),
+        "reference": lambda: vm.run_reference(prog, [0] * 40, host),
+    }
+    best = {k: float("inf") for k in makers}
+    for _ in range(5):                     # interleaved, so load changes hit all three alike
+        for k, make in makers.items():
+            step = make().__next__
+            n = ticks if k != "reference" else ticks // 5
+            t0 = time.perf_counter()
+            for _ in range(n):
+                step()
+            best[k] = min(best[k], (time.perf_counter() - t0) / n)
+    return best["native"] * 1e9, best["fast"] / best["native"], best["reference"] / best["native"]
+
+
+_HOUR_SCRIPT = """
+import sys, time, resource
+from plcbuilder.simulate import run, RunOptions
+t0 = time.perf_counter()
+r = run(sys.argv[1], RunOptions(ms=3_600_000, starts=["M03:12000@1000", "M88@2000"],
+                                trace=sys.argv[2]))
+dt = time.perf_counter() - t0
+print(dt, r.report["ended_at_ms"], resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+"""
+
+
+def hour_with_trace(gz: bool = False) -> tuple[float, float, float]:
+    from plcbuilder.project.new import create_project
+    with tempfile.TemporaryDirectory() as d:
+        proj = create_project(Path(d) / "shop").root
+        (proj / "hardware" / "M88.plc").write_text(HARDWARE)   # runs for the whole hour
+        trace = Path(d) / ("trace.csv.gz" if gz else "trace.csv")
+        env = dict(os.environ, PYTHONPATH=str(ROOT))
+        out = subprocess.run([sys.executable, "-c", _HOUR_SCRIPT, str(proj), str(trace)],
+                             capture_output=True, text=True, env=env, check=True).stdout.split()
+        wall, ended, rss_kb = float(out[0]), int(out[1]), int(out[2])
+        assert ended == 3_600_000
+        return wall, trace.stat().st_size / 1e6, rss_kb / 1024
+
+
+def run() -> list[str]:
+    lines = []
+    rt = realtime(60_000)
+    rt_core = realtime(60_000, _NullMachine)
+    rt_ref = realtime(10_000, backend="reference")
+    lines.append(f"real-time factor, 1 hardware + 20 software procedures, default machine: "
+                 f"{rt:,.0f}x (goal >= 3000x)")
+    lines.append(f"  the PLC core alone (machine stubbed): {rt_core:,.0f}x; "
+                 f"with the reference interpreter: {rt_ref:,.0f}x")
+    ns, fast, ref = vm_ratios()
+    lines.append(f"one loop, native Python {ns:.0f} ns/tick: fast backend {fast:.2f}x native "
+                 f"(goal <= 2x), reference interpreter {ref:.1f}x native (goal <= 20x)")
+    for gz in (False, True):
+        wall, mb, rss = hour_with_trace(gz)
+        lines.append(f"one simulated hour with {'--trace .csv.gz' if gz else '--trace .csv'}: "
+                     f"{wall:.1f} s wall ({3600 / wall:,.0f}x), trace {mb:.0f} MB, peak memory "
+                     f"{rss:.0f} MB (goal < 200 MB)")
+    return lines
+
+
+if __name__ == "__main__":
+    for line in run():
+        print(line)

@@ -1,0 +1,117 @@
+"""``plcbuilder run``: SPEC §5's options, JSON object and exit statuses."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from plcbuilder.cli.main import main
+
+DELAY = "main(){ timer=10; do{timer--;}while(timer>0); exit(99); };\n"
+
+
+def write(path: Path, text: str) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def run_cli(capsys, *argv) -> tuple[int, str, str]:
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:           # argparse's own usage errors
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_json_output_is_one_object_with_the_spec_fields(tmp_path, capsys):
+    f = write(tmp_path / "M05.plc", DELAY)
+    code, out, err = run_cli(capsys, "run", f, "--json")
+    assert code == 0, err
+    rep = json.loads(out)
+    assert rep["ended_at_ms"] == 10
+    p = rep["procedures"][0]
+    assert (p["name"], p["kind"], p["started_at_ms"], p["ended_at_ms"], p["exit_code"],
+            p["exit_name"], p["vexit"]) == ("M05", "hardware", 0, 10, 99, "plc_exit_normal", 0)
+    assert set(rep) >= {"vars", "outputs", "pwm", "dac", "messages", "prints", "faults", "axes",
+                        "proc"}
+
+
+def test_options_start_input_adc_eparam_ms(tmp_path, capsys):
+    proj = tmp_path / "p"
+    write(proj / "hardware" / "M88.plc",
+          "main(){ v = eparam; do { s = portget(9); a = adc01; } while (s == 0); exit(99); };")
+    write(proj / "software" / "tick.plc", "main(){ do { n++; } while (1); };")
+    code, out, err = run_cli(capsys, "run", proj, "--start", "M88:0x10@20", "--input",
+                             "9=1@50", "--adc", "0=777@30", "--ms", "400", "--json")
+    assert code == 0, err
+    rep = json.loads(out)
+    m88 = [p for p in rep["procedures"] if p["name"] == "M88"][0]
+    assert (m88["started_at_ms"], m88["ended_at_ms"]) == (20, 51)
+    assert rep["vars"]["M88"]["v"] == 16 and rep["vars"]["M88"]["a"] == 777
+    assert rep["ended_at_ms"] == 400                     # the software procedure runs on
+
+
+def test_software_single_file_and_trace(tmp_path, capsys):
+    f = write(tmp_path / "S.plc", "main(){ do { n++; } while (n < 2); exit(99); };")
+    trace = tmp_path / "trace.csv"
+    code, out, _ = run_cli(capsys, "run", f, "--software", "--trace", trace, "--json")
+    assert code == 0
+    assert json.loads(out)["procedures"][0]["kind"] == "software"
+    assert len(trace.read_text().splitlines()) == 1 + 201
+
+
+def test_summary_without_json(tmp_path, capsys):
+    f = write(tmp_path / "M03.plc", "main(){ portset(2); message=146; do { } while (0); "
+                                    "gvarset(20000, 5); exit(99); };")
+    code, out, _ = run_cli(capsys, "run", f, "--color=never")
+    assert code == 0
+    assert "M03 (hardware): 0 -> 1 ms, exit 99 plc_exit_normal" in out
+    assert "146 PLC_MESSAGE_USER" in out and "[20000] 5" in out
+    assert "outputs on: 2" in out and "run ended at 1 ms" in out
+
+
+def test_compile_errors_exit_1_with_diagnostics(tmp_path, capsys):
+    f = write(tmp_path / "M03.plc", "main(){\n  a = ;\n};\n")
+    code, out, err = run_cli(capsys, "run", f, "--color=never")
+    assert code == 1
+    assert "M03.plc:2:" in err and "error:" in err and "did not compile" in err
+
+
+def test_strict_applies(tmp_path, capsys):
+    f = write(tmp_path / "M03.plc", "main(){ a = 1; if (a) { a = 2; } else { a = 3; }; };")
+    assert run_cli(capsys, "run", f)[0] == 0
+    assert run_cli(capsys, "run", f, "--strict")[0] == 1
+
+
+@pytest.mark.parametrize("args,msg", [
+    (["--start", "M99@0"], "no procedure named M99"),
+    (["--input", "3=7@0"], "0 or 1"),
+    (["--ms", "-1"], "must not be negative"),
+    (["--ms", "lots"], "not a whole number"),
+    (["--machine", "/nonexistent/m.toml"], "m.toml"),
+    (["--bogus"], "unrecognized arguments"),
+])
+def test_bad_usage_exits_2_without_a_traceback(tmp_path, capsys, args, msg):
+    f = write(tmp_path / "M05.plc", DELAY)
+    code, out, err = run_cli(capsys, "run", f, *args)
+    assert code == 2
+    assert msg in err and "Traceback" not in err
+
+
+def test_missing_target_exits_2(tmp_path, capsys):
+    code, _, err = run_cli(capsys, "run", tmp_path / "nope.plc")
+    assert code == 2 and "no such file or folder" in err
+
+
+def test_the_installed_command_runs(tmp_path):
+    f = write(tmp_path / "M05.plc", DELAY)
+    r = subprocess.run([sys.executable, "-m", "plcbuilder", "run", str(f), "--json"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["ended_at_ms"] == 10
