@@ -58,6 +58,8 @@ class Machine:
         self._in_mask = (1 << cfg.input_count) - 1
         self._out_mask = (1 << cfg.output_count) - 1
         self._notes: list[tuple[str, str]] = []
+        #: the notes not yet returned by advance() (the same list, read-only for callers)
+        self.pending_notes = self._notes
         self.motion = Motion(cfg, self._notes)
         self.sensors = Sensors(cfg)
         self._input_names = cfg.input_names()
@@ -67,9 +69,14 @@ class Machine:
         self.reset()
 
     # ------------------------------------------------------------ setup
+    #: True while advance() has nothing to do but count the ms (nothing moves,
+    #: nothing is due); every call that could change that clears it.
+    quiet = False
+
     def reset(self) -> None:
         """Power-on state: start positions, outputs off, no overrides, registers
         cleared, t_ms = 0."""
+        self.quiet = False
         self.t_ms = 0
         self._notes.clear()
         self.motion.reset()
@@ -135,6 +142,7 @@ class Machine:
     # ------------------------------------------------------- PLC-facing
     def portset(self, pin: int) -> None:
         """Turn output ``pin`` on (at once)."""
+        self.quiet = False
         if 0 <= pin < self.output_count:
             self._set_outputs(self._outputs | (1 << pin))
         else:
@@ -142,6 +150,7 @@ class Machine:
 
     def portclear(self, pin: int) -> None:
         """Turn output ``pin`` off (at once)."""
+        self.quiet = False
         if 0 <= pin < self.output_count:
             self._set_outputs(self._outputs & ~(1 << pin))
         else:
@@ -165,6 +174,7 @@ class Machine:
         if f is None:
             self._regs[addr] = value
         else:
+            self.quiet = False
             f(addr, value)
 
     def is_plain_register(self, addr: int) -> bool:
@@ -174,17 +184,20 @@ class Machine:
     def g0move(self, flags: int, mask: int, distance: int) -> None:
         """g0moveA(flags, mask, distance): bit 0 absolute, bit 1 machine coordinates,
         bit 7 delayed start; distance in 0.01 mm."""
+        self.quiet = False
         self.motion.g0move(self.t_ms, flags, mask, distance)
 
     def on_message(self, code: int) -> None:
         """A PLC message; the stop messages stop the motion in progress (decelerating)."""
         if code in STOP_MESSAGES:
+            self.quiet = False
             self.motion.stop()
 
     def soft_jog(self, axis_index: int, speed: int) -> None:
         """The software PLC's gvarset(100020 + axis, speed): jog one axis (negative
         speed: negative direction) until it is set to 0. Speed is in jog speed
         units (mm/min while 8632 is 0 or 1000). No watchdog."""
+        self.quiet = False
         self.motion.soft_jog(axis_index, speed)
 
     # ------------------------------------------------------ host-facing
@@ -236,8 +249,12 @@ class Machine:
         Returns the notes of this ms (and of the PLC calls since the last advance)
         as (level, text), level "info", "warning" or "error"."""
         t = self.t_ms = self.t_ms + 1
+        if self.quiet and not self._notes:
+            return []          # nothing moves or is due: the common case, kept cheap
         if not (self.motion.needs_advance or self.sensors.pending or self.sensors.dynamic_adc
                 or self._notes):
+            # idle until a PLC call or the host changes something (they clear _idle)
+            self.quiet = True
             return []
         return self._advance(t)
 

@@ -325,8 +325,12 @@ class PLC:
         tick (software tick, starts due). Samples are kept as raw rows
         ``(t, running, proc, message, machine fields)``; :meth:`take_samples`
         turns them into :class:`Sample` objects."""
-        advance = self.machine.advance
-        fields = self.machine.sample_fields
+        machine = self.machine
+        advance = machine.advance
+        machine_notes = getattr(machine, "pending_notes", None)
+        if machine_notes is None or not hasattr(machine, "quiet"):
+            machine_notes = [None]                 # another machine: always call advance()
+        fields = machine.sample_fields
         events = self.events
         add_sample = self.samples.append
         rec = self.record_samples
@@ -368,10 +372,13 @@ class PLC:
                         send(hw, code)
                     if rec:
                         add_sample((t, name, slots[1], code, fields()))
-                    notes = advance()
-                    if notes:
-                        for level, text in notes:
-                            events.append(Note(t, text, level))
+                    if not machine_notes and machine.quiet:
+                        machine.t_ms += 1          # advance() would do only this
+                    else:
+                        notes = advance()
+                        if notes:
+                            for level, text in notes:
+                                events.append(Note(t, text, level))
                     t += 1
                 if until_idle and hw is None and not self.sw and not self._pending_sw \
                         and not self._due_hw:
