@@ -1,0 +1,58 @@
+"""``plcbuilder gui [PROJECT]``: the IDE.
+
+``--screenshot FILE`` opens the project, builds it, optionally runs a
+procedure (``--run NAME[:EPARAM]`` for ``--after MS`` of simulated time),
+saves a PNG of the main window and exits. Importing this module does not
+load Qt: the IDE is imported when the command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    p = subparsers.add_parser(
+        "gui", help="the IDE (the default command)",
+        description="Open the PLC Builder IDE, with PROJECT when given (else the last "
+                    "project). With --screenshot, save a PNG of the window and exit.")
+    p.add_argument("project", nargs="?", type=Path, metavar="PROJECT",
+                   help="a project folder to open")
+    p.add_argument("--screenshot", type=Path, metavar="FILE",
+                   help="open PROJECT, build it, save a PNG of the main window to FILE, exit")
+    p.add_argument("--run", metavar="NAME[:EPARAM]",
+                   help="with --screenshot: upload the image and start this procedure first")
+    p.add_argument("--after", type=int, default=1000, metavar="MS",
+                   help="with --screenshot: simulated milliseconds to run (with --run), or "
+                        "milliseconds to wait (default 1000)")
+    p.add_argument("--settings", type=Path, metavar="FILE",
+                   help="keep the IDE's settings in this INI file instead of the user's")
+    p.add_argument("--no-controller", action="store_true",
+                   help="do not start the embedded simulated controller")
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    if getattr(args, "run", None) and not getattr(args, "screenshot", None):
+        print("plcbuilder gui: --run needs --screenshot", file=sys.stderr)
+        return 2
+    if getattr(args, "after", 1000) < 0:
+        print("plcbuilder gui: --after must not be negative", file=sys.stderr)
+        return 2
+    project = getattr(args, "project", None)
+    if project is not None and not project.is_dir():
+        print(f"plcbuilder gui: {project}: no such project folder", file=sys.stderr)
+        return 2
+    try:
+        from plcbuilder.ide.app import main
+    except ImportError as exc:
+        print(f"plcbuilder gui: the IDE cannot start: {exc}", file=sys.stderr)
+        return 1
+    settings = getattr(args, "settings", None)
+    return main(str(project) if project else None,
+                screenshot=str(args.screenshot) if getattr(args, "screenshot", None) else None,
+                run=getattr(args, "run", None), after_ms=getattr(args, "after", 1000),
+                settings_path=str(settings) if settings else None,
+                start_controller=not getattr(args, "no_controller", False))

@@ -1,0 +1,602 @@
+"""The IDE's link to a simulated controller, as one QObject with signals.
+
+By default the IDE runs its own controller as a child process
+(:meth:`ControllerConnection.start_embedded`): ``python -m plcbuilder
+controller --port 0`` with a private runtime file, from which the address and
+the token are read. It can also talk to a controller that is already running
+(:meth:`ControllerConnection.connect_to`).
+
+Threads: the GUI never waits for the network. A worker thread owns the
+:class:`~plcbuilder.link.client.Client` (whose own reader thread receives
+telemetry): it spawns and watches the child, connects, runs the requests the
+GUI queued, in order, and polls the state about five times a second. Whatever
+it learns goes into a queue that a GUI-thread timer drains every ~15 ms,
+emitting the signals below (samples and events merged into one emission per
+drain). If the connection breaks or the child dies, ``sig_disconnected``
+says why, and the worker connects again (restarting the child) with backoff;
+after a restart it uploads the last image again.
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import queue
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import weakref
+from pathlib import Path
+from typing import Optional, Sequence
+
+from PySide6 import QtCore
+
+from plcbuilder.link import runtime
+from plcbuilder.link.client import Client, ConnectionLost, LinkError, RefusedError, Telemetry
+
+Signal = QtCore.Signal
+
+__all__ = ["ControllerConnection", "SPEED_CHOICES", "parse_speed"]
+
+#: What :meth:`ControllerConnection.set_speed` understands (any number is N× real time).
+SPEED_CHOICES = ("realtime", "2", "10", "100", "max", "pause")
+STATE_INTERVAL = 0.2          # seconds between state polls
+PUMP_INTERVAL_MS = 15         # GUI-side drain of the worker's queue
+SPAWN_TIMEOUT = 20.0          # seconds a child gets to write its runtime file
+BACKOFF = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
+STABLE_AFTER = 10.0           # a connection up this long resets the backoff
+MAX_SAMPLES_PER_EMIT = 60000  # never hand the GUI more than this many samples at once
+#: Samples the controller keeps for this IDE between two telemetry frames (20 ms):
+#: every tick up to 10x real time (with room for jitter). Faster than that, and
+#: at Max, each frame brings only the newest FAST_TELEMETRY_QUEUE ticks and the
+#: rest are dropped (``missed``): decoding telemetry takes the GIL from the GUI
+#: thread, and at Max the controller would send more than the IDE can decode.
+TELEMETRY_QUEUE = 400
+FAST_TELEMETRY_QUEUE = 100
+FAST_FACTOR = 10.0
+
+
+def _telemetry_queue(speed: Optional[tuple[str, Optional[float]]]) -> int:
+    if speed is None:
+        return TELEMETRY_QUEUE
+    mode, factor = speed
+    if mode == "max" or (mode == "factor" and (factor or 0) > FAST_FACTOR):
+        return FAST_TELEMETRY_QUEUE
+    return TELEMETRY_QUEUE
+
+
+def parse_speed(mode) -> tuple[str, Optional[float]]:
+    """``"realtime"``, ``"max"``, ``"pause"``, or a factor (``"10"``, ``10``, ``"10x"``)
+    -> (protocol mode, factor). Raises ValueError."""
+    if isinstance(mode, (int, float)) and not isinstance(mode, bool):
+        factor = float(mode)
+    else:
+        text = str(mode).strip().lower()
+        if text in ("realtime", "real-time", "real time", "1", "1x", "1×"):
+            return "realtime", None
+        if text in ("max", "maximum", "fast", "pause", "paused"):
+            return ("pause" if text.startswith("paus") else "max"), None
+        try:
+            factor = float(text.rstrip("x×"))
+        except ValueError:
+            raise ValueError(f"unknown speed {mode!r}: use realtime, max, pause or a factor "
+                             "such as 10") from None
+    if factor == 1.0:
+        return "realtime", None
+    if not 0.001 <= factor <= 10000:
+        raise ValueError(f"speed factor {factor:g} is out of range (0.001 to 10000)")
+    return "factor", factor
+
+
+# ====================================================================== child
+
+class _Child:
+    """One embedded controller process and its private runtime folder."""
+
+    def __init__(self, extra_args: Sequence[str] = ()):
+        self.dir = Path(tempfile.mkdtemp(prefix="plcbuilder-ide-"))   # 0700
+        self.runtime_file = self.dir / "controller.json"
+        self.stderr_path = self.dir / "controller.err"
+        env = dict(os.environ)
+        env[runtime.ENV_FILE] = str(self.runtime_file)
+        env.setdefault("PYTHONUNBUFFERED", "1")
+        args = ["controller", "--port", "0", "--runtime-file", str(self.runtime_file),
+                *extra_args]
+        if sys.platform.startswith("linux"):
+            # end with the IDE even when the IDE is killed (PR_SET_PDEATHSIG)
+            code = ("import ctypes, signal, sys\n"
+                    "try:\n ctypes.CDLL(None).prctl(1, signal.SIGTERM)\n"
+                    "except Exception:\n pass\n"
+                    "from plcbuilder.cli.main import main\n"
+                    f"sys.argv[0] = 'plcbuilder'\nraise SystemExit(main({args!r}))\n")
+            cmd = [sys.executable, "-c", code]
+        else:
+            cmd = [sys.executable, "-m", "plcbuilder", *args]
+        self._err = open(self.stderr_path, "wb")
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                     stderr=self._err, env=env, close_fds=True)
+
+    @property
+    def pid(self) -> int:
+        return self.proc.pid
+
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def endpoint(self) -> Optional[runtime.Endpoint]:
+        try:
+            ep = runtime.read(self.runtime_file)
+        except runtime.RuntimeFileError:
+            return None
+        return ep if ep.pid == self.proc.pid else None
+
+    def why_dead(self) -> str:
+        code = self.proc.poll()
+        if code is None:
+            return "the controller process is running"
+        if code < 0:
+            try:
+                name = signal.Signals(-code).name
+            except ValueError:
+                name = f"signal {-code}"
+            text = f"the controller process was killed ({name})"
+        else:
+            text = f"the controller process exited with status {code}"
+        tail = self.stderr_tail()
+        return f"{text}: {tail}" if tail else text
+
+    def stderr_tail(self, lines: int = 3) -> str:
+        try:
+            data = self.stderr_path.read_bytes()[-4000:].decode("utf-8", "replace")
+        except OSError:
+            return ""
+        rows = [r for r in data.strip().splitlines() if r.strip()]
+        return " | ".join(rows[-lines:])
+
+    def stop(self, timeout: float = 3.0) -> None:
+        p = self.proc
+        if p.poll() is None:
+            try:
+                p.terminate()
+                p.wait(timeout)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                try:
+                    p.wait(timeout)
+                except subprocess.TimeoutExpired:
+                    pass
+            except OSError:
+                pass
+        try:
+            self._err.close()
+        except OSError:
+            pass
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+_CHILDREN: "weakref.WeakSet[_Child]" = weakref.WeakSet()
+
+
+def _reap_children() -> None:           # at interpreter exit: no orphans
+    for c in list(_CHILDREN):
+        try:
+            c.stop(1.0)
+        except Exception:  # noqa: BLE001
+            pass
+
+
+atexit.register(_reap_children)
+
+
+# ===================================================================== worker
+
+class _Worker(threading.Thread):
+    """Owns the client (and the child): connects, reconnects, runs requests."""
+
+    def __init__(self, inbox: "queue.SimpleQueue", *, embedded: bool,
+                 address: Optional[tuple[str, int, str]] = None, extra_args: Sequence[str] = ()):
+        super().__init__(name="plcbuilder-ide-link", daemon=True)
+        self.inbox = inbox
+        self.embedded = embedded
+        self.address = address
+        self.extra_args = tuple(extra_args)
+        self.commands: "queue.Queue" = queue.Queue()
+        self.stopping = threading.Event()
+        self.client: Optional[Client] = None
+        self.child: Optional[_Child] = None
+        self.image: Optional[bytes] = None      # re-uploaded after a restart
+        self.speed: Optional[tuple[str, Optional[float]]] = None
+        self.variables_pending = False
+        self.restarts = 0
+
+    # ----------------------------------------------------------------- plumbing
+    def post(self, kind: str, payload=None) -> None:
+        self.inbox.put((kind, payload))
+
+    def run(self) -> None:
+        attempt = 0
+        try:
+            while not self.stopping.is_set():
+                up_since = None
+                try:
+                    self._open()
+                    up_since = time.monotonic()
+                    self._serve()
+                    reason = self._lost_reason()
+                except _Stop:
+                    break
+                except (LinkError, OSError) as exc:
+                    reason = self._lost_reason(str(exc))
+                except Exception as exc:  # noqa: BLE001 - a bug here must not kill the link
+                    reason = f"internal error in the IDE's link: {type(exc).__name__}: {exc}"
+                self._close()
+                if self.stopping.is_set():
+                    break
+                self.restarts += 1
+                self.post("disconnected", reason)
+                self._drop_waiting_commands()
+                if up_since is not None and time.monotonic() - up_since > STABLE_AFTER:
+                    attempt = 0
+                delay = BACKOFF[min(attempt, len(BACKOFF) - 1)]
+                attempt += 1
+                if self.stopping.wait(delay):
+                    break
+        finally:
+            self._close()
+            if self.child is not None:
+                self.child.stop()
+                self.child = None
+            self.post("stopped", None)
+
+    def _drop_waiting_commands(self) -> None:
+        """Requests that were waiting when the link broke: an upload or a speed
+        is kept for the next connection, anything else (a start, an input...)
+        is dropped and reported, rather than done later by surprise."""
+        while True:
+            try:
+                cmd = self.commands.get_nowait()
+            except queue.Empty:
+                return
+            if cmd is None:
+                self.commands.put(None)
+                return
+            verb, args = cmd
+            if verb == "upload":
+                self.image = args[0]
+            elif verb == "speed":
+                self.speed = (args[0], args[1])
+            elif verb == "variables":
+                self.variables_pending = False
+            else:
+                self.post("error", f"{verb}: not done, the connection to the controller "
+                                   "was lost")
+
+    def _lost_reason(self, detail: str = "") -> str:
+        if self.child is not None and not self.child.alive():
+            return self.child.why_dead()
+        c = self.client
+        if c is not None and c.close_reason:
+            return c.close_reason
+        return detail or "the connection to the controller was lost"
+
+    def _open(self) -> None:
+        if self.embedded:
+            if self.child is None or not self.child.alive():
+                if self.child is not None:
+                    self.child.stop()
+                self.child = _Child(self.extra_args)
+                _CHILDREN.add(self.child)
+                self.post("child", self.child.pid)
+            ep = self._wait_endpoint(self.child)
+            host, port, token = ep.host, ep.port, ep.token
+        else:
+            host, port, token = self.address
+        client = Client.connect(host, port, token, timeout=30.0, connect_timeout=5.0)
+        self.client = client
+        client.subscribe(self._on_telemetry, queue=_telemetry_queue(self.speed))
+        if self.image is not None and self.restarts:
+            try:
+                result = client.upload(self.image)
+                self.post("result", ("upload", result))
+                self.post("note", "uploaded the image again after the controller came back")
+            except RefusedError as exc:
+                self.post("error", f"upload: {exc.reason}")
+        if self.speed is not None:
+            mode, factor = self.speed
+            try:
+                client.speed(mode, factor)
+            except RefusedError as exc:
+                self.post("error", f"speed: {exc.reason}")
+        self.post("connected", (f"{host}:{port}", client.welcome))
+
+    def _wait_endpoint(self, child: _Child) -> runtime.Endpoint:
+        deadline = time.monotonic() + SPAWN_TIMEOUT
+        while True:
+            ep = child.endpoint()
+            if ep is not None:
+                return ep
+            if not child.alive():
+                raise LinkError(child.why_dead())
+            if time.monotonic() > deadline:
+                tail = child.stderr_tail()
+                child.stop()                    # hung: the next try starts a fresh one
+                raise LinkError(f"the controller process did not start within "
+                                f"{SPAWN_TIMEOUT:g} s" + (f": {tail}" if tail else ""))
+            if self.stopping.wait(0.02):
+                raise _Stop()
+
+    def _on_telemetry(self, batch: Telemetry) -> None:   # on the client's reader thread
+        self.post("telemetry", batch)
+
+    def _serve(self) -> None:
+        next_state = 0.0
+        client = self.client
+        while not self.stopping.is_set():
+            if client.closed or (self.child is not None and not self.child.alive()):
+                return
+            now = time.monotonic()
+            if now >= next_state:
+                next_state = now + STATE_INTERVAL
+                self.post("state", client.state())
+            try:
+                cmd = self.commands.get(timeout=max(0.0, min(0.05, next_state - now)))
+            except queue.Empty:
+                continue
+            if cmd is None:
+                raise _Stop()
+            self._run_command(client, *cmd)
+
+    def _run_command(self, client: Client, verb: str, args: tuple) -> None:
+        try:
+            if verb == "upload":
+                self.image = args[0]
+                result = client.upload(args[0])
+            elif verb == "start":
+                result = client.start(args[0], int(args[1]))
+            elif verb == "stop":
+                result = client.stop()
+            elif verb == "input":
+                result = client.set_input(int(args[0]), int(args[1]))
+            elif verb == "adc":
+                result = client.set_adc(int(args[0]), int(args[1]))
+            elif verb == "speed":
+                before = _telemetry_queue(self.speed)
+                self.speed = (args[0], args[1])
+                result = client.speed(args[0], args[1])
+                if _telemetry_queue(self.speed) != before:
+                    client.subscribe(self._on_telemetry, queue=_telemetry_queue(self.speed))
+            elif verb == "reset":
+                result = client.reset()
+            elif verb == "event":
+                result = client.event(args[0])
+            elif verb == "variables":
+                self.variables_pending = False
+                self.post("variables", client.variables())
+                return
+            else:
+                result = client.request(verb, **(args[0] if args else {}))
+        except ConnectionLost:
+            raise
+        except RefusedError as exc:
+            self.post("error", f"{verb}: {exc.reason}")
+            self.post("refused", (verb, exc.reason))
+            return
+        self.post("result", (verb, result))
+
+    def _close(self) -> None:
+        c, self.client = self.client, None
+        if c is not None:
+            c.close()
+
+
+class _Stop(Exception):
+    pass
+
+
+# ================================================================= QObject
+
+class ControllerConnection(QtCore.QObject):
+    """The IDE's connection to a controller (embedded child or external)."""
+
+    sig_connected = Signal(str)
+    """Connected (again): the controller's address, ``host:port``."""
+
+    sig_disconnected = Signal(str)
+    """The connection is gone: why (the child's exit status and last stderr line
+    when the embedded controller died). It reconnects on its own."""
+
+    sig_state = Signal(dict)
+    """The controller's state, about 5 times a second: ``t_ms``, ``running``,
+    ``software``, ``proc``, ``proc_name``, ``image``, ``speed``, ``inputs``,
+    ``outputs``, ``axes``... plus ``missed`` (samples this IDE dropped or was not
+    sent because it fell behind, since connecting)."""
+
+    sig_events = Signal(list)
+    """Controller events (:mod:`plcbuilder.controller.events` objects), oldest first."""
+
+    sig_samples = Signal(list)
+    """Telemetry samples (``events.Sample``), oldest first, batched."""
+
+    sig_error = Signal(str)
+    """A request was refused or failed: ``verb: reason``."""
+
+    sig_variables = Signal(object)
+    """The answer to :meth:`request_variables`: ``{procedure: {variable: value}}``,
+    each procedure's variables in slot order (an ``object`` signal: a ``dict``
+    signal would sort the keys)."""
+
+    sig_result = Signal(str, dict)
+    """A request was done: its verb and the controller's result object."""
+
+    sig_note = Signal(str)
+    """Something worth a line in the log that is not an error (an image uploaded
+    again after a restart)."""
+
+    def __init__(self, parent: Optional[QtCore.QObject] = None):
+        super().__init__(parent)
+        self._inbox: "queue.SimpleQueue" = queue.SimpleQueue()
+        self._worker: Optional[_Worker] = None
+        self._pump = QtCore.QTimer(self)
+        self._pump.setInterval(PUMP_INTERVAL_MS)
+        self._pump.timeout.connect(self._drain)
+        self.connected = False
+        self.address = ""
+        self.child_pid: Optional[int] = None
+        self.last_state: dict = {}
+        self.missed = 0
+        self.welcome: dict = {}
+
+    # -------------------------------------------------------------- lifecycle
+    @property
+    def embedded(self) -> bool:
+        return self._worker is not None and self._worker.embedded
+
+    def start_embedded(self, extra_args: Sequence[str] = ()) -> None:
+        """Run a controller as a child process and connect to it (restarting it
+        with backoff whenever it dies). ``extra_args`` go to ``plcbuilder
+        controller`` (say ``["--machine", path]``)."""
+        self._begin(_Worker(self._inbox, embedded=True, extra_args=extra_args))
+
+    def connect_to(self, host: str, port: int, token: str) -> None:
+        """Talk to a controller that is already running (reconnecting with backoff
+        when the connection breaks)."""
+        self._begin(_Worker(self._inbox, embedded=False, address=(host, int(port), token)))
+
+    def shutdown(self, timeout: float = 5.0) -> None:
+        """Disconnect and end the embedded controller (waits for it, at most ``timeout``)."""
+        w, self._worker = self._worker, None
+        if w is not None:
+            w.stopping.set()
+            w.commands.put(None)
+            c = w.client
+            if c is not None:
+                c.close()
+            w.join(timeout)
+            if w.is_alive() and w.child is not None:      # stuck: end the child anyway
+                w.child.stop(1.0)
+        self._drain()
+        self._pump.stop()
+        if self.connected:
+            self.connected = False
+            self.sig_disconnected.emit("disconnected")
+        self.child_pid = None
+
+    def _begin(self, worker: _Worker) -> None:
+        self.shutdown()
+        self._inbox = worker.inbox = queue.SimpleQueue()
+        self._worker = worker
+        self.missed = 0
+        worker.start()
+        self._pump.start()
+
+    # ---------------------------------------------------------------- requests
+    def upload(self, image_bytes: bytes) -> None:
+        """Upload an eeprom.rom image (kept, and uploaded again after a restart)."""
+        self._send("upload", bytes(image_bytes))
+
+    def start(self, name: str, eparam: int = 0) -> None:
+        self._send("start", name, int(eparam))
+
+    def stop(self) -> None:
+        """Press Stop (the first time starts M02, the second OFF)."""
+        self._send("stop")
+
+    def set_input(self, pin: int, v: int) -> None:
+        self._send("input", int(pin), 1 if v else 0)
+
+    def set_adc(self, ch: int, v: int) -> None:
+        self._send("adc", int(ch), int(v))
+
+    def set_speed(self, mode) -> None:
+        """``"realtime"``, ``"max"``, ``"pause"`` or a factor (``"10"``: 10× real time)."""
+        try:
+            m, factor = parse_speed(mode)
+        except ValueError as exc:
+            self.sig_error.emit(f"speed: {exc}")
+            return
+        self._send("speed", m, factor)
+
+    def reset(self) -> None:
+        """A fresh controller with the same image (time starts again at 0)."""
+        self._send("reset")
+
+    def send_event(self, handler: str) -> None:
+        """Start ``__HANDLER_GCODE_START`` or ``__HANDLER_GCODE_STOP``."""
+        self._send("event", handler)
+
+    def request_variables(self) -> None:
+        """Ask for every procedure's variables; the answer comes as sig_variables.
+        A request still waiting is not repeated."""
+        w = self._worker
+        if w is None or not self.connected or w.variables_pending:
+            return
+        w.variables_pending = True
+        self._send("variables")
+
+    def _send(self, verb: str, *args) -> None:
+        w = self._worker
+        if w is None:
+            self.sig_error.emit(f"{verb}: not connected to a controller")
+            return
+        if not self.connected and w.restarts and verb not in ("upload", "speed"):
+            # the controller is coming back: do not start things later by surprise
+            self.sig_error.emit(f"{verb}: not connected to a controller (it is restarting)")
+            return
+        w.commands.put((verb, args))
+
+    # ------------------------------------------------------------------- pump
+    def _drain(self) -> None:
+        samples: list = []
+        events: list = []
+
+        def flush():
+            if samples:
+                self.sig_samples.emit(list(samples[-MAX_SAMPLES_PER_EMIT:]))
+                samples.clear()
+            if events:
+                self.sig_events.emit(list(events))
+                events.clear()
+
+        for _ in range(10000):
+            try:
+                kind, payload = self._inbox.get_nowait()
+            except queue.Empty:
+                break
+            if kind == "telemetry":
+                samples.extend(payload.samples)
+                events.extend(payload.events)
+                self.missed += payload.missed
+                continue
+            flush()                     # keep the order of telemetry and the rest
+            if kind == "state":
+                st = dict(payload)
+                st["missed"] = self.missed
+                self.last_state = st
+                self.sig_state.emit(st)
+            elif kind == "connected":
+                self.address, self.welcome = payload
+                self.connected = True
+                self.sig_connected.emit(self.address)
+            elif kind == "disconnected":
+                was = self.connected
+                self.connected = False
+                if was or payload:
+                    self.sig_disconnected.emit(str(payload))
+            elif kind == "child":
+                self.child_pid = payload
+            elif kind == "error":
+                self.sig_error.emit(str(payload))
+            elif kind == "variables":
+                self.sig_variables.emit(dict(payload))
+            elif kind == "result":
+                verb, result = payload
+                self.sig_result.emit(verb, dict(result) if isinstance(result, dict) else {})
+            elif kind == "note":
+                self.sig_note.emit(str(payload))
+            elif kind == "stopped":
+                pass
+        flush()

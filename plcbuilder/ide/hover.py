@@ -1,0 +1,170 @@
+"""Hover help: what the name or number under the mouse is.
+
+- a register number (``gvarget(6060)``) or name (``GVAR_CURRENT_MOTION_CODE``)
+  says what the register is (from :func:`plcbuilder.bytecode.abi.describe_register`);
+- a number given to ``exit()`` names the exit code, one assigned to
+  ``message`` or ``proc`` names the message or proc state;
+- a define shows its value and where it is defined; built-in names their
+  value and table; built-in functions their signature; predefined variables
+  what they hold; the file's own variables and procedures what they are.
+
+:func:`hover_text` is pure (word + context -> text) so it is tested without
+a widget; the editor supplies the word and the text before it.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Optional
+
+from plcbuilder.bytecode import abi
+from plcbuilder.bytecode.program import Kind
+from plcbuilder.lang.checker import BUILTINS
+from plcbuilder.lang.lexer import KEYWORDS
+from plcbuilder.lang.preprocess import parse_number
+
+PREDEFINED_HELP = {
+    "eparam": "the parameter the procedure was started with (M-code P/eparam)",
+    "proc": "the procedure's state code, shown by myCNC (plc_proc_* / proc_* names)",
+    "timer": "an ordinary variable; the manual's delays count it down by hand, one per tick",
+    "vexit": "a value sent with the exit event (beside the exit code)",
+    "message": "a message to the host: at the end of the tick it is sent with command "
+               "(var00) and parameter (var01), then set back to 0",
+    "command": "the same variable as var00 (sent with a message)",
+    "parameter": "the same variable as var01 (sent with a message)",
+    "Param": "software procedures: the procedure's parameter",
+}
+for _i in range(16):
+    PREDEFINED_HELP.setdefault(f"var{_i:02d}", "initialised from plc-variables.xml before the "
+                                              "procedure starts" + (" (also 'command')" if _i == 0 else
+                                                                    " (also 'parameter')" if _i == 1 else ""))
+_MAPPED_HELP = {
+    "pwm01": "PWM0", "pwm02": "PWM1", "pwm03": "PWM2", "pwm04": "PWM3",
+    "dac01": "DAC0", "dac02": "DAC1", "adc01": "ADC0 (read-only)", "adc02": "ADC1 (read-only)",
+}
+
+_NUMBER_RE = re.compile(r"0[xX][0-9A-Fa-f]+|[0-9]+")
+
+
+def _num(v: int) -> str:
+    return f"{v} (0x{v & 0xFFFFFFFF:x})" if v >= 0 else f"{v}"
+
+
+def register_text(value: int) -> Optional[str]:
+    desc = abi.describe_register(value)
+    if desc is None:
+        return None
+    return f"register {_num(value)}: {desc}"
+
+
+def _context(before: str) -> str:
+    """What the text just before a number makes of it: 'register', 'exit',
+    'message', 'proc', 'pin' or ''."""
+    b = before.rstrip()
+    if re.search(r"\b(gvarget|gvarset)\s*\(\s*$", b):
+        return "register"
+    if re.search(r"\bexit\s*\(\s*$", b):
+        return "exit"
+    if re.search(r"\bmessage\s*=\s*$", b):
+        return "message"
+    if re.search(r"\bproc\s*=\s*$", b):
+        return "proc"
+    if re.search(r"\bport(set|clear|clr|get)\s*\(\s*$", b):
+        return "pin"
+    return ""
+
+
+def value_text(value: int, context: str = "") -> Optional[str]:
+    """Hover text for a number (given what precedes it)."""
+    if context == "exit":
+        name = abi.exit_name(value)
+        desc = abi.EXIT_DESCRIPTIONS.get(value)
+        if name:
+            return f"exit code {value}: {name}" + (f" — {desc}" if desc else "")
+        return f"exit code {value}"
+    if context == "message":
+        name = abi.message_name(value)
+        return f"message {value}: {name}" if name else f"message {value}"
+    if context == "proc":
+        name = abi.proc_name(value)
+        return f"proc state {value}: {name}" if name else f"proc state {value}"
+    if context == "pin":
+        return f"pin {value}"
+    reg = register_text(value)
+    if context == "register":
+        return reg or f"register {_num(value)}: a plain global register (keeps what is written)"
+    if reg and value >= 1000:
+        return reg
+    if value > 9 or value < 0:
+        return _num(value)
+    return None
+
+
+def hover_text(word: str, before: str = "", *, kind: Kind = Kind.HARDWARE, symbols=None,
+               header_defines: Optional[dict] = None, variables: tuple = (),
+               procedures: dict | None = None) -> Optional[str]:
+    """The hover text for word (an identifier or a number); ``before`` is the
+    text of the line before it. ``symbols`` is the last compile's
+    CompileResult.symbols; ``header_defines`` {name: (value, file, line)}."""
+    if not word:
+        return None
+    if _NUMBER_RE.fullmatch(word):
+        value = parse_number(word)
+        if value is None:
+            return None
+        return value_text(value, _context(before))
+    if word in KEYWORDS:
+        return None
+    b = BUILTINS.get(word)
+    if b is not None:
+        ret = "returns a value" if b.returns else "returns nothing"
+        return f"{b.name}({', '.join(b.params)}) — built-in function, {ret}\n{b.doc}"
+    if word in _MAPPED_HELP:
+        addr = abi.MAPPED_VARIABLES[word]
+        return f"{word}: predefined variable, {_MAPPED_HELP[word]} (register {addr})"
+    if word in PREDEFINED_HELP and (word != "Param" or kind is Kind.SOFTWARE):
+        return f"{word}: predefined variable — {PREDEFINED_HELP[word]}"
+    defines = getattr(symbols, "defines", None) or {}
+    if word in defines:
+        value, span = defines[word]
+        where = f"{Path(span.file).name}:{span.line}" if span is not None else ""
+        return _define_text(word, value, where)
+    if header_defines and word in header_defines:
+        value, file, line = header_defines[word]
+        return _define_text(word, value, f"{Path(file).name}:{line}")
+    if word in abi.BUILTIN_NAMES:
+        value = abi.BUILTIN_NAMES[word]
+        kind_name = abi.BUILTIN_KIND.get(word, "built-in name")
+        text = f"{word} = {_num(value)} — built-in {kind_name}"
+        if kind_name == "register":
+            desc = abi.describe_register(value)
+            if desc and desc != word:
+                text += f"\n{desc}"
+        elif kind_name == "exit code" and value in abi.EXIT_DESCRIPTIONS:
+            text += f"\n{abi.EXIT_DESCRIPTIONS[value]}"
+        return text
+    procs = dict(procedures or {})
+    procs.update(getattr(symbols, "procedures", None) or {})
+    if word in procs:
+        span = procs[word]
+        line = f", line {span.line}" if span is not None else ""
+        return f"{word}(): procedure of this file{line}"
+    own = set(variables) | set(getattr(symbols, "variables", None) or [])
+    if word in own:
+        return f"{word}: variable of this file (0 when the procedure starts)"
+    return None
+
+
+def _define_text(name: str, value: str, where: str) -> str:
+    text = f"#define {name} {value}".rstrip()
+    if where:
+        text += f"    ({where})"
+    n = parse_number(value.strip()) if value.strip() else None
+    if n is not None:
+        reg = abi.describe_register(n) if n >= 1000 else None
+        if reg:
+            text += f"\nas a register: {reg}"
+        elif name.startswith(("INPUT_", "OUTPUT_")):
+            text += f"\n{'input' if name.startswith('INPUT_') else 'output'} pin {n}"
+    return text

@@ -1,0 +1,71 @@
+"""The IDE's icons: small SVGs in ``plcbuilder/resources/icons`` (package data),
+loaded once each. An unknown name gives an empty icon, never an error."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from importlib import resources
+
+from PySide6.QtCore import QByteArray, QRectF, QSize, Qt
+from PySide6.QtGui import QIcon, QImage, QPainter, QPixmap
+
+ICON_DIR = ("resources", "icons")
+
+
+def icon_names() -> list[str]:
+    ref = resources.files("plcbuilder").joinpath(*ICON_DIR)
+    try:
+        return sorted(p.name[:-4] for p in ref.iterdir() if p.name.endswith(".svg"))
+    except OSError:
+        return []
+
+
+def icon_path(name: str) -> str:
+    """A file path of an icon, for style sheets ('' when the package is not on disk)."""
+    ref = resources.files("plcbuilder").joinpath(*ICON_DIR, f"{name}.svg")
+    try:
+        return str(ref).replace("\\", "/") if ref.is_file() else ""
+    except (OSError, TypeError):
+        return ""
+
+
+@lru_cache(maxsize=None)
+def svg_data(name: str) -> bytes:
+    ref = resources.files("plcbuilder").joinpath(*ICON_DIR, f"{name}.svg")
+    try:
+        return ref.read_bytes()
+    except (OSError, FileNotFoundError):
+        return b""
+
+
+@lru_cache(maxsize=None)
+def icon(name: str) -> QIcon:
+    """The icon called name (an SVG rendered crisply at every size asked for)."""
+    data = svg_data(name)
+    if not data:
+        return QIcon()
+    ic = QIcon()
+    for size in (16, 20, 24, 32, 48, 64):
+        ic.addPixmap(_render(data, size))
+    return ic
+
+
+def pixmap(name: str, size: int = 16) -> QPixmap:
+    data = svg_data(name)
+    return _render(data, size) if data else QPixmap()
+
+
+def _render(data: bytes, size: int) -> QPixmap:
+    try:
+        from PySide6.QtSvg import QSvgRenderer
+    except ImportError:        # no QtSvg: let the image plugin read the SVG
+        img = QImage.fromData(QByteArray(data), "SVG")
+        return QPixmap.fromImage(img.scaled(QSize(size, size)))
+    renderer = QSvgRenderer(QByteArray(data))
+    img = QImage(size, size, QImage.Format.Format_ARGB32_Premultiplied)
+    img.fill(Qt.GlobalColor.transparent)
+    p = QPainter(img)
+    p.setRenderHint(QPainter.RenderHint.Antialiasing)
+    renderer.render(p, QRectF(0, 0, size, size))
+    p.end()
+    return QPixmap.fromImage(img)

@@ -1,0 +1,213 @@
+"""The inputs panel: a toggle per input pin, a slider per ADC channel.
+
+A toggle shows the input as the controller last reported it; clicking it asks
+the controller to set the pin by hand (which overrides the machine's own wiring
+of that pin from then on). Sliders send their value when they stop moving.
+"""
+
+from __future__ import annotations
+
+import time
+
+from PySide6 import QtCore, QtWidgets
+
+from plcbuilder.ide.panels.model import RunModel
+
+Qt = QtCore.Qt
+Signal = QtCore.Signal
+
+ADC_MAX = 4095
+PENDING_S = 0.6        # a clicked pin shows the asked state this long before a sample wins
+
+_TOGGLE_STYLE = """
+QToolButton { border: 1px solid #b8b8b8; border-radius: 3px; padding: 3px 6px;
+              background: #f4f4f4; color: #202020; text-align: left; }
+QToolButton:hover { border-color: #6a9bd1; }
+QToolButton:checked { background: #3c9d4b; border-color: #2f7d3b; color: #ffffff; }
+QToolButton:disabled { color: #9a9a9a; background: #efefef; }
+"""
+
+
+class InputsPanel(QtWidgets.QWidget):
+    """Toggles for the input pins and sliders for the ADC channels."""
+
+    sig_set_input = Signal(int, int)
+    """A toggle asks for input pin (int) to be set to value (0/1)."""
+
+    sig_set_adc = Signal(int, int)
+    """A slider asks for ADC channel (int) to read value (int)."""
+
+    COLUMNS = 2
+
+    def __init__(self, model: RunModel, pins: int = 64, adc_channels: int = 8, parent=None):
+        super().__init__(parent)
+        self.model = model
+        self.pins = pins
+        self.names: dict[int, str] = {}
+        self.buttons: dict[int, QtWidgets.QToolButton] = {}
+        self._pending: dict[int, tuple[int, float]] = {}
+        self._drawn = -1
+
+        top = QtWidgets.QHBoxLayout()
+        top.setContentsMargins(4, 2, 4, 2)
+        self.show_all = QtWidgets.QCheckBox("Show unnamed pins")
+        self.show_all.setToolTip("Also show the input pins that pins.h does not name")
+        self.show_all.toggled.connect(self._relayout)
+        self.filter = QtWidgets.QLineEdit()
+        self.filter.setPlaceholderText("Filter pins…")
+        self.filter.setClearButtonEnabled(True)
+        self.filter.textChanged.connect(self._relayout)
+        top.addWidget(self.filter, 1)
+        top.addWidget(self.show_all)
+
+        self.grid_host = QtWidgets.QWidget()
+        self.grid = QtWidgets.QGridLayout(self.grid_host)
+        self.grid.setContentsMargins(4, 4, 4, 4)
+        self.grid.setSpacing(3)
+        self.grid_host.setStyleSheet(_TOGGLE_STYLE)
+        for pin in range(pins):
+            b = QtWidgets.QToolButton()
+            b.setCheckable(True)
+            b.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding,
+                            QtWidgets.QSizePolicy.Policy.Fixed)
+            b.clicked.connect(lambda checked, p=pin: self._clicked(p, checked))
+            self.buttons[pin] = b
+        pins_box = QtWidgets.QGroupBox("Input pins")
+        pl = QtWidgets.QVBoxLayout(pins_box)
+        pl.setContentsMargins(2, 2, 2, 2)
+        pl.addLayout(top)
+        pl.addWidget(self.grid_host)
+        pl.addStretch(1)
+
+        adc_box = QtWidgets.QGroupBox("ADC channels")
+        ag = QtWidgets.QGridLayout(adc_box)
+        ag.setContentsMargins(6, 4, 6, 4)
+        ag.setHorizontalSpacing(8)
+        self.sliders: list[QtWidgets.QSlider] = []
+        self.spins: list[QtWidgets.QSpinBox] = []
+        self.readings: list[QtWidgets.QLabel] = []
+        for ch in range(adc_channels):
+            label = QtWidgets.QLabel(f"ADC{ch}" + (f" (adc0{ch + 1})" if ch < 2 else ""))
+            s = QtWidgets.QSlider(Qt.Orientation.Horizontal)
+            s.setRange(0, ADC_MAX)
+            s.setToolTip(f"Set ADC{ch} by hand (sent when you let go)")
+            spin = QtWidgets.QSpinBox()
+            spin.setRange(-(1 << 31), (1 << 31) - 1)
+            spin.setKeyboardTracking(False)
+            spin.setToolTip(f"ADC{ch} value to set (Enter sends it)")
+            reading = QtWidgets.QLabel("–")
+            reading.setMinimumWidth(48)
+            reading.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+            reading.setToolTip(f"What ADC{ch} reads now")
+            s.valueChanged.connect(lambda v, sp=spin: (sp.blockSignals(True), sp.setValue(v),
+                                                       sp.blockSignals(False)))
+            s.sliderReleased.connect(lambda ch=ch, sl=s: self.sig_set_adc.emit(ch, sl.value()))
+            s.actionTriggered.connect(
+                lambda action, ch=ch, sl=s: self._slider_action(ch, sl, action))
+            spin.valueChanged.connect(lambda v, ch=ch: self._spin_changed(ch, v))
+            ag.addWidget(label, ch, 0)
+            ag.addWidget(s, ch, 1)
+            ag.addWidget(spin, ch, 2)
+            ag.addWidget(reading, ch, 3)
+            self.sliders.append(s)
+            self.spins.append(spin)
+            self.readings.append(reading)
+        ag.setColumnStretch(1, 1)
+
+        body = QtWidgets.QWidget()
+        bl = QtWidgets.QVBoxLayout(body)
+        bl.setContentsMargins(2, 2, 2, 2)
+        bl.addWidget(pins_box)
+        bl.addWidget(adc_box)
+        bl.addStretch(1)
+        scroll = QtWidgets.QScrollArea()
+        scroll.setWidgetResizable(True)
+        scroll.setWidget(body)
+        scroll.setFrameShape(QtWidgets.QFrame.Shape.NoFrame)
+        lay = QtWidgets.QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(scroll)
+        self._relayout()
+
+    # ------------------------------------------------------------------ API
+    def set_pin_names(self, inputs: dict[int, str]) -> None:
+        self.names = dict(inputs)
+        self._relayout()
+
+    def shown_pins(self) -> list[int]:
+        text = self.filter.text().strip().lower()
+        pins = [p for p in range(self.pins)
+                if p in self.names or self.show_all.isChecked() or not self.names]
+        if text:
+            pins = [p for p in pins if text in self._label(p).lower()]
+        return pins
+
+    def button(self, pin: int) -> QtWidgets.QToolButton:
+        return self.buttons[pin]
+
+    def set_enabled(self, on: bool) -> None:
+        self.grid_host.setEnabled(on)
+        for w in self.sliders + self.spins:
+            w.setEnabled(on)
+
+    def refresh(self) -> None:
+        """Show the newest sample's input and ADC values."""
+        if self.model.version == self._drawn and not self._pending:
+            return
+        self._drawn = self.model.version
+        s = self.model.last_sample
+        if s is None:
+            return
+        now = time.monotonic()
+        for pin, b in self.buttons.items():
+            w = pin // 32
+            v = (int(s.inputs[w]) >> (pin % 32)) & 1 if w < len(s.inputs) else 0
+            pend = self._pending.get(pin)
+            if pend is not None:
+                if pend[0] == v or now > pend[1]:
+                    del self._pending[pin]
+                else:
+                    v = pend[0]
+            if b.isChecked() != bool(v):
+                b.setChecked(bool(v))
+        for ch, lab in enumerate(self.readings):
+            if ch < len(s.adc):
+                text = str(s.adc[ch])
+                if lab.text() != text:
+                    lab.setText(text)
+
+    # -------------------------------------------------------------- private
+    def _label(self, pin: int) -> str:
+        name = self.names.get(pin)
+        return f"{pin:>2}  {name}" if name else f"{pin:>2}  input {pin}"
+
+    def _relayout(self, *args) -> None:
+        while self.grid.count():
+            item = self.grid.takeAt(0)
+            w = item.widget()
+            if w is not None:
+                w.hide()
+        for i, pin in enumerate(self.shown_pins()):
+            b = self.buttons[pin]
+            b.setText(self._label(pin))
+            b.setToolTip(f"Input {pin}" + (f" ({self.names[pin]})" if pin in self.names else "")
+                         + ": click to set it by hand (overrides the machine's wiring)")
+            self.grid.addWidget(b, i // self.COLUMNS, i % self.COLUMNS)
+            b.show()
+
+    def _clicked(self, pin: int, checked: bool) -> None:
+        value = 1 if checked else 0
+        self._pending[pin] = (value, time.monotonic() + PENDING_S)
+        self.sig_set_input.emit(pin, value)
+
+    def _slider_action(self, ch: int, slider: QtWidgets.QSlider, action: int) -> None:
+        # keyboard / page clicks (not drags) send at once; drags send on release
+        if not slider.isSliderDown():
+            QtCore.QTimer.singleShot(0, lambda: self.sig_set_adc.emit(ch, slider.value()))
+
+    def _spin_changed(self, ch: int, value: int) -> None:
+        s = self.sliders[ch]
+        s.blockSignals(True)
+        s.setValue(max(0, min(ADC_MAX, value)))
+        s.blockSignals(False)
+        self.sig_set_adc.emit(ch, value)

@@ -1,0 +1,276 @@
+"""RunPanels: the docks that show a running controller, and their one redraw timer.
+
+Data path: ``connection.sig_samples`` -> :class:`RunModel` (numpy ring buffers,
+no widgets) -> one QTimer (40 Hz) -> ``refresh()`` of the visible panels only,
+which hand pyqtgraph views of the buffers cut to the visible time window.
+"""
+
+from __future__ import annotations
+
+import re
+from importlib import resources
+from typing import Mapping, Optional
+
+from PySide6 import QtCore, QtWidgets
+
+from plcbuilder.bytecode import abi
+from plcbuilder.controller import events as ev
+from plcbuilder.ide.panels.inputs import InputsPanel
+from plcbuilder.ide.panels.log import LogPanel
+from plcbuilder.ide.panels.model import RunModel
+from plcbuilder.ide.panels.plots import AnalogPanel, AxesPanel, LanesPanel, ProcPanel, TimeBase
+from plcbuilder.ide.panels.watch import WatchPanel
+
+Qt = QtCore.Qt
+Signal = QtCore.Signal
+
+__all__ = ["RunPanels", "pin_names_from_defines", "default_pin_names"]
+
+FPS = 40                       # redraws a second (at most)
+VARIABLES_INTERVAL_MS = 250    # watch polls while something runs
+
+
+def _int_value(text) -> Optional[int]:
+    if isinstance(text, int) and not isinstance(text, bool):
+        return text
+    if isinstance(text, (tuple, list)) and text:
+        text = text[0]
+    if not isinstance(text, str):
+        return None
+    t = text.split("//")[0].split("/*")[0].strip().strip("()").strip()
+    try:
+        return int(t, 0)
+    except ValueError:
+        return None
+
+
+def pin_names_from_defines(defines: Mapping) -> tuple[dict[int, str], dict[int, str]]:
+    """Pin names from a project's defines: ``INPUT_*`` name inputs, ``OUTPUT_*``
+    name outputs. ``defines`` maps a name to its value text, to ``(value_text,
+    span)`` (as ``CompileResult.symbols.defines``) or to an int. When several
+    names give one pin, they are joined with " / "."""
+    inputs: dict[int, str] = {}
+    outputs: dict[int, str] = {}
+    for name, value in defines.items():
+        if name.startswith("INPUT_"):
+            target = inputs
+        elif name.startswith("OUTPUT_"):
+            target = outputs
+        else:
+            continue
+        pin = _int_value(value)
+        if pin is None or not 0 <= pin < 256:
+            continue
+        target[pin] = f"{target[pin]} / {name}" if pin in target else name
+    return inputs, outputs
+
+
+_DEFINE = re.compile(r"^\s*#\s*define\s+([A-Za-z_]\w*)\s+([^\s/]+)", re.M)
+
+
+def pin_names_from_header(text: str) -> tuple[dict[int, str], dict[int, str]]:
+    """Pin names from the text of a pins.h (object-like #defines only)."""
+    return pin_names_from_defines({m.group(1): m.group(2) for m in _DEFINE.finditer(text)})
+
+
+def default_pin_names() -> tuple[dict[int, str], dict[int, str]]:
+    """The names of the built-in pins.h (the default machine's wiring)."""
+    try:
+        text = resources.files("plcbuilder.resources").joinpath("include/pins.h").read_text(
+            encoding="utf-8")
+    except (OSError, ModuleNotFoundError, FileNotFoundError):
+        return {}, {}
+    return pin_names_from_header(text)
+
+
+class RunPanels(QtCore.QObject):
+    """The run docks: proc, outputs, analog, axes, inputs, watch, log."""
+
+    sig_open_location = Signal(str, int)
+    """A fault was clicked in the log: its source file and line (1-based). The
+    file is the one the compiler recorded, or ``NAME.plc`` of the procedure."""
+
+    DOCKS = (("proc", "Proc / messages", "runProcDock"),
+             ("outputs", "Outputs", "runOutputsDock"),
+             ("analog", "PWM / DAC / ADC", "runAnalogDock"),
+             ("axes", "Axes", "runAxesDock"),
+             ("inputs", "Inputs", "runInputsDock"),
+             ("watch", "Watch", "runWatchDock"),
+             ("log", "Run log", "runLogDock"))
+
+    def __init__(self, main_window: Optional[QtWidgets.QWidget], connection,
+                 capacity: int = 30000, fps: int = FPS):
+        super().__init__(main_window)
+        self.connection = connection
+        self.model = RunModel(capacity)
+        self.timebase = TimeBase(parent=self)
+        clear = self.clear
+        self.proc = ProcPanel(self.model, self.timebase, clear)
+        self.lanes = LanesPanel(self.model, self.timebase, clear)
+        self.analog = AnalogPanel(self.model, self.timebase, clear)
+        self.axes = AxesPanel(self.model, self.timebase, clear)
+        self.inputs = InputsPanel(self.model)
+        self.watch = WatchPanel()
+        self.log = LogPanel()
+        self.time_panels = (self.proc, self.lanes, self.analog, self.axes)
+        widgets = {"proc": self.proc, "outputs": self.lanes, "analog": self.analog,
+                   "axes": self.axes, "inputs": self.inputs, "watch": self.watch,
+                   "log": self.log}
+        self._docks: dict[str, QtWidgets.QDockWidget] = {}
+        for key, title, object_name in self.DOCKS:
+            dock = QtWidgets.QDockWidget(title, main_window)
+            dock.setObjectName(object_name)
+            dock.setWidget(widgets[key])
+            dock.setAllowedAreas(Qt.DockWidgetArea.AllDockWidgetAreas)
+            self._docks[key] = dock
+        self._state: dict = {}
+        self._missed = 0
+        self._running: Optional[str] = None
+        self._final_poll = 0          # polls still due after something ended
+        self.inputs.set_enabled(False)
+
+        self.log.sig_open_location.connect(self.sig_open_location)
+        self.inputs.sig_set_input.connect(lambda pin, v: self.connection.set_input(pin, v))
+        self.inputs.sig_set_adc.connect(lambda ch, v: self.connection.set_adc(ch, v))
+        c = connection
+        c.sig_samples.connect(self._on_samples)
+        c.sig_events.connect(self._on_events)
+        c.sig_state.connect(self._on_state)
+        c.sig_connected.connect(self._on_connected)
+        c.sig_disconnected.connect(self._on_disconnected)
+        c.sig_error.connect(lambda text: self.log.add_note(text, "error"))
+        if hasattr(c, "sig_note"):
+            c.sig_note.connect(lambda text: self.log.add_note(text, "link"))
+        if hasattr(c, "sig_variables"):
+            c.sig_variables.connect(self._on_variables)
+        if getattr(c, "connected", False):
+            self._on_connected(getattr(c, "address", ""))
+
+        self.set_pin_names(*default_pin_names())
+        self.timer = QtCore.QTimer(self)
+        self.timer.setTimerType(Qt.TimerType.PreciseTimer)
+        self.timer.setInterval(max(1, 1000 // max(1, fps)))
+        self.timer.timeout.connect(self.tick)
+        self.timer.start()
+        self.var_timer = QtCore.QTimer(self)
+        self.var_timer.setInterval(VARIABLES_INTERVAL_MS)
+        self.var_timer.timeout.connect(self._poll_variables)
+        self.var_timer.start()
+
+    # ------------------------------------------------------------------- API
+    def docks(self) -> list[QtWidgets.QDockWidget]:
+        """The docks, for the main window to place (each has an objectName)."""
+        return list(self._docks.values())
+
+    def dock(self, key: str) -> QtWidgets.QDockWidget:
+        """One dock by key: proc, outputs, analog, axes, inputs, watch, log."""
+        return self._docks[key]
+
+    def set_pin_names(self, inputs: Mapping[int, str], outputs: Mapping[int, str]) -> None:
+        """Names for the lanes and toggles (from the project's pins.h)."""
+        inputs, outputs = dict(inputs), dict(outputs)
+        self.lanes.set_pin_names(inputs, outputs)
+        self.inputs.set_pin_names(inputs)
+
+    def clear(self) -> None:
+        """Forget the recorded samples and messages (the log keeps its rows)."""
+        self.model.clear()
+        self._cleared()
+
+    def tick(self) -> None:
+        """One redraw: flush queued rows, refresh the visible panels."""
+        for panel in self.time_panels:
+            if self._shown(panel):
+                panel.refresh()
+        self.proc.flush()
+        self.log.flush()
+        if self._shown(self.inputs):
+            self.inputs.refresh()
+
+    def shutdown(self) -> None:
+        self.timer.stop()
+        self.var_timer.stop()
+
+    # --------------------------------------------------------------- private
+    @staticmethod
+    def _shown(w: QtWidgets.QWidget) -> bool:
+        return w.isVisible()
+
+    def _cleared(self) -> None:
+        for p in self.time_panels:
+            p._epoch = self.model.epoch
+            p.model_cleared()
+            p._view_dirty = True
+
+    def _on_samples(self, samples: list) -> None:
+        epoch = self.model.epoch
+        self.model.add_samples(samples)
+        if self.model.epoch != epoch:
+            self._cleared()
+
+    def _on_events(self, events: list) -> None:
+        rows = self.model.add_events(events)
+        if rows:
+            self.proc.add_messages(rows)
+        self.log.add_events(events)
+        if any(isinstance(e, (ev.Ended, ev.Fault)) for e in events):
+            self._final_poll = 2
+            self._poll_variables()
+
+    def _on_state(self, st: dict) -> None:
+        self._state = st
+        self._running = st.get("running")
+        t = st.get("t_ms")
+        parts = []
+        if self._running:
+            parts.append(f"<b>Running {self._running}</b>")
+        else:
+            parts.append("Idle")
+        soft = st.get("software") or []
+        if soft:
+            parts.append("software: " + ", ".join(map(str, soft[:4]))
+                         + (" …" if len(soft) > 4 else ""))
+        proc = st.get("proc")
+        if proc is not None:
+            name = st.get("proc_name") or abi.proc_name(proc)
+            parts.append(f"proc {name} ({proc})" if name else f"proc {proc}")
+        if t is not None:
+            parts.append(f"t = {t / 1000:.3f} s")
+        speed = st.get("speed")
+        fast = False
+        if isinstance(speed, dict) and speed.get("mode"):
+            mode = speed["mode"]
+            fast = mode == "max" or (mode == "factor" and (speed.get("factor") or 0) > 10)
+            if mode == "factor":
+                mode = f"{speed.get('factor', 0):g}×"
+            parts.append(mode)
+        missed = int(st.get("missed") or 0)
+        if fast:
+            parts.append("plots thinned")
+        elif missed > self._missed:
+            parts.append(f"<span style='color:#b35c00'>telemetry behind: "
+                         f"{missed - self._missed} samples dropped</span>")
+        self._missed = missed
+        self.proc.set_status("  ·  ".join(parts))
+
+    def _on_connected(self, address: str) -> None:
+        self.inputs.set_enabled(True)
+        self.log.add_note(f"connected to the controller at {address}", "link")
+
+    def _on_disconnected(self, reason: str) -> None:
+        self.inputs.set_enabled(False)
+        self.proc.set_status(f"<span style='color:#c62828'>Disconnected</span>: {reason}")
+        self.log.add_note(f"controller disconnected: {reason}", "error")
+
+    def _poll_variables(self) -> None:
+        if not getattr(self.connection, "connected", False):
+            return
+        busy = bool(self._running) or bool(self._state.get("software"))
+        if busy or self._final_poll > 0:
+            if not busy:
+                self._final_poll -= 1
+            if hasattr(self.connection, "request_variables"):
+                self.connection.request_variables()
+
+    def _on_variables(self, variables: dict) -> None:
+        self.watch.set_variables(variables, self._running)

@@ -1,0 +1,159 @@
+"""Screenshot mode: ``plcbuilder gui PROJECT --screenshot FILE [--run NAME[:EPARAM]] [--after MS]``.
+
+Opens the project, builds it, and — with ``--run`` — uploads the image to the
+embedded controller, starts the procedure and lets exactly ``--after``
+milliseconds of simulated time pass (the controller is paused and stepped,
+so the picture is the same every time); then saves a PNG of the main window
+and exits. Without ``--run`` it waits ``--after`` ms of wall-clock time for the
+window to settle.
+
+The window uses settings of its own (a temporary file), so a screenshot
+neither uses nor changes the user's layout.
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Callable, Optional
+
+from PySide6.QtCore import QEventLoop, QTimer
+
+WINDOW_SIZE = (1500, 940)
+
+
+def parse_run(spec: Optional[str]) -> Optional[tuple[str, int]]:
+    """``NAME`` or ``NAME:EPARAM`` -> (name, eparam); raises ValueError."""
+    if not spec:
+        return None
+    name, _, eparam = spec.partition(":")
+    name = name.strip()
+    if not name:
+        raise ValueError(f"--run needs a procedure name, got {spec!r}")
+    try:
+        value = int(eparam, 0) if eparam.strip() else 0
+    except ValueError:
+        raise ValueError(f"--run {spec!r}: the eparam must be a whole number") from None
+    return name, value
+
+
+def wait_until(app, cond: Callable[[], bool], timeout_s: float) -> bool:
+    """Run the event loop until cond() holds (True) or the time is up (False)."""
+    deadline = time.monotonic() + timeout_s
+    while not cond():
+        if time.monotonic() > deadline:
+            return False
+        app.processEvents(QEventLoop.ProcessEventsFlag.AllEvents, 30)
+        time.sleep(0.005)
+    return True
+
+
+def settle(app, ms: int) -> None:
+    loop = QEventLoop()
+    QTimer.singleShot(max(0, int(ms)), loop.quit)
+    loop.exec()
+
+
+def _say(text: str) -> None:
+    print(f"plcbuilder gui: {text}", file=sys.stderr)
+
+
+def run(app, settings, project: Optional[str], out: str, run_spec: Optional[str],
+        after_ms: int, start_controller: bool = True) -> int:
+    from plcbuilder.ide.main_window import MainWindow
+    from plcbuilder.ide.settings import Settings
+    try:
+        run_target = parse_run(run_spec)
+    except ValueError as exc:
+        _say(str(exc))
+        return 2
+    if not settings.explicit:
+        tmp = tempfile.mkdtemp(prefix="plcbuilder-shot-")
+        settings = Settings(str(Path(tmp) / "settings.ini"))
+    win = MainWindow(settings, start_controller=start_controller)
+    win.resize(*WINDOW_SIZE)
+    win.show()
+    try:
+        if project and not win.open_project(project, offer_recovery=False):
+            _say(f"cannot open the project {project}")
+            return 1
+        proj = win.project
+        if proj is not None:
+            shown = None
+            if run_target is not None:
+                p = proj.procedure(run_target[0])
+                shown = p.path if p is not None else None
+            if shown is None:
+                procs = proj.procedures()
+                shown = procs[0].path if procs else None
+            if shown is not None and win.editor_for(shown) is None:
+                win.open_file(shown)
+            elif shown is not None:
+                win.open_file(shown)
+            done: list = []
+            win.sig_build_finished.connect(done.append)
+            if win.build_all():
+                wait_until(app, lambda: bool(done), 60)
+        if run_target is not None:
+            if not _run_procedure(app, win, run_target, after_ms):
+                return 1
+        else:
+            settle(app, after_ms)
+        wait_until(app, lambda: not win.busy(), 5)
+        settle(app, 250)                    # let the plots redraw (40 Hz)
+        image = win.grab()
+        if not image.save(str(out)):
+            _say(f"cannot write {out}")
+            return 1
+        print(f"wrote {out} ({image.width()}x{image.height()})")
+        return 0
+    finally:
+        win.shutdown()
+        win._closing = True
+        win.hide()
+        win.deleteLater()
+
+
+def _run_procedure(app, win, target: tuple[str, int], after_ms: int) -> bool:
+    c = win.connection
+    if c is None:
+        _say("--run needs the controller (the run side of the IDE is not available)")
+        return False
+    if not wait_until(app, lambda: bool(getattr(c, "connected", False)), 30):
+        _say("the controller did not start")
+        return False
+    if win.project is None or not win.project.image_path.exists():
+        _say("there is no image to upload (does the project build?)")
+        return False
+    results: list = []
+    if hasattr(c, "sig_result"):
+        c.sig_result.connect(lambda verb, res: results.append(verb))
+    c.set_speed("pause")
+    win.set_speed("pause")
+    c.upload(win.project.image_path.read_bytes())
+    name, eparam = target
+    win.start_procedure(name, eparam)
+    t0 = None
+
+    def state_t():
+        st = getattr(c, "last_state", None) or win._last_state
+        return st.get("t_ms") if isinstance(st, dict) else None
+
+    wait_until(app, lambda: "start" in results or not hasattr(c, "sig_result"), 10)
+    t0 = state_t() or 0
+    stepper = getattr(c, "step", None)
+    if stepper is not None:
+        stepper(int(after_ms))
+    elif hasattr(c, "_send"):
+        c._send("step", {"ms": int(after_ms)})
+    else:                                   # no stepping: let it run in real time
+        c.set_speed("realtime")
+        settle(app, after_ms)
+        c.set_speed("pause")
+    wait_until(app, lambda: "step" in results or not hasattr(c, "sig_result"), 60)
+    ok = wait_until(app, lambda: (state_t() or 0) >= t0 + after_ms, 10)
+    if not ok:
+        _say(f"the simulation did not reach t = {t0 + after_ms} ms")
+    return True

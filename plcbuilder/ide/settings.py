@@ -1,0 +1,164 @@
+"""What the IDE remembers between sessions (QSettings): recent projects, the
+window's geometry and dock layout, open files, and the preferences.
+
+Tests (and ``PLCBUILDER_SETTINGS=FILE``) use an INI file of their own, so a
+test run never touches the user's settings.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
+from typing import Optional
+
+from PySide6.QtCore import QByteArray, QSettings, QStandardPaths
+
+from plcbuilder.ide.editor import EditorPrefs
+
+ORGANIZATION = "PLC Builder"
+APPLICATION = "PLC Builder"
+SETTINGS_ENV = "PLCBUILDER_SETTINGS"
+RECOVERY_ENV = "PLCBUILDER_RECOVERY_DIR"
+MAX_RECENT = 10
+
+
+@dataclass(frozen=True)
+class Preferences:
+    """Everything the Preferences dialog edits."""
+    font_family: str = ""
+    font_size: int = 11
+    tab_width: int = 4
+    theme: str = "light"
+    show_whitespace: bool = False
+    indent_guides: bool = True
+    autocomplete: bool = True
+    autocomplete_threshold: int = 2
+    hover: bool = True
+    autosave_seconds: int = 5           # recovery autosave interval
+    save_before_build: bool = True
+    reload_unmodified: bool = True      # reload files changed on disk when not edited
+    build_before_upload: bool = True
+    open_last_project: bool = True
+
+    def editor_prefs(self) -> EditorPrefs:
+        names = {f.name for f in fields(EditorPrefs)}
+        return EditorPrefs(**{k: v for k, v in asdict(self).items() if k in names})
+
+    def with_changes(self, **changes) -> "Preferences":
+        return replace(self, **changes)
+
+
+class Settings:
+    """A thin, typed layer over QSettings."""
+
+    def __init__(self, path: Optional[str] = None):
+        path = path or os.environ.get(SETTINGS_ENV)
+        self.explicit = bool(path)
+        if path:
+            self.qs = QSettings(str(path), QSettings.Format.IniFormat)
+        else:
+            self.qs = QSettings(QSettings.Format.IniFormat, QSettings.Scope.UserScope,
+                                ORGANIZATION, APPLICATION)
+        self.path = self.qs.fileName()
+
+    # ------------------------------------------------------------ recent
+    def recent_projects(self) -> list[str]:
+        value = self.qs.value("recent/projects", [])
+        if isinstance(value, str):
+            value = [value] if value else []
+        return [str(v) for v in (value or []) if v]
+
+    def add_recent_project(self, path) -> list[str]:
+        path = str(Path(path).resolve())
+        items = [p for p in self.recent_projects() if p != path]
+        items.insert(0, path)
+        del items[MAX_RECENT:]
+        self.qs.setValue("recent/projects", items)
+        return items
+
+    def remove_recent_project(self, path) -> None:
+        items = [p for p in self.recent_projects() if p != str(path)]
+        self.qs.setValue("recent/projects", items)
+
+    def clear_recent_projects(self) -> None:
+        self.qs.setValue("recent/projects", [])
+
+    # ------------------------------------------------------------ window
+    def window_state(self) -> tuple[Optional[QByteArray], Optional[QByteArray]]:
+        geom = self.qs.value("window/geometry")
+        state = self.qs.value("window/state")
+        return (geom if isinstance(geom, QByteArray) else None,
+                state if isinstance(state, QByteArray) else None)
+
+    def save_window_state(self, geometry: QByteArray, state: QByteArray) -> None:
+        self.qs.setValue("window/geometry", geometry)
+        self.qs.setValue("window/state", state)
+
+    def open_files(self, project) -> list[str]:
+        value = self.qs.value(f"session/{_key(project)}/files", [])
+        if isinstance(value, str):
+            value = [value] if value else []
+        return [str(v) for v in (value or [])]
+
+    def current_file(self, project) -> str:
+        return str(self.qs.value(f"session/{_key(project)}/current", "") or "")
+
+    def save_session(self, project, files: list[str], current: str) -> None:
+        self.qs.setValue(f"session/{_key(project)}/files", list(files))
+        self.qs.setValue(f"session/{_key(project)}/current", current or "")
+
+    # ------------------------------------------------------- preferences
+    def preferences(self) -> Preferences:
+        d = Preferences()
+        values = {}
+        for f in fields(Preferences):
+            raw = self.qs.value(f"preferences/{f.name}", None)
+            if raw is None:
+                continue
+            default = getattr(d, f.name)
+            try:
+                if isinstance(default, bool):
+                    values[f.name] = raw if isinstance(raw, bool) else str(raw).lower() in ("1", "true", "yes")
+                elif isinstance(default, int):
+                    values[f.name] = int(raw)
+                else:
+                    values[f.name] = str(raw)
+            except (TypeError, ValueError):
+                continue
+        return replace(d, **values)
+
+    def save_preferences(self, prefs: Preferences) -> None:
+        for k, v in asdict(prefs).items():
+            self.qs.setValue(f"preferences/{k}", v)
+
+    # ---------------------------------------------------------- recovery
+    def recovery_dir(self) -> Path:
+        env = os.environ.get(RECOVERY_ENV)
+        if env:
+            return Path(env)
+        custom = self.qs.value("recovery/dir", "")
+        if custom:
+            return Path(str(custom))
+        if self.explicit:                   # a settings file of its own: recovery beside it
+            return Path(self.path).parent / "recovery"
+        base = QStandardPaths.writableLocation(QStandardPaths.StandardLocation.AppLocalDataLocation)
+        return Path(base or Path.home() / ".plcbuilder") / "recovery"
+
+    def set_recovery_dir(self, path) -> None:
+        self.qs.setValue("recovery/dir", str(path))
+
+    def example_dir(self) -> Path:
+        """Where "Open Example Project" creates its project when the user does not pick."""
+        if self.explicit:
+            return Path(self.path).parent / "examples"
+        base = QStandardPaths.writableLocation(QStandardPaths.StandardLocation.AppLocalDataLocation)
+        return Path(base or Path.home() / ".plcbuilder") / "examples"
+
+    def sync(self) -> None:
+        self.qs.sync()
+
+
+def _key(project) -> str:
+    return str(Path(str(project)).resolve()).replace("/", "|").replace("\\", "|")
+

@@ -1,0 +1,90 @@
+"""Diagnostics while typing: debounced, on a worker thread, stale results dropped."""
+
+import time
+
+import pytest
+
+from plcbuilder import api
+from plcbuilder.ide.diagnostics_worker import DiagnosticsWorker
+
+
+@pytest.fixture
+def worker(qtbot):
+    w = DiagnosticsWorker(debounce_ms=40)
+    yield w
+    w.shutdown()
+
+
+def test_debounce_compiles_only_the_last_text(worker, qtbot):
+    results = []
+    worker.sig_result.connect(lambda key, r: results.append((key, r)))
+    texts = ["main() { a = ; }", "main() { a = 1 }", "main() { a = 1; exit(99); }"]
+    for t in texts:
+        worker.schedule("k", lambda t=t: ("/x/M01.plc", t, api.CompileOptions()))
+    qtbot.waitUntil(lambda: len(results) == 1, timeout=5000)
+    qtbot.wait(150)
+    assert len(results) == 1
+    key, r = results[0]
+    assert key == "k" and r.ok and r.size is not None
+
+
+def test_result_within_300_ms_of_the_last_keystroke(qtbot):
+    w = DiagnosticsWorker()          # the real debounce
+    try:
+        got = []
+        w.sig_result.connect(lambda k, r: got.append(time.perf_counter()))
+        t0 = time.perf_counter()
+        w.schedule("k", lambda: ("<f>", "main() { a = ; }", api.CompileOptions()))
+        qtbot.waitUntil(lambda: bool(got), timeout=3000)
+        assert got[0] - t0 < 1.0           # generous on a loaded machine; the bench measures it
+    finally:
+        w.shutdown()
+
+
+def test_stale_results_are_dropped(worker, qtbot):
+    results = []
+    worker.sig_result.connect(lambda key, r: results.append(r))
+    worker.submit("k", "<a>", "main() { a = ; }", api.CompileOptions())
+    gen = worker.submit("k", "<a>", "main() { exit(99); }", api.CompileOptions())
+    assert worker.generation("k") == gen
+    qtbot.waitUntil(lambda: not worker.pending(), timeout=5000)
+    qtbot.wait(50)
+    assert results and all(r.ok for r in results)     # the first text's error never shows
+
+
+def test_a_schedule_after_submit_makes_the_submitted_result_stale(worker, qtbot):
+    results = []
+    worker.sig_result.connect(lambda key, r: results.append(r))
+    worker.submit("k", "<a>", "main() { a = ; }", api.CompileOptions())
+    worker.schedule("k", lambda: ("<a>", "main() { exit(99); }", api.CompileOptions()))
+    qtbot.waitUntil(lambda: bool(results), timeout=5000)
+    qtbot.waitUntil(lambda: not worker.pending(), timeout=5000)
+    assert [r.ok for r in results] == [True]
+
+
+def test_cancel_forgets_a_file(worker, qtbot):
+    results = []
+    worker.sig_result.connect(lambda key, r: results.append(r))
+    worker.schedule("k", lambda: ("<a>", "main() {}", api.CompileOptions()))
+    worker.cancel("k")
+    qtbot.wait(150)
+    assert results == []
+    assert not worker.pending()
+
+
+def test_compile_from_disk_and_internal_errors(worker, qtbot, tmp_path, monkeypatch):
+    f = tmp_path / "M05.plc"
+    f.write_text("main() { exit(99); }\n")
+    results = []
+    worker.sig_result.connect(lambda key, r: results.append(r))
+    worker.submit("d", str(f), None, api.CompileOptions())
+    qtbot.waitUntil(lambda: bool(results), timeout=5000)
+    assert results[0].ok and results[0].name == "M05"
+
+    def boom(*a, **k):
+        raise RuntimeError("kaput")
+    monkeypatch.setattr(api, "compile_source", boom)
+    worker.submit("e", "/x/M06.plc", "main() {}", api.CompileOptions())
+    qtbot.waitUntil(lambda: len(results) == 2, timeout=5000)
+    d, = results[1].diagnostics
+    assert d.code == "internal" and "kaput" in d.message

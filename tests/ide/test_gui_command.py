@@ -1,0 +1,78 @@
+"""``plcbuilder gui``: the command line, and screenshot mode (in-process
+without a controller; once in a child process with the real embedded
+controller running a procedure)."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from PySide6.QtGui import QImage
+
+from plcbuilder.cli import cmd_gui
+from plcbuilder.cli.main import build_parser
+from plcbuilder.ide.screenshot import parse_run
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def make_project(root: Path) -> Path:
+    (root / "hardware").mkdir(parents=True)
+    (root / "hardware" / "M03.plc").write_text(
+        "// M03: spindle on\n#include pins.h\nmain()\n{\n  pwm01 = eparam;\n"
+        "  portset(OUTPUT_SPINDLE);\n  exit(99);\n};\n")
+    (root / "hardware" / "M05.plc").write_text(
+        "#include pins.h\nmain() { portclear(OUTPUT_SPINDLE); exit(99); };\n")
+    return root
+
+
+def test_parser_and_bad_usage(tmp_path, capsys):
+    args = build_parser().parse_args(["gui", str(tmp_path), "--screenshot", "x.png", "--run",
+                                      "M03:5", "--after", "250"])
+    assert args.project == tmp_path and args.run == "M03:5" and args.after == 250
+    assert cmd_gui.run(build_parser().parse_args(["gui", "--run", "M03"])) == 2
+    assert cmd_gui.run(build_parser().parse_args(["gui", str(tmp_path / "nope")])) == 2
+    assert "no such project" in capsys.readouterr().err
+
+
+def test_parse_run():
+    assert parse_run("M03") == ("M03", 0)
+    assert parse_run("M03:0x10") == ("M03", 16)
+    assert parse_run(None) is None
+    with pytest.raises(ValueError):
+        parse_run(":5")
+    with pytest.raises(ValueError):
+        parse_run("M03:x")
+
+
+def test_importing_the_cli_does_not_load_qt():
+    code = ("import sys, plcbuilder.cli.main as m; m.build_parser(); "
+            "print('PySide6' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert out.stdout.strip() == "False", out.stderr
+
+
+def test_screenshot_without_a_controller(qtbot, tmp_path):
+    from plcbuilder.ide.app import main
+    project = make_project(tmp_path / "proj")
+    out = tmp_path / "shot.png"
+    rc = main(str(project), screenshot=str(out), after_ms=50, start_controller=False,
+              settings_path=str(tmp_path / "s.ini"))
+    assert rc == 0
+    img = QImage(str(out))
+    assert img.width() >= 1000 and img.height() >= 600
+    assert (project / "build" / "eeprom.rom").is_file()
+
+
+def test_screenshot_running_a_procedure_on_the_embedded_controller(tmp_path):
+    project = make_project(tmp_path / "proj")
+    out = tmp_path / "run.png"
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
+    proc = subprocess.run(
+        [sys.executable, "-m", "plcbuilder", "gui", str(project), "--screenshot", str(out),
+         "--run", "M03:1000", "--after", "300", "--settings", str(tmp_path / "s.ini")],
+        capture_output=True, text=True, cwd=ROOT, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "wrote" in proc.stdout
+    assert QImage(str(out)).width() >= 1000

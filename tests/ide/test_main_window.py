@@ -1,0 +1,695 @@
+"""The main window driven like a user would: open a project, type, see the
+problems, build, save, react to the disk, recover from a crash, and the run
+side through the connection interface (a fake connection, no process)."""
+
+import os
+from pathlib import Path
+
+import pytest
+from PySide6.QtCore import QObject, Qt, Signal
+from PySide6.QtWidgets import QDialog, QMessageBox
+
+from plcbuilder.ide import dialogs
+from plcbuilder.ide.editor import IND_ERROR, IND_WARNING, MK_ERROR
+from plcbuilder.ide.main_window import Act, MainWindow
+from plcbuilder.ide.settings import Preferences, Settings
+
+SB = QMessageBox.StandardButton
+
+M03 = """// M03: spindle on
+#include pins.h
+
+main()
+{
+  speed = eparam;
+  pwm01 = speed;
+  portset(OUTPUT_SPINDLE);
+  exit(99);
+};
+"""
+M05 = """// M05: spindle off
+#include mine.h
+
+main()
+{
+  portclear(MY_PIN);
+  exit(99);
+};
+"""
+LOOP = """// LOOP: a software loop
+main()
+{
+  do {
+    timer = timer + 1;
+  } while (1);
+};
+"""
+MINE = "// mine.h: my pins\n#define MY_PIN 3\n"
+
+
+def make_project(root: Path) -> Path:
+    (root / "hardware").mkdir(parents=True)
+    (root / "software").mkdir()
+    (root / "include").mkdir()
+    (root / "hardware" / "M03.plc").write_text(M03)
+    (root / "hardware" / "M05.plc").write_text(M05)
+    (root / "software" / "LOOP.plc").write_text(LOOP)
+    (root / "include" / "mine.h").write_text(MINE)
+    return root
+
+
+class Prompts:
+    """Stands in for QMessageBox's static functions: records every prompt and
+    answers from a queue (or with a safe default)."""
+
+    def __init__(self, monkeypatch):
+        self.calls = []
+        self.answers = []
+        for name, default in (("warning", SB.Discard), ("question", SB.No),
+                              ("critical", SB.Ok), ("information", SB.Ok)):
+            monkeypatch.setattr(QMessageBox, name, self._make(name, default))
+        monkeypatch.setattr(QMessageBox, "about", lambda *a, **k: self.calls.append(("about", a[2])))
+
+    def _make(self, name, default):
+        def prompt(parent, title, text, *args, **kw):
+            self.calls.append((name, title, text))
+            return self.answers.pop(0) if self.answers else default
+        return prompt
+
+    def titles(self):
+        return [c[1] for c in self.calls]
+
+
+class FakeConnection(QObject):
+    """The connection interface of part B, recording what the window asks."""
+    sig_connected = Signal(str)
+    sig_disconnected = Signal(str)
+    sig_state = Signal(dict)
+    sig_events = Signal(list)
+    sig_samples = Signal(list)
+    sig_error = Signal(str)
+
+    def __init__(self):
+        super().__init__()
+        self.calls = []
+        self.connected = False
+        self.embedded = True
+
+    def __getattr__(self, name):
+        if name in ("start_embedded", "connect_to", "upload", "start", "stop", "set_input",
+                    "set_adc", "set_speed", "reset", "shutdown"):
+            return lambda *a: self.calls.append((name,) + a)
+        raise AttributeError(name)
+
+
+@pytest.fixture
+def prompts(monkeypatch):
+    return Prompts(monkeypatch)
+
+
+@pytest.fixture
+def settings(tmp_path):
+    return Settings(str(tmp_path / "config" / "settings.ini"))
+
+
+@pytest.fixture
+def project(tmp_path):
+    return make_project(tmp_path / "proj")
+
+
+@pytest.fixture
+def make_window(qtbot, settings, prompts):
+    made = []
+
+    def make(**kw):
+        kw.setdefault("start_controller", False)
+        kw.setdefault("debounce_ms", 20)
+        w = MainWindow(kw.pop("settings", settings), **kw)
+        qtbot.addWidget(w)
+        w.resize(1200, 800)
+        w.show()
+        made.append(w)
+        return w
+    yield make
+    for w in made:
+        w.shutdown()
+
+
+@pytest.fixture
+def win(make_window):
+    return make_window()
+
+
+def settle(qtbot, w):
+    qtbot.waitUntil(lambda: not w.busy(), timeout=10000)
+    qtbot.wait(10)
+
+
+# ------------------------------------------------------------------ project
+def test_open_project_fills_tree_and_lints(win, project, qtbot):
+    assert win.open_project(project)
+    settle(qtbot, win)
+    texts = {it.text(0) for it in win.tree._all_items()}
+    assert {"Hardware PLC", "Software PLC", "Headers", "M03", "M05", "LOOP", "mine.h"} <= texts
+    assert "pins.h (built-in)" in texts
+    assert win.store.counts() == (0, 0)
+    assert win.problems.counts() == (0, 0)
+    assert "proj" in win.windowTitle()
+    assert str(project.resolve()) in win.settings.recent_projects()
+    # the description column shows the first comment
+    assert win.tree.find_item("M03").data(0, Qt.ItemDataRole.UserRole + 3) == "spindle on"
+
+
+def test_open_bad_project_says_why(win, tmp_path, prompts):
+    f = tmp_path / "file.txt"
+    f.write_text("x")
+    assert not win.open_project(f)
+    assert prompts.calls[-1][0] == "critical" and "Cannot open" in prompts.calls[-1][2]
+
+
+def test_type_an_error_see_squiggle_and_problem_then_fix(win, project, qtbot):
+    win.open_project(project)
+    ed = win.open_file(project / "hardware" / "M03.plc")
+    settle(qtbot, win)
+    assert ed.indicator_ranges(IND_ERROR) == []
+    line = 7                                              # "  pwm01 = speed;"
+    start = ed.position_of(line, 11)
+    ed.setSel(start, start + len("speed"))
+    ed.replaceSel("")                                     # "  pwm01 = ;"
+    qtbot.waitUntil(lambda: ed.indicator_ranges(IND_ERROR) != [], timeout=5000)
+    (s, e), = ed.indicator_ranges(IND_ERROR)
+    assert ed.line_col_of(s) == (7, 11) and e == s + 1    # the ';'
+    assert ed.diagnostic_lines() == {7: MK_ERROR}
+    items = win.problems.problem_items()
+    assert len(items) == 1 and "expected an expression" in items[0].text(0)
+    assert items[0].text(2) == "Ln 7, Col 11"
+    assert win.problems.counts() == (1, 0)
+    assert "?/512 bytes" in win.size_text()
+    assert win.tabs.tabText(win.tabs.currentIndex()).endswith("●")
+    # fix it
+    ed.insertText(s, "speed")
+    qtbot.waitUntil(lambda: ed.indicator_ranges(IND_ERROR) == [], timeout=5000)
+    assert win.problems.problem_items() == []
+    assert ed.diagnostic_lines() == {}
+    qtbot.waitUntil(lambda: "?/" not in win.size_text(), timeout=5000)
+    assert win.size_text().startswith("M03: ") and win.size_text().endswith("/512 bytes")
+
+
+def test_non_ascii_line_squiggle_is_at_the_right_bytes(win, project, qtbot):
+    win.open_project(project)
+    ed = win.open_file(project / "hardware" / "M03.plc")
+    ed.set_text("// é€𝄞 ünïcödé\nmain() { é = 1; exit(99); }\n", keep_undo=True)
+    qtbot.waitUntil(lambda: ed.indicator_ranges(IND_ERROR) != [], timeout=5000)
+    d = [d for d in win.store.for_file(ed.path) if d.is_error][0]
+    (s, e), = ed.indicator_ranges(IND_ERROR)
+    assert s == ed.position_of(d.span.line, d.span.col)
+    assert ed.byte_range_text(s, e) == "é"
+
+
+def test_warnings_show_as_warning_squiggles(win, project, qtbot):
+    win.open_project(project)
+    ed = win.open_file(project / "hardware" / "M03.plc")
+    ed.insertText(ed.position_of(6, 1), "  unused = 5;\n")
+    qtbot.waitUntil(lambda: ed.indicator_ranges(IND_WARNING) != [], timeout=5000)
+    assert win.problems.counts()[1] >= 1
+    assert "warning" in win.problems_button.text()
+
+
+def test_problem_in_a_header_opens_the_header(win, project, qtbot):
+    (project / "include" / "mine.h").write_text("#define MY_PIN 3\nbad() { x = ; }\n")
+    win.open_project(project)
+    settle(qtbot, win)
+    items = win.problems.problem_items()
+    header_items = [it for it in items if it.parent().text(0) == "include/mine.h"]
+    assert header_items, [it.parent().text(0) for it in items]
+    win.problems.activate_item(header_items[0])
+    ed = win.current_editor()
+    assert ed.path.endswith("mine.h")
+    assert ed.cursor_line_col()[0] == 2
+    qtbot.waitUntil(lambda: ed.indicator_ranges(IND_ERROR) != [], timeout=5000)
+    # fixing the header and saving re-checks the procedures that include it
+    ed.set_text("#define MY_PIN 3\n", keep_undo=True)
+    assert win.save_editor(ed)
+    qtbot.waitUntil(lambda: win.store.counts() == (0, 0), timeout=5000)
+    assert ed.indicator_ranges(IND_ERROR) == []
+
+
+def test_builtin_header_opens_read_only(win, project):
+    win.open_project(project)
+    ed = win.open_file("<builtin>/pins.h", 10)
+    assert ed.readOnly() and ed.builtin
+    assert "INPUT_HOME_X" in ed.text()
+    assert not win.action(Act.SAVE).isEnabled()
+
+
+# -------------------------------------------------------------------- build
+def test_build_all_writes_the_image(win, project, qtbot):
+    win.open_project(project)
+    with qtbot.waitSignal(win.sig_build_finished, timeout=20000) as blocker:
+        win.action(Act.BUILD_ALL).trigger()
+    result = blocker.args[0]
+    assert result.ok
+    assert (project / "build" / "eeprom.rom").is_file()
+    text = win.build_panel.plain_text()
+    assert "M03" in text and "Build succeeded" in text and "eeprom.rom" in text
+    assert "/512 bytes" in text
+    assert win.action(Act.BUILD_ALL).isEnabled()
+
+
+def test_build_all_saves_first_and_reports_errors(win, project, qtbot):
+    win.open_project(project)
+    ed = win.open_file(project / "hardware" / "M05.plc")
+    ed.insertText(ed.position_of(6, 1), "  x = ;\n")
+    with qtbot.waitSignal(win.sig_build_finished, timeout=20000) as blocker:
+        win.build_all()
+    result = blocker.args[0]
+    assert not result.ok
+    assert "x = ;" in (project / "hardware" / "M05.plc").read_text()     # saved first
+    assert not win.is_modified(ed)
+    text = win.build_panel.plain_text()
+    assert "Build failed" in text and "hardware/M05.plc:6:" in text
+    # double-clicking the diagnostic line opens the file there
+    doc = win.build_panel.text.document()
+    block = next(i for i in range(doc.blockCount())
+                 if doc.findBlockByNumber(i).text().startswith("hardware/M05.plc:6:"))
+    win.tabs.setCurrentIndex(0)
+    assert win.build_panel.activate_line(block)
+    assert win.current_editor().cursor_line_col()[0] == 6
+    assert win.problems.counts()[0] == 1
+
+
+# ---------------------------------------------------------- saving/prompts
+def test_unsaved_changes_prompt_on_close(win, project, prompts, qtbot):
+    win.open_project(project)
+    ed = win.open_file(project / "hardware" / "M03.plc")
+    ed.insertText(0, "// changed\n")
+    prompts.answers = [SB.Cancel]
+    assert not win.close_editor(ed)
+    assert prompts.calls[-1][0] == "warning" and "unsaved changes" in prompts.calls[-1][2]
+    assert win.editor_for(ed.path) is ed
+    prompts.answers = [SB.Save]
+    assert win.close_editor(ed)
+    assert (project / "hardware" / "M03.plc").read_text().startswith("// changed\n")
+    ed = win.open_file(project / "hardware" / "M03.plc")
+    ed.insertText(0, "// again\n")
+    prompts.answers = [SB.Discard]
+    assert win.close_editor(ed)
+    assert not (project / "hardware" / "M03.plc").read_text().startswith("// again")
+
+
+def test_unsaved_changes_prompt_on_quit_and_open_project(win, project, prompts, tmp_path):
+    win.open_project(project)
+    ed = win.open_file(project / "hardware" / "M03.plc")
+    ed.insertText(0, "// x\n")
+    prompts.answers = [SB.Cancel]
+    assert not win.close()
+    assert win.isVisible()
+    prompts.answers = [SB.Cancel]
+    other = make_project(tmp_path / "other")
+    assert not win.open_project(other)
+    assert win.project.root == project.resolve()
+    prompts.answers = [SB.Discard]
+    assert win.open_project(other)
+
+
+def test_save_keeps_line_ends_and_is_atomic(win, project):
+    p = project / "hardware" / "M03.plc"
+    p.write_bytes(M03.replace("\n", "\r\n").encode())
+    win.open_project(project)
+    ed = win.open_file(p)
+    assert "\r" not in ed.text()
+    ed.insertText(0, "// é\n")
+    assert win.save_editor(ed)
+    data = p.read_bytes()
+    assert data.startswith("// é\r\n".encode()) and b"\r\n" in data and b"\n\n" not in data
+    assert not [f for f in p.parent.iterdir() if f.name.endswith(".tmp")]
+
+
+def test_file_changed_on_disk(win, project, prompts, qtbot):
+    win.open_project(project)
+    p = project / "hardware" / "M03.plc"
+    ed = win.open_file(p)
+    # not edited: reloaded without asking (preference), our own saves ignored
+    p.write_text("// new\n" + M03)
+    qtbot.waitUntil(lambda: ed.text().startswith("// new"), timeout=5000)
+    assert not [c for c in prompts.calls if c[1] == "File Changed on Disk"]
+    ed.insertText(0, "// mine\n")
+    assert win.save_editor(ed)
+    qtbot.wait(300)
+    assert not [c for c in prompts.calls if c[1] == "File Changed on Disk"]
+    # edited: asked; No keeps the editor's text
+    ed.insertText(0, "// edit\n")
+    prompts.answers = [SB.No]
+    p.write_text("// theirs\n")
+    qtbot.waitUntil(lambda: "File Changed on Disk" in prompts.titles(), timeout=5000)
+    assert ed.text().startswith("// edit")
+    assert win.is_modified(ed)
+    # and Yes reloads
+    prompts.answers = [SB.Yes]
+    p.write_text("// theirs again\n")
+    qtbot.waitUntil(lambda: ed.text() == "// theirs again\n", timeout=5000)
+    assert not win.is_modified(ed)
+
+
+def test_file_changed_on_disk_always_asks_when_preferred(win, project, prompts, qtbot):
+    win.apply_preferences(Preferences(reload_unmodified=False))
+    win.open_project(project)
+    p = project / "hardware" / "M05.plc"
+    ed = win.open_file(p)
+    prompts.answers = [SB.Yes]
+    os.replace(_write(project / "tmpfile", "// replaced atomically\n"), p)
+    qtbot.waitUntil(lambda: ed.text() == "// replaced atomically\n", timeout=5000)
+    assert "File Changed on Disk" in prompts.titles()
+    # the watch survives the atomic replace
+    prompts.answers = [SB.Yes]
+    p.write_text("// and again\n")
+    qtbot.waitUntil(lambda: ed.text() == "// and again\n", timeout=5000)
+
+
+def test_file_deleted_on_disk(win, project, prompts, qtbot):
+    win.open_project(project)
+    p = project / "hardware" / "M05.plc"
+    ed = win.open_file(p)
+    prompts.answers = [SB.Yes]
+    p.unlink()
+    qtbot.waitUntil(lambda: "File Deleted" in prompts.titles(), timeout=5000)
+    assert win.is_modified(ed)
+    assert win.save_editor(ed) and p.exists()
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+# ------------------------------------------------------------------ recovery
+def test_recovery_after_a_crash(qtbot, settings, project, prompts, make_window):
+    w1 = make_window()
+    w1.open_project(project)
+    ed = w1.open_file(project / "hardware" / "M03.plc")
+    ed.insertText(0, "// unsaved work é\n")
+    assert w1.recovery.autosave_now() == 1
+    folder = settings.recovery_dir()
+    assert (folder / "index.json").is_file()
+    # the crash: no closeEvent, the process "dies" (another pid left the copy)
+    import json
+    index = json.loads((folder / "index.json").read_text())
+    for v in index.values():
+        v["pid"] = 999999999
+    (folder / "index.json").write_text(json.dumps(index))
+    w1.shutdown()
+    w1._closing = True
+    w1.hide()
+    w1.recovery._written.clear()
+    for e in w1.editors():
+        e.setSavePoint()          # so that the teardown does not prompt
+    # next start: offered, restored
+    w2 = make_window()
+    prompts.answers = [SB.Yes]
+    w2.open_project(project)
+    assert "Recover Unsaved Changes" in prompts.titles()
+    ed2 = w2.editor_for(project / "hardware" / "M03.plc")
+    assert ed2 is not None and ed2.text().startswith("// unsaved work é\n")
+    assert w2.is_modified(ed2)
+    assert not (project / "hardware" / "M03.plc").read_text().startswith("// unsaved")
+    # restored copies are not offered twice
+    w2.recovery.discard(ed2.path)
+    assert w2.recovery.pending(project) == []
+
+
+def test_recovery_declined_discards_the_copy(qtbot, settings, project, prompts, make_window):
+    w = make_window()
+    w.open_project(project)
+    ed = w.open_file(project / "hardware" / "M05.plc")
+    ed.insertText(0, "// x\n")
+    w.recovery.autosave_now()
+    import json
+    folder = settings.recovery_dir()
+    index = json.loads((folder / "index.json").read_text())
+    for v in index.values():
+        v["pid"] = 999999999
+    (folder / "index.json").write_text(json.dumps(index))
+    w.recovery._written.clear()
+    prompts.answers = [SB.No]
+    assert w.offer_recovery() == 0
+    assert w.recovery.pending(project) == []
+
+
+def test_clean_exit_leaves_no_recovery(settings, project, prompts, make_window):
+    w = make_window()
+    w.open_project(project)
+    ed = w.open_file(project / "hardware" / "M05.plc")
+    ed.insertText(0, "// x\n")
+    w.recovery.autosave_now()
+    prompts.answers = [SB.Discard]
+    w.close()
+    assert w.recovery.pending() == []
+
+
+# ------------------------------------------------------------------ settings
+def test_layout_recent_session_and_preferences_are_remembered(settings, project, prompts,
+                                                              make_window, qtbot):
+    w1 = make_window()
+    w1.open_project(project)
+    w1.open_file(project / "hardware" / "M05.plc")
+    w1.open_file(project / "software" / "LOOP.plc")
+    w1.apply_preferences(Preferences(font_size=15, tab_width=2))
+    w1.problems_dock.hide()
+    w1.close()
+    w2 = make_window(settings=Settings(settings.path))
+    assert w2.prefs.font_size == 15 and w2.prefs.tab_width == 2
+    assert w2.problems_dock.isHidden()
+    assert str(project.resolve()) in [a.text() for a in w2.recent_menu.actions()]
+    w2.open_project(project)
+    assert [Path(e.path).name for e in w2.editors()] == ["M05.plc", "LOOP.plc"]
+    assert Path(w2.current_editor().path).name == "LOOP.plc"
+    assert w2.current_editor().tabWidth() == 2
+    w2.action(Act.RESET_LAYOUT).trigger()
+    assert not w2.problems_dock.isHidden()
+
+
+def test_recent_projects_menu_opens_and_clears(win, project, tmp_path):
+    other = make_project(tmp_path / "other")
+    win.open_project(project)
+    win.open_project(other)
+    acts = [a for a in win.recent_menu.actions() if a.text() == str(project.resolve())]
+    acts[0].trigger()
+    assert win.project.root == project.resolve()
+    assert win.welcome_recent.count() == 2
+    clear = [a for a in win.recent_menu.actions() if a.text() == "Clear List"][0]
+    clear.trigger()
+    assert win.settings.recent_projects() == []
+
+
+def test_open_example_project(win, prompts, monkeypatch, tmp_path):
+    prompts.answers = [SB.Yes]
+    assert win.open_example_project()
+    assert win.project is not None
+    assert win.project.root.parent == win.settings.example_dir().resolve()
+    assert {"M03", "OFF"} <= {p.name for p in win.project.procedures()}
+    assert win.current_editor() is not None
+    # No: pick a folder
+    from PySide6.QtWidgets import QFileDialog
+    monkeypatch.setattr(QFileDialog, "getExistingDirectory", lambda *a, **k: str(tmp_path / "picked"))
+    prompts.answers = [SB.No]
+    assert win.open_example_project()
+    assert win.project.root == (tmp_path / "picked" / "plc-example").resolve()
+    prompts.answers = [SB.Cancel]
+    assert not win.open_example_project()
+
+
+def test_open_project_dialog(win, project, monkeypatch):
+    from PySide6.QtWidgets import QFileDialog
+    monkeypatch.setattr(QFileDialog, "getExistingDirectory", lambda *a, **k: str(project))
+    win.action(Act.OPEN_PROJECT).trigger()
+    assert win.project.root == project.resolve()
+    monkeypatch.setattr(QFileDialog, "getExistingDirectory", lambda *a, **k: "")
+    assert not win._open_project_dialog()
+
+
+def test_close_project_shows_the_welcome_page(win, project):
+    win.open_project(project)
+    win.open_file(project / "hardware" / "M03.plc")
+    assert win.stack.currentWidget() is win.tabs
+    assert win.close_project()
+    assert win.project is None and win.editors() == []
+    assert win.stack.currentWidget() is win.welcome
+
+
+# --------------------------------------------------------------- run side
+@pytest.fixture
+def runwin(make_window, project):
+    conn = FakeConnection()
+    w = make_window(connection=conn, start_controller=True)
+    w.open_project(project)
+    return w, conn
+
+
+def test_the_run_side_calls_the_connection(runwin, qtbot, monkeypatch, project):
+    w, conn = runwin
+    assert conn.calls[0][0] == "start_embedded"
+    args = conn.calls[0][1]
+    assert "--limits" in args
+    # start picker: by name with eparam
+    def fake_exec(dlg):
+        dlg.list.setCurrentRow([n for n, _ in dlg.procedures].index("M03"))
+        dlg.eparam_spin.setValue(1234)
+        dlg.accept()
+        return QDialog.DialogCode.Accepted
+    monkeypatch.setattr(dialogs.StartDialog, "exec", fake_exec)
+    w.action(Act.START).trigger()
+    assert ("start", "M03", 1234) in conn.calls
+    # by M-code number
+    def by_mcode(dlg):
+        dlg.mcode_spin.setValue(5)
+        assert dlg.by_mcode.isChecked() and dlg.selected() == "M05"
+        dlg.accept()
+        return QDialog.DialogCode.Accepted
+    monkeypatch.setattr(dialogs.StartDialog, "exec", by_mcode)
+    w.start_procedure()
+    assert conn.calls[-1] == ("start", "M05", 1234)
+    w.action(Act.STOP).trigger()
+    assert conn.calls[-1] == ("stop",)
+    w.speed_combo.setCurrentIndex(w.speed_combo.findData("max"))
+    assert conn.calls[-1] == ("set_speed", "max")
+    w._speed_actions["pause"].trigger()
+    assert conn.calls[-1] == ("set_speed", "pause")
+    assert w.speed_combo.currentData() == "pause"
+    w.action(Act.RESET_CONTROLLER).trigger()
+    assert conn.calls[-1] == ("reset",)
+
+
+def test_upload_builds_first(runwin, qtbot, project):
+    w, conn = runwin
+    with qtbot.waitSignal(w.sig_build_finished, timeout=20000):
+        w.action(Act.UPLOAD).trigger()
+    qtbot.waitUntil(lambda: any(c[0] == "upload" for c in conn.calls), timeout=5000)
+    data = [c for c in conn.calls if c[0] == "upload"][0][1]
+    assert data == (project / "build" / "eeprom.rom").read_bytes()
+
+
+def test_state_goes_to_the_status_bar(runwin, project):
+    w, conn = runwin
+    conn.connected = True
+    conn.sig_connected.emit("127.0.0.1:5555")
+    assert "127.0.0.1:5555" in w.connection_label.text()
+    conn.sig_state.emit({"t_ms": 12345, "running": "M03", "proc": 70,
+                         "proc_name": "plc_proc_spindle"})
+    assert w.time_label.text() == "t = 12.345 s"
+    assert w.running_label.text() == "▶ M03"
+    assert w.proc_label.text() == "proc 70 plc_proc_spindle"
+    conn.sig_state.emit({"t_ms": 20000, "running": None, "proc": 33})
+    assert w.running_label.text() == "idle"
+    assert w.proc_label.text() == "proc 33 plc_proc_probing"       # named by abi.proc_name
+    conn.sig_disconnected.emit("gone")
+    assert "disconnected" in w.connection_label.text()
+
+
+def test_run_panels_are_docked_when_part_b_is_there(runwin):
+    w, conn = runwin
+    pytest.importorskip("plcbuilder.ide.panels")
+    if w.run_panels is None:
+        pytest.skip("the run panels did not start")
+    names = {d.objectName() for d in w.run_panels.docks()}
+    assert names and all(w.dockWidgetArea(d) != Qt.DockWidgetArea.NoDockWidgetArea
+                         for d in w.run_panels.docks())
+    view = {a.text() for a in w.view_menu.actions()}
+    assert {"Project", "Build Output"} <= view and len(view) > 5
+
+
+def test_no_connection_disables_the_run_actions(win, project):
+    win.open_project(project)
+    for name in (Act.UPLOAD, Act.START, Act.STOP):
+        assert not win.action(name).isEnabled()
+    assert not win.start_procedure("M03")
+
+
+def test_tree_start_uses_last_eparam(runwin):
+    w, conn = runwin
+    w._last_eparam = 7
+    w.tree.sig_start_procedure.emit("M05")
+    assert conn.calls[-1] == ("start", "M05", 7)
+
+
+# ------------------------------------------------------------- keys & help
+def test_keyboard_shortcuts_from_the_editor(win, project, qtbot, monkeypatch):
+    win.activateWindow()
+    win.open_project(project)
+    ed = win.open_file(project / "hardware" / "M03.plc")
+    ed.take_focus()
+    ed.gotoPos(ed.position_of(9, 3))
+    qtbot.keyClick(ed, Qt.Key.Key_Slash, Qt.KeyboardModifier.ControlModifier)
+    assert ed.line_text(8) == "  // exit(99);"
+    qtbot.keyClick(ed, Qt.Key.Key_S, Qt.KeyboardModifier.ControlModifier)
+    assert "// exit(99);" in (project / "hardware" / "M03.plc").read_text()
+    from plcbuilder.ide import dialogs
+    asked = []
+    monkeypatch.setattr(dialogs.GoToLineDialog, "exec", lambda d: asked.append(d) or 0)
+    qtbot.keyClick(ed, Qt.Key.Key_G, Qt.KeyboardModifier.ControlModifier)
+    assert asked
+    with qtbot.waitSignal(win.sig_build_finished, timeout=20000):
+        qtbot.keyClick(ed, Qt.Key.Key_B, Qt.KeyboardModifier.ControlModifier)
+    qtbot.keyClick(ed, Qt.Key.Key_F, Qt.KeyboardModifier.ControlModifier)
+    assert win.find_bar.isVisible()
+
+
+def test_hover_and_completion_in_the_window(win, project, qtbot):
+    win.open_project(project)
+    ed = win.open_file(project / "hardware" / "M05.plc")
+    ed.insertText(ed.position_of(6, 1), "  code = gvarget(6060);\n")
+    settle(qtbot, win)
+    t = ed.hover_text_at(ed.position_of(6, 20))
+    assert "GVAR_CURRENT_MOTION_CODE" in t and "0x4d" in t
+    t = ed.hover_text_at(ed.position_of(7, 14))            # MY_PIN
+    assert "#define MY_PIN 3" in t and "mine.h:2" in t
+    assert "variable of this file" in ed.hover_text_at(ed.position_of(6, 4))
+    names = {n for n, _k in win._complete(ed, "")}
+    assert {"MY_PIN", "code", "OUTPUT_SPINDLE", "gvarget", "eparam"} <= names
+    from plcbuilder.ide import highlighter as hl
+    ed.highlighter.style_to(ed.length())
+    assert ed.styleAt(ed.position_of(7, 14)) == hl.S_DEFINE
+
+
+def test_saving_the_settings_file_applies_it(win, project, qtbot):
+    win.open_project(project)
+    ed = win.open_file(project / "plcbuilder.toml") if (project / "plcbuilder.toml").exists() \
+        else None
+    if ed is None:
+        (project / "plcbuilder.toml").write_text('name = "mine"\n')
+        ed = win.open_file(project / "plcbuilder.toml")
+    ed.set_text('name = "renamed"\n[limits]\nhw_proc = 8\n', keep_undo=True)
+    assert win.save_editor(ed)
+    assert win.project.name == "renamed" and win.project.limits.hw_proc == 8
+    settle(qtbot, win)
+    assert any(d.code == "size-limit" for d in win.store.all())       # M03 is over 8 bytes
+    ed.set_text('name = "renamed"\n[limits]\nhw_proc = "big"\n', keep_undo=True)
+    assert win.save_editor(ed)
+    assert win.project.limits.hw_proc == 8                           # kept
+    (d,) = [d for d in win.store.all() if d.code == "settings"]
+    assert d.span.line == 3 and "hw_proc" in d.message
+    assert ed.diagnostic_lines() == {3: MK_ERROR}
+
+
+def test_tab_menu_drop_and_status(win, project, qtbot):
+    win.open_project(project)
+    a = win.open_file(project / "hardware" / "M03.plc")
+    b = win.open_file(project / "hardware" / "M05.plc")
+    c = win.open_file(project / "software" / "LOOP.plc")
+    assert win.eol_label.text() == "UTF-8  LF"
+    menu = win.tab_menu(win.tabs.indexOf(b))
+    acts = {x.objectName(): x for x in menu.actions()}
+    acts["copy_path"].trigger()
+    from PySide6.QtWidgets import QApplication
+    assert QApplication.clipboard().text() == b.path
+    acts["reveal"].trigger()
+    assert win.tree.tree.currentItem().text(0) == "M05"
+    acts["others"].trigger()
+    assert win.editors() == [b]
+    win.tab_menu(0).actions()[0].trigger()
+    assert win.editors() == []
+    win.open_paths([str(project / "include" / "mine.h")])
+    assert win.current_editor().path.endswith("mine.h")
+    other = make_project(project.parent / "dropped")
+    win.open_paths([str(other)])
+    assert win.project.root == other.resolve()
+    del a, c

@@ -1,0 +1,377 @@
+"""The run panels without a controller: ring buffers, the run model, and the
+docks driven through a stand-in connection."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("PySide6")
+
+from PySide6 import QtCore, QtWidgets  # noqa: E402
+
+from plcbuilder.controller import events as ev  # noqa: E402
+from plcbuilder.ide.panels import (RunPanels, default_pin_names,  # noqa: E402
+                                   pin_names_from_defines, pin_names_from_header)
+from plcbuilder.ide.panels.log import CATEGORY, TEXT, event_row  # noqa: E402
+from plcbuilder.ide.panels.model import RunModel  # noqa: E402
+from plcbuilder.ide.ringbuffer import RingBuffer  # noqa: E402
+
+Qt = QtCore.Qt
+
+
+# ------------------------------------------------------------------ helpers
+class FakeConnection(QtCore.QObject):
+    """The ControllerConnection interface, recording the requests."""
+    sig_connected = QtCore.Signal(str)
+    sig_disconnected = QtCore.Signal(str)
+    sig_state = QtCore.Signal(dict)
+    sig_events = QtCore.Signal(list)
+    sig_samples = QtCore.Signal(list)
+    sig_error = QtCore.Signal(str)
+    sig_variables = QtCore.Signal(object)
+    sig_note = QtCore.Signal(str)
+
+    def __init__(self):
+        super().__init__()
+        self.connected = False
+        self.calls: list[tuple] = []
+
+    def set_input(self, pin, v):
+        self.calls.append(("input", pin, v))
+
+    def set_adc(self, ch, v):
+        self.calls.append(("adc", ch, v))
+
+    def request_variables(self):
+        self.calls.append(("variables",))
+
+
+def sample(t, *, proc=0, outputs=0, inputs=0, pwm=(), dac=(), adc=(), axes=(), vel=(),
+           running="M03", message=0):
+    pad = lambda v, n: tuple(v) + (0,) * (n - len(v))  # noqa: E731
+    return ev.Sample(t_ms=t, running=running, proc=proc, message=message,
+                     inputs=pad((inputs,), 8), outputs=pad((outputs,), 8), pwm=pad(pwm, 8),
+                     dac=pad(dac, 8), adc=pad(adc, 8), axes=pad(axes, 9), velocities=pad(vel, 9))
+
+
+@pytest.fixture
+def fake():
+    return FakeConnection()
+
+
+@pytest.fixture
+def panels(qtbot, fake):
+    win = QtWidgets.QMainWindow()
+    qtbot.addWidget(win)
+    p = RunPanels(win, fake, capacity=2000)
+    for d in p.docks():
+        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
+    win.resize(1400, 900)
+    win.show()
+    yield p
+    p.shutdown()
+
+
+# ------------------------------------------------------------------ ring buffer
+def test_ring_buffer_keeps_the_newest_in_order():
+    rb = RingBuffer(5, 2)
+    assert len(rb) == 0 and rb.view().size == 0 and rb.latest() is None
+    for i in range(3):
+        rb.append((i, 10 * i))
+    assert rb.view(0).tolist() == [0, 1, 2]
+    rb.extend(np.array([[3, 30], [4, 40], [5, 50], [6, 60]]))
+    assert len(rb) == 5 and rb.total == 7
+    assert rb.view(0).tolist() == [2, 3, 4, 5, 6]
+    assert rb.view(1, last=2).tolist() == [50, 60]
+    assert rb.views().shape == (2, 5)
+    assert rb.latest().tolist() == [6, 60]
+    rb.extend(np.arange(24).reshape(12, 2))           # more than the capacity at once
+    assert rb.view(0).tolist() == [14, 16, 18, 20, 22] and rb.total == 19
+    with pytest.raises(ValueError):
+        rb.view(0)[0] = 1                              # read-only views
+    rb.clear()
+    assert len(rb) == 0
+
+
+def test_ring_buffer_matches_a_list_under_random_writes():
+    rng = np.random.default_rng(1)
+    rb = RingBuffer(37, 1)
+    ref: list[float] = []
+    for _ in range(200):
+        n = int(rng.integers(0, 50))
+        vals = rng.random(n)
+        rb.extend(vals)
+        ref.extend(vals.tolist())
+        assert rb.view().tolist() == ref[-37:]
+
+
+# ------------------------------------------------------------------ model
+def test_model_ingests_samples():
+    m = RunModel(capacity=100)
+    m.add_samples([sample(t, proc=70 if t >= 5 else 0, outputs=0b101 if t >= 3 else 0,
+                          inputs=1 << 9 if t >= 4 else 0, pwm=(0, 250), axes=(10000, 0, 2000),
+                          vel=(0, 0, 0)) for t in range(10)])
+    assert len(m) == 10 and m.t_end == pytest.approx(0.009)
+    assert m.active_outputs == {0, 2}
+    assert m.active_inputs == {9}
+    assert m.proc_values == {0, 70}
+    assert m.active_analog() == [1]                    # PWM1 only
+    assert m.active_axes() == [0, 2]                   # X and Z sit off zero
+    assert m.axes.view(0)[-1] == pytest.approx(100.0)  # mm
+    assert m.bit_series("outputs", 2).tolist() == [0, 0, 0] + [1] * 7
+    assert m.pin_state("inputs", 9) == 1 and m.pin_state("outputs", 1) == 0
+    a, b = m.window(0.0035, 0.006)
+    assert m.time.view()[a:b].tolist() == pytest.approx([0.003, 0.004, 0.005, 0.006, 0.007])
+    # an older time means the controller started over
+    epoch = m.epoch
+    m.add_samples([sample(0), sample(1)])
+    assert m.epoch == epoch + 1 and len(m) == 2 and m.active_outputs == set()
+
+
+def test_model_keeps_messages_bounded():
+    m = RunModel(capacity=10, messages=50)
+    rows = m.add_events([ev.Message(t, 131, None, 1, 2, "M03") for t in range(120)]
+                        + [ev.Print(5, 20000, 1, "M03")])
+    assert len(rows) == 120 and rows[0].name == "PLC_MESSAGE_SPINDLE_TURNING"
+    assert len(m.messages) <= 50 and m.messages[-1].t_ms == 119
+    assert m.message_times == pytest.approx([r.t_ms / 1000 for r in m.messages])
+
+
+def test_signed_words_are_bits():
+    m = RunModel(capacity=10)
+    m.add_samples([sample(0, outputs=-(1 << 31))])     # bit 31 as a signed word
+    assert m.active_outputs == {31}
+
+
+# ------------------------------------------------------------------ pin names
+def test_pin_names_from_defines():
+    ins, outs = pin_names_from_defines({
+        "INPUT_PROBE": ("3", None), "INPUT_HOME_X": "0x0 // comment", "OUTPUT_SPINDLE": 0,
+        "OUTPUT_PLASMA": ("4",), "OUTPUT_TORCH": "4", "PWM_SPINDLE_SPEED": "0",
+        "INPUT_BAD": "FOO", "OUTPUT_HUGE": "100000"})
+    assert ins == {3: "INPUT_PROBE", 0: "INPUT_HOME_X"}
+    assert outs == {0: "OUTPUT_SPINDLE", 4: "OUTPUT_PLASMA / OUTPUT_TORCH"}
+    ins, outs = pin_names_from_header("#define INPUT_A 7 // x\n  #  define OUTPUT_B (2)\n")
+    assert ins == {7: "INPUT_A"} and outs == {2: "OUTPUT_B"}
+    ins, outs = default_pin_names()
+    assert ins[3] == "INPUT_PROBE" and outs[0] == "OUTPUT_SPINDLE"
+
+
+def test_pin_names_from_a_compiled_project_file():
+    from plcbuilder.api import compile_source
+    r = compile_source("#include pins.h\nmain() { portset(OUTPUT_MIST); exit(99); }", "M07.plc")
+    ins, outs = pin_names_from_defines(r.symbols.defines)
+    assert outs[2] == "OUTPUT_MIST" and ins[9] == "INPUT_CYCLE_START"
+
+
+# ------------------------------------------------------------------ docks
+def test_docks_have_names_and_render(qtbot, panels, fake, tmp_path):
+    docks = panels.docks()
+    names = [d.objectName() for d in docks]
+    assert len(set(names)) == 7 and all(names)
+    assert [d.windowTitle() for d in docks][:2] == ["Proc / messages", "Outputs"]
+    fake.sig_samples.emit([sample(t, proc=70, outputs=t & 1, pwm=(t,), axes=(t, 2 * t))
+                           for t in range(500)])
+    fake.sig_events.emit([ev.Message(100, 131, "PLC_MESSAGE_SPINDLE_TURNING", 0, 0, "M03")])
+    panels.tick()
+    for d in docks:
+        img = d.grab()
+        assert not img.isNull() and img.width() > 50
+    # only visible docks redraw; a hidden one catches up when shown
+    panels.dock("axes").hide()
+    before = panels.axes.frames
+    fake.sig_samples.emit([sample(500, axes=(1, 1))])
+    panels.tick()
+    assert panels.axes.frames == before and panels.lanes.frames > 0
+    panels.dock("axes").show()
+    panels.tick()
+    assert panels.axes.frames == before + 1
+
+
+def test_lanes_follow_pins_and_the_context_menu(qtbot, panels, fake):
+    panels.set_pin_names({9: "INPUT_CYCLE_START"}, {0: "OUTPUT_SPINDLE", 5: "OUTPUT_LUBE"})
+    fake.sig_samples.emit([sample(t, outputs=1 if t > 10 else 0) for t in range(50)])
+    panels.tick()
+    lanes = panels.lanes
+    assert lanes.lanes() == [("outputs", 0)]
+    assert lanes.y_labels() == ["OUT 0  OUTPUT_SPINDLE"]
+    menu = lanes.build_menu(("outputs", 0))
+    texts = [a.text() for a in menu.actions()]
+    assert texts[0] == "Remove lane OUT 0  OUTPUT_SPINDLE"
+    sub = [a.menu() for a in menu.actions() if a.text() == "Add output lane"][0]
+    pick = [a for a in sub.actions() if a.text() == "5  OUTPUT_LUBE"][0]
+    pick.trigger()
+    panels.tick()
+    assert lanes.lanes() == [("outputs", 0), ("outputs", 5)]
+    menu.actions()[0].trigger()                       # remove OUT 0
+    panels.tick()
+    assert lanes.lanes() == [("outputs", 5)]
+    lanes.pin_lane("inputs", 9)
+    panels.tick()
+    assert lanes.y_labels() == ["OUT 5  OUTPUT_LUBE", "IN 9  INPUT_CYCLE_START"]
+    lanes.reset_lanes()
+    panels.tick()
+    assert lanes.lanes() == [("outputs", 0)]
+
+
+def test_lane_under_the_mouse(qtbot, panels, fake):
+    fake.sig_samples.emit([sample(t, outputs=0b11 if t > 10 else 0) for t in range(50)])
+    panels.tick()
+    lanes = panels.lanes
+    vb = lanes.plot.getViewBox()
+    top = lanes.widget.mapFromScene(vb.mapViewToScene(QtCore.QPointF(-0.01, 2.0)))
+    low = lanes.widget.mapFromScene(vb.mapViewToScene(QtCore.QPointF(-0.01, 0.5)))
+    assert lanes._lane_at(top) == ("outputs", 0)
+    assert lanes._lane_at(low) == ("outputs", 1)
+
+
+def test_follow_stops_when_the_user_pans(qtbot, panels, fake):
+    fake.sig_samples.emit([sample(t) for t in range(1500)])
+    panels.tick()
+    tb = panels.timebase
+    assert tb.follow
+    t0, t1 = panels.lanes.visible_span()
+    assert t0 == pytest.approx(0.0) and t1 == pytest.approx(10.0)   # filling a 10 s window
+    vb = panels.lanes.plot.getViewBox()
+    vb.sigRangeChangedManually.emit([True, False])
+    assert not tb.follow and not panels.proc.toolbar.follow.isChecked()
+    panels.lanes.toolbar.follow.click()
+    assert tb.follow and panels.axes.toolbar.follow.isChecked()
+    combo = panels.analog.toolbar.window
+    combo.setCurrentIndex(combo.findText("1 s"))
+    combo.activated.emit(combo.currentIndex())
+    assert tb.window == 1.0
+    panels.tick()
+    t0, t1 = panels.lanes.visible_span()
+    assert t1 == pytest.approx(1.499) and t0 == pytest.approx(0.499)
+
+
+def test_clear_forgets_samples_and_messages(qtbot, panels, fake):
+    fake.sig_samples.emit([sample(t, pwm=(5,)) for t in range(100)])
+    fake.sig_events.emit([ev.Message(10, 101, None, 0, 0, "M03")])
+    panels.tick()
+    assert panels.proc.messages.rowCount() == 1 and panels.analog._curves
+    panels.proc.toolbar.findChildren(QtWidgets.QToolButton)[-1].click()   # Clear
+    panels.tick()
+    assert len(panels.model) == 0 and panels.proc.messages.rowCount() == 0
+    assert not panels.analog._curves
+
+
+def test_log_rows_and_fault_click(qtbot, panels, fake):
+    fake.sig_events.emit([
+        ev.Started(0, "M03", "hardware", 5),
+        ev.Print(3, 20000, 42, "M03"),
+        ev.Print(4, 20007, -1, "M03"),
+        ev.Message(5, -15, "PLC_MESSAGE_ERR_PROBING", 0, 0, "M03"),
+        ev.Fault(6, "M03", "M03.plc", 12, "division by zero"),
+        ev.Ended(6, "M03", "hardware", -1, None, 0),
+        ev.Ended(9, "M88", "hardware", 7, "plc_exit_probe_error", 3),
+        ev.Note(10, "jog watchdog stopped the jog", "warning"),
+    ])
+    fake.sig_error.emit("start: no procedure named 'X'")
+    panels.tick()
+    texts = [r[TEXT] for r in panels.log.rows.rows()]
+    assert "42" in texts and "-1  [register 20007]" in texts
+    assert "PLC_MESSAGE_ERR_PROBING (-15)  command=0 parameter=0" in texts
+    assert any(t.startswith("M88 ended: exit plc_exit_probe_error (7)") and "probe" in t
+               for t in texts)
+    assert "start: no procedure named 'X'" in texts
+    rows = panels.log.fault_rows()
+    assert len(rows) == 1
+    # filters
+    panels.log.kind_buttons["print"].click()
+    assert panels.log.proxy.rowCount() == len(texts) - 2
+    panels.log.kind_buttons["print"].click()
+    panels.log.search.setText("probing")
+    assert panels.log.proxy.rowCount() == 1
+    panels.log.search.clear()
+    # a click on the fault opens its line; on anything else, nothing
+    view = panels.log.view
+    got = []
+    panels.sig_open_location.connect(lambda f, line: got.append((f, line)))
+    other = view.visualRect(panels.log.proxy.index(1, 3)).center()
+    qtbot.mouseClick(view.viewport(), Qt.MouseButton.LeftButton, pos=other)
+    assert got == []
+    rect = view.visualRect(panels.log.proxy.index(panels.log.fault_rows()[0], 3))
+    with qtbot.waitSignal(panels.sig_open_location, timeout=2000) as blocker:
+        qtbot.mouseClick(view.viewport(), Qt.MouseButton.LeftButton, pos=rect.center())
+    assert blocker.args == ["M03.plc", 12]
+
+
+def test_reply_messages_are_decoded():
+    from plcbuilder.ide.panels.model import decode_message
+    assert decode_message(1100, 120, 12000) == \
+        "to myCNC: PLC_MESSAGE_SPINDLE_SPEED_CHANGED (120), parameter 12000"
+    assert decode_message(131, 0, 0) == ""
+    row = event_row(ev.Message(5, 1100, "PLCCMD_REPLY_TO_MYCNC", 120, 0, "M05"))
+    assert row[TEXT] == ("PLCCMD_REPLY_TO_MYCNC (1100)  to myCNC: "
+                         "PLC_MESSAGE_SPINDLE_SPEED_CHANGED (120), parameter 0")
+
+
+def test_fault_without_file_names_the_procedure():
+    row = event_row(ev.Fault(1, "M05", None, 3, "call depth over 16"))
+    assert row[CATEGORY] == "fault" and row[-2:] == ("M05.plc", 3)
+    assert event_row(ev.Fault(1, "M05", None, None, "x"))[-1] is None
+    assert event_row({"type": "future", "t_ms": 5})[CATEGORY] == "note"
+    assert event_row(object()) is None
+
+
+def test_log_is_bounded(qtbot, panels, fake):
+    panels.log.rows.limit = 1000
+    fake.sig_events.emit([ev.Print(t, 20000, t, "SW") for t in range(2500)])
+    panels.tick()
+    n = panels.log.rows.rowCount()
+    assert 0 < n <= 1000
+    assert panels.log.rows.row(n - 1)[TEXT] == "2499"
+
+
+def test_inputs_panel_sends_and_shows(qtbot, panels, fake):
+    panels.set_pin_names({3: "INPUT_PROBE", 9: "INPUT_CYCLE_START"}, {})
+    inputs = panels.inputs
+    assert inputs.shown_pins() == [3, 9]
+    assert not inputs.button(3).isEnabled() or not inputs.grid_host.isEnabled()
+    fake.connected = True
+    fake.sig_connected.emit("127.0.0.1:1")
+    panels.dock("inputs").raise_()
+    qtbot.mouseClick(inputs.button(3), Qt.MouseButton.LeftButton)
+    assert fake.calls[-1] == ("input", 3, 1)
+    assert inputs.button(3).isChecked()                # shown as asked until a sample says
+    fake.sig_samples.emit([sample(1, inputs=1 << 3, adc=(0, 0, 512))])
+    panels.tick()
+    assert inputs.button(3).isChecked() and inputs.readings[2].text() == "512"
+    inputs.show_all.setChecked(True)
+    assert len(inputs.shown_pins()) == 64
+    inputs.filter.setText("probe")
+    assert inputs.shown_pins() == [3]
+    inputs.spins[1].setValue(1000)
+    assert fake.calls[-1] == ("adc", 1, 1000)
+    fake.sig_disconnected.emit("the controller process was killed (SIGKILL)")
+    assert not inputs.grid_host.isEnabled()
+    assert "Disconnected" in panels.proc.status.text()
+
+
+def test_watch_panel_orders_and_follows(qtbot, panels, fake):
+    fake.connected = True
+    fake.sig_state.emit({"t_ms": 10, "running": "M03", "software": [], "proc": 70})
+    panels._poll_variables()
+    assert fake.calls[-1] == ("variables",)
+    assert "Running M03" in panels.proc.status.text()
+    assert "plc_proc_spindle (70)" in panels.proc.status.text()
+    vars_ = {"M03": {"eparam": 1, "proc": 70, "timer": 0, "vexit": 0, "message": 0,
+                     "var00": 0, "var01": 0, "speed": 5, "count": 3},
+             "M05": {"eparam": 0, "proc": 0, "x": 1}}
+    fake.sig_variables.emit(vars_)
+    w = panels.watch
+    names = [w.table.item(r, 0).text() for r in range(w.table.rowCount())]
+    assert names == ["speed", "count", "eparam", "proc", "timer", "vexit", "message"]
+    w.show_regs.setChecked(True)
+    assert w.table.rowCount() == 9
+    vars_["M03"]["count"] = 4
+    fake.sig_variables.emit(vars_)
+    assert w.table.item(1, 1).text() == "4" and w.table.item(1, 2).text() == "0x00000004"
+    assert w.table.item(1, 1).background().color().name() == "#fff2b3"   # changed
+    w.procedure.setCurrentText("M05")
+    w.procedure.activated.emit(w.procedure.currentIndex())
+    assert w.current == "M05" and not w.follow.isChecked()
+    assert w.value("x") == 1
