@@ -9,8 +9,14 @@ load Qt: the IDE is imported when the command runs.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
+
+
+def _has_display() -> bool:
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+                or sys.platform in ("win32", "darwin"))
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -45,6 +51,13 @@ def run(args: argparse.Namespace) -> int:
     if project is not None and not project.is_dir():
         print(f"plcbuilder gui: {project}: no such project folder", file=sys.stderr)
         return 2
+    if "QT_QPA_PLATFORM" not in os.environ and not _has_display():
+        if getattr(args, "screenshot", None):
+            os.environ["QT_QPA_PLATFORM"] = "offscreen"     # a picture needs no screen
+        else:
+            print("plcbuilder gui: no display (DISPLAY is not set); run it on a desktop, or "
+                  "use --screenshot FILE, or set QT_QPA_PLATFORM=offscreen", file=sys.stderr)
+            return 1
     try:
         from plcbuilder.ide.app import main
     except ImportError as exc:

@@ -281,7 +281,8 @@ class ProcPanel(TimePanel):
         style.style_plot(self.plot, left="proc state", bottom="time (s)", bottom_units=None)
         self.add_time_plot(self.plot)
         self.plot.setMouseEnabled(x=True, y=False)
-        self.curve = style.new_curve(self.plot, style.PROC_COLOUR, "proc", width=2.0)
+        self.curve = style.new_curve(self.plot, style.PROC_COLOUR, "proc", width=2.0,
+                                     stepMode="right")   # proc holds its value
         self.markers = pg.ScatterPlotItem(symbol="t", size=10, pen=pg.mkPen("#ffffff", width=1),
                                           brush=pg.mkBrush(style.MESSAGE_COLOUR))
         self.markers.setZValue(10)
@@ -549,7 +550,7 @@ class LanesPanel(TimePanel):
             item = self._items.get(key)
             if item is None:
                 c = style.OUTPUT_COLOUR if key[0] == "outputs" else style.INPUT_COLOUR
-                item = style.new_curve(self.plot, c)
+                item = style.new_curve(self.plot, c, stepMode="right")   # sample and hold
                 self._items[key] = item
             item.setPos(0, y)
             ticks.append((y + 0.5, self.lane_label(*key)))
