@@ -39,6 +39,10 @@ def parse_run(spec: Optional[str]) -> Optional[tuple[str, int]]:
     return name, value
 
 
+#: simulated ms stepped at a time in screenshot mode (below the telemetry queue)
+STEP_SLICE_MS = 200
+
+
 def wait_until(app, cond: Callable[[], bool], timeout_s: float) -> bool:
     """Run the event loop until cond() holds (True) or the time is up (False)."""
     deadline = time.monotonic() + timeout_s
@@ -144,15 +148,25 @@ def _run_procedure(app, win, target: tuple[str, int], after_ms: int) -> bool:
     wait_until(app, lambda: "start" in results or not hasattr(c, "sig_result"), 10)
     t0 = state_t() or 0
     stepper = getattr(c, "step", None)
-    if stepper is not None:
+    if stepper is None and hasattr(c, "_send"):
+        stepper = lambda ms: c._send("step", {"ms": ms})  # noqa: E731
+    if stepper is not None and hasattr(c, "sig_result"):
+        # in slices small enough that the IDE receives every tick's telemetry
+        # (a paused controller keeps only the newest few hundred samples for it)
+        done = 0
+        while done < after_ms:
+            n = min(STEP_SLICE_MS, int(after_ms) - done)
+            before = results.count("step")
+            stepper(n)
+            wait_until(app, lambda: results.count("step") > before, 60)
+            settle(app, 40)                 # a telemetry frame or two
+            done += n
+    elif stepper is not None:
         stepper(int(after_ms))
-    elif hasattr(c, "_send"):
-        c._send("step", {"ms": int(after_ms)})
     else:                                   # no stepping: let it run in real time
         c.set_speed("realtime")
         settle(app, after_ms)
         c.set_speed("pause")
-    wait_until(app, lambda: "step" in results or not hasattr(c, "sig_result"), 60)
     ok = wait_until(app, lambda: (state_t() or 0) >= t0 + after_ms, 10)
     if not ok:
         _say(f"the simulation did not reach t = {t0 + after_ms} ms")
