@@ -63,7 +63,7 @@ class _Progress:
 
 def _procedure_line(pb, out: term.Out) -> str:
     status = out.paint("ok", "ok") if pb.ok else out.paint("bad", "failed")
-    used = "?" if pb.size is None else str(pb.size)
+    used = "-" if pb.size is None else str(pb.size)
     note = " (unchanged)" if pb.cached else ""
     return (f"{out.paint('location', str(pb.path) + ':')} {status}: {summary(pb.diagnostics)}; "
             f"{pb.kind.label} procedure {pb.name}, {used}/{pb.limit} bytes{note}")

@@ -174,7 +174,7 @@ class BuildPanel(QWidget):
         for pb in result.procedures:
             errors = sum(1 for d in pb.diagnostics if d.is_error)
             warns = sum(1 for d in pb.diagnostics if d.severity == Severity.WARNING)
-            size = f"{pb.size}/{pb.limit} bytes" if pb.size is not None else f"?/{pb.limit} bytes"
+            size = f"{pb.size}/{pb.limit} bytes" if pb.size is not None else f"-/{pb.limit} bytes"
             if errors:
                 state, kind = f"{errors} error{'s' * (errors != 1)}", "error"
             elif warns:

@@ -1709,7 +1709,7 @@ class MainWindow(QMainWindow):
         size, limit = self._sizes.get(file_key(ed.path), (None, None))
         if limit is None:
             limit = self._options_for(ed.path).limit
-        used = "?" if size is None else str(size)
+        used = "-" if size is None else str(size)
         self.size_label.setText(f"{Path(ed.path).stem}: {used}/{limit} bytes")
         if size is None:
             style = "color: #9a6700;"

@@ -100,6 +100,12 @@ def run(app, settings, project: Optional[str], out: str, run_spec: Optional[str]
             win.sig_build_finished.connect(done.append)
             if win.build_all():
                 wait_until(app, lambda: bool(done), 60)
+            # a build that failed shows its first error, as a person would look at it
+            result = done[0] if done else None
+            first = next((d for d in getattr(result, "all_diagnostics", []) or []
+                          if d.is_error and d.span is not None), None)
+            if first is not None and run_target is None:
+                win.open_location(first.span.file, first.span.line, first.span.col)
         if run_target is not None:
             if not _run_procedure(app, win, run_target, after_ms):
                 return 1

@@ -184,14 +184,14 @@ def test_type_an_error_see_squiggle_and_problem_then_fix(win, project, qtbot):
     assert len(items) == 1 and "expected an expression" in items[0].text(0)
     assert items[0].text(2) == "Ln 7, Col 11"
     assert win.problems.counts() == (1, 0)
-    assert "?/512 bytes" in win.size_text()
+    assert "-/512 bytes" in win.size_text()
     assert win.tabs.tabText(win.tabs.currentIndex()).endswith("●")
     # fix it
     ed.insertText(s, "speed")
     qtbot.waitUntil(lambda: ed.indicator_ranges(IND_ERROR) == [], timeout=5000)
     assert win.problems.problem_items() == []
     assert ed.diagnostic_lines() == {}
-    qtbot.waitUntil(lambda: "?/" not in win.size_text(), timeout=5000)
+    qtbot.waitUntil(lambda: "-/" not in win.size_text(), timeout=5000)
     assert win.size_text().startswith("M03: ") and win.size_text().endswith("/512 bytes")
 
 
