@@ -28,7 +28,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         epilog="Scenario lines (--scenario FILE): 'start NAME[:EPARAM] @ MS', "
                "'input PIN=0|1 @ MS', 'adc CH=VALUE @ MS', 'stop @ MS', "
                "'event GCODE_START @ MS', 'bind PIN=NAME[:EPARAM] @ MS'; '#' starts a "
-               "comment. See docs/simulator.md.")
+               "comment. See README.md, 'The simulated controller'.")
     p.add_argument("target", type=Path, metavar="TARGET",
                    help="a .plc file (a hardware procedure) or a project folder")
     p.add_argument("--ms", type=_nonneg, default=None, metavar="N",

@@ -4,7 +4,7 @@ A machine description says what the simulated controller is wired to: its axes
 (speeds, accelerations, soft limits, start position, work offset), what each
 input pin reads (a switch at an axis position, a sensor that follows an output
 after a delay, a constant), and what each ADC channel reads. The format is
-documented for users in ``docs/machine.md``; the default machine is package data
+documented for users in README.md ("The simulated machine"); the default machine is package data
 (``resources/machine/default.toml``).
 
 Lengths in the file are in mm (degrees for rotary axes), speeds in mm/min,
@@ -550,7 +550,7 @@ def parse_int_value(text: str) -> int:
 def load_variables(path) -> list[int]:
     """Read ``plc-variables.xml``: the initial values of var00..var15.
 
-    The format (see docs/machine.md)::
+    The format (see README.md, "The simulated machine")::
 
         <plc-variables>
           <var name="var00" value="5"/>

@@ -135,7 +135,7 @@ class Settings:
         def line(key: str, value: str, comment: str) -> str:
             return f"{key} = {value}".ljust(27) + f"# {comment}\n"
         lim = self.limits
-        return ("# PLC Builder project settings (see docs/project.md)\n"
+        return ("# PLC Builder project settings (see README.md, 'Projects')\n"
                 + line("name", _toml_str(self.name), "the project's name")
                 + line("machine", _toml_str(self.machine), "the simulated machine's file")
                 + "\n[limits]\n"
