@@ -18,10 +18,10 @@ from plcbuilder.bytecode.program import Kind, LoadError, Program
 from plcbuilder.lang.compiler import (CompileOptions, CompileResult, compile_bytes, compile_file,
                                       compile_source)
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header, builtin_header_names
-from plcbuilder.project import (BuildResult, Project, ProjectError, build_project,
+from plcbuilder.project import (BuildResult, Project, ProjectError, atomic_write, build_project,
                                 create_project)
 
-__all__ = ["BUILTIN_PREFIX", "builtin_header", "builtin_header_names", "BuildResult", "CompileOptions", "CompileResult", "Kind", "LoadError", "Program",
+__all__ = ["atomic_write", "BUILTIN_PREFIX", "builtin_header", "builtin_header_names", "BuildResult", "CompileOptions", "CompileResult", "Kind", "LoadError", "Program",
            "Project", "ProjectError", "build_project", "compile_bytes", "compile_file",
            "compile_source", "create_project", "disassemble", "kind_for_path", "load_program"]
 

@@ -9,8 +9,6 @@ compile never leaves a half-written OUT. With errors nothing is written.
 from __future__ import annotations
 
 import argparse
-import os
-import secrets
 from pathlib import Path
 
 from plcbuilder.cli import term
@@ -40,24 +38,6 @@ def output_path(src: Path, out: Path | None, name: str) -> Path:
     return out
 
 
-def write_atomic(path: Path, data: bytes) -> None:
-    """Write data to path through a temporary file in the same folder and os.replace."""
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
 def _same_file(a: Path, b: Path) -> bool:
     try:
         return a.resolve() == b.resolve()
@@ -85,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
                       f"choose another with -o", err=True)
             return 1
         try:
-            write_atomic(dest, result.program.to_bytes())
+            api.atomic_write(dest, result.program.to_bytes())
         except OSError as exc:
             out.print(f"plcbuilder compile: error: cannot write {dest}: {exc.strerror or exc}",
                       err=True)

@@ -18,7 +18,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional, Sequence
 
-from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import LONG_FORM, Op, Operand, encode, fits, size_of
 from plcbuilder.bytecode.program import Kind, LineEntry, Program
 from plcbuilder.diagnostics import Diagnostic, Span, error

@@ -138,10 +138,11 @@ def test_missing_source(work, capsys):
     assert rc == 1 and out == "" and "gone.plc:1:1: error: gone.plc: no such file" in err
 
 
-def test_write_atomic_replaces_and_cleans_up(tmp_path, monkeypatch):
+def test_compile_writes_atomically_replacing_and_cleaning_up(tmp_path, monkeypatch):
+    from plcbuilder.api import atomic_write
     dest = tmp_path / "a.bin"
     dest.write_bytes(b"old")
-    cmd_compile.write_atomic(dest, b"new")
+    atomic_write(dest, b"new")
     assert dest.read_bytes() == b"new"
     assert os.listdir(tmp_path) == ["a.bin"]
 
@@ -150,7 +151,7 @@ def test_write_atomic_replaces_and_cleans_up(tmp_path, monkeypatch):
 
     monkeypatch.setattr(os, "replace", fail)
     with pytest.raises(OSError):
-        cmd_compile.write_atomic(dest, b"newer")
+        atomic_write(dest, b"newer")
     assert dest.read_bytes() == b"new", "a failed write leaves the old file"
     assert os.listdir(tmp_path) == ["a.bin"], "and no temporary file"
 
