@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, Optional
+from typing import Callable, Iterable, NamedTuple, Optional
 
 
 class Severity(enum.IntEnum):
@@ -25,8 +25,9 @@ class Severity(enum.IntEnum):
         return self.name.lower()
 
 
-@dataclass(frozen=True, order=True)
-class Span:
+class Span(NamedTuple):
+    """Where something is: 1-based line and column, ``end_col`` exclusive.
+    A named tuple: made for every token, so it must be cheap to create."""
     file: str
     line: int
     col: int
@@ -39,11 +40,17 @@ class Span:
 
     def cover(self, other: "Span") -> "Span":
         """The smallest span from the start of self to the end of other (same file)."""
-        if other.file != self.file:
+        if other[0] != self[0]:
             return self
-        start = min((self.line, self.col), (other.line, other.col))
-        end = max((self.end_line, self.end_col), (other.end_line, other.end_col))
-        return Span(self.file, start[0], start[1], end[0], end[1])
+        if (other[1], other[2]) < (self[1], self[2]):
+            start_line, start_col = other[1], other[2]
+        else:
+            start_line, start_col = self[1], self[2]
+        if (other[3], other[4]) > (self[3], self[4]):
+            end_line, end_col = other[3], other[4]
+        else:
+            end_line, end_col = self[3], self[4]
+        return Span(self[0], start_line, start_col, end_line, end_col)
 
 
 @dataclass(frozen=True)

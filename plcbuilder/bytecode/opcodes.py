@@ -139,11 +139,14 @@ def encode(op: Op, arg: Optional[int] = None) -> bytes:
     return bytes((op,)) + _STRUCT[shape].pack(arg)
 
 
+_RANGE = {Operand.I8: (-128, 127), Operand.REL8: (-128, 127),
+          Operand.I16: (-32768, 32767), Operand.REL16: (-32768, 32767),
+          Operand.I32: (-2**31, 2**31 - 1), Operand.SLOT: (0, 255),
+          Operand.ABS16: (0, 65535)}
+
+
 def fits(shape: Operand, value: int) -> bool:
-    lo, hi = {Operand.I8: (-128, 127), Operand.REL8: (-128, 127),
-              Operand.I16: (-32768, 32767), Operand.REL16: (-32768, 32767),
-              Operand.I32: (-2**31, 2**31 - 1), Operand.SLOT: (0, 255),
-              Operand.ABS16: (0, 65535)}[shape]
+    lo, hi = _RANGE[shape]
     return lo <= value <= hi
 
 

@@ -47,14 +47,17 @@ class _Stream:
 
     def __iter__(self):
         toks = self.toks
-        while self.pos < len(toks):
+        n = len(toks)
+        new = Token
+        while self.pos < n:
             i = self.pos
             self.pos = i + 1
             t = toks[i]
-            if t.kind == "BAD":
+            kind = t.kind
+            if kind == "BAD":
                 continue
             s = t.span
-            yield Token(t.kind, t.value, i, s.line, s.col, s.end_line, s.end_col, i + 1)
+            yield new(kind, t.value, i, s[1], s[2], s[3], s[4], i + 1)
 
 
 class _TokLexer(_LarkLexer):
@@ -87,7 +90,13 @@ class AstBuilder(Transformer):
         return self.depth.get(id(node), 0)
 
     def _nest(self, node, *kids):
-        d = 1 + max((self._d(k) for k in kids), default=0)
+        depth = self.depth
+        d = 0
+        for k in kids:
+            kd = depth.get(id(k), 0)
+            if kd > d:
+                d = kd
+        d += 1
         if d > MAX_DEPTH:
             if not self.too_deep:
                 self.too_deep = True
@@ -100,7 +109,7 @@ class AstBuilder(Transformer):
             else:
                 node = A.Empty(node.span)
             d = 1
-        self.depth[id(node)] = d
+        depth[id(node)] = d
         return node
 
     # ---------------------------------------------------------- module

@@ -45,8 +45,8 @@ TERMINAL_TEXT.update({v: k for k, v in KEYWORDS.items()})
 TERMINAL_TEXT.update({"NAME": "a name", "NUMBER": "a number", "$END": "the end of the file"})
 
 _TOKEN_RE = re.compile(r"""
-    (?P<ws>[ \t\f\v]+)
-  | (?P<nl>\n)
+    [ \t\f\v]*                  # blanks before a token are part of its match
+    (?: (?P<nl>\n)
   | (?P<lc>//[^\n]*)
   | (?P<bc>/\*)
   | (?P<num>0[xX][0-9A-Fa-f]*[0-9A-Za-z_]*|[0-9][0-9A-Za-z_]*)
@@ -54,6 +54,7 @@ _TOKEN_RE = re.compile(r"""
   | (?P<punct><<|>>|<=|>=|==|!=|&&|\|\||\+\+|--|[(){};,=+\-*/%<>&|^!~])
   | (?P<hash>\#)
   | (?P<bad>.)
+  | (?P<eof>\Z) )
 """, re.VERBOSE)
 _HEX_RE = re.compile(r"0[xX][0-9A-Fa-f]+")
 _DEC_RE = re.compile(r"[0-9]+")
@@ -151,11 +152,13 @@ class _Lexer:
         while pos < n:
             m = _TOKEN_RE.match(text, pos)
             kind = m.lastgroup
-            s, e = m.start(), m.end()
+            s, e = m.start(kind), m.end()
             col = s - line_start + 1
-            if kind == "ws" or kind == "lc":
+            if kind == "lc":
                 pos = e
                 continue
+            if kind == "eof":
+                break
             if kind == "nl":
                 yield directive, current, hash_span, text[raw_start:s] if directive else ""
                 current, directive, hash_span = [], False, None
@@ -185,11 +188,11 @@ class _Lexer:
                 continue
             first_on_line = False
             if kind == "name":
-                v = m.group()
+                v = m.group(kind)
                 current.append(Tok(KEYWORDS.get(v, "NAME"), v, span))
             elif kind == "num":
-                v = m.group()
-                num = parse_number(v)
+                v = m.group(kind)
+                num = int(v) if v.isdigit() and len(v) < 10 else parse_number(v)
                 if num is None:
                     if not directive:
                         self.diags.append(error("bad-number", f"malformed number '{v}'", span,
@@ -198,7 +201,7 @@ class _Lexer:
                     num = 0
                 current.append(Tok("NUMBER", v, span, num))
             elif kind == "punct":
-                v = m.group()
+                v = m.group(kind)
                 current.append(Tok(PUNCT[v], v, span))
             else:  # bad character or a stray '#'
                 if not directive:
@@ -210,9 +213,9 @@ class _Lexer:
                         what = "'#' (directives start a line)" if ch == "#" else repr(ch)
                         self.diags.append(error("bad-char", f"unexpected character {what}",
                                                 Span(name, line, col, line, col + length)))
-                    current.append(Tok("BAD", m.group(), span))
+                    current.append(Tok("BAD", m.group(kind), span))
                 else:
-                    current.append(Tok("BAD", m.group(), span))
+                    current.append(Tok("BAD", m.group(kind), span))
             pos = e
         yield directive, current, hash_span, text[raw_start:] if directive else ""
 
