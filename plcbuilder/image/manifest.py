@@ -224,6 +224,12 @@ def _no_duplicates(pairs):
     return out
 
 
+def strict_json_loads(text: str):
+    """JSON that refuses repeated keys and NaN/Infinity (raises ValueError, or
+    RecursionError when nested too deeply). Shared with the link protocol."""
+    return json.loads(text, object_pairs_hook=_no_duplicates, parse_constant=_reject_constant)
+
+
 def _int(value, what: str, lo: int = 0, hi: int = 1 << 32) -> int:
     if type(value) is not int or not lo <= value <= hi:
         raise ImageError(f"manifest: {what} must be a whole number from {lo} to {hi}, is {value!r}")
@@ -239,7 +245,7 @@ def parse_manifest(raw: bytes) -> tuple[Limits, list[dict]]:
     except UnicodeDecodeError as exc:
         raise ImageError(f"manifest is not UTF-8 text (byte {exc.start})") from None
     try:
-        doc = json.loads(text, object_pairs_hook=_no_duplicates, parse_constant=_reject_constant)
+        doc = strict_json_loads(text)
     except (ValueError, RecursionError) as exc:
         raise ImageError(f"manifest is not valid JSON: {exc}") from None
     if not isinstance(doc, dict):

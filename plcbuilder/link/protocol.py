@@ -50,6 +50,7 @@ import struct
 from typing import Any, Iterable, Optional
 
 from plcbuilder.controller.events import Sample, from_dict, to_dict
+from plcbuilder.image.manifest import strict_json_loads
 
 #: Bumped on any incompatible change; hello carries it and the server checks it.
 PROTOCOL_VERSION = 1
@@ -145,19 +146,6 @@ def encode_frame(msg: dict, max_frame: int = MAX_FRAME) -> bytes:
     return HEADER.pack(len(payload)) + payload
 
 
-def _no_constant(name: str):
-    raise ValueError(f"{name} is not allowed")
-
-
-def _pairs(pairs):
-    out = {}
-    for k, v in pairs:
-        if k in out:
-            raise ValueError(f"key {k!r} appears twice")
-        out[k] = v
-    return out
-
-
 def decode_payload(payload: bytes, allowed: Optional[frozenset] = None) -> dict:
     """Parse and check one frame's payload. Raises ProtocolError.
 
@@ -169,7 +157,7 @@ def decode_payload(payload: bytes, allowed: Optional[frozenset] = None) -> dict:
     except UnicodeDecodeError as exc:
         raise ProtocolError(f"frame is not UTF-8 (byte {exc.start})") from None
     try:
-        msg = json.loads(text, object_pairs_hook=_pairs, parse_constant=_no_constant)
+        msg = strict_json_loads(text)
     except RecursionError:
         raise ProtocolError("frame is not valid JSON: nested too deeply") from None
     except ValueError as exc:
