@@ -300,23 +300,11 @@ class Machine:
 
     def outputs_on(self) -> list[int]:
         """The output pins that are on, sorted."""
-        out, v, n = [], self._outputs, 0
-        while v:
-            if v & 1:
-                out.append(n)
-            v >>= 1
-            n += 1
-        return out
+        return _bits_on(self._outputs)
 
     def inputs_on(self) -> list[int]:
         """The input pins that read 1, sorted."""
-        out, v, n = [], self._inputs, 0
-        while v:
-            if v & 1:
-                out.append(n)
-            v >>= 1
-            n += 1
-        return out
+        return _bits_on(self._inputs)
 
     def axis_positions(self) -> dict[str, int]:
         """Machine positions (0.01 mm) of the configured axes, in X..W order."""
@@ -426,3 +414,14 @@ class Machine:
                 m.halt()
                 self._sample = None
                 return
+
+
+def _bits_on(v: int) -> list[int]:
+    """The numbers of the bits set in v, ascending."""
+    out, n = [], 0
+    while v:
+        if v & 1:
+            out.append(n)
+        v >>= 1
+        n += 1
+    return out
