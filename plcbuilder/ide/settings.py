@@ -24,17 +24,8 @@ MAX_RECENT = 10
 
 
 @dataclass(frozen=True)
-class Preferences:
-    """Everything the Preferences dialog edits."""
-    font_family: str = ""
-    font_size: int = 11
-    tab_width: int = 4
-    theme: str = "light"
-    show_whitespace: bool = False
-    indent_guides: bool = True
-    autocomplete: bool = True
-    autocomplete_threshold: int = 2
-    hover: bool = True
+class Preferences(EditorPrefs):
+    """Everything the Preferences dialog edits: the editor's own preferences and more."""
     autosave_seconds: int = 5           # recovery autosave interval
     save_before_build: bool = True
     reload_unmodified: bool = True      # reload files changed on disk when not edited
