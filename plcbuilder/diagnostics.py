@@ -11,7 +11,7 @@ characters (not bytes): the IDE converts to Scintilla's byte offsets itself.
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, Iterable, NamedTuple, Optional
 
 
@@ -85,41 +85,6 @@ def error(code: str, message: str, span: Optional[Span], *hints: str,
 def warning(code: str, message: str, span: Optional[Span], *hints: str,
             related: Iterable[Related] = ()) -> Diagnostic:
     return Diagnostic(Severity.WARNING, code, message, span, tuple(hints), tuple(related))
-
-
-@dataclass
-class DiagnosticBag:
-    """Collects diagnostics, dropping exact repeats and capping the count."""
-
-    limit: int = 100
-    items: list[Diagnostic] = field(default_factory=list)
-    _seen: set = field(default_factory=set)
-    truncated: int = 0
-
-    def add(self, diag: Diagnostic) -> None:
-        key = (diag.severity, diag.code, diag.message, diag.span)
-        if key in self._seen:
-            return
-        self._seen.add(key)
-        if len(self.items) >= self.limit:
-            self.truncated += 1
-            return
-        self.items.append(diag)
-
-    def extend(self, diags: Iterable[Diagnostic]) -> None:
-        for d in diags:
-            self.add(d)
-
-    @property
-    def has_errors(self) -> bool:
-        return any(d.is_error for d in self.items)
-
-    def sorted(self) -> list[Diagnostic]:
-        return sorted(self.items, key=lambda d: (d.sort_key(), d.severity))
-
-
-def has_errors(diags: Iterable[Diagnostic]) -> bool:
-    return any(d.is_error for d in diags)
 
 
 # ---------------------------------------------------------------- rendering

@@ -16,7 +16,7 @@ import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Optional, Sequence
+from typing import Optional
 
 from plcbuilder.bytecode.opcodes import LONG_FORM, Op, Operand, encode, fits, size_of
 from plcbuilder.bytecode.program import Kind, LineEntry, Program
@@ -512,7 +512,3 @@ def _size(it: _Ins, long: bool) -> int:
 _BINOP = {"+": Op.ADD, "-": Op.SUB, "*": Op.MUL, "/": Op.DIV, "%": Op.MOD, "<<": Op.SHL,
           ">>": Op.SHR, "&": Op.AND, "|": Op.OR, "^": Op.XOR, "==": Op.EQ, "!=": Op.NE,
           "<": Op.LT, "<=": Op.LE, ">": Op.GT, ">=": Op.GE}
-
-
-def compile_many(paths: Sequence[Path], options: CompileOptions) -> list[CompileResult]:
-    return [compile_file(p, options) for p in paths]

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Optional, Sequence
 
 from plcbuilder.diagnostics import Diagnostic, Related, Span, error, warning
-from plcbuilder.lang.source import SourceFile, SourceSet, decode_source, normalise, read_source
+from plcbuilder.lang.source import SourceFile, SourceSet, normalise, read_source
 
 BUILTIN_PREFIX = "<builtin>/"
 MAX_INCLUDE_DEPTH = 32
@@ -441,24 +441,3 @@ class Preprocessor:
 def preprocess_text(text: str, name: str = "<input>", path: Optional[Path] = None,
                     include_dirs: Sequence[Path] = ()) -> Preprocessed:
     return Preprocessor(include_dirs).run_text(text, name, path)
-
-
-def preprocess_file(path: Path, name: Optional[str] = None,
-                    include_dirs: Sequence[Path] = ()) -> Preprocessed:
-    name = name or str(path)
-    text, diags = read_source(path, name)
-    if text is None:
-        return Preprocessed([], diags, SourceSet(), {}, [])
-    pp = Preprocessor(include_dirs)
-    pp.diags.extend(diags)
-    return pp.run_text(text, name, path)
-
-
-def decode_and_preprocess(data: bytes, name: str, path: Optional[Path] = None,
-                          include_dirs: Sequence[Path] = ()) -> Preprocessed:
-    text, diags = decode_source(data, name)
-    if text is None:
-        return Preprocessed([], diags, SourceSet(), {}, [])
-    pp = Preprocessor(include_dirs)
-    pp.diags.extend(diags)
-    return pp.run_text(text, name, path)

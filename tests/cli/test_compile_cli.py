@@ -10,7 +10,6 @@ import sys
 import pytest
 
 from plcbuilder.bytecode.program import Kind, Program
-from plcbuilder.cli import cmd_compile
 from plcbuilder.cli.main import main
 
 GOOD = """main()
