@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import bisect
 import enum
+import functools
 import struct
 import zlib
 from dataclasses import dataclass, field
@@ -85,8 +86,7 @@ class Program:
         """(file, line) of the instruction at code offset pc, or None."""
         if not self.lines:
             return None
-        pcs = [e.pc for e in self.lines]
-        i = bisect.bisect_right(pcs, pc) - 1
+        i = bisect.bisect_right(self._line_pcs, pc) - 1
         if i < 0:
             return None
         e = self.lines[i]
@@ -95,11 +95,19 @@ class Program:
 
     def proc_at(self, pc: int) -> str | None:
         """The name of the procedure whose code holds pc."""
-        best = None
-        for name, off in sorted(self.procs, key=lambda p: p[1]):
-            if off <= pc:
-                best = name
-        return best
+        starts, names = self._proc_starts
+        i = bisect.bisect_right(starts, pc) - 1
+        return names[i] if i >= 0 else None
+
+    # looked up once per instruction by the disassembler: computed once
+    @functools.cached_property
+    def _line_pcs(self) -> list[int]:
+        return [e.pc for e in self.lines]
+
+    @functools.cached_property
+    def _proc_starts(self) -> tuple[list[int], list[str]]:
+        ordered = sorted(self.procs, key=lambda p: p[1])
+        return [off for _, off in ordered], [name for name, _ in ordered]
 
     def slot_names(self) -> dict[int, str]:
         """Slot number -> variable name, predefined and user variables."""
