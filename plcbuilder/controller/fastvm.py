@@ -41,18 +41,17 @@ import zlib
 from dataclasses import dataclass, field
 from typing import Callable, Iterator, Optional
 
-from plcbuilder.bytecode.opcodes import (BINARY, BUILTIN_STACK, HAS_CONST, HAS_JREL,
-                                         NO_FALLTHROUGH, UNARY, Instruction, Op, validate)
+from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST,
+                                         NO_FALLTHROUGH, STACK_EFFECT, UNARY, Instruction, Op,
+                                         validate)
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.bytecode import abi
 from plcbuilder.controller import vm
 from plcbuilder.controller.vm import (FAULT_DEPTH, FAULT_DIV, FAULT_END, FAULT_MOD,
-                                      IMPLICIT_CONST, MAX_CALL_DEPTH, STACK_LIMIT,
-                                      TICK_BUDGET, Handoff, Host, ProcExit, VMFault)
+                                      MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET, Handoff, Host, ProcExit, VMFault)
 
 __all__ = ["Unsupported", "translate", "make_runner", "factory"]
 
-_COND_JUMPS = HAS_JREL - NO_FALLTHROUGH           # JZ, JNZ, LOOP
 _LOOPS = frozenset({Op.LOOP8, Op.LOOP16})
 _JZ = frozenset({Op.JZ8, Op.JZ16})
 _JNZ = frozenset({Op.JNZ8, Op.JNZ16})
@@ -69,21 +68,6 @@ _YIELD = re.compile(r"\byield\b")
 
 class Unsupported(Exception):
     """The program cannot be translated (the reason says why)."""
-
-
-def _effect(op: Op) -> tuple[int, int]:
-    """(values popped, values pushed)."""
-    if op in HAS_CONST or op in IMPLICIT_CONST or op is Op.LOAD:
-        return 0, 1
-    if op in (Op.STORE, Op.POP, Op.EXIT) or op in _COND_JUMPS:
-        return 1, 0
-    if op in BINARY:
-        return 2, 1
-    if op in UNARY:
-        return 1, 1
-    if op in BUILTIN_STACK:
-        return BUILTIN_STACK[op]
-    return 0, 0
 
 
 # ------------------------------------------------------------------ analysis
@@ -140,7 +124,7 @@ def _function(fstart: int, at: dict[int, Instruction], end: int) -> _Func:
             continue
         i = at[pc]
         d = depth[pc]
-        pops, pushes = _effect(i.op)
+        pops, pushes = STACK_EFFECT[i.op]
         if d < pops:
             raise Unsupported(f"stack underflow at {pc}")
         if i.op in (Op.CALL, Op.RET) and d:

@@ -31,8 +31,8 @@ from __future__ import annotations
 
 from typing import Callable, Iterator, Optional
 
-from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, Op, UNARY, size_of,
-                                         validate)
+from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST, Op, UNARY,
+                                         size_of, validate)
 from plcbuilder.bytecode.program import Program
 
 TICK_BUDGET = 100_000
@@ -155,9 +155,6 @@ _UNOPS: dict[int, Callable[[int], int]] = {
     Op.BOOL: lambda a: 1 if a else 0,
 }
 assert set(_BINOPS) == set(BINARY) and set(_UNOPS) == set(UNARY)
-
-#: Constant pushes without an operand.
-IMPLICIT_CONST = {Op.PUSH0: 0, Op.PUSH1: 1}
 
 
 def binary(op: Op, a: int, b: int) -> int:
