@@ -25,6 +25,7 @@ from typing import Callable, Iterable, Optional
 
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.bytecode.semantics import wrap
 from plcbuilder.controller import fastvm, vm
 from plcbuilder.controller.events import (Ended, Fault, Message, Note, Print, Sample,
                                           Started)
@@ -81,7 +82,7 @@ class PLC:
         vals = list(variables) if variables is not None else []
         if len(vals) > 16:
             raise ValueError(f"{len(vals)} initial variables, var00..var15 are 16")
-        self.var_init = [vm.wrap(int(v)) for v in vals] + [0] * (16 - len(vals))
+        self.var_init = [wrap(int(v)) for v in vals] + [0] * (16 - len(vals))
         self.latency = max(0, int(gvarget_latency_ms))
         self.record_samples = record_samples
         self.events: deque = deque(maxlen=EVENT_BUFFER)
@@ -148,7 +149,7 @@ class PLC:
                     starthw=starthw, seteparam=seteparam, softjog=softjog, software=True)
 
     def _spawn(self, program: Program, eparam: int) -> Process:
-        eparam = vm.wrap(int(eparam))
+        eparam = wrap(int(eparam))
         slots = [0] * 256                  # every slot an instruction can name (a byte)
         slots[abi.SLOT_EPARAM] = eparam
         slots[abi.SLOT_VAR00:abi.SLOT_VAR00 + 16] = self.var_init
@@ -205,7 +206,7 @@ class PLC:
         reference interpreter (which then finishes this tick)."""
         while True:
             if isinstance(exc, ProcExit):
-                self._end(p, vm.wrap(exc.code))
+                self._end(p, wrap(exc.code))
             elif isinstance(exc, VMFault):
                 self._fault(p, exc.pc, exc.text, exc.callers)
             elif isinstance(exc, StopIteration):

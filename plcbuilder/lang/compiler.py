@@ -20,6 +20,7 @@ from typing import Optional
 
 from plcbuilder.bytecode.opcodes import LONG_FORM, Op, Operand, encode, fits, size_of
 from plcbuilder.bytecode.program import Kind, LineEntry, Program
+from plcbuilder.bytecode.semantics import BINARY_SYMBOL, UNARY_SYMBOL
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
 from plcbuilder.lang.checker import BUILTINS, Checker, Resolved, Symbols, const_value
@@ -419,10 +420,10 @@ class Generator:
                 return
             self.expr(e.left)
             self.expr(e.right)
-            self.emit(_BINOP[e.op])
+            self.emit(BINARY_SYMBOL[e.op])
         elif t is A.Unary:
             self.expr(e.operand)
-            self.emit({"-": Op.NEG, "!": Op.NOT, "~": Op.BNOT}[e.op])
+            self.emit(UNARY_SYMBOL[e.op])
         elif t is A.Call:
             for a in e.args:
                 self.expr(a)
@@ -507,8 +508,3 @@ def _size(it: _Ins, long: bool) -> int:
     if it.label is not None:
         return 3 if long else 2
     return size_of(it.op)
-
-
-_BINOP = {"+": Op.ADD, "-": Op.SUB, "*": Op.MUL, "/": Op.DIV, "%": Op.MOD, "<<": Op.SHL,
-          ">>": Op.SHR, "&": Op.AND, "|": Op.OR, "^": Op.XOR, "==": Op.EQ, "!=": Op.NE,
-          "<": Op.LT, "<=": Op.LE, ">": Op.GT, ">=": Op.GE}
