@@ -5,7 +5,7 @@ The PLC (hardware or software) reaches it through ``portset``/``portclear``/
 (scenarios, the IDE, the server) through ``set_input``, ``set_adc``, ``advance``
 and the sampling methods. One ``advance()`` is 1 ms of machine time.
 
-Register map (SPEC §2 "I/O and registers"; decisions in README.md, "The simulated machine"):
+Register map (for users: docs/machine.md, "Registers"):
 
 =====================  ==================================================
 0x400 + n              state of output n (read-only)

@@ -1,5 +1,6 @@
-"""SPEC §2 (the hardware PLC) and §3 (the software PLC), one test per sentence,
-each quoting its sentence; every test runs on both VM backends."""
+"""The timing rules of the hardware PLC and the software PLC (docs/controller.md,
+"Timing rules"), one test per sentence, each quoting its sentence; every test
+runs on both VM backends."""
 
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ def prints(events):
     return [(e.t_ms, e.register, e.value) for e in events if isinstance(e, Print)]
 
 
-# =================================================================== §2 timing
+# ====================================================== hardware PLC timing
 
 def test_time_advances_in_ticks_of_1_ms(backend):
     """Time advances in ticks of 1 ms."""
@@ -401,7 +402,7 @@ def test_variables_start_at_0_except_eparam_var00_15_and_param(backend):
     assert (v["__S"]["p"], v["__S"]["q"]) == (12, 101)
 
 
-# ============================================================== §3 software
+# ========================================================= software PLC
 
 def test_software_ticks_are_100_ms(backend):
     """Ticks of 100 ms."""
