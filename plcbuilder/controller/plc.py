@@ -116,6 +116,9 @@ class PLC:
             events.append(Print(self.t, addr, value, name))
             raw(addr, value)
 
+        common = dict(portset=m.portset, portclr=m.portclear, portget=m.portget,
+                      gvarget=m.gvarget, g0move=m.g0move, plain=m.is_plain_register, pr=pr,
+                      raw_gvarset=raw)
         if kind is Kind.HARDWARE:
             def gvarset(addr: int, value: int) -> None:
                 if lo <= addr <= hi:
@@ -123,9 +126,7 @@ class PLC:
                 else:
                     raw(addr, value)
 
-            return Host(portset=m.portset, portclr=m.portclear, portget=m.portget,
-                        gvarget=m.gvarget, gvarset=gvarset, g0move=m.g0move,
-                        plain=m.is_plain_register, lat=self.latency, pr=pr, raw_gvarset=raw)
+            return Host(**common, gvarset=gvarset, lat=self.latency)
 
         def starthw(n: int) -> None:
             self._request_hardware(n, name)
@@ -148,10 +149,8 @@ class PLC:
             else:
                 raw(addr, value)
 
-        return Host(portset=m.portset, portclr=m.portclear, portget=m.portget,
-                    gvarget=m.gvarget, gvarset=sw_gvarset, g0move=m.g0move,
-                    plain=m.is_plain_register, lat=0, pr=pr, raw_gvarset=raw,
-                    starthw=starthw, seteparam=seteparam, softjog=softjog, software=True)
+        return Host(**common, gvarset=sw_gvarset, lat=0, starthw=starthw, seteparam=seteparam,
+                    softjog=softjog, software=True)
 
     def _spawn(self, program: Program, eparam: int) -> Process:
         eparam = wrap(int(eparam))
