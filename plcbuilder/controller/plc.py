@@ -331,10 +331,11 @@ class PLC:
         """Run ``ms`` ticks; with ``until_idle``, stop after the first tick that
         leaves no procedure running and none due. Returns the ticks run.
 
-        Every tick is :meth:`_tick`, except runs of ticks in which nothing but
-        a fast path's work can happen (no software tick, no start due, no
-        input bound): :meth:`_hardware_alone` (a hardware procedure alone, the
-        common case) and :meth:`_machine_alone` (no procedure at all). They
+        Every tick is :meth:`_tick`, except where no start is due and no input
+        is bound, between software ticks: there the fast paths
+        :meth:`_hardware_alone` (a hardware procedure alone, the common case;
+        it also goes on through the software ticks, which are :meth:`_tick`'s)
+        and :meth:`_machine_alone` (no procedure at all) do the same work, and
         end their ticks as :meth:`_after_tick` does. Samples are kept as raw
         rows ``(t, running, proc, message, machine fields)``;
         :meth:`take_samples` turns them into :class:`Sample` objects."""
@@ -346,7 +347,7 @@ class PLC:
                 self._tick(t, software=t == next_sw)
                 t += 1
             elif self.hw is not None:
-                t = self._hardware_alone(t, min(end, next_sw))
+                t = self._hardware_alone(t, end)
             else:
                 stop = t + 1 if until_idle and self.idle() else min(end, next_sw)
                 t = self._machine_alone(t, stop)
@@ -380,8 +381,9 @@ class PLC:
         software by name) whose ``message`` is not 0 sends it; the sample is
         recorded (its message: the first one sent); the machine advances 1 ms."""
         msg = 0
+        message_slot = abi.SLOT_MESSAGE
         for p in ran:
-            code = p.slots[abi.SLOT_MESSAGE]
+            code = p.slots[message_slot]
             if code:
                 self._send(p, code)
                 if not msg:
@@ -394,11 +396,14 @@ class PLC:
         if notes:
             self._emit_notes(t, notes)
 
-    def _hardware_alone(self, t: int, stop: int) -> int:
-        """Ticks t..stop-1 with the hardware procedure alone: :meth:`_tick` and
-        :meth:`_after_tick` for one procedure, written out, with advance() skipped
-        while the machine is quiet. A tick that ends the procedure (or hands it
-        over to the reference interpreter) is the last. Returns the next tick."""
+    def _hardware_alone(self, t: int, end: int) -> int:
+        """Ticks from t (not a software tick) on, while the hardware procedure
+        runs with no start due and no input bound: between software ticks,
+        :meth:`_tick` and :meth:`_after_tick` for one procedure, written out,
+        with advance() skipped while the machine is quiet; the software ticks
+        are :meth:`_tick`'s. Returns the next tick at ``end``, or after a tick
+        that ended the procedure, handed it over to the reference interpreter
+        or made a start due."""
         hw = self.hw
         resume, slots, name = hw.resume, hw.slots, hw.name
         message_slot, proc_slot = abi.SLOT_MESSAGE, abi.SLOT_PROC
@@ -408,27 +413,34 @@ class PLC:
         send = self._send
         add_sample = self.samples.append
         rec = self.record_samples
-        while t < stop:
-            self.t = t
-            try:
-                resume()
-            except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
-                self._outcome(hw, exc)
-                self._after_tick(t, (hw,))
-                return t + 1
-            code = slots[message_slot]
-            if code:
-                send(hw, code)
-            if rec:
-                add_sample((t, name, slots[proc_slot], code, fields()))
-            if not notes_pending and machine.quiet:
-                machine.t_ms += 1                  # advance() would do only this
-            else:
-                notes = advance()
-                if notes:
-                    self._emit_notes(t, notes)
+        while True:
+            stop = min(end, t + (-t) % SOFTWARE_PERIOD_MS)
+            while t < stop:
+                self.t = t
+                try:
+                    resume()
+                except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                    self._outcome(hw, exc)
+                    self._after_tick(t, (hw,))
+                    return t + 1
+                code = slots[message_slot]
+                if code:
+                    send(hw, code)
+                if rec:
+                    add_sample((t, name, slots[proc_slot], code, fields()))
+                if not notes_pending and machine.quiet:
+                    machine.t_ms += 1              # advance() would do only this
+                else:
+                    notes = advance()
+                    if notes:
+                        self._emit_notes(t, notes)
+                t += 1
+            if t == end:
+                return t
+            self._tick(t, software=True)
             t += 1
-        return t
+            if self.hw is not hw or hw.resume is not resume or self._due_hw or self.bindings:
+                return t
 
     def _machine_alone(self, t: int, stop: int) -> int:
         """Ticks t..stop-1 with no procedure running and none due: only the
