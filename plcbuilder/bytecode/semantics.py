@@ -59,7 +59,8 @@ class Operator:
     #: the result modulo 2**32 depends only on the operands modulo 2**32, so a
     #: value may stay unwrapped through it (the fast backend defers wrapping)
     modular: bool = False
-    #: the source for a divisor known to be positive (DIV and MOD), simpler
+    #: DIV and MOD: the source for a divisor known to be positive (simpler; its
+    #: value always is a 32-bit value)
     positive_divisor: Optional[str] = None
     #: the reference function, compiled from the source
     fn: Callable = field(init=False, repr=False, compare=False)
