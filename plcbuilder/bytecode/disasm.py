@@ -6,8 +6,8 @@ from dataclasses import dataclass
 from typing import Callable, Iterator, Optional
 
 from plcbuilder.bytecode import abi
-from plcbuilder.bytecode.opcodes import (BINARY, BUILTIN_STACK, HAS_CONST, HAS_SLOT, UNARY, Op,
-                                        decode)
+from plcbuilder.bytecode.opcodes import (HAS_CONST, HAS_SLOT, IMPLICIT_CONST, STACK_EFFECT, Op,
+                                         decode)
 from plcbuilder.bytecode.program import Program
 
 
@@ -35,7 +35,7 @@ def _register_operands(decoded) -> set[int]:
     following the stack through straight-line code."""
     targets = {i.target for i in decoded if i.target is not None}
     found: set[int] = set()
-    stack: list[int | None] = []
+    stack: list[int | None] = []       # the offset of the constant of each value, or None
     for ins in decoded:
         if ins.offset in targets:
             stack = []
@@ -44,24 +44,13 @@ def _register_operands(decoded) -> set[int]:
             depth = 1 if op is Op.GVARGET else 2
             if len(stack) >= depth and stack[-depth] is not None:
                 found.add(stack[-depth])
-        if op in HAS_CONST or op in (Op.PUSH0, Op.PUSH1):
+        pops, pushes = STACK_EFFECT[op]
+        del stack[len(stack) - min(pops, len(stack)):]
+        if op in HAS_CONST or op in IMPLICIT_CONST:
             stack.append(ins.offset)
-        elif op is Op.LOAD:
-            stack.append(None)
-        elif op in BINARY:
-            del stack[-2:]
-            stack.append(None)
-        elif op in UNARY:
-            if stack:
-                stack[-1] = None
-        elif op in BUILTIN_STACK:
-            pops, pushes = BUILTIN_STACK[op]
-            del stack[len(stack) - min(pops, len(stack)):]
+        else:
             stack.extend([None] * pushes)
-        elif op in (Op.STORE, Op.POP, Op.EXIT):
-            if stack:
-                stack.pop()
-        elif ins.target is not None or op in (Op.RET, Op.YIELD):
+        if ins.target is not None or op in (Op.RET, Op.YIELD):
             stack = []
     return found
 

@@ -8,8 +8,10 @@ the opcode byte, little-endian:
 - ``REL8``/``REL16``: a signed jump offset, relative to the end of the instruction;
 - ``ABS16``: an absolute code offset (CALL).
 
-The compiler, both VM backends and the disassembler all use the sets below, so
-adding an opcode here is the only place its shape is stated.
+The compiler, both VM backends and the disassembler all use the tables below
+(operand shapes, sets by role, stack effects), so adding an opcode here is the
+only place its shape is stated. What the operators compute is in
+:mod:`plcbuilder.bytecode.semantics`.
 """
 
 from __future__ import annotations
@@ -116,9 +118,20 @@ BINARY = frozenset({Op.ADD, Op.SUB, Op.MUL, Op.DIV, Op.MOD, Op.SHL, Op.SHR, Op.A
 UNARY = frozenset({Op.NEG, Op.NOT, Op.BNOT, Op.BOOL})
 ENDS_TICK = frozenset({Op.LOOP8, Op.LOOP16, Op.YIELD})
 BUILTIN_CALLS = frozenset({Op.PORTSET, Op.PORTCLR, Op.PORTGET, Op.GVARGET, Op.GVARSET, Op.G0MOVE})
-#: (arguments popped, values pushed) of each built-in call
-BUILTIN_STACK = {Op.PORTSET: (1, 0), Op.PORTCLR: (1, 0), Op.PORTGET: (1, 1),
-                 Op.GVARGET: (1, 1), Op.GVARSET: (2, 0), Op.G0MOVE: (3, 0)}
+#: Constant pushes without an operand, and the value each pushes.
+IMPLICIT_CONST = {Op.PUSH0: 0, Op.PUSH1: 1}
+#: Conditional jumps: they pop the condition (LOOP also ends the tick).
+COND_JUMPS = frozenset({Op.JZ8, Op.JZ16, Op.JNZ8, Op.JNZ16, Op.LOOP8, Op.LOOP16})
+
+#: (values popped, values pushed) by each opcode. CALL and RET move no values
+#: (procedures share variables, not the stack).
+STACK_EFFECT: dict[Op, tuple[int, int]] = {op: (0, 0) for op in Op}
+STACK_EFFECT.update({op: (0, 1) for op in HAS_CONST | set(IMPLICIT_CONST) | {Op.LOAD}})
+STACK_EFFECT.update({op: (1, 0) for op in COND_JUMPS | {Op.STORE, Op.POP, Op.EXIT}})
+STACK_EFFECT.update({op: (2, 1) for op in BINARY})
+STACK_EFFECT.update({op: (1, 1) for op in UNARY})
+STACK_EFFECT.update({Op.PORTSET: (1, 0), Op.PORTCLR: (1, 0), Op.PORTGET: (1, 1),  # built-in calls:
+                     Op.GVARGET: (1, 1), Op.GVARSET: (2, 0), Op.G0MOVE: (3, 0)})  # their arguments
 #: Opcodes after which execution does not fall through to the next instruction.
 NO_FALLTHROUGH = frozenset({Op.JMP8, Op.JMP16, Op.RET, Op.EXIT})
 #: Short form -> long form of each jump, for the compiler's relaxation pass.

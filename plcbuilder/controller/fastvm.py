@@ -10,8 +10,11 @@ How the code is translated:
 - The stack is simulated at translation time: within a basic block stack
   values are Python expressions, so ``x = x + 1`` becomes one statement. At a
   block boundary the values are stored in locals named by stack position
-  (``_0``, ``_1``, …). Wrapping to 32 bits is deferred while it cannot change
-  the result (``+ - * & | ^ <<`` are exact modulo 2**32) and applied where a
+  (``_0``, ``_1``, …). Each operator is written as its source in
+  :mod:`plcbuilder.bytecode.semantics` (the table the reference interpreter and
+  the checker's folding use), over the operands' expressions. Wrapping to 32
+  bits is deferred while it cannot change the result (the operators marked
+  ``modular``: ``+ - * & | ^ <<``, unary ``-`` and ``~``) and applied where a
   value is stored, compared, divided, shifted right or passed out.
 - Control flow: a block with exactly one predecessor is written inline at its
   predecessor's branch (``if``/``else``); every other block is a *label*. A
@@ -41,18 +44,19 @@ import zlib
 from dataclasses import dataclass, field
 from typing import Callable, Iterator, Optional
 
-from plcbuilder.bytecode.opcodes import (BINARY, BUILTIN_STACK, HAS_CONST, HAS_JREL,
-                                         NO_FALLTHROUGH, UNARY, Instruction, Op, validate)
+from plcbuilder.bytecode import abi, semantics
+from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST,
+                                         NO_FALLTHROUGH, STACK_EFFECT, UNARY, Instruction, Op,
+                                         validate)
 from plcbuilder.bytecode.program import Kind, Program
-from plcbuilder.bytecode import abi
+from plcbuilder.bytecode.semantics import INT_MAX, INT_MIN, SHIFT_MASK, WRAP_SOURCE, Result
 from plcbuilder.controller import vm
 from plcbuilder.controller.vm import (FAULT_DEPTH, FAULT_DIV, FAULT_END, FAULT_MOD,
-                                      IMPLICIT_CONST, MAX_CALL_DEPTH, STACK_LIMIT,
-                                      TICK_BUDGET, Handoff, Host, ProcExit, VMFault)
+                                      MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET, Handoff, Host,
+                                      ProcExit, VMFault)
 
 __all__ = ["Unsupported", "translate", "make_runner", "factory"]
 
-_COND_JUMPS = HAS_JREL - NO_FALLTHROUGH           # JZ, JNZ, LOOP
 _LOOPS = frozenset({Op.LOOP8, Op.LOOP16})
 _JZ = frozenset({Op.JZ8, Op.JZ16})
 _JNZ = frozenset({Op.JNZ8, Op.JNZ16})
@@ -69,21 +73,6 @@ _YIELD = re.compile(r"\byield\b")
 
 class Unsupported(Exception):
     """The program cannot be translated (the reason says why)."""
-
-
-def _effect(op: Op) -> tuple[int, int]:
-    """(values popped, values pushed)."""
-    if op in HAS_CONST or op in IMPLICIT_CONST or op is Op.LOAD:
-        return 0, 1
-    if op in (Op.STORE, Op.POP, Op.EXIT) or op in _COND_JUMPS:
-        return 1, 0
-    if op in BINARY:
-        return 2, 1
-    if op in UNARY:
-        return 1, 1
-    if op in BUILTIN_STACK:
-        return BUILTIN_STACK[op]
-    return 0, 0
 
 
 # ------------------------------------------------------------------ analysis
@@ -140,7 +129,7 @@ def _function(fstart: int, at: dict[int, Instruction], end: int) -> _Func:
             continue
         i = at[pc]
         d = depth[pc]
-        pops, pushes = _effect(i.op)
+        pops, pushes = STACK_EFFECT[i.op]
         if d < pops:
             raise Unsupported(f"stack underflow at {pc}")
         if i.op in (Op.CALL, Op.RET) and d:
@@ -309,11 +298,6 @@ class _Ctx:
     wrapped: bool
 
 
-_ARITH = {Op.ADD: "+", Op.SUB: "-", Op.MUL: "*"}
-_BITWISE = {Op.AND: "&", Op.OR: "|", Op.XOR: "^"}
-_COMPARE = {Op.EQ: "==", Op.NE: "!=", Op.LT: "<", Op.LE: "<=", Op.GT: ">", Op.GE: ">="}
-
-
 class _Gen:
     def __init__(self, program: Program, latency: bool):
         self.program = program
@@ -341,7 +325,7 @@ class _Gen:
             return f"(1 if {v.e} else 0)"
         if v.exact:
             return v.e
-        return f"(({v.e} + 2147483648 & 4294967295) - 2147483648)"
+        return WRAP_SOURCE.format(v=v.e)
 
     @staticmethod
     def as_cond(v: _V) -> str:
@@ -584,12 +568,12 @@ class _Gen:
             name = self.temp()
             if op is Op.INC:
                 self.emit(ind, f"{name} = {old} + 1")
-                self.emit(ind, f"if {name} > 2147483647:")
-                self.emit(ind + 1, f"{name} = -2147483648")
+                self.emit(ind, f"if {name} > {INT_MAX}:")
+                self.emit(ind + 1, f"{name} = {INT_MIN}")
             else:
                 self.emit(ind, f"{name} = {old} - 1")
-                self.emit(ind, f"if {name} < -2147483648:")
-                self.emit(ind + 1, f"{name} = 2147483647")
+                self.emit(ind, f"if {name} < {INT_MIN}:")
+                self.emit(ind + 1, f"{name} = {INT_MAX}")
             self.emit(ind, f"s[{i.arg}] = {name}")
             self.known[i.arg] = _V(name)
         elif op is Op.POP:
@@ -639,45 +623,46 @@ class _Gen:
         return f"raw_gvarset({c}, {value})"
 
     def binary(self, op: Op, a: _V, b: _V, pc: int, ind: int) -> _V:
-        if a.const is not None and b.const is not None and \
-                not (op in (Op.DIV, Op.MOD) and b.const == 0):
-            return _const(vm.binary(op, a.const, b.const))
+        """The operator's source (semantics.BINARY) over the operands' expressions,
+        wrapped only where the value must be exact."""
+        o = semantics.BINARY[op]
+        if a.const is not None and b.const is not None and not (o.divides and b.const == 0):
+            return _const(o.fn(a.const, b.const))
+        if o.divides:
+            return self.divide(o, a, b, pc, ind)
         slots, temps = _join(a, b)
-        if op in _ARITH:
-            if op is Op.MUL:
-                if a.bits + b.bits > _BITS_CAP:
-                    a, b = self.tight(a), self.tight(b)
-                bits = a.bits + b.bits
-            else:
-                if max(a.bits, b.bits) >= _BITS_CAP:
-                    a, b = self.tight(a), self.tight(b)
-                bits = max(a.bits, b.bits) + 1
-            return _V(f"({a.e} {_ARITH[op]} {b.e})", exact=False, slots=slots, temps=temps,
-                      bits=bits)
-        if op in _BITWISE:
-            return _V(f"({a.e} {_BITWISE[op]} {b.e})", exact=a.exact and b.exact,
-                      isbool=a.isbool and b.isbool, slots=slots, temps=temps,
-                      bits=max(a.bits, b.bits))
-        if op is Op.SHL or op is Op.SHR:
+        if o.shifts:
+            # the count is taken modulo 32, so b may stay unwrapped; >> needs an exact a
             if op is Op.SHR:
                 a = self.tight(a)
-            if b.const is not None:
-                n = b.const & 31
-                count, shift = str(n), n
-            else:
-                count, shift = f"({b.e} & 31)", 31
-            if op is Op.SHR:
-                return _V(f"({a.e} >> {count})", slots=slots, temps=temps)
+                return _V(f"({o.text(a.e, b.e)})", slots=slots, temps=temps)
+            shift = b.const & SHIFT_MASK if b.const is not None else SHIFT_MASK
             if a.bits + shift > _BITS_CAP:
                 a = self.tight(a)
-            return _V(f"({a.e} << {count})", exact=False, slots=slots, temps=temps,
+            return _V(f"({o.text(a.e, b.e)})", exact=False, slots=slots, temps=temps,
                       bits=a.bits + shift)
-        if op in _COMPARE:
+        if o.result is Result.BOOL:
             a, b = self.tight(a), self.tight(b)
-            return _V(f"({a.e} {_COMPARE[op]} {b.e})", isbool=True, slots=slots, temps=temps,
-                      bits=1)
-        # DIV / MOD: statements, in order, with the zero check
-        fault = FAULT_DIV if op is Op.DIV else FAULT_MOD
+            return _V(f"({o.text(a.e, b.e)})", isbool=True, slots=slots, temps=temps, bits=1)
+        assert o.modular
+        if o.result is Result.EXACT:      # & | ^: exact when both operands are
+            return _V(f"({o.text(a.e, b.e)})", exact=a.exact and b.exact,
+                      isbool=a.isbool and b.isbool, slots=slots, temps=temps,
+                      bits=max(a.bits, b.bits))
+        # + - *: wrapped later, while the value stays below 2**_BITS_CAP
+        if op is Op.MUL:
+            if a.bits + b.bits > _BITS_CAP:
+                a, b = self.tight(a), self.tight(b)
+            bits = a.bits + b.bits
+        else:
+            if max(a.bits, b.bits) >= _BITS_CAP:
+                a, b = self.tight(a), self.tight(b)
+            bits = max(a.bits, b.bits) + 1
+        return _V(f"({o.text(a.e, b.e)})", exact=False, slots=slots, temps=temps, bits=bits)
+
+    def divide(self, o: semantics.Operator, a: _V, b: _V, pc: int, ind: int) -> _V:
+        """DIV / MOD: statements, in order, with the zero check."""
+        fault = FAULT_DIV if o.op is Op.DIV else FAULT_MOD
         x = self.as_int(a)
         if b.const is not None and b.const == 0:
             self.emit(ind, f"raise VMFault({pc}, {fault!r})")
@@ -688,11 +673,7 @@ class _Gen:
             x = t
         name = self.temp()
         if b.const is not None and b.const > 0:
-            c = b.const
-            if op is Op.DIV:
-                self.emit(ind, f"{name} = {x} // {c} if {x} >= 0 else -(-{x} // {c})")
-            else:
-                self.emit(ind, f"{name} = {x} % {c} if {x} >= 0 else -(-{x} % {c})")
+            self.emit(ind, f"{name} = {o.positive_divisor.format(a=x, b=b.const)}")
             return _V(name)
         y = self.as_int(b)
         if not _SIMPLE.match(y):
@@ -701,26 +682,23 @@ class _Gen:
             y = t
         self.emit(ind, f"if {y} == 0:")
         self.emit(ind + 1, f"raise VMFault({pc}, {fault!r})")
-        if op is Op.DIV:
-            self.emit(ind, f"{name} = {x} // {y} if ({x} >= 0) == ({y} > 0) else -(-{x} // {y})")
+        self.emit(ind, f"{name} = {o.text(x, y)}")
+        if o.result is Result.WRAP:        # INT_MIN / -1
             return _V(name, exact=False, bits=32)
-        self.emit(ind, f"{name} = c_mod({x}, {y})")
         return _V(name)
 
     def unary(self, op: Op, a: _V) -> _V:
+        o = semantics.UNARY[op]
         if a.const is not None:
-            return _const(vm.unary(op, a.const))
-        if op is Op.NEG:
-            return _V(f"(-{a.e})", exact=False, slots=a.slots, temps=a.temps, bits=a.bits + 1)
-        if op is Op.BNOT:
-            return _V(f"(~{a.e})", exact=a.exact, slots=a.slots, temps=a.temps, bits=a.bits + 1)
-        if op is Op.NOT:
-            return _V(f"(not {self.as_cond(a)})", isbool=True, slots=a.slots, temps=a.temps,
+            return _const(o.fn(a.const))
+        if o.result is Result.BOOL:        # NOT, BOOL: on the value modulo 2**32
+            if op is Op.BOOL and a.isbool:
+                return a
+            return _V(f"({o.text(self.as_cond(a))})", isbool=True, slots=a.slots, temps=a.temps,
                       bits=1)
-        # BOOL
-        if a.isbool:
-            return a
-        return _V(f"({self.as_cond(a)} != 0)", isbool=True, slots=a.slots, temps=a.temps, bits=1)
+        # NEG, BNOT
+        return _V(f"({o.text(a.e)})", exact=a.exact and o.result is Result.EXACT, slots=a.slots,
+                  temps=a.temps, bits=a.bits + 1)
 
     def terminator(self, i: Instruction, stack: list[_V], ind: int,
                    ctx: _Ctx) -> Optional[tuple[int, list[_V]]]:
@@ -807,7 +785,7 @@ class _Gen:
 # ------------------------------------------------------------------ runtime
 
 _NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff,
-              "c_mod": vm.c_mod, "__builtins__": {"len": len, "range": range}}
+              "__builtins__": {"len": len, "range": range}}
 _CACHE: dict[tuple, tuple[bytes, Optional[Callable], str]] = {}
 
 

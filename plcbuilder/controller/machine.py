@@ -5,7 +5,7 @@ The PLC (hardware or software) reaches it through ``portset``/``portclear``/
 (scenarios, the IDE, the server) through ``set_input``, ``set_adc``, ``advance``
 and the sampling methods. One ``advance()`` is 1 ms of machine time.
 
-Register map (SPEC §2 "I/O and registers"; decisions in README.md, "The simulated machine"):
+Register map (for users: docs/machine.md, "Registers"):
 
 =====================  ==================================================
 0x400 + n              state of output n (read-only)
@@ -29,6 +29,7 @@ from typing import Callable, Optional
 
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.abi import AXES
+from plcbuilder.bytecode.semantics import wrap
 
 from .config import ADC_CHANNELS, MachineConfig, default_machine
 from .motion import N_AXES, Motion, fmt_mm
@@ -40,11 +41,6 @@ STOP_MESSAGES = frozenset(abi.PLCCMD[n] for n in (
 
 _M32 = 0xFFFFFFFF
 _WORD_SHIFTS = tuple(range(0, 256, 32))
-
-
-def _s32(v: int) -> int:
-    v &= _M32
-    return v - (1 << 32) if v & 0x80000000 else v
 
 
 class Machine:
@@ -103,10 +99,10 @@ class Machine:
             g[abi.OUTPUT_STATE_BASE + n] = self._get_output_bit
             s[abi.OUTPUT_STATE_BASE + n] = ro
         for k, a in enumerate(abi.GVAR_HW_INPUTS):
-            g[a] = (lambda _a, k=k: _s32(self._inputs >> (32 * k)))
+            g[a] = (lambda _a, k=k: wrap(self._inputs >> (32 * k)))
             s[a] = ro
         for k, a in enumerate(abi.GVAR_HW_OUTPUTS):
-            g[a] = (lambda _a, k=k: _s32(self._outputs >> (32 * k)))
+            g[a] = (lambda _a, k=k: wrap(self._outputs >> (32 * k)))
             s[a] = (lambda _a, v, k=k: self._set_output_word(k, v))
         for ch in range(ADC_CHANNELS):
             g[abi.GVAR_HW_ADC0 + ch] = (lambda _a, ch=ch: self._adc[ch])

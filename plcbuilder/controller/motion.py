@@ -4,7 +4,7 @@ Units inside: positions in 0.01 mm (0.01° on rotary axes) as floats, time in ms
 velocity in 0.01 mm per ms, acceleration in 0.01 mm per ms². Reported positions
 are the floats rounded to the nearest integer.
 
-Decisions (documented for users in README.md, "The simulated machine"):
+Decisions (documented for users in docs/machine.md, "Motion"):
 
 - A g0moveA of several axes is one coordinated straight line: every axis starts
   and arrives together. The path speed and acceleration are the largest that

@@ -1,7 +1,7 @@
 """The hardware PLC (1 ms ticks, one procedure at a time) and the software PLC
 (100 ms ticks, every procedure side by side), scheduled together tick by tick.
 
-One tick ``t`` (SPEC §2, §3):
+One tick ``t`` (docs/controller.md, "Timing rules"):
 
 1. starts due at ``t`` (hardware procedures asked for by a software procedure
    with ``gvarset(100040, N)`` in the previous tick) begin; starts, inputs and
@@ -25,6 +25,7 @@ from typing import Callable, Iterable, Optional
 
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.bytecode.semantics import wrap
 from plcbuilder.controller import fastvm, vm
 from plcbuilder.controller.events import (Ended, Fault, Message, Note, Print, Sample,
                                           Started)
@@ -81,7 +82,7 @@ class PLC:
         vals = list(variables) if variables is not None else []
         if len(vals) > 16:
             raise ValueError(f"{len(vals)} initial variables, var00..var15 are 16")
-        self.var_init = [vm.wrap(int(v)) for v in vals] + [0] * (16 - len(vals))
+        self.var_init = [wrap(int(v)) for v in vals] + [0] * (16 - len(vals))
         self.latency = max(0, int(gvarget_latency_ms))
         self.record_samples = record_samples
         self.events: deque = deque(maxlen=EVENT_BUFFER)
@@ -98,6 +99,11 @@ class PLC:
         self.last: dict[str, Process] = {}  # the latest run of each procedure
         self.bindings: dict[int, tuple[str, int]] = {}   # input pin -> (procedure, eparam)
         self._levels: dict[int, int] = {}                # last level seen of each bound pin
+        # advance() can be skipped while the machine is quiet and has no notes pending
+        notes = getattr(machine, "pending_notes", None)
+        if notes is None or not hasattr(machine, "quiet"):
+            notes = (None,)                # another machine: always call advance()
+        self._notes_pending = notes
 
     # ------------------------------------------------------------- hosts
     def _host(self, name: str, kind: Kind) -> Host:
@@ -110,6 +116,9 @@ class PLC:
             events.append(Print(self.t, addr, value, name))
             raw(addr, value)
 
+        common = dict(portset=m.portset, portclr=m.portclear, portget=m.portget,
+                      gvarget=m.gvarget, g0move=m.g0move, plain=m.is_plain_register, pr=pr,
+                      raw_gvarset=raw)
         if kind is Kind.HARDWARE:
             def gvarset(addr: int, value: int) -> None:
                 if lo <= addr <= hi:
@@ -117,9 +126,7 @@ class PLC:
                 else:
                     raw(addr, value)
 
-            return Host(portset=m.portset, portclr=m.portclear, portget=m.portget,
-                        gvarget=m.gvarget, gvarset=gvarset, g0move=m.g0move,
-                        plain=m.is_plain_register, lat=self.latency, pr=pr, raw_gvarset=raw)
+            return Host(**common, gvarset=gvarset, lat=self.latency)
 
         def starthw(n: int) -> None:
             self._request_hardware(n, name)
@@ -142,13 +149,11 @@ class PLC:
             else:
                 raw(addr, value)
 
-        return Host(portset=m.portset, portclr=m.portclear, portget=m.portget,
-                    gvarget=m.gvarget, gvarset=sw_gvarset, g0move=m.g0move,
-                    plain=m.is_plain_register, lat=0, pr=pr, raw_gvarset=raw,
-                    starthw=starthw, seteparam=seteparam, softjog=softjog, software=True)
+        return Host(**common, gvarset=sw_gvarset, lat=0, starthw=starthw, seteparam=seteparam,
+                    softjog=softjog, software=True)
 
     def _spawn(self, program: Program, eparam: int) -> Process:
-        eparam = vm.wrap(int(eparam))
+        eparam = wrap(int(eparam))
         slots = [0] * 256                  # every slot an instruction can name (a byte)
         slots[abi.SLOT_EPARAM] = eparam
         slots[abi.SLOT_VAR00:abi.SLOT_VAR00 + 16] = self.var_init
@@ -205,7 +210,7 @@ class PLC:
         reference interpreter (which then finishes this tick)."""
         while True:
             if isinstance(exc, ProcExit):
-                self._end(p, vm.wrap(exc.code))
+                self._end(p, wrap(exc.code))
             elif isinstance(exc, VMFault):
                 self._fault(p, exc.pc, exc.text, exc.callers)
             elif isinstance(exc, StopIteration):
@@ -316,139 +321,142 @@ class PLC:
         s[abi.SLOT_MESSAGE] = 0
         self.machine.on_message(code)
 
+    def _emit_notes(self, t: int, notes) -> None:
+        """The machine's notes of tick t, as Note events."""
+        events = self.events
+        for level, text in notes:
+            events.append(Note(t, text, level))
+
     def run(self, ms: int, until_idle: bool = False) -> int:
         """Run ``ms`` ticks; with ``until_idle``, stop after the first tick that
         leaves no procedure running and none due. Returns the ticks run.
 
-        Three loops, one tick order: a hardware procedure alone between
-        software ticks (the common case), no procedure at all, and the general
-        tick (software tick, starts due). Samples are kept as raw rows
-        ``(t, running, proc, message, machine fields)``; :meth:`take_samples`
-        turns them into :class:`Sample` objects."""
-        machine = self.machine
-        advance = machine.advance
-        machine_notes = getattr(machine, "pending_notes", None)
-        if machine_notes is None or not hasattr(machine, "quiet"):
-            machine_notes = [None]                 # another machine: always call advance()
-        fields = machine.sample_fields
-        events = self.events
-        add_sample = self.samples.append
-        rec = self.record_samples
-        send = self._send
-        period = SOFTWARE_PERIOD_MS
+        Every tick is :meth:`_tick`, except where no start is due and no input
+        is bound, between software ticks: there the fast paths
+        :meth:`_hardware_alone` (a hardware procedure alone, the common case;
+        it also goes on through the software ticks, which are :meth:`_tick`'s)
+        and :meth:`_machine_alone` (no procedure at all) do the same work, and
+        end their ticks as :meth:`_after_tick` does. Samples are kept as raw
+        rows ``(t, running, proc, message, machine fields)``;
+        :meth:`take_samples` turns them into :class:`Sample` objects."""
         t = start = self.t
         end = t + ms
-        next_sw = t + (-t) % period
-        hw = self.hw
-        resume = hw.resume if hw is not None else None
         while t < end:
-            if hw is not None and t != next_sw and not self._due_hw and not self.bindings:
-                # the hardware procedure alone until the next software tick
-                stop = min(end, next_sw)
-                slots = hw.slots
-                name = hw.name
-                while t < stop:
-                    self.t = t
-                    try:
-                        resume()
-                    except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
-                        self._outcome(hw, exc)
-                        code = slots[4]
-                        if code:
-                            send(hw, code)
-                        hw = self.hw
-                        resume = hw.resume if hw is not None else None
-                        if rec:
-                            add_sample((t, hw.name if hw is not None else None, self.proc, code,
-                                        fields()))
-                        notes = advance()
-                        if notes:
-                            for level, text in notes:
-                                events.append(Note(t, text, level))
-                        t += 1
-                        break
-                    code = slots[4]
-                    if code:
-                        send(hw, code)
-                    if rec:
-                        add_sample((t, name, slots[1], code, fields()))
-                    if not machine_notes and machine.quiet:
-                        machine.t_ms += 1          # advance() would do only this
-                    else:
-                        notes = advance()
-                        if notes:
-                            for level, text in notes:
-                                events.append(Note(t, text, level))
-                    t += 1
-                if until_idle and hw is None and not self.sw and not self._pending_sw \
-                        and not self._due_hw:
-                    break
-                continue
-            if hw is None and not self._due_hw and t != next_sw and not self.bindings:
-                # no hardware procedure: only the machine moves until the next software tick
-                stop = min(end, next_sw)
-                idle = until_idle and not self.sw and not self._pending_sw
-                if idle:
-                    stop = t + 1
-                proc = self._proc
-                while t < stop:
-                    if rec:
-                        add_sample((t, None, proc, 0, fields()))
-                    notes = advance()
-                    if notes:
-                        for level, text in notes:
-                            events.append(Note(t, text, level))
-                    t += 1
-                if idle:
-                    break
-                continue
-            # ---- the general tick
-            self.t = t
-            if self._due_hw or self.bindings:
-                if self._due_hw:
-                    self._apply_due(t)
-                if self.bindings:
-                    self._input_edges()
-                hw = self.hw
-                resume = hw.resume if hw is not None else None
-            ran_hw = hw
-            if hw is not None:
+            next_sw = t + (-t) % SOFTWARE_PERIOD_MS
+            if t == next_sw or self._due_hw or self.bindings:
+                self._tick(t, software=t == next_sw)
+                t += 1
+            elif self.hw is not None:
+                t = self._hardware_alone(t, end)
+            else:
+                stop = t + 1 if until_idle and self.idle() else min(end, next_sw)
+                t = self._machine_alone(t, stop)
+            if until_idle and self.idle():
+                break
+        self.t = t
+        return t - start
+
+    def _tick(self, t: int, software: bool) -> None:
+        """Tick t in the order of the module's docstring: starts due, the
+        hardware procedure, the software tick (when ``software``), the end of the tick."""
+        self.t = t
+        if self._due_hw:
+            self._apply_due(t)
+        if self.bindings:
+            self._input_edges()
+        ran = []
+        hw = self.hw
+        if hw is not None:
+            ran.append(hw)
+            try:
+                hw.resume()
+            except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                self._outcome(hw, exc)
+        if software and (self.sw or self._pending_sw):
+            ran += self._software_tick()
+        self._after_tick(t, ran)
+
+    def _after_tick(self, t: int, ran) -> None:
+        """The end of tick t: each procedure that ran (hardware first, then
+        software by name) whose ``message`` is not 0 sends it; the sample is
+        recorded (its message: the first one sent); the machine advances 1 ms."""
+        msg = 0
+        message_slot = abi.SLOT_MESSAGE
+        for p in ran:
+            code = p.slots[message_slot]
+            if code:
+                self._send(p, code)
+                if not msg:
+                    msg = code
+        if self.record_samples:
+            hw = self.hw
+            self.samples.append((t, hw.name if hw is not None else None, self.proc, msg,
+                                 self.machine.sample_fields()))
+        notes = self.machine.advance()
+        if notes:
+            self._emit_notes(t, notes)
+
+    def _hardware_alone(self, t: int, end: int) -> int:
+        """Ticks from t (not a software tick) on, while the hardware procedure
+        runs with no start due and no input bound: between software ticks,
+        :meth:`_tick` and :meth:`_after_tick` for one procedure, written out,
+        with advance() skipped while the machine is quiet; the software ticks
+        are :meth:`_tick`'s. Returns the next tick at ``end``, or after a tick
+        that ended the procedure, handed it over to the reference interpreter
+        or made a start due."""
+        hw = self.hw
+        resume, slots, name = hw.resume, hw.slots, hw.name
+        message_slot, proc_slot = abi.SLOT_MESSAGE, abi.SLOT_PROC
+        machine = self.machine
+        advance, fields = machine.advance, machine.sample_fields
+        notes_pending = self._notes_pending
+        send = self._send
+        add_sample = self.samples.append
+        rec = self.record_samples
+        while True:
+            stop = min(end, t + (-t) % SOFTWARE_PERIOD_MS)
+            while t < stop:
+                self.t = t
                 try:
                     resume()
                 except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
                     self._outcome(hw, exc)
-                    hw = self.hw
-                    resume = hw.resume if hw is not None else None
-            ran = None
-            if t == next_sw:
-                next_sw += period
-                if self.sw or self._pending_sw:
-                    ran = self._software_tick()
-            msg = 0
-            if ran_hw is not None:
-                code = ran_hw.slots[4]
+                    self._after_tick(t, (hw,))
+                    return t + 1
+                code = slots[message_slot]
                 if code:
-                    msg = code
-                    send(ran_hw, code)
-            if ran:
-                for p in ran:
-                    code = p.slots[4]
-                    if code:
-                        send(p, code)
-                        if not msg:
-                            msg = code
+                    send(hw, code)
+                if rec:
+                    add_sample((t, name, slots[proc_slot], code, fields()))
+                if not notes_pending and machine.quiet:
+                    machine.t_ms += 1              # advance() would do only this
+                else:
+                    notes = advance()
+                    if notes:
+                        self._emit_notes(t, notes)
+                t += 1
+            if t == end:
+                return t
+            self._tick(t, software=True)
+            t += 1
+            if self.hw is not hw or hw.resume is not resume or self._due_hw or self.bindings:
+                return t
+
+    def _machine_alone(self, t: int, stop: int) -> int:
+        """Ticks t..stop-1 with no procedure running and none due: only the
+        machine moves (:meth:`_after_tick` with nothing that ran)."""
+        proc = self._proc
+        advance, fields = self.machine.advance, self.machine.sample_fields
+        add_sample = self.samples.append
+        rec = self.record_samples
+        while t < stop:
             if rec:
-                add_sample((t, hw.name if hw is not None else None, self.proc, msg, fields()))
+                add_sample((t, None, proc, 0, fields()))
             notes = advance()
             if notes:
-                for level, text in notes:
-                    events.append(Note(t, text, level))
+                self._emit_notes(t, notes)
             t += 1
-            if until_idle and hw is None and not self.sw and not self._pending_sw \
-                    and not self._due_hw and not self._edge_due():
-                break
-        self.t = t
-        return t - start
+        return t
 
     def take_sample_rows(self) -> list[tuple]:
         """The samples recorded so far as raw rows ``(t_ms, running, proc,

@@ -9,13 +9,10 @@ instruction that ends the tick (``yield``), or the procedure ends. It ends by
 raising :class:`ProcExit` (``exit(code)``, or falling off ``main`` with 0) or
 :class:`VMFault` (a runtime fault, with the code offset that caused it).
 
-The meaning of the code, in short (values are 32-bit two's complement; every
-result wraps):
+The meaning of the code, in short (values are 32-bit two's complement; what
+each operator computes is :mod:`plcbuilder.bytecode.semantics`):
 
-- binary operators pop b, then a, and push ``a OP b``; ``/`` and ``%`` truncate
-  toward zero as in C; a zero divisor is a fault; ``INT_MIN / -1`` wraps to
-  ``INT_MIN`` and ``INT_MIN % -1`` is 0; shift counts are ``b & 31``; ``>>`` is
-  arithmetic; comparisons, ``NOT`` and ``BOOL`` give 0 or 1;
+- binary operators pop b, then a, and push ``a OP b``; a zero divisor is a fault;
 - jumps are relative to the end of the instruction; ``LOOP`` pops a condition,
   ends the tick, and when the procedure resumes goes to its target if the
   condition was not 0; ``YIELD`` ends the tick;
@@ -29,11 +26,13 @@ result wraps):
 
 from __future__ import annotations
 
-from typing import Callable, Iterator, Optional
+from typing import Iterator, Optional
 
-from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, Op, UNARY, size_of,
-                                         validate)
+from plcbuilder.bytecode import semantics
+from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST, Op, UNARY,
+                                         size_of, validate)
 from plcbuilder.bytecode.program import Program
+from plcbuilder.bytecode.semantics import c_div, c_mod, wrap
 
 TICK_BUDGET = 100_000
 MAX_CALL_DEPTH = 16
@@ -48,8 +47,6 @@ FAULT_UNDERFLOW = "stack underflow"
 FAULT_OVERFLOW = f"stack overflow (more than {STACK_LIMIT} values)"
 
 _CALL_SIZE = size_of(Op.CALL)
-INT_MIN = -0x80000000
-INT_MAX = 0x7FFFFFFF
 
 
 class VMFault(Exception):
@@ -111,64 +108,6 @@ class Host:
         self.software = software
 
 
-# ------------------------------------------------------------------ values
-
-def wrap(v: int) -> int:
-    """v as a 32-bit two's complement value."""
-    return ((v + 0x80000000) & 0xFFFFFFFF) - 0x80000000
-
-
-def c_div(a: int, b: int) -> int:
-    """a / b truncated toward zero, wrapped (b != 0)."""
-    q = abs(a) // abs(b)
-    return wrap(-q if (a < 0) != (b < 0) else q)
-
-
-def c_mod(a: int, b: int) -> int:
-    """a % b with the sign of a, as in C (b != 0)."""
-    r = abs(a) % abs(b)
-    return -r if a < 0 else r
-
-
-_BINOPS: dict[int, Callable[[int, int], int]] = {
-    Op.ADD: lambda a, b: wrap(a + b),
-    Op.SUB: lambda a, b: wrap(a - b),
-    Op.MUL: lambda a, b: wrap(a * b),
-    Op.DIV: c_div,
-    Op.MOD: c_mod,
-    Op.SHL: lambda a, b: wrap(a << (b & 31)),
-    Op.SHR: lambda a, b: a >> (b & 31),
-    Op.AND: lambda a, b: a & b,
-    Op.OR: lambda a, b: a | b,
-    Op.XOR: lambda a, b: a ^ b,
-    Op.EQ: lambda a, b: 1 if a == b else 0,
-    Op.NE: lambda a, b: 1 if a != b else 0,
-    Op.LT: lambda a, b: 1 if a < b else 0,
-    Op.LE: lambda a, b: 1 if a <= b else 0,
-    Op.GT: lambda a, b: 1 if a > b else 0,
-    Op.GE: lambda a, b: 1 if a >= b else 0,
-}
-_UNOPS: dict[int, Callable[[int], int]] = {
-    Op.NEG: lambda a: wrap(-a),
-    Op.NOT: lambda a: 0 if a else 1,
-    Op.BNOT: lambda a: ~a,
-    Op.BOOL: lambda a: 1 if a else 0,
-}
-assert set(_BINOPS) == set(BINARY) and set(_UNOPS) == set(UNARY)
-
-#: Constant pushes without an operand.
-IMPLICIT_CONST = {Op.PUSH0: 0, Op.PUSH1: 1}
-
-
-def binary(op: Op, a: int, b: int) -> int:
-    """The result of a binary operator on two 32-bit values (b != 0 for DIV/MOD)."""
-    return _BINOPS[op](a, b)
-
-
-def unary(op: Op, a: int) -> int:
-    return _UNOPS[op](a)
-
-
 # ------------------------------------------------------------- pre-decoding
 # The interpreter walks the bytes once per program into per-offset tables
 # (kind, argument, next offset); the kinds group opcodes by what they do.
@@ -217,9 +156,9 @@ def decoded(program: Program) -> tuple[list, list, list]:
         elif ins.op in HAS_JREL or k == K_CALL:
             args[ins.offset] = ins.target
         elif k == K_BIN:
-            args[ins.offset] = _BINOPS[ins.op]
+            args[ins.offset] = semantics.BINARY[ins.op].fn
         elif k == K_UN:
-            args[ins.offset] = _UNOPS[ins.op]
+            args[ins.offset] = semantics.UNARY[ins.op].fn
         else:
             args[ins.offset] = ins.arg
     kinds[n] = K_END

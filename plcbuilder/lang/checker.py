@@ -1,4 +1,5 @@
-"""The checker: names, calls, variables, control flow and the warnings of SPEC §1.
+"""The checker: names, calls, variables, control flow and the warnings of
+docs/language.md ("Errors and warnings").
 
 It resolves every name once (predefined slot, mapped register, built-in
 constant, user variable) and hands the compiler a :class:`Resolved` table, so
@@ -11,7 +12,7 @@ import difflib
 from dataclasses import dataclass, field
 from typing import Optional
 
-from plcbuilder.bytecode import abi
+from plcbuilder.bytecode import abi, semantics
 from plcbuilder.bytecode.opcodes import Op
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.diagnostics import Diagnostic, Related, Span, error, warning
@@ -505,67 +506,9 @@ class Checker:
 
 
 # ==================================================================== constants
-def _wrap(v: int) -> int:
-    v &= 0xFFFFFFFF
-    return v - (1 << 32) if v & 0x80000000 else v
-
-
-def _tdiv(a: int, b: int) -> int:
-    q = abs(a) // abs(b)
-    return q if (a >= 0) == (b >= 0) else -q
-
-
-def fold_binary(op: str, a: int, b: int) -> Optional[int]:
-    """C semantics on 32-bit values; None for division by zero."""
-    if op == "+":
-        return _wrap(a + b)
-    if op == "-":
-        return _wrap(a - b)
-    if op == "*":
-        return _wrap(a * b)
-    if op == "/":
-        return None if b == 0 else _wrap(_tdiv(a, b))
-    if op == "%":
-        return None if b == 0 else _wrap(a - _tdiv(a, b) * b)
-    if op == "<<":
-        return _wrap(a << (b & 31))
-    if op == ">>":
-        return _wrap(a >> (b & 31))
-    if op == "&":
-        return _wrap(a & b)
-    if op == "|":
-        return _wrap(a | b)
-    if op == "^":
-        return _wrap(a ^ b)
-    if op == "==":
-        return int(a == b)
-    if op == "!=":
-        return int(a != b)
-    if op == "<":
-        return int(a < b)
-    if op == "<=":
-        return int(a <= b)
-    if op == ">":
-        return int(a > b)
-    if op == ">=":
-        return int(a >= b)
-    if op == "&&":
-        return int(bool(a) and bool(b))
-    if op == "||":
-        return int(bool(a) or bool(b))
-    raise ValueError(op)
-
-
-def fold_unary(op: str, a: int) -> int:
-    if op == "-":
-        return _wrap(-a)
-    if op == "!":
-        return int(a == 0)
-    return _wrap(~a)
-
-
 def _const(e) -> Optional[int]:
-    """The value of a constant expression (numbers and built-in names), or None."""
+    """The value of a constant expression (numbers and built-in names), or None.
+    The operators mean what they mean on the controller (bytecode.semantics)."""
     t = type(e)
     if t is A.Num:
         return e.value
@@ -575,7 +518,7 @@ def _const(e) -> Optional[int]:
         return _const(e.expr)
     if t is A.Unary:
         v = _const(e.operand)
-        return None if v is None else fold_unary(e.op, v)
+        return None if v is None else semantics.fold_unary(e.op, v)
     if t is A.Binary:
         a = _const(e.left)
         if a is None:
@@ -587,7 +530,7 @@ def _const(e) -> Optional[int]:
         b = _const(e.right)
         if b is None:
             return None
-        return fold_binary(e.op, a, b)
+        return semantics.fold_binary(e.op, a, b)
     return None
 
 

@@ -14,12 +14,15 @@ from __future__ import annotations
 
 import os
 import sys
+import threading
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
 from plcbuilder.bytecode.opcodes import LONG_FORM, Op, Operand, encode, fits, size_of
 from plcbuilder.bytecode.program import Kind, LineEntry, Program
+from plcbuilder.bytecode.semantics import BINARY_SYMBOL, UNARY_SYMBOL
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
 from plcbuilder.lang.checker import BUILTINS, Checker, Resolved, Symbols, const_value
@@ -29,10 +32,38 @@ from plcbuilder.lang.source import SourceSet, decode_source, read_source
 
 COMPILER_VERSION = "1"
 
-# The checker and generator recurse over the tree, whose depth the parser caps
-# at MAX_DEPTH (256) levels; a few frames a level need more than Python's default.
-if sys.getrecursionlimit() < 4000:
-    sys.setrecursionlimit(4000)
+#: The recursion limit while compiling: the preprocessor expands a chain of
+#: #defines (each naming the next) one Python frame a link, and a chain may be
+#: longer than Python's default limit allows. (The checker and generator recurse
+#: over the tree too, but the parser caps its depth at 256 levels.)
+RECURSION_LIMIT = 4000
+_limit_lock = threading.Lock()
+_limit_users = 0                   # compiles running (in any thread)
+_limit_saved: Optional[int] = None  # the limit to restore when the last one ends
+
+
+@contextmanager
+def _recursion_limit():
+    """Raise the recursion limit to RECURSION_LIMIT while the block runs. The
+    limit is global to the process: the first compile to start raises it and
+    the last to end restores it, so concurrent compiles do not undo each other."""
+    global _limit_users, _limit_saved
+    with _limit_lock:
+        if _limit_users == 0:
+            old = sys.getrecursionlimit()
+            _limit_saved = old if old < RECURSION_LIMIT else None
+            if _limit_saved is not None:
+                sys.setrecursionlimit(RECURSION_LIMIT)
+        _limit_users += 1
+    try:
+        yield
+    finally:
+        with _limit_lock:
+            _limit_users -= 1
+            if _limit_users == 0 and _limit_saved is not None:
+                if sys.getrecursionlimit() == RECURSION_LIMIT:   # unless changed meanwhile
+                    sys.setrecursionlimit(_limit_saved)
+                _limit_saved = None
 
 
 # ====================================================================== options
@@ -91,9 +122,7 @@ def compile_source(text: str, path: str = "<input>", options: CompileOptions = C
     if file_path is None and not path.startswith("<"):
         p = Path(path)
         file_path = p if p.parent != Path("") or p.exists() else None
-    pp = Preprocessor(options.include_dirs)
-    pre = pp.run_text(text, path, file_path)
-    return _compile(pre, path, file_path, options)
+    return _compile(Preprocessor(options.include_dirs), text, path, file_path, options)
 
 
 def compile_bytes(data: bytes, path: str, options: CompileOptions = CompileOptions(),
@@ -115,8 +144,7 @@ def compile_file(path, options: CompileOptions = CompileOptions()) -> CompileRes
         return _failed(name, options, diags)
     pp = Preprocessor(options.include_dirs)
     pp.diags.extend(diags)
-    pre = pp.run_text(text, name, p)
-    return _compile(pre, name, p, options)
+    return _compile(pp, text, name, p, options)
 
 
 def _failed(path: str, options: CompileOptions, diags: list[Diagnostic]) -> CompileResult:
@@ -124,8 +152,14 @@ def _failed(path: str, options: CompileOptions, diags: list[Diagnostic]) -> Comp
                          options.limit)
 
 
-def _compile(pre: Preprocessed, path: str, file_path: Optional[Path],
+def _compile(pp: Preprocessor, text: str, path: str, file_path: Optional[Path],
              options: CompileOptions) -> CompileResult:
+    with _recursion_limit():
+        return _compile_preprocessed(pp.run_text(text, path, file_path), path, file_path, options)
+
+
+def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path],
+                          options: CompileOptions) -> CompileResult:
     name = procedure_name(path)
     diags = list(pre.diagnostics)
     if options.strict:
@@ -419,10 +453,10 @@ class Generator:
                 return
             self.expr(e.left)
             self.expr(e.right)
-            self.emit(_BINOP[e.op])
+            self.emit(BINARY_SYMBOL[e.op])
         elif t is A.Unary:
             self.expr(e.operand)
-            self.emit({"-": Op.NEG, "!": Op.NOT, "~": Op.BNOT}[e.op])
+            self.emit(UNARY_SYMBOL[e.op])
         elif t is A.Call:
             for a in e.args:
                 self.expr(a)
@@ -507,8 +541,3 @@ def _size(it: _Ins, long: bool) -> int:
     if it.label is not None:
         return 3 if long else 2
     return size_of(it.op)
-
-
-_BINOP = {"+": Op.ADD, "-": Op.SUB, "*": Op.MUL, "/": Op.DIV, "%": Op.MOD, "<<": Op.SHL,
-          ">>": Op.SHR, "&": Op.AND, "|": Op.OR, "^": Op.XOR, "==": Op.EQ, "!=": Op.NE,
-          "<": Op.LT, "<=": Op.LE, ">": Op.GT, ">=": Op.GE}

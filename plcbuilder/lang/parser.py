@@ -221,11 +221,6 @@ def _parser() -> tuple[Lark, AstBuilder]:
 _lock = threading.Lock()
 
 
-def bare_lark() -> Lark:
-    """lark with its own lexer and no transformer: the benchmark's baseline."""
-    return Lark(grammar_text(), parser="lalr")
-
-
 def parse_tokens(toks: list[Tok]) -> tuple[A.Module, list[Diagnostic]]:
     """Parse preprocessed tokens into a Module; syntax errors become diagnostics."""
     lark, builder = _parser()

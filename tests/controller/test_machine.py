@@ -1,4 +1,4 @@
-"""The simulated machine: I/O and registers (SPEC §2 "I/O and registers"),
+"""The simulated machine: I/O and registers (docs/machine.md, "Registers"),
 the default machine, and the manual's homing and probing examples driven at the
 machine level (a Python loop imitates the PLC code, one iteration a tick)."""
 

@@ -1,4 +1,4 @@
-"""Motion (SPEC §2 "Motion"): g0moveA, start latency, work offsets, stop messages,
+"""Motion (docs/machine.md, "Motion"): g0moveA, start latency, work offsets, stop messages,
 jogs from the hardware and software PLC, soft and hard limits."""
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
-"""SPEC §2 (the hardware PLC) and §3 (the software PLC), one test per sentence,
-each quoting its sentence; every test runs on both VM backends."""
+"""The timing rules of the hardware PLC and the software PLC (docs/controller.md,
+"Timing rules"), one test per sentence, each quoting its sentence; every test
+runs on both VM backends."""
 
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ def prints(events):
     return [(e.t_ms, e.register, e.value) for e in events if isinstance(e, Print)]
 
 
-# =================================================================== §2 timing
+# ====================================================== hardware PLC timing
 
 def test_time_advances_in_ticks_of_1_ms(backend):
     """Time advances in ticks of 1 ms."""
@@ -401,7 +402,7 @@ def test_variables_start_at_0_except_eparam_var00_15_and_param(backend):
     assert (v["__S"]["p"], v["__S"]["q"]) == (12, 101)
 
 
-# ============================================================== §3 software
+# ========================================================= software PLC
 
 def test_software_ticks_are_100_ms(backend):
     """Ticks of 100 ms."""
@@ -501,3 +502,52 @@ def test_a_software_procedure_started_by_hand_starts_at_the_next_software_tick(b
     c.start("__S", eparam=4)
     c.step(100)
     assert prints(c.drain_events()) == [(200, 20000, 4)]
+
+
+# ============================================================ one tick, fast paths
+
+def test_the_fast_paths_run_exactly_as_the_tick_function(backend):
+    """Where only a hardware procedure runs, or nothing does, PLC.run takes a
+    fast path; an input bound to a procedure sends every tick through the tick
+    function instead. Both give the same events and samples, tick for tick:
+    messages, prints, motion, a procedure started by a software one, a fault."""
+    m10 = compile_proc("""main(){
+        timer=30; do { timer--; if (timer==20) { message=PLCCMD_LINE_STOP; };
+                       if (timer==10) { gvarset(20000, timer); }; } while (timer>0);
+        g0moveA(0, 1, 500);
+        do { s=gvarget(6060); } while (s==0);
+        portset(3);
+        timer=40; do { timer--; } while (timer>0);
+        a=5/eparam;
+        exit(99); };""", "M10")
+    m11 = compile_proc("""main(){ timer=5; do { timer--; } while (timer>0);
+        message=PLCCMD_MOTION_PAUSE; exit(99); };""", "M11")
+    s1 = compile_proc("""main(){ n=0; do { n++;
+        if (n==3) { message=PLC_MESSAGE_PRESSED_ALARM_KEY; };
+        if (n==12) { gvarset(100040, 11); }; } while (n<15); exit(99); };""", "S1",
+                      software=True)
+
+    def session(bound: bool):
+        c = controller(m10, m11, s1, backend=backend)
+        plc = c.plc
+        fast = []
+        hardware_alone, machine_alone = plc._hardware_alone, plc._machine_alone
+        plc._hardware_alone = lambda *a: fast.append("hw") or hardware_alone(*a)
+        plc._machine_alone = lambda *a: fast.append("idle") or machine_alone(*a)
+        if bound:
+            c.set_input(40, 0)
+            c.bind_input(40, "M11")          # never rises: every tick is the general one
+        c.start("M10")
+        for ms in (1, 37, 250, 99, 100, 3):
+            c.step(ms)
+        c.run_until_idle(3000)
+        c.start("M11")
+        c.run_until_idle(3000)
+        return c.drain_events(), c.drain_samples(), c.t_ms, fast
+
+    events, samples, t_end, fast = session(bound=False)
+    events2, samples2, t_end2, fast2 = session(bound=True)
+    assert "hw" in fast and "idle" in fast and fast2 == []
+    assert of(events, Fault) and of(events, Message) and of(events, Print)
+    assert [e.name for e in of(events, Started)] == ["M10", "S1", "M11", "M11"]
+    assert events == events2 and samples == samples2 and t_end == t_end2

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import pytest
 
-from plcbuilder.bytecode import abi
+from plcbuilder.bytecode import abi, semantics
 from plcbuilder.bytecode.opcodes import Op
 from plcbuilder.bytecode.program import Kind
-from plcbuilder.controller import fastvm, vm
+from plcbuilder.controller import fastvm
 from plcbuilder.controller.controller import Controller
 from plcbuilder.controller.events import Ended, Fault, Message
 
@@ -115,7 +115,7 @@ def test_binary_operators_wrap_and_truncate_like_c(op, a, b, want, backend):
              (Op.PUSH8, 99), Op.EXIT]
     _, v, _ = run(items, backend, eparam=a, variables=[b])
     assert v["r0"] == want
-    assert vm.binary(op, a, b) == want
+    assert semantics.binary(op, a, b) == want
 
 
 @pytest.mark.parametrize("op,a,b,want", BINARY_CASES[::3],
