@@ -299,9 +299,11 @@ class _Ctx:
 
 
 class _Gen:
-    def __init__(self, program: Program, latency: bool):
+    def __init__(self, program: Program, latency: bool, pins: Optional[tuple[int, int]] = None):
         self.program = program
         self.latency = latency
+        #: (input count, output count) of a host whose ``io`` may be read directly
+        self.pins = pins
         self.software = program.kind is Kind.SOFTWARE
         self.funcs, self.end = _analyze(program.code, program.entry)
         self.tracked, self.budget = _plan(self.funcs, program.entry, latency)
@@ -373,7 +375,7 @@ class _Gen:
     def generate(self) -> str:
         self.out = []
         self.emit(0, "def make(s, portset, portclr, portget, gvarget, gvarset, raw_gvarset, g0move,")
-        self.emit(0, "         pr, plain, lat, seteparam, starthw, softjog):")
+        self.emit(0, "         pr, plain, lat, seteparam, starthw, softjog, io):")
         for start in sorted(self.funcs):
             self.function(self.funcs[start])
         entry = self.program.entry
@@ -589,12 +591,22 @@ class _Gen:
         elif op in (Op.PORTSET, Op.PORTCLR):
             a = stack.pop()
             fn = "portset" if op is Op.PORTSET else "portclr"
-            self.emit(ind, f"{fn}({self.as_int(a)})")
+            if self.pins and a.const is not None and 0 <= a.const < self.pins[1]:
+                # called only when it changes the output (the host's io contract)
+                bit = f"io.out_bits & {1 << a.const}"
+                self.emit(ind, f"if {'not ' if op is Op.PORTSET else ''}{bit}:")
+                self.emit(ind + 1, f"{fn}({a.const})")
+            else:
+                self.emit(ind, f"{fn}({self.as_int(a)})")
         elif op is Op.PORTGET:
             a = stack.pop()
             name = self.temp()
-            self.emit(ind, f"{name} = portget({self.as_int(a)})")
-            stack.append(_V(name))
+            if self.pins and a.const is not None and 0 <= a.const < self.pins[0]:
+                self.emit(ind, f"{name} = io.in_bits >> {a.const} & 1")
+                stack.append(_V(name, bits=1))
+            else:
+                self.emit(ind, f"{name} = portget({self.as_int(a)})")
+                stack.append(_V(name))
         elif op is Op.GVARSET:
             v = stack.pop()
             a = stack.pop()
@@ -645,6 +657,12 @@ class _Gen:
             a, b = self.tight(a), self.tight(b)
             return _V(f"({o.text(a.e, b.e)})", isbool=True, slots=slots, temps=temps, bits=1)
         assert o.modular
+        if op is Op.AND:                  # a mask 0..INT_MAX bounds the value: no wrap
+            c = a.const if a.const is not None else b.const
+            if c is not None and 0 <= c <= INT_MAX:
+                x = b if a.const is not None else a
+                return _V(f"({o.text(x.e, str(c))})", slots=slots, temps=temps,
+                          bits=max(c.bit_length(), 1))
         if o.result is Result.EXACT:      # & | ^: exact when both operands are
             return _V(f"({o.text(a.e, b.e)})", exact=a.exact and b.exact,
                       isbool=a.isbool and b.isbool, slots=slots, temps=temps,
@@ -789,20 +807,28 @@ _NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff,
 _CACHE: dict[tuple, tuple[bytes, Optional[Callable], str]] = {}
 
 
-def translate(program: Program, latency: bool = False) -> str:
-    """The Python source the fast backend runs for ``program`` (raises Unsupported)."""
-    return _Gen(program, latency).generate()
+def translate(program: Program, latency: bool = False,
+              pins: Optional[tuple[int, int]] = None) -> str:
+    """The Python source the fast backend runs for ``program`` (raises Unsupported).
+    With ``pins`` (input and output count of a host with ``io``), constant-pin
+    port calls read and test ``io`` directly."""
+    return _Gen(program, latency, pins).generate()
 
 
-def factory(program: Program, latency: bool = False) -> Optional[Callable]:
+def _key(program: Program, latency: bool, pins) -> tuple:
+    return (zlib.crc32(program.code), program.entry, int(program.kind), bool(latency), pins)
+
+
+def factory(program: Program, latency: bool = False,
+            pins: Optional[tuple[int, int]] = None) -> Optional[Callable]:
     """The compiled ``make(...)`` of ``program``, or None if it cannot be translated.
-    Translated once per program (by CRC of its code, entry and kind)."""
-    key = (zlib.crc32(program.code), program.entry, int(program.kind), bool(latency))
+    Translated once per program (by CRC of its code, entry and kind) and host shape."""
+    key = _key(program, latency, pins)
     hit = _CACHE.get(key)
     if hit is not None and hit[0] == program.code:
         return hit[1]
     try:
-        src = translate(program, latency)
+        src = translate(program, latency, pins)
     except Unsupported as exc:
         _CACHE[key] = (program.code, None, str(exc))
         return None
@@ -819,16 +845,20 @@ def unsupported_reason(program: Program, latency: bool = False) -> Optional[str]
     """Why ``program`` runs on the reference interpreter, or None if it is translated."""
     if factory(program, latency) is not None:
         return None
-    key = (zlib.crc32(program.code), program.entry, int(program.kind), bool(latency))
-    return _CACHE[key][2]
+    return _CACHE[_key(program, latency, None)][2]
+
+
+def _pins(host: Host) -> Optional[tuple[int, int]]:
+    io = host.io
+    return None if io is None else (io.input_count, io.output_count)
 
 
 def make_runner(program: Program, s: list[int], host: Host) -> Iterator[None]:
     """A generator running ``program`` on the slots ``s``: translated code, or the
     reference interpreter where the program cannot be translated."""
-    make = factory(program, host.lat > 0)
+    make = factory(program, host.lat > 0, _pins(host))
     if make is None:
         return vm.run_reference(program, s, host)
     return make(s, host.portset, host.portclr, host.portget, host.gvarget, host.gvarset,
                 host.raw_gvarset, host.g0move, host.pr, host.plain, host.lat, host.seteparam,
-                host.starthw, host.softjog)
+                host.starthw, host.softjog, host.io)

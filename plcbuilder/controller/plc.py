@@ -118,7 +118,7 @@ class PLC:
 
         common = dict(portset=m.portset, portclr=m.portclear, portget=m.portget,
                       gvarget=m.gvarget, g0move=m.g0move, plain=m.is_plain_register, pr=pr,
-                      raw_gvarset=raw)
+                      raw_gvarset=raw, io=m if hasattr(m, "in_bits") else None)
         if kind is Kind.HARDWARE:
             def gvarset(addr: int, value: int) -> None:
                 if lo <= addr <= hi:
@@ -428,13 +428,13 @@ class PLC:
                     send(hw, code)
                 if rec:
                     add_sample((t, name, slots[proc_slot], code, fields()))
-                if not notes_pending and machine.quiet:
-                    machine.t_ms += 1              # advance() would do only this
-                else:
+                t += 1
+                if notes_pending or not machine.quiet:
                     notes = advance()
                     if notes:
-                        self._emit_notes(t, notes)
-                t += 1
+                        self._emit_notes(t - 1, notes)
+                else:
+                    machine.t_ms += 1              # advance() would do only this
             if t == end:
                 return t
             self._tick(t, software=True)
@@ -446,10 +446,15 @@ class PLC:
         """Ticks t..stop-1 with no procedure running and none due: only the
         machine moves (:meth:`_after_tick` with nothing that ran)."""
         proc = self._proc
-        advance, fields = self.machine.advance, self.machine.sample_fields
+        machine = self.machine
+        advance, fields = machine.advance, machine.sample_fields
         add_sample = self.samples.append
         rec = self.record_samples
+        notes_pending = self._notes_pending
         while t < stop:
+            if not rec and not notes_pending and machine.quiet:
+                machine.t_ms += stop - t           # nothing to record, nothing moves
+                return stop
             if rec:
                 add_sample((t, None, proc, 0, fields()))
             notes = advance()
