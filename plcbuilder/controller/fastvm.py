@@ -69,6 +69,11 @@ _BITS_CAP = 62
 _DUP_MAX_INS = 12         # a join block this small is written at each predecessor
 _DUP_MAX_BLOCKS = 400
 _YIELD = re.compile(r"\byield\b")
+#: Slots the controller reads at every tick end, never kept in locals.
+_UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT_VAR00,
+                       abi.SLOT_VAR00 + 1})
+#: What the controller sends a suspended procedure to have its variables written back.
+SYNC = object()
 
 
 class Unsupported(Exception):
@@ -304,6 +309,8 @@ class _Gen:
         self.latency = latency
         #: (input count, output count) of a host whose ``io`` may be read directly
         self.pins = pins
+        #: slots the function being written keeps in locals (``v<slot>``)
+        self.cached: frozenset[int] = frozenset()
         self.software = program.kind is Kind.SOFTWARE
         self.funcs, self.end = _analyze(program.code, program.entry)
         self.tracked, self.budget = _plan(self.funcs, program.entry, latency)
@@ -374,6 +381,8 @@ class _Gen:
     # ------------------------------------------------------------ functions
     def generate(self) -> str:
         self.out = []
+        #: some function keeps variables in locals: every tick end answers SYNC
+        self.syncs = any(self._cacheable(f) for f in self.funcs.values())
         self.emit(0, "def make(s, portset, portclr, portget, gvarget, gvarset, raw_gvarset, g0move,")
         self.emit(0, "         pr, plain, lat, seteparam, starthw, softjog, io):")
         for start in sorted(self.funcs):
@@ -438,22 +447,54 @@ class _Gen:
             count[b] = sum(count.get(p, 0) for p in preds[b])
         return sum(count.get(b, 0) * len(blk.ins) for b, blk in blocks.items())
 
+    def _cacheable(self, func: _Func) -> frozenset[int]:
+        """The slots a function may keep in locals: a function that ends ticks
+        and calls nothing, in a program that neither counts the tick budget nor
+        waits for gvarget, keeps the variables that only it can see between
+        tick ends (not those the controller reads every tick: message, proc,
+        vexit, var00 and var01, which a message carries)."""
+        if self.budget or self.latency or not func.gen or func.callees:
+            return frozenset()
+        used = {i.arg for b in func.blocks.values() for i in b.ins
+                if i.op in (Op.LOAD, Op.STORE, Op.INC, Op.DEC)}
+        return frozenset(used - _UNCACHED)
+
     def _function_body(self, func: _Func) -> None:
         params = "rets, n" if self.budget else "rets" if self.tracked else ""
         self.emit(1, f"def f_{func.start}({params}):")
         mark = len(self.out)
+        self.cached = self._cacheable(func)
+        base = 2
+        if self.cached:
+            # locals from the slots at entry, back to the slots however the function
+            # leaves (return, exit, fault, close) and whenever the controller asks (SYNC)
+            self.emit(2, self._load_cached())
+            self.emit(2, "try:")
+            base = 3
         labels = sorted(func.labels)
         if len(labels) == 1:
-            self.region(func, labels[0], 2)
+            self.region(func, labels[0], base)
         else:
-            self.emit(2, f"pc = {func.start}")
-            self.emit(2, "while True:")
+            self.emit(base, f"pc = {func.start}")
+            self.emit(base, "while True:")
             for lab in labels:
-                self.emit(3, f"if pc == {lab}:")
-                self.region(func, lab, 4)
+                self.emit(base + 1, f"if pc == {lab}:")
+                self.region(func, lab, base + 2)
+        if self.cached:
+            self.emit(2, "finally:")
+            self.emit(3, self._store_cached())
+            self.cached = frozenset()
         # a generator even where constant conditions removed every tick end
         if func.gen and not any(_YIELD.search(line) for line in self.out[mark:]):
             self.out[mark:mark] = ["        if 0:", "            yield"]
+
+    def _load_cached(self) -> str:
+        order = sorted(self.cached)
+        return f"{', '.join(f'v{k}' for k in order)}, = {', '.join(f's[{k}]' for k in order)},"
+
+    def _store_cached(self) -> str:
+        order = sorted(self.cached)
+        return f"{', '.join(f's[{k}]' for k in order)}, = {', '.join(f'v{k}' for k in order)},"
 
     def region(self, func: _Func, label: int, ind: int) -> None:
         # does the code under this label jump back to it?
@@ -492,7 +533,18 @@ class _Gen:
             self.emit(ind, "continue")
 
     def tick_end(self, ind: int) -> None:
-        self.emit(ind, "yield")
+        if self.syncs:
+            # between ticks the controller may ask for the variables (send(SYNC)):
+            # they go back to the slots, and are read again when the tick goes on
+            self.emit(ind, "_sig = yield")
+            self.emit(ind, "while _sig is not None:")
+            if self.cached:
+                self.emit(ind + 1, self._store_cached())
+            self.emit(ind + 1, "_sig = yield")
+            if self.cached:
+                self.emit(ind + 1, self._load_cached())
+        else:
+            self.emit(ind, "yield")
         if self.budget:
             self.emit(ind, "n = 0")
         self.known.pop(abi.SLOT_MESSAGE, None)    # the controller clears message at a tick end
@@ -548,6 +600,23 @@ class _Gen:
         op = i.op
         if op in HAS_CONST or op in IMPLICIT_CONST:
             stack.append(_const(IMPLICIT_CONST.get(op, i.arg)))
+        elif op is Op.LOAD and i.arg in self.cached:
+            stack.append(_V(f"v{i.arg}", slots=frozenset({i.arg})))
+        elif op is Op.STORE and i.arg in self.cached:
+            v = stack.pop()
+            self.invalidate(stack, i.arg, ind)
+            self.emit(ind, f"v{i.arg} = {self.as_int(v)}")
+        elif op in (Op.INC, Op.DEC) and i.arg in self.cached:
+            self.invalidate(stack, i.arg, ind)
+            name = f"v{i.arg}"
+            if op is Op.INC:
+                self.emit(ind, f"{name} += 1")
+                self.emit(ind, f"if {name} > {INT_MAX}:")
+                self.emit(ind + 1, f"{name} = {INT_MIN}")
+            else:
+                self.emit(ind, f"{name} -= 1")
+                self.emit(ind, f"if {name} < {INT_MIN}:")
+                self.emit(ind + 1, f"{name} = {INT_MAX}")
         elif op is Op.LOAD:
             known = self.known.get(i.arg)
             stack.append(known if known is not None
@@ -804,7 +873,8 @@ class _Gen:
 
 _NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff,
               "__builtins__": {"len": len, "range": range}}
-_CACHE: dict[tuple, tuple[bytes, Optional[Callable], str]] = {}
+#: (code, make or None, why not translated, whether its tick ends answer SYNC)
+_CACHE: dict[tuple, tuple[bytes, Optional[Callable], str, bool]] = {}
 
 
 def translate(program: Program, latency: bool = False,
@@ -830,14 +900,14 @@ def factory(program: Program, latency: bool = False,
     try:
         src = translate(program, latency, pins)
     except Unsupported as exc:
-        _CACHE[key] = (program.code, None, str(exc))
+        _CACHE[key] = (program.code, None, str(exc), False)
         return None
     ns = dict(_NAMESPACE)
     filename = f"<plc {program.name} {key[0]:08x}>"
     exec(compile(src, filename, "exec"), ns)
     if len(_CACHE) > 256:
         _CACHE.clear()
-    _CACHE[key] = (program.code, ns["make"], "")
+    _CACHE[key] = (program.code, ns["make"], "", "_sig = yield" in src)
     return ns["make"]
 
 
@@ -851,6 +921,16 @@ def unsupported_reason(program: Program, latency: bool = False) -> Optional[str]
 def _pins(host: Host) -> Optional[tuple[int, int]]:
     io = host.io
     return None if io is None else (io.input_count, io.output_count)
+
+
+def answers_sync(program: Program, host: Host) -> bool:
+    """Whether the generator make_runner gives for this program and host keeps
+    variables in locals between ticks: then ``gen.send(SYNC)`` while it is
+    suspended writes them back to the slots (and the next tick reads them
+    again), which is what must happen before anyone reads or writes its slots."""
+    if factory(program, host.lat > 0, _pins(host)) is None:
+        return False
+    return _CACHE[_key(program, host.lat > 0, _pins(host))][3]
 
 
 def make_runner(program: Program, s: list[int], host: Host) -> Iterator[None]:

@@ -43,7 +43,7 @@ class Process:
     """One run of a procedure."""
 
     __slots__ = ("name", "program", "kind", "slots", "eparam", "started_at", "resume",
-                 "host", "ended_at", "exit_code")
+                 "host", "ended_at", "exit_code", "syncing")
 
     def __init__(self, program: Program, slots: list[int], eparam: int, started_at: int,
                  host: Host):
@@ -57,9 +57,20 @@ class Process:
         self.resume: Callable[[], None] = lambda: None
         self.ended_at: Optional[int] = None
         self.exit_code: Optional[int] = None
+        #: the fast backend's generator when it keeps variables in locals between ticks
+        self.syncing = None
+
+    def sync(self) -> None:
+        """Make ``slots`` hold every variable's value now (the fast backend keeps
+        some in locals while it runs); call it before reading or writing them
+        from outside. The procedure reads them again when its next tick begins."""
+        gen = self.syncing
+        if gen is not None and gen.gi_suspended:
+            gen.send(fastvm.SYNC)
 
     def variables(self) -> dict[str, int]:
         """Every variable by name (predefined and the program's own)."""
+        self.sync()
         s = self.slots
         return {name: s[slot] for slot, name in sorted(self.program.slot_names().items())
                 if slot < len(s)}
@@ -163,6 +174,8 @@ class PLC:
         p = Process(program, slots, eparam, self.t, host)
         if self.backend == "fast":
             gen = fastvm.make_runner(program, slots, host)
+            if fastvm.answers_sync(program, host):
+                p.syncing = gen
         else:
             gen = vm.run_reference(program, slots, host)
         p.resume = gen.__next__
@@ -174,6 +187,8 @@ class PLC:
     def _end(self, p: Process, code: int) -> None:
         if p.ended_at is not None:
             return
+        p.sync()                           # ended from outside: its variables as they are
+        p.syncing = None
         p.ended_at = self.t
         p.exit_code = code
         p.resume = _finished
