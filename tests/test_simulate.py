@@ -164,3 +164,12 @@ def test_both_backends_give_the_same_report(project):
     fast = run(project, RunOptions(**opts)).report
     ref = run(project, RunOptions(backend="reference", **opts)).report
     assert fast == ref
+
+
+def test_run_start_m03_at_0_leaves_the_spindle_on(project):
+    """`run PROJECT --start M03@0`: __HANDLER_INIT "begins in the tick of the first
+    load, before any procedure started at that same tick", so output 0 stays on."""
+    rep = run(project, RunOptions(ms=500, starts=["M03:12000@0"])).report
+    starts = [(p["name"], p["started_at_ms"]) for p in rep["procedures"]]
+    assert starts.index(("__HANDLER_INIT", 0)) < starts.index(("M03", 0))
+    assert 0 in rep["outputs"] and rep["pwm"][0] == 12000

@@ -22,7 +22,6 @@ from typing import Iterable, Optional
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import DecodeError, validate
 from plcbuilder.bytecode.program import Kind, Program
-from plcbuilder.controller import fastvm
 from plcbuilder.controller.events import Event, Note, Sample
 from plcbuilder.controller.plc import BACKENDS, PLC, mcode_names
 
@@ -114,10 +113,10 @@ class Controller:
             if name not in by_name:
                 plc.unbind_input(pin)
         self._crc = {name: p.crc32 for name, p in by_name.items()}
-        if plc.backend == "fast":                    # translate now, not on first start
-            for p in progs:
-                fastvm.factory(p, plc.latency > 0 and p.kind is Kind.HARDWARE)
+        plc.prepare(progs)                           # translate now, not on first start
         first, self._loaded_once = not self._loaded_once, True
+        if first:
+            plc.grid = plc.t               # the software grid starts at the first load
         if not autostart:
             return
         for name in sorted(by_name):

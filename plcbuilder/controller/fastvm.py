@@ -69,6 +69,11 @@ _BITS_CAP = 62
 _DUP_MAX_INS = 12         # a join block this small is written at each predecessor
 _DUP_MAX_BLOCKS = 400
 _YIELD = re.compile(r"\byield\b")
+#: Slots the controller reads at every tick end, never kept in locals.
+_UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT_VAR00,
+                       abi.SLOT_VAR00 + 1})
+#: What the controller sends a suspended procedure to have its variables written back.
+SYNC = object()
 
 
 class Unsupported(Exception):
@@ -299,9 +304,13 @@ class _Ctx:
 
 
 class _Gen:
-    def __init__(self, program: Program, latency: bool):
+    def __init__(self, program: Program, latency: bool, pins: Optional[tuple[int, int]] = None):
         self.program = program
         self.latency = latency
+        #: (input count, output count) of a host whose ``io`` may be read directly
+        self.pins = pins
+        #: slots the function being written keeps in locals (``v<slot>``)
+        self.cached: frozenset[int] = frozenset()
         self.software = program.kind is Kind.SOFTWARE
         self.funcs, self.end = _analyze(program.code, program.entry)
         self.tracked, self.budget = _plan(self.funcs, program.entry, latency)
@@ -372,8 +381,10 @@ class _Gen:
     # ------------------------------------------------------------ functions
     def generate(self) -> str:
         self.out = []
+        #: some function keeps variables in locals: every tick end answers SYNC
+        self.syncs = any(self._cacheable(f) for f in self.funcs.values())
         self.emit(0, "def make(s, portset, portclr, portget, gvarget, gvarset, raw_gvarset, g0move,")
-        self.emit(0, "         pr, plain, lat, seteparam, starthw, softjog):")
+        self.emit(0, "         pr, plain, lat, seteparam, starthw, softjog, io):")
         for start in sorted(self.funcs):
             self.function(self.funcs[start])
         entry = self.program.entry
@@ -436,22 +447,54 @@ class _Gen:
             count[b] = sum(count.get(p, 0) for p in preds[b])
         return sum(count.get(b, 0) * len(blk.ins) for b, blk in blocks.items())
 
+    def _cacheable(self, func: _Func) -> frozenset[int]:
+        """The slots a function may keep in locals: a function that ends ticks
+        and calls nothing, in a program that neither counts the tick budget nor
+        waits for gvarget, keeps the variables that only it can see between
+        tick ends (not those the controller reads every tick: message, proc,
+        vexit, var00 and var01, which a message carries)."""
+        if self.budget or self.latency or not func.gen or func.callees:
+            return frozenset()
+        used = {i.arg for b in func.blocks.values() for i in b.ins
+                if i.op in (Op.LOAD, Op.STORE, Op.INC, Op.DEC)}
+        return frozenset(used - _UNCACHED)
+
     def _function_body(self, func: _Func) -> None:
         params = "rets, n" if self.budget else "rets" if self.tracked else ""
         self.emit(1, f"def f_{func.start}({params}):")
         mark = len(self.out)
+        self.cached = self._cacheable(func)
+        base = 2
+        if self.cached:
+            # locals from the slots at entry, back to the slots however the function
+            # leaves (return, exit, fault, close) and whenever the controller asks (SYNC)
+            self.emit(2, self._load_cached())
+            self.emit(2, "try:")
+            base = 3
         labels = sorted(func.labels)
         if len(labels) == 1:
-            self.region(func, labels[0], 2)
+            self.region(func, labels[0], base)
         else:
-            self.emit(2, f"pc = {func.start}")
-            self.emit(2, "while True:")
+            self.emit(base, f"pc = {func.start}")
+            self.emit(base, "while True:")
             for lab in labels:
-                self.emit(3, f"if pc == {lab}:")
-                self.region(func, lab, 4)
+                self.emit(base + 1, f"if pc == {lab}:")
+                self.region(func, lab, base + 2)
+        if self.cached:
+            self.emit(2, "finally:")
+            self.emit(3, self._store_cached())
+            self.cached = frozenset()
         # a generator even where constant conditions removed every tick end
         if func.gen and not any(_YIELD.search(line) for line in self.out[mark:]):
             self.out[mark:mark] = ["        if 0:", "            yield"]
+
+    def _load_cached(self) -> str:
+        order = sorted(self.cached)
+        return f"{', '.join(f'v{k}' for k in order)}, = {', '.join(f's[{k}]' for k in order)},"
+
+    def _store_cached(self) -> str:
+        order = sorted(self.cached)
+        return f"{', '.join(f's[{k}]' for k in order)}, = {', '.join(f'v{k}' for k in order)},"
 
     def region(self, func: _Func, label: int, ind: int) -> None:
         # does the code under this label jump back to it?
@@ -490,7 +533,18 @@ class _Gen:
             self.emit(ind, "continue")
 
     def tick_end(self, ind: int) -> None:
-        self.emit(ind, "yield")
+        if self.syncs:
+            # between ticks the controller may ask for the variables (send(SYNC)):
+            # they go back to the slots, and are read again when the tick goes on
+            self.emit(ind, "_sig = yield")
+            self.emit(ind, "while _sig is not None:")
+            if self.cached:
+                self.emit(ind + 1, self._store_cached())
+            self.emit(ind + 1, "_sig = yield")
+            if self.cached:
+                self.emit(ind + 1, self._load_cached())
+        else:
+            self.emit(ind, "yield")
         if self.budget:
             self.emit(ind, "n = 0")
         self.known.pop(abi.SLOT_MESSAGE, None)    # the controller clears message at a tick end
@@ -546,6 +600,23 @@ class _Gen:
         op = i.op
         if op in HAS_CONST or op in IMPLICIT_CONST:
             stack.append(_const(IMPLICIT_CONST.get(op, i.arg)))
+        elif op is Op.LOAD and i.arg in self.cached:
+            stack.append(_V(f"v{i.arg}", slots=frozenset({i.arg})))
+        elif op is Op.STORE and i.arg in self.cached:
+            v = stack.pop()
+            self.invalidate(stack, i.arg, ind)
+            self.emit(ind, f"v{i.arg} = {self.as_int(v)}")
+        elif op in (Op.INC, Op.DEC) and i.arg in self.cached:
+            self.invalidate(stack, i.arg, ind)
+            name = f"v{i.arg}"
+            if op is Op.INC:
+                self.emit(ind, f"{name} += 1")
+                self.emit(ind, f"if {name} > {INT_MAX}:")
+                self.emit(ind + 1, f"{name} = {INT_MIN}")
+            else:
+                self.emit(ind, f"{name} -= 1")
+                self.emit(ind, f"if {name} < {INT_MIN}:")
+                self.emit(ind + 1, f"{name} = {INT_MAX}")
         elif op is Op.LOAD:
             known = self.known.get(i.arg)
             stack.append(known if known is not None
@@ -589,12 +660,22 @@ class _Gen:
         elif op in (Op.PORTSET, Op.PORTCLR):
             a = stack.pop()
             fn = "portset" if op is Op.PORTSET else "portclr"
-            self.emit(ind, f"{fn}({self.as_int(a)})")
+            if self.pins and a.const is not None and 0 <= a.const < self.pins[1]:
+                # called only when it changes the output (the host's io contract)
+                bit = f"io.out_bits & {1 << a.const}"
+                self.emit(ind, f"if {'not ' if op is Op.PORTSET else ''}{bit}:")
+                self.emit(ind + 1, f"{fn}({a.const})")
+            else:
+                self.emit(ind, f"{fn}({self.as_int(a)})")
         elif op is Op.PORTGET:
             a = stack.pop()
             name = self.temp()
-            self.emit(ind, f"{name} = portget({self.as_int(a)})")
-            stack.append(_V(name))
+            if self.pins and a.const is not None and 0 <= a.const < self.pins[0]:
+                self.emit(ind, f"{name} = io.in_bits >> {a.const} & 1")
+                stack.append(_V(name, bits=1))
+            else:
+                self.emit(ind, f"{name} = portget({self.as_int(a)})")
+                stack.append(_V(name))
         elif op is Op.GVARSET:
             v = stack.pop()
             a = stack.pop()
@@ -645,6 +726,12 @@ class _Gen:
             a, b = self.tight(a), self.tight(b)
             return _V(f"({o.text(a.e, b.e)})", isbool=True, slots=slots, temps=temps, bits=1)
         assert o.modular
+        if op is Op.AND:                  # a mask 0..INT_MAX bounds the value: no wrap
+            c = a.const if a.const is not None else b.const
+            if c is not None and 0 <= c <= INT_MAX:
+                x = b if a.const is not None else a
+                return _V(f"({o.text(x.e, str(c))})", slots=slots, temps=temps,
+                          bits=max(c.bit_length(), 1))
         if o.result is Result.EXACT:      # & | ^: exact when both operands are
             return _V(f"({o.text(a.e, b.e)})", exact=a.exact and b.exact,
                       isbool=a.isbool and b.isbool, slots=slots, temps=temps,
@@ -786,32 +873,41 @@ class _Gen:
 
 _NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff,
               "__builtins__": {"len": len, "range": range}}
-_CACHE: dict[tuple, tuple[bytes, Optional[Callable], str]] = {}
+#: (code, make or None, why not translated, whether its tick ends answer SYNC)
+_CACHE: dict[tuple, tuple[bytes, Optional[Callable], str, bool]] = {}
 
 
-def translate(program: Program, latency: bool = False) -> str:
-    """The Python source the fast backend runs for ``program`` (raises Unsupported)."""
-    return _Gen(program, latency).generate()
+def translate(program: Program, latency: bool = False,
+              pins: Optional[tuple[int, int]] = None) -> str:
+    """The Python source the fast backend runs for ``program`` (raises Unsupported).
+    With ``pins`` (input and output count of a host with ``io``), constant-pin
+    port calls read and test ``io`` directly."""
+    return _Gen(program, latency, pins).generate()
 
 
-def factory(program: Program, latency: bool = False) -> Optional[Callable]:
+def _key(program: Program, latency: bool, pins) -> tuple:
+    return (zlib.crc32(program.code), program.entry, int(program.kind), bool(latency), pins)
+
+
+def factory(program: Program, latency: bool = False,
+            pins: Optional[tuple[int, int]] = None) -> Optional[Callable]:
     """The compiled ``make(...)`` of ``program``, or None if it cannot be translated.
-    Translated once per program (by CRC of its code, entry and kind)."""
-    key = (zlib.crc32(program.code), program.entry, int(program.kind), bool(latency))
+    Translated once per program (by CRC of its code, entry and kind) and host shape."""
+    key = _key(program, latency, pins)
     hit = _CACHE.get(key)
     if hit is not None and hit[0] == program.code:
         return hit[1]
     try:
-        src = translate(program, latency)
+        src = translate(program, latency, pins)
     except Unsupported as exc:
-        _CACHE[key] = (program.code, None, str(exc))
+        _CACHE[key] = (program.code, None, str(exc), False)
         return None
     ns = dict(_NAMESPACE)
     filename = f"<plc {program.name} {key[0]:08x}>"
     exec(compile(src, filename, "exec"), ns)
     if len(_CACHE) > 256:
         _CACHE.clear()
-    _CACHE[key] = (program.code, ns["make"], "")
+    _CACHE[key] = (program.code, ns["make"], "", "_sig = yield" in src)
     return ns["make"]
 
 
@@ -819,16 +915,30 @@ def unsupported_reason(program: Program, latency: bool = False) -> Optional[str]
     """Why ``program`` runs on the reference interpreter, or None if it is translated."""
     if factory(program, latency) is not None:
         return None
-    key = (zlib.crc32(program.code), program.entry, int(program.kind), bool(latency))
-    return _CACHE[key][2]
+    return _CACHE[_key(program, latency, None)][2]
+
+
+def _pins(host: Host) -> Optional[tuple[int, int]]:
+    io = host.io
+    return None if io is None else (io.input_count, io.output_count)
+
+
+def answers_sync(program: Program, host: Host) -> bool:
+    """Whether the generator make_runner gives for this program and host keeps
+    variables in locals between ticks: then ``gen.send(SYNC)`` while it is
+    suspended writes them back to the slots (and the next tick reads them
+    again), which is what must happen before anyone reads or writes its slots."""
+    if factory(program, host.lat > 0, _pins(host)) is None:
+        return False
+    return _CACHE[_key(program, host.lat > 0, _pins(host))][3]
 
 
 def make_runner(program: Program, s: list[int], host: Host) -> Iterator[None]:
     """A generator running ``program`` on the slots ``s``: translated code, or the
     reference interpreter where the program cannot be translated."""
-    make = factory(program, host.lat > 0)
+    make = factory(program, host.lat > 0, _pins(host))
     if make is None:
         return vm.run_reference(program, s, host)
     return make(s, host.portset, host.portclr, host.portget, host.gvarget, host.gvarset,
                 host.raw_gvarset, host.g0move, host.pr, host.plain, host.lat, host.seteparam,
-                host.starthw, host.softjog)
+                host.starthw, host.softjog, host.io)

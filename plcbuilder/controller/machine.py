@@ -76,11 +76,11 @@ class Machine:
         self.t_ms = 0
         self._notes.clear()
         self.motion.reset()
-        self._outputs = 0
+        self.out_bits = 0
         self._ov_mask = 0
         self._ov_val = 0
         self.sensors.reset(self.motion.ipos, 0)
-        self._inputs = 0
+        self.in_bits = 0
         self._regs: dict[int, int] = {}
         self._special: dict[int, int] = {}
         self._pwm = [0] * 8
@@ -99,10 +99,10 @@ class Machine:
             g[abi.OUTPUT_STATE_BASE + n] = self._get_output_bit
             s[abi.OUTPUT_STATE_BASE + n] = ro
         for k, a in enumerate(abi.GVAR_HW_INPUTS):
-            g[a] = (lambda _a, k=k: wrap(self._inputs >> (32 * k)))
+            g[a] = (lambda _a, k=k: wrap(self.in_bits >> (32 * k)))
             s[a] = ro
         for k, a in enumerate(abi.GVAR_HW_OUTPUTS):
-            g[a] = (lambda _a, k=k: wrap(self._outputs >> (32 * k)))
+            g[a] = (lambda _a, k=k: wrap(self.out_bits >> (32 * k)))
             s[a] = (lambda _a, v, k=k: self._set_output_word(k, v))
         for ch in range(ADC_CHANNELS):
             g[abi.GVAR_HW_ADC0 + ch] = (lambda _a, ch=ch: self._adc[ch])
@@ -137,25 +137,28 @@ class Machine:
 
     # ------------------------------------------------------- PLC-facing
     def portset(self, pin: int) -> None:
-        """Turn output ``pin`` on (at once)."""
-        self.quiet = False
+        """Turn output ``pin`` on (at once). Writing the value an output already
+        has changes nothing, and costs little: the machine stays quiet."""
         if 0 <= pin < self.output_count:
-            self._set_outputs(self._outputs | (1 << pin))
+            new = self.out_bits | (1 << pin)
+            if new != self.out_bits:
+                self._set_outputs(new)
         else:
             self._bad_pin("portset", pin, self.output_count, "outputs")
 
     def portclear(self, pin: int) -> None:
         """Turn output ``pin`` off (at once)."""
-        self.quiet = False
         if 0 <= pin < self.output_count:
-            self._set_outputs(self._outputs & ~(1 << pin))
+            new = self.out_bits & ~(1 << pin)
+            if new != self.out_bits:
+                self._set_outputs(new)
         else:
             self._bad_pin("portclear", pin, self.output_count, "outputs")
 
     def portget(self, pin: int) -> int:
         """The state of input ``pin``, 0 or 1 (a manual override wins over the wiring)."""
         if 0 <= pin < self.input_count:
-            return (self._inputs >> pin) & 1
+            return (self.in_bits >> pin) & 1
         self._bad_pin("portget", pin, self.input_count, "inputs")
         return 0
 
@@ -281,7 +284,7 @@ class Machine:
         The same dict is returned until something changes: do not modify it."""
         s = self._sample
         if s is None:
-            ins, outs = self._inputs, self._outputs
+            ins, outs = self.in_bits, self.out_bits
             m = self.motion
             s = self._sample = {
                 "inputs": tuple((ins >> k) & _M32 for k in _WORD_SHIFTS),
@@ -296,11 +299,11 @@ class Machine:
 
     def outputs_on(self) -> list[int]:
         """The output pins that are on, sorted."""
-        return _bits_on(self._outputs)
+        return _bits_on(self.out_bits)
 
     def inputs_on(self) -> list[int]:
         """The input pins that read 1, sorted."""
-        return _bits_on(self._inputs)
+        return _bits_on(self.in_bits)
 
     def axis_positions(self) -> dict[str, int]:
         """Machine positions (0.01 mm) of the configured axes, in X..W order."""
@@ -321,27 +324,28 @@ class Machine:
     def _recompute_inputs(self) -> None:
         m = self._ov_mask
         v = ((self.sensors.wired & ~m) | (self._ov_val & m)) & self._in_mask
-        if v != self._inputs:
-            self._inputs = v
+        if v != self.in_bits:
+            self.in_bits = v
             self._sample = None
 
     def _set_outputs(self, new: int) -> None:
-        old = self._outputs
+        old = self.out_bits
         if new == old:
             return
-        self._outputs = new
+        self.out_bits = new
         self._sample = None
         if (old ^ new) & self.sensors.followed_mask:
+            self.quiet = False             # a wired input may follow after a delay
             if self.sensors.output_changed(self.t_ms, old, new):
                 self._recompute_inputs()
 
     def _set_output_word(self, k: int, value: int) -> None:
         shift = 32 * k
-        new = (self._outputs & ~(_M32 << shift)) | ((value & _M32) << shift)
+        new = (self.out_bits & ~(_M32 << shift)) | ((value & _M32) << shift)
         self._set_outputs(new & self._out_mask)
 
     def _get_output_bit(self, addr: int) -> int:
-        return (self._outputs >> (addr - abi.OUTPUT_STATE_BASE)) & 1
+        return (self.out_bits >> (addr - abi.OUTPUT_STATE_BASE)) & 1
 
     def _write_list(self, lst: list, ch: int, value: int) -> None:
         if lst[ch] != value:
@@ -396,7 +400,7 @@ class Machine:
     def _check_hard_limits(self) -> None:
         m = self.motion
         vel = m.vel
-        ins = self._inputs
+        ins = self.in_bits
         for sw in self.sensors.hard_limits:
             v = vel[sw.axis]
             if v == 0.0 or ((ins >> sw.pin) & 1) != sw.active:

@@ -7,9 +7,12 @@ One tick ``t`` (docs/controller.md, "Timing rules"):
    with ``gvarset(100040, N)`` in the previous tick) begin; starts, inputs and
    ADC values given from outside (:meth:`PLC.start_hardware`, the scenario) were
    applied before the tick;
-2. the hardware procedure runs until it ends its tick or ends;
-3. when ``t % 100 == 0``: pending software starts begin, then every running
-   software procedure runs its tick, in name order;
+2. when ``t`` is on the software grid (``t = grid + k·100``, ``grid`` being the
+   tick of the controller's first load): pending software starts begin, then
+   every running software procedure runs its tick, in name order — so
+   ``__HANDLER_INIT``, started by the first load, runs before a hardware
+   procedure started in that same tick;
+3. the hardware procedure runs until it ends its tick or ends;
 4. end of tick: each procedure that ran whose ``message`` is not 0 sends it
    (hardware first, then software by name) and its ``message`` becomes 0; the
    machine sees the message (stop messages stop motion); the state is sampled;
@@ -43,7 +46,7 @@ class Process:
     """One run of a procedure."""
 
     __slots__ = ("name", "program", "kind", "slots", "eparam", "started_at", "resume",
-                 "host", "ended_at", "exit_code")
+                 "host", "ended_at", "exit_code", "syncing")
 
     def __init__(self, program: Program, slots: list[int], eparam: int, started_at: int,
                  host: Host):
@@ -57,9 +60,20 @@ class Process:
         self.resume: Callable[[], None] = lambda: None
         self.ended_at: Optional[int] = None
         self.exit_code: Optional[int] = None
+        #: the fast backend's generator when it keeps variables in locals between ticks
+        self.syncing = None
+
+    def sync(self) -> None:
+        """Make ``slots`` hold every variable's value now (the fast backend keeps
+        some in locals while it runs); call it before reading or writing them
+        from outside. The procedure reads them again when its next tick begins."""
+        gen = self.syncing
+        if gen is not None and gen.gi_suspended:
+            gen.send(fastvm.SYNC)
 
     def variables(self) -> dict[str, int]:
         """Every variable by name (predefined and the program's own)."""
+        self.sync()
         s = self.slots
         return {name: s[slot] for slot, name in sorted(self.program.slot_names().items())
                 if slot < len(s)}
@@ -89,6 +103,8 @@ class PLC:
         self.samples: deque = deque(maxlen=SAMPLE_BUFFER)
         self.programs: dict[str, Program] = {}
         self.t = 0
+        #: the software grid: software ticks fall at grid + k·100 (the first load sets it)
+        self.grid = 0
         self._proc = 0                     # the last hardware procedure's proc, kept after it ends
         self.hw: Optional[Process] = None
         self.sw: dict[str, Process] = {}
@@ -105,6 +121,16 @@ class PLC:
             notes = (None,)                # another machine: always call advance()
         self._notes_pending = notes
 
+    def prepare(self, programs: Iterable[Program]) -> None:
+        """Translate programs for the fast backend now (as they will be run),
+        so that the first start does not pay for it."""
+        if self.backend != "fast":
+            return
+        m = self.machine
+        pins = (m.input_count, m.output_count) if hasattr(m, "in_bits") else None
+        for p in programs:
+            fastvm.factory(p, self.latency > 0 and p.kind is Kind.HARDWARE, pins)
+
     # ------------------------------------------------------------- hosts
     def _host(self, name: str, kind: Kind) -> Host:
         m = self.machine
@@ -118,7 +144,7 @@ class PLC:
 
         common = dict(portset=m.portset, portclr=m.portclear, portget=m.portget,
                       gvarget=m.gvarget, g0move=m.g0move, plain=m.is_plain_register, pr=pr,
-                      raw_gvarset=raw)
+                      raw_gvarset=raw, io=m if hasattr(m, "in_bits") else None)
         if kind is Kind.HARDWARE:
             def gvarset(addr: int, value: int) -> None:
                 if lo <= addr <= hi:
@@ -163,6 +189,8 @@ class PLC:
         p = Process(program, slots, eparam, self.t, host)
         if self.backend == "fast":
             gen = fastvm.make_runner(program, slots, host)
+            if fastvm.answers_sync(program, host):
+                p.syncing = gen
         else:
             gen = vm.run_reference(program, slots, host)
         p.resume = gen.__next__
@@ -174,6 +202,8 @@ class PLC:
     def _end(self, p: Process, code: int) -> None:
         if p.ended_at is not None:
             return
+        p.sync()                           # ended from outside: its variables as they are
+        p.syncing = None
         p.ended_at = self.t
         p.exit_code = code
         p.resume = _finished
@@ -240,10 +270,12 @@ class PLC:
 
     def start_software(self, name: str, eparam: int = 0) -> None:
         """Queue a software procedure: it starts at the next software tick
-        (t % 100 == 0; at once if that is this tick)."""
+        (on the grid; at once if that is this tick)."""
         if name not in self.programs:
             raise KeyError(name)
         self._pending_sw.append((name, int(eparam)))
+        if (self.t - self.grid) % SOFTWARE_PERIOD_MS == 0:
+            self._begin_pending()          # this tick is a software tick: it begins now
 
     def _request_hardware(self, n: int, source: str) -> None:
         for name in mcode_names(n):
@@ -289,11 +321,12 @@ class PLC:
         due = [t for t, _n, _e in self._due_hw]
         if self._pending_sw:
             t = self.t
-            due.append(t + (-t) % SOFTWARE_PERIOD_MS)
+            due.append(t + (self.grid - t) % SOFTWARE_PERIOD_MS)
         return min(due) if due else None
 
     # ---------------------------------------------------------------- run
-    def _software_tick(self) -> list[Process]:
+    def _begin_pending(self) -> None:
+        """The pending software starts begin (a running one of the same name ends)."""
         for name, eparam in self._pending_sw:
             program = self.programs.get(name)
             if program is None:
@@ -306,6 +339,10 @@ class PLC:
         if self._pending_sw:
             self._pending_sw.clear()
             self._sw_order = sorted(self.sw.values(), key=lambda q: q.name)
+
+    def _software_tick(self) -> list[Process]:
+        if self._pending_sw:
+            self._begin_pending()
         ran = list(self._sw_order)
         for p in ran:
             try:
@@ -342,7 +379,7 @@ class PLC:
         t = start = self.t
         end = t + ms
         while t < end:
-            next_sw = t + (-t) % SOFTWARE_PERIOD_MS
+            next_sw = t + (self.grid - t) % SOFTWARE_PERIOD_MS
             if t == next_sw or self._due_hw or self.bindings:
                 self._tick(t, software=t == next_sw)
                 t += 1
@@ -358,23 +395,22 @@ class PLC:
 
     def _tick(self, t: int, software: bool) -> None:
         """Tick t in the order of the module's docstring: starts due, the
-        hardware procedure, the software tick (when ``software``), the end of the tick."""
+        software tick (when ``software``), the hardware procedure, the end of the tick."""
         self.t = t
         if self._due_hw:
             self._apply_due(t)
         if self.bindings:
             self._input_edges()
-        ran = []
+        soft = self._software_tick() if software and (self.sw or self._pending_sw) else ()
         hw = self.hw
         if hw is not None:
-            ran.append(hw)
             try:
                 hw.resume()
             except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
                 self._outcome(hw, exc)
-        if software and (self.sw or self._pending_sw):
-            ran += self._software_tick()
-        self._after_tick(t, ran)
+            self._after_tick(t, (hw, *soft))
+        else:
+            self._after_tick(t, soft)
 
     def _after_tick(self, t: int, ran) -> None:
         """The end of tick t: each procedure that ran (hardware first, then
@@ -410,11 +446,12 @@ class PLC:
         machine = self.machine
         advance, fields = machine.advance, machine.sample_fields
         notes_pending = self._notes_pending
+        grid = self.grid
         send = self._send
         add_sample = self.samples.append
         rec = self.record_samples
         while True:
-            stop = min(end, t + (-t) % SOFTWARE_PERIOD_MS)
+            stop = min(end, t + (grid - t) % SOFTWARE_PERIOD_MS)
             while t < stop:
                 self.t = t
                 try:
@@ -428,13 +465,13 @@ class PLC:
                     send(hw, code)
                 if rec:
                     add_sample((t, name, slots[proc_slot], code, fields()))
-                if not notes_pending and machine.quiet:
-                    machine.t_ms += 1              # advance() would do only this
-                else:
+                t += 1
+                if notes_pending or not machine.quiet:
                     notes = advance()
                     if notes:
-                        self._emit_notes(t, notes)
-                t += 1
+                        self._emit_notes(t - 1, notes)
+                else:
+                    machine.t_ms += 1              # advance() would do only this
             if t == end:
                 return t
             self._tick(t, software=True)
@@ -446,10 +483,15 @@ class PLC:
         """Ticks t..stop-1 with no procedure running and none due: only the
         machine moves (:meth:`_after_tick` with nothing that ran)."""
         proc = self._proc
-        advance, fields = self.machine.advance, self.machine.sample_fields
+        machine = self.machine
+        advance, fields = machine.advance, machine.sample_fields
         add_sample = self.samples.append
         rec = self.record_samples
+        notes_pending = self._notes_pending
         while t < stop:
+            if not rec and not notes_pending and machine.quiet:
+                machine.t_ms += stop - t           # nothing to record, nothing moves
+                return stop
             if rec:
                 add_sample((t, None, proc, 0, fields()))
             notes = advance()

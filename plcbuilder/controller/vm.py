@@ -90,14 +90,21 @@ class Host:
     ``starthw``, ``seteparam``, ``softjog``) directly where the address is a
     constant, which must have the same effect. ``lat`` is the gvarget latency
     in ticks for addresses where ``plain(addr)`` is true.
+
+    ``io``, when given, is the machine's pin state that the fast backend may read
+    directly instead of calling (an object with ``in_bits``, ``out_bits``,
+    ``input_count`` and ``output_count``): ``portget`` of a constant pin reads
+    ``io.in_bits``, and ``portset``/``portclr`` of a constant pin are only called
+    when they would change ``io.out_bits``. So ``portget(n)`` must return bit n of
+    ``in_bits``, and writing an output its current value must do nothing.
     """
 
     __slots__ = ("portset", "portclr", "portget", "gvarget", "gvarset", "g0move", "plain",
-                 "lat", "pr", "raw_gvarset", "starthw", "seteparam", "softjog", "software")
+                 "lat", "pr", "raw_gvarset", "starthw", "seteparam", "softjog", "software", "io")
 
     def __init__(self, *, portset, portclr, portget, gvarget, gvarset, g0move,
                  plain=None, lat: int = 0, pr=None, raw_gvarset=None, starthw=None,
-                 seteparam=None, softjog=None, software: bool = False):
+                 seteparam=None, softjog=None, software: bool = False, io=None):
         self.portset, self.portclr, self.portget = portset, portclr, portget
         self.gvarget, self.gvarset, self.g0move = gvarget, gvarset, g0move
         self.plain = plain or (lambda _addr: True)
@@ -106,6 +113,7 @@ class Host:
         self.raw_gvarset = raw_gvarset or gvarset
         self.starthw, self.seteparam, self.softjog = starthw, seteparam, softjog
         self.software = software
+        self.io = io
 
 
 # ------------------------------------------------------------- pre-decoding

@@ -513,3 +513,37 @@ def test_plasma_arc_ok_follows_the_torch_output():
     m.portclear(OUTPUT_PLASMA)
     assert m.portget(INPUT_ARC_OK) == 0             # the arc goes out at once
     assert m.portget(INPUT_AIR) == 1                # air pressure OK by default
+
+
+# ------------------------------------------------------------ quiet and cheap
+def test_writing_an_output_its_current_value_keeps_the_machine_quiet():
+    """An unchanged output write changes nothing, so an idle machine stays idle
+    (advance() is then only a clock tick)."""
+    m = bare()
+    m.portset(7)
+    m.advance()
+    m.advance()
+    assert m.quiet
+    for _ in range(3):
+        m.portset(7)                    # already on
+        m.portclear(8)                  # already off
+        assert m.quiet
+        assert m.advance() == []
+    assert m.outputs_on() == [7]
+    m.portclear(7)                      # a real change on an unwired pin: still nothing to do
+    assert m.outputs_on() == []
+
+
+def test_an_output_that_a_sensor_follows_wakes_the_machine():
+    """A changed output that an input follows after a delay must be advanced."""
+    m = bare("[[inputs]]\npin = 40\noutput = 41\ndelay_ms = 3\n")
+    for _ in range(3):
+        m.advance()
+    assert m.quiet
+    m.portset(41)
+    assert not m.quiet
+    for _ in range(2):
+        m.advance()
+    assert m.portget(40) == 0
+    m.advance()
+    assert m.portget(40) == 1

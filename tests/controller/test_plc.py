@@ -354,7 +354,8 @@ def test_a_software_start_of_a_missing_procedure_is_a_warning(backend):
 
 def test_prints_from_every_procedure(backend):
     """20000..20100: writing prints the value in the host's message log (a print
-    event {t, register, value})."""
+    event {t, register, value}). The software procedure prints first: "in a tick
+    where software procedures run, they run before the hardware procedure"."""
     hw = compile_proc("main(){ gvarset(20000, 5); gvarset(20100, 0-1); gvarset(20101, 9); "
                       "exit(99); };", "M03")
     sw = compile_proc("main(){ gvarset(20050, Param + 1); exit(99); };", "S", software=True)
@@ -363,7 +364,7 @@ def test_prints_from_every_procedure(backend):
     c.step(1)
     ev = c.drain_events()
     assert [(e.t_ms, e.register, e.value, e.source) for e in of(ev, Print)] == \
-        [(0, 20000, 5, "M03"), (0, 20100, -1, "M03"), (0, 20050, 1, "S")]
+        [(0, 20050, 1, "S"), (0, 20000, 5, "M03"), (0, 20100, -1, "M03")]
 
 
 def test_gvarget_latency_defaults_to_0_and_can_be_set(backend):
@@ -549,5 +550,53 @@ def test_the_fast_paths_run_exactly_as_the_tick_function(backend):
     events2, samples2, t_end2, fast2 = session(bound=True)
     assert "hw" in fast and "idle" in fast and fast2 == []
     assert of(events, Fault) and of(events, Message) and of(events, Print)
-    assert [e.name for e in of(events, Started)] == ["M10", "S1", "M11", "M11"]
+    # S1, started by the load, "begins in the tick of the first load, before any
+    # procedure started at that same tick"
+    assert [e.name for e in of(events, Started)] == ["S1", "M10", "M11", "M11"]
     assert events == events2 and samples == samples2 and t_end == t_end2
+
+
+# ------------------------------------------------- the software grid and order
+def test_the_software_grid_starts_at_the_first_load(backend):
+    """"The software grid starts at the tick of the controller's first load (so
+    software ticks fall at load + k·100 ms)"; later loads keep it."""
+    sw = compile_proc("main(){ do { gvarset(20001, 1); } while(1); };", "S", software=True)
+    c = Controller(backend=backend)
+    c.step(37)
+    c.load([sw])
+    c.step(250)
+    assert [e.t_ms for e in of(c.drain_events(), Print)] == [37, 137, 237]
+    c.load([sw])                        # Build All again at 287: the grid stays
+    c.step(100)
+    assert [e.t_ms for e in of(c.drain_events(), Print)] == [337]
+
+
+def test_software_runs_before_hardware_in_a_shared_tick(backend):
+    """"in a tick where software procedures run, they run before the hardware
+    procedure": a software write is seen by the hardware procedure in that tick,
+    and the hardware procedure's write only by the next software tick."""
+    sw = compile_proc("main(){ do { gvarset(9000, gvarget(9000) + 1); "
+                      "gvarset(20002, gvarget(9001)); } while(1); };", "S", software=True)
+    hw = compile_proc("main(){ do { gvarset(9001, gvarget(9000)); } while(1); };", "M03")
+    c = controller(hw, sw, backend=backend)
+    c.start("M03")
+    c.step(201)
+    assert c.machine.gvarget(9001) == 3
+    assert [(e.t_ms, e.value) for e in of(c.drain_events(), Print)] == [(0, 0), (100, 1),
+                                                                        (200, 2)]
+
+
+def test_handler_init_runs_before_a_hardware_start_in_the_load_tick(backend):
+    """__HANDLER_INIT "begins in the tick of the first load, before any procedure
+    started at that same tick, so 'upload, then start M03 at once' leaves the
+    spindle on"."""
+    init = compile_proc("main(){ portclear(0); exit(99); };", "__HANDLER_INIT", software=True)
+    m03 = compile_proc("main(){ portset(0); exit(99); };", "M03")
+    c = Controller(backend=backend)
+    c.step(5)
+    c.load([init, m03])
+    c.start("M03")
+    c.step(1)
+    started = [(e.t_ms, e.name) for e in of(c.drain_events(), Started)]
+    assert started == [(5, "__HANDLER_INIT"), (5, "M03")]
+    assert c.machine.outputs_on() == [0]

@@ -80,6 +80,17 @@ def test_handler_init_and_lube(fresh):
     assert "LUBE" in ctl.state()["software"]
 
 
+def test_upload_then_start_m03_at_once_leaves_the_spindle_on(fresh):
+    """__HANDLER_INIT "begins in the tick of the first load, before any procedure
+    started at that same tick, so 'upload, then start M03 at once' leaves the
+    spindle on"."""
+    ended, _seen = run(fresh, "M03", 12000)
+    assert ended.exit_code == 99
+    fresh.step(500)
+    st = fresh.state()
+    assert SPINDLE in st["outputs"] and st["pwm"][0] == 12000
+
+
 def test_spindle(ctl):
     ended, seen = run(ctl, "M03", 12000)
     assert ended.exit_code == 99
