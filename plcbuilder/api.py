@@ -18,8 +18,8 @@ from plcbuilder.bytecode.program import Kind, LoadError, Program
 from plcbuilder.lang.compiler import (CompileOptions, CompileResult, compile_bytes, compile_file,
                                       compile_source)
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header, builtin_header_names
-from plcbuilder.project import (BuildResult, Project, ProjectError, atomic_write, build_project,
-                                create_project)
+from plcbuilder._support.files import atomic_write
+from plcbuilder.project import BuildResult, Project, ProjectError, build_project, create_project
 
 __all__ = ["atomic_write", "BUILTIN_PREFIX", "builtin_header", "builtin_header_names", "BuildResult", "CompileOptions", "CompileResult", "Kind", "LoadError", "Program",
            "Project", "ProjectError", "build_project", "compile_bytes", "compile_file",

@@ -91,7 +91,7 @@ def _compile_target(target: Path, opts: RunOptions) -> _Target:
 
 
 def _compile_project(root: Path, opts: RunOptions) -> _Target:
-    from plcbuilder.controller import config
+    from plcbuilder.controller import machine_config, variables_xml
     from plcbuilder.project.model import DEFAULT_MACHINE, Project, ProjectError
     try:
         project = Project.open(root)
@@ -120,8 +120,8 @@ def _compile_project(root: Path, opts: RunOptions) -> _Target:
     variables = None
     if project.variables_path.is_file():
         try:
-            variables = config.load_variables(project.variables_path)
-        except config.ConfigError as exc:
+            variables = variables_xml.load_variables(project.variables_path)
+        except machine_config.ConfigError as exc:
             raise UsageError(str(exc)) from None
     machine = project.machine_path if project.machine_path.is_file() else None
     if machine is None and project.settings.machine != DEFAULT_MACHINE:
@@ -216,7 +216,7 @@ def _check_scenario(sc, controller, machine) -> None:
 
 def run(target, options: Optional[RunOptions] = None) -> RunResult:
     """Compile ``target`` and simulate it (see the module docstring)."""
-    from plcbuilder.controller import config
+    from plcbuilder.controller import machine_config, variables_xml
     from plcbuilder.controller.controller import Controller, ControllerError
     from plcbuilder.controller.scenario import Action, drive
 
@@ -231,9 +231,9 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
         return RunResult(tg.compiled, None)
     machine_path = opts.machine if opts.machine is not None else tg.machine_path
     try:
-        mconf = config.load_machine(machine_path) if machine_path is not None \
-            else config.default_machine()
-    except config.ConfigError as exc:
+        mconf = machine_config.load_machine(machine_path) if machine_path is not None \
+            else machine_config.default_machine()
+    except machine_config.ConfigError as exc:
         raise UsageError(str(exc)) from None
     try:
         c = Controller(mconf, backend=opts.backend, variables=tg.variables,

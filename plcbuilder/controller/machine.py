@@ -31,7 +31,7 @@ from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.abi import AXES
 from plcbuilder.bytecode.semantics import wrap
 
-from .config import ADC_CHANNELS, MachineConfig, default_machine
+from .machine_config import ADC_CHANNELS, MachineConfig, default_machine
 from .motion import N_AXES, Motion, fmt_mm
 from .sensors import Sensors
 

@@ -31,7 +31,7 @@ from typing import Optional
 
 from plcbuilder.bytecode.abi import AXES
 
-from .config import MachineConfig
+from .machine_config import MachineConfig
 
 N_AXES = len(AXES)
 JOG_AXES = 8              # 8635 and 100020.. reach X..V

@@ -20,7 +20,7 @@ from typing import Optional
 
 from plcbuilder.bytecode.abi import AXES
 
-from .config import ADC_CHANNELS, AdcConfig, MachineConfig
+from .machine_config import ADC_CHANNELS, AdcConfig, MachineConfig
 
 
 class PositionInput:

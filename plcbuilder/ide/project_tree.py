@@ -29,7 +29,8 @@ from plcbuilder.bytecode.program import Kind
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.icons import icon
-from plcbuilder.project.model import Project, atomic_write
+from plcbuilder._support.files import atomic_write
+from plcbuilder.project.model import Project
 
 ROLE_PATH = Qt.ItemDataRole.UserRole + 1
 ROLE_WHAT = Qt.ItemDataRole.UserRole + 2

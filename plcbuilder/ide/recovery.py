@@ -14,7 +14,7 @@ re-arms the watch, and a file that is briefly missing (mid-replace) is
 looked at again before it is called deleted.
 
 :func:`save_text` is the one way the IDE writes a source file: atomic
-(:func:`plcbuilder.project.model.atomic_write`), in UTF-8, with the file's
+(:func:`plcbuilder._support.files.atomic_write`), in UTF-8, with the file's
 own line ends.
 """
 
@@ -30,7 +30,8 @@ from typing import Callable, Optional
 from PySide6.QtCore import QFileSystemWatcher, QObject, QTimer, Signal
 
 from plcbuilder.ide.editor import file_key
-from plcbuilder.project.model import atomic_write
+from plcbuilder._support.files import atomic_write
+from plcbuilder._support.procs import pid_alive
 
 INDEX = "index.json"
 
@@ -149,7 +150,7 @@ class RecoveryManager(QObject):
         root = file_key(project_root) if project_root else None
         for key, entry in sorted(index.items()):
             pid = entry.get("pid")
-            if pid == os.getpid() or (isinstance(pid, int) and _pid_alive(pid)):
+            if pid == os.getpid() or (isinstance(pid, int) and pid_alive(pid)):
                 continue            # this session's own, or another IDE's that still runs
             if root is not None:
                 project = entry.get("project") or ""
@@ -194,19 +195,6 @@ class RecoveryManager(QObject):
                 (self.folder / entry["copy"]).unlink()
             except OSError:
                 pass
-
-
-def _pid_alive(pid: int) -> bool:
-    """Whether another IDE process still runs (then its copies are not leftovers)."""
-    if pid <= 0 or os.name == "nt":      # Windows: os.kill(pid, 0) would end the process
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OSError):
-        return True
-    return True
 
 
 # ------------------------------------------------------------------ disk

@@ -32,6 +32,7 @@ import zlib
 from dataclasses import dataclass, field
 from typing import Iterable, Sequence, Union
 
+from plcbuilder._support.strictjson import strict_json_loads
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind, LoadError, Program
 from plcbuilder.image.romfs import REGULAR, ImageError, read_romfs, write_romfs
@@ -210,25 +211,6 @@ def write_image(programs: Sequence[ProgramInput], limits: Limits | None = None) 
 
 
 # ------------------------------------------------------------------ reading
-
-def _reject_constant(name: str):
-    raise ValueError(f"{name} is not allowed")
-
-
-def _no_duplicates(pairs):
-    out = {}
-    for k, v in pairs:
-        if k in out:
-            raise ValueError(f"key {k!r} appears twice")
-        out[k] = v
-    return out
-
-
-def strict_json_loads(text: str):
-    """JSON that refuses repeated keys and NaN/Infinity (raises ValueError, or
-    RecursionError when nested too deeply). Shared with the link protocol."""
-    return json.loads(text, object_pairs_hook=_no_duplicates, parse_constant=_reject_constant)
-
 
 def _int(value, what: str, lo: int = 0, hi: int = 1 << 32) -> int:
     if type(value) is not int or not lo <= value <= hi:

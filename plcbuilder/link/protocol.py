@@ -50,7 +50,7 @@ import struct
 from typing import Any, Iterable, Optional
 
 from plcbuilder.controller.events import Sample, from_dict, to_dict
-from plcbuilder.image.manifest import strict_json_loads
+from plcbuilder._support.strictjson import strict_json_loads
 
 #: Bumped on any incompatible change; hello carries it and the server checks it.
 PROTOCOL_VERSION = 1

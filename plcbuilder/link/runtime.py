@@ -24,6 +24,12 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Optional
 
+from plcbuilder._support.files import atomic_write
+from plcbuilder._support.procs import pid_alive
+
+__all__ = ["Endpoint", "RuntimeFileError", "default_path", "new_token", "pid_alive", "read",
+           "remove", "write"]
+
 ENV_FILE = "PLCBUILDER_CONTROLLER_FILE"
 FILE_NAME = "controller.json"
 MAX_SIZE = 64 * 1024
@@ -71,26 +77,7 @@ def write(endpoint: Endpoint, path: Optional[Path] = None) -> Path:
     folder = path.parent
     folder.mkdir(mode=0o700, parents=True, exist_ok=True)
     data = (json.dumps(endpoint.as_dict(), sort_keys=True) + "\n").encode("utf-8")
-    tmp = folder / f".{path.name}.{secrets.token_hex(6)}.tmp"
-    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0) \
-        | getattr(os, "O_NOFOLLOW", 0)
-    fd = os.open(tmp, flags, 0o600)
-    try:
-        try:
-            os.fchmod(fd, 0o600)          # whatever the umask
-        except (AttributeError, OSError):
-            pass
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    atomic_write(path, data, mode=0o600)
     return path
 
 
@@ -113,21 +100,6 @@ def read(path: Optional[Path] = None) -> Endpoint:
             and isinstance(ep.token, str) and type(ep.pid) is int):
         raise RuntimeFileError(f"{path} is damaged (expected host, port, token and pid)")
     return ep
-
-
-def pid_alive(pid: int) -> bool:
-    """Whether a process with that id exists (True when it cannot be told)."""
-    if pid <= 0:
-        return False
-    if sys.platform == "win32":
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OSError):
-        return True
-    return True
 
 
 def remove(endpoint: Endpoint, path: Optional[Path] = None) -> bool:

@@ -53,7 +53,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
-from plcbuilder.controller.config import ConfigError
+from plcbuilder.controller.machine_config import ConfigError
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.image.manifest import Image, ImageError, Limits, read_image
 from plcbuilder.link import protocol
@@ -1088,9 +1088,9 @@ class Server:
 def make_controller(machine=None, variables=None, **kwargs) -> Callable[[], Controller]:
     """A factory of controllers for a machine file and a plc-variables.xml (paths
     or None for the defaults). Raises ConfigError on a bad file."""
-    from plcbuilder.controller import config
-    mc = config.load_machine(machine) if machine else config.default_machine()
-    vs = config.load_variables(variables) if variables else None
+    from plcbuilder.controller import machine_config, variables_xml
+    mc = machine_config.load_machine(machine) if machine else machine_config.default_machine()
+    vs = variables_xml.load_variables(variables) if variables else None
 
     def factory() -> Controller:
         return Controller(mc, variables=vs, **kwargs)

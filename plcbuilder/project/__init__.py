@@ -2,9 +2,8 @@
 new`` (``new``)."""
 
 from plcbuilder.project.build import BuildResult, ProcedureBuild, build_project
-from plcbuilder.project.model import (Procedure, Project, ProjectError, Settings, atomic_write,
-                                      parse_settings)
+from plcbuilder.project.model import Procedure, Project, ProjectError, Settings, parse_settings
 from plcbuilder.project.new import create_project
 
 __all__ = ["BuildResult", "ProcedureBuild", "Procedure", "Project", "ProjectError", "Settings",
-           "atomic_write", "build_project", "create_project", "parse_settings"]
+           "build_project", "create_project", "parse_settings"]

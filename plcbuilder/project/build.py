@@ -43,7 +43,8 @@ from plcbuilder.image.manifest import ImageError, Limits, valid_name, write_imag
 from plcbuilder.lang import compiler as _compiler
 from plcbuilder.lang.compiler import CompileOptions, compile_file
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
-from plcbuilder.project.model import Procedure, Project, atomic_write
+from plcbuilder._support.files import atomic_write
+from plcbuilder.project.model import Procedure, Project
 
 CACHE_FILE = ".cache.json"
 CACHE_VERSION = 1

@@ -1,4 +1,4 @@
-"""The project folder (SPEC §4) and its settings file.
+"""The project folder (docs/projects.md) and its settings file.
 
 A project is a folder::
 
@@ -27,19 +27,19 @@ The settings file::
     strict = false                 # build with --strict (controller compatibility)
 
 Every problem with the settings raises :class:`ProjectError` naming the file,
-the line and the key. :func:`atomic_write` is how the IDE saves files.
+the line and the key.
 """
 
 from __future__ import annotations
 
-import os
 import re
-import secrets
 import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Optional, Union
 
+from plcbuilder._support.files import atomic_write
+from plcbuilder._support.toml_errors import TomlLocator, decode_error
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.image.manifest import MAX_LIMIT, Limits
 
@@ -70,56 +70,6 @@ class ProjectError(ValueError):
         super().__init__(f"{where}{key + ': ' if key else ''}{message}")
 
 
-# ------------------------------------------------------------ atomic writes
-
-def atomic_write(path: Union[str, Path], data: Union[bytes, str]) -> None:
-    """Replace path's contents all at once: write a temporary file in the same
-    folder, fsync it, os.replace it over path (then fsync the folder). Readers
-    see the old file or the new one, never a half-written one. str is written
-    as UTF-8. The file keeps its permissions when it existed."""
-    path = Path(path)
-    if isinstance(data, str):
-        data = data.encode("utf-8")
-    elif not isinstance(data, (bytes, bytearray, memoryview)):
-        raise TypeError(f"atomic_write takes bytes or str, not {type(data).__name__}")
-    try:
-        mode = path.stat().st_mode & 0o7777
-    except FileNotFoundError:
-        mode = None
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        if mode is not None:
-            os.chmod(tmp, mode)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-    _fsync_dir(path.parent)
-
-
-def _fsync_dir(folder: Path) -> None:
-    if not hasattr(os, "O_DIRECTORY"):
-        return
-    try:
-        fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
 # ---------------------------------------------------------------- settings
 
 @dataclass(frozen=True)
@@ -135,7 +85,7 @@ class Settings:
         def line(key: str, value: str, comment: str) -> str:
             return f"{key} = {value}".ljust(27) + f"# {comment}\n"
         lim = self.limits
-        return ("# PLC Builder project settings (see README.md, 'Projects')\n"
+        return ("# PLC Builder project settings (see docs/projects.md in PLC Builder)\n"
                 + line("name", _toml_str(self.name), "the project's name")
                 + line("machine", _toml_str(self.machine), "the simulated machine's file")
                 + "\n[limits]\n"
@@ -173,22 +123,8 @@ _SCHEMA: dict[str, dict[str, type]] = {
 
 def _line_of(text: str, table: str, key: Optional[str]) -> Optional[int]:
     """The line where [table] key = … is (or the table header), for messages."""
-    current = ""
-    header_line = None
-    for i, raw in enumerate(text.splitlines(), 1):
-        line = raw.strip()
-        m = re.match(r"\[\s*([A-Za-z0-9_\-\"'. ]+?)\s*\]\s*(#.*)?$", line)
-        if m:
-            current = m.group(1).strip().strip("\"'")
-            if current == table and key is None:
-                return i
-            if current == table:
-                header_line = i
-            continue
-        if key is not None and current == table:
-            if re.match(rf"""["']?{re.escape(key)}["']?\s*=""", line):
-                return i
-    return header_line
+    path = tuple(p for p in (table, key) if p)
+    return TomlLocator(text).line_of(path) if path else None
 
 
 def parse_settings(text: str, file: Union[str, Path] = SETTINGS_FILE,
@@ -197,12 +133,7 @@ def parse_settings(text: str, file: Union[str, Path] = SETTINGS_FILE,
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        msg = str(exc)
-        m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
-        line = int(m.group(1)) if m else None
-        msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", msg) if m else msg
-        if not m and "end of document" in msg:
-            line = text.count("\n") + 1
+        msg, line = decode_error(exc, text)
         raise ProjectError(f"not valid TOML: {msg}", file, line) from None
     values: dict[str, object] = {}
     for key, value in doc.items():

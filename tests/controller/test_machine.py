@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from plcbuilder.bytecode import abi
-from plcbuilder.controller.config import parse_machine
+from plcbuilder.controller.machine_config import parse_machine
 from plcbuilder.controller.machine import Machine
 
 INPUT_HOME_Z, INPUT_PROBE, INPUT_IHC, INPUT_ARC_OK, INPUT_AIR = 2, 3, 4, 5, 6

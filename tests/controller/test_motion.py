@@ -8,7 +8,7 @@ import math
 import pytest
 
 from plcbuilder.bytecode import abi
-from plcbuilder.controller.config import parse_machine
+from plcbuilder.controller.machine_config import parse_machine
 from plcbuilder.controller.machine import Machine
 from plcbuilder.controller.motion import Profile
 

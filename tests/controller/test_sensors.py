@@ -3,7 +3,7 @@ sources, and manual overrides."""
 
 from __future__ import annotations
 
-from plcbuilder.controller.config import parse_machine
+from plcbuilder.controller.machine_config import parse_machine
 from plcbuilder.controller.machine import Machine
 
 AXIS = """

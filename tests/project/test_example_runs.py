@@ -8,7 +8,8 @@ from plcbuilder.image import read_image
 from plcbuilder.project import build_project, create_project
 
 controller = pytest.importorskip("plcbuilder.controller.controller")
-config = pytest.importorskip("plcbuilder.controller.config")
+machine_config = pytest.importorskip("plcbuilder.controller.machine_config")
+variables_xml = pytest.importorskip("plcbuilder.controller.variables_xml")
 events = pytest.importorskip("plcbuilder.controller.events")
 
 # pins.h
@@ -28,8 +29,8 @@ def built(tmp_path_factory):
 def fresh(built):
     """A controller that has just loaded the image (nothing has run yet)."""
     project, image = built
-    c = controller.Controller(config.load_machine(project.machine_path),
-                              variables=config.load_variables(project.variables_path),
+    c = controller.Controller(machine_config.load_machine(project.machine_path),
+                              variables=variables_xml.load_variables(project.variables_path),
                               record_samples=False)
     c.load([p.program for p in image.procedures])
     return c

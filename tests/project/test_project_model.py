@@ -1,4 +1,4 @@
-"""The project folder model, its settings file and atomic_write."""
+"""The project folder model and its settings file."""
 
 import os
 import stat
@@ -7,7 +7,7 @@ import pytest
 
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.image import Limits
-from plcbuilder.project import Project, ProjectError, Settings, atomic_write, parse_settings
+from plcbuilder.project import Project, ProjectError, Settings, parse_settings
 
 
 def write(path, text):
@@ -120,30 +120,3 @@ def test_procedures_are_listed_by_kind_and_name(tmp_path):
     assert p.procedure("M99") is None
     assert p.include_dirs() == (tmp_path / "include",)
     assert p.new_procedure_path("M04", Kind.HARDWARE) == tmp_path / "hardware" / "M04.plc"
-
-
-def test_atomic_write(tmp_path):
-    f = tmp_path / "M03.plc"
-    atomic_write(f, "main(){};\n")
-    assert f.read_text() == "main(){};\n"
-    atomic_write(f, b"\x00\x01")
-    assert f.read_bytes() == b"\x00\x01"
-    os.chmod(f, 0o600)
-    atomic_write(f, "é")
-    assert f.read_bytes() == "é".encode() and stat.S_IMODE(f.stat().st_mode) == 0o600
-    assert sorted(os.listdir(tmp_path)) == ["M03.plc"]
-    with pytest.raises(TypeError):
-        atomic_write(f, 42)
-
-
-def test_atomic_write_failure_keeps_the_old_file(tmp_path, monkeypatch):
-    f = tmp_path / "M03.plc"
-    f.write_text("old")
-
-    def boom(src, dst):
-        raise OSError(28, "No space left on device")
-    monkeypatch.setattr(os, "replace", boom)
-    with pytest.raises(OSError):
-        atomic_write(f, "new")
-    assert f.read_text() == "old"
-    assert sorted(os.listdir(tmp_path)) == ["M03.plc"]

@@ -61,8 +61,9 @@ def test_example_builds_cleanly_even_in_strict_mode(tmp_path):
 
 
 def test_example_machine_and_variables_load(tmp_path):
-    config = pytest.importorskip("plcbuilder.controller.config")
+    machine_config = pytest.importorskip("plcbuilder.controller.machine_config")
+    variables_xml = pytest.importorskip("plcbuilder.controller.variables_xml")
     p = create_project(tmp_path / "p")
-    machine = config.load_machine(p.machine_path)
+    machine = machine_config.load_machine(p.machine_path)
     assert machine is not None
-    assert config.load_variables(p.variables_path) == [0] * 16
+    assert variables_xml.load_variables(p.variables_path) == [0] * 16

@@ -1,10 +1,10 @@
-"""The machine description (a TOML file) and ``plc-variables.xml``.
+"""The machine description: a TOML file.
 
 A machine description says what the simulated controller is wired to: its axes
 (speeds, accelerations, soft limits, start position, work offset), what each
 input pin reads (a switch at an axis position, a sensor that follows an output
 after a delay, a constant), and what each ADC channel reads. The format is
-documented for users in README.md ("The simulated machine"); the default machine is package data
+documented for users in docs/machine.md; the default machine is package data
 (``resources/machine/default.toml``).
 
 Lengths in the file are in mm (degrees for rotary axes), speeds in mm/min,
@@ -12,13 +12,13 @@ accelerations in mm/s², times in ms. The machine works in the PLC's units
 (0.01 mm) and converts on load.
 
 Every problem with a file raises :class:`ConfigError`, whose message names the
-file, the line (where it can be found) and the key.
+file, the line (where it can be found) and the key. ``plc-variables.xml`` is
+read by :mod:`plcbuilder.controller.variables_xml`, with the same error.
 """
 
 from __future__ import annotations
 
 import math
-import re
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -26,16 +26,15 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping, Optional
 
+from plcbuilder._support.toml_errors import TomlLocator, decode_error
 from plcbuilder.bytecode.abi import AXES
 
 MAX_PINS = 256          # 8 words of 32 pins
 ADC_CHANNELS = 8
-VARIABLE_COUNT = 16
-_VARIABLES_MAX_BYTES = 1 << 20
 
 
 class ConfigError(ValueError):
-    """A machine description or plc-variables.xml that cannot be used.
+    """A machine description or a plc-variables.xml that cannot be used.
 
     ``str(err)`` reads ``FILE:LINE: KEY: what is wrong`` (the parts that are known).
     """
@@ -153,78 +152,11 @@ class MachineConfig:
         return {o.pin: o.name for o in self.outputs if o.name}
 
 
-# ----------------------------------------------------------- line locator
-_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
-
-
-def _split_key(text: str) -> tuple[str, ...]:
-    parts = []
-    for p in re.findall(r'"[^"]*"|\'[^\']*\'|[^.]+', text):
-        p = p.strip()
-        if len(p) >= 2 and p[0] == p[-1] and p[0] in "\"'":
-            p = p[1:-1]
-        parts.append(p)
-    return tuple(parts)
-
-
-class _Locator:
-    """Finds the line of a key in TOML text (best effort: plain tables,
-    arrays of tables and ``key = value`` lines; None when not found)."""
-
-    def __init__(self, text: str):
-        self.lines = text.splitlines()
-        # one entry per header: (line number, table path with array indexes)
-        self.headers: list[tuple[int, tuple]] = [(0, ())]
-        counts: dict[tuple, int] = {}
-        for n, line in enumerate(self.lines, 1):
-            m = _HEADER.match(line)
-            if not m:
-                continue
-            path = _split_key(m.group(2))
-            if m.group(1) == "[[":
-                k = counts.get(path, 0)
-                counts[path] = k + 1
-                self.headers.append((n, path + (k,)))
-            else:
-                self.headers.append((n, path))
-
-    def line_of(self, path: tuple) -> Optional[int]:
-        best: Optional[int] = None
-        for i, (hline, hpath) in enumerate(self.headers):
-            if hpath and hpath == path:
-                return hline
-            if path[:len(hpath)] == hpath and len(path) > len(hpath):
-                rest = [p for p in path[len(hpath):] if not isinstance(p, int)]
-                end = self.headers[i + 1][0] if i + 1 < len(self.headers) else len(self.lines) + 1
-                found = self._key_line(rest, hline + 1, end)
-                if found is not None:
-                    return found
-                if hpath:
-                    best = hline
-        return best
-
-    def _key_line(self, rest: list, start: int, end: int) -> Optional[int]:
-        if not rest:
-            return None
-        dotted = r"\s*\.\s*".join(
-            r"(?:%s|\"%s\"|'%s')" % ((re.escape(str(p)),) * 3) for p in rest)
-        pat = re.compile(r"^\s*(?:%s)\s*=" % dotted)
-        first = re.compile(r"^\s*(?:%s|\"%s\"|'%s')\s*=" % ((re.escape(str(rest[0])),) * 3))
-        fallback = None
-        for n in range(start, end):
-            line = self.lines[n - 1]
-            if pat.match(line):
-                return n
-            if fallback is None and first.match(line):
-                fallback = n
-        return fallback
-
-
 # ----------------------------------------------------------------- parsing
 class _Reader:
     def __init__(self, file: str, text: str):
         self.file = file
-        self.loc = _Locator(text)
+        self.loc = TomlLocator(text)
 
     def error(self, path: tuple, message: str) -> ConfigError:
         key = ".".join(str(p) if not isinstance(p, int) else f"[{p}]" for p in path)
@@ -320,14 +252,7 @@ def parse_machine(text: str, name: str = "<machine>") -> MachineConfig:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
-        msg = str(e)
-        m = re.search(r"\(at line (\d+), column \d+\)", msg)
-        line = int(m.group(1)) if m else None
-        msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", msg)
-        m2 = re.search(r"\(at end of document\)", msg)
-        if m2:
-            line = max(1, len(text.splitlines()))
-            msg = msg.replace(" (at end of document)", "")
+        msg, line = decode_error(e, text)
         raise ConfigError(f"TOML syntax error: {msg}", name, line) from None
     r = _Reader(name, text)
     r.known(data, (), _TOP_KEYS)
@@ -522,132 +447,3 @@ def default_machine() -> MachineConfig:
     if _default_cache is None:
         _default_cache = parse_machine(default_machine_text(), "<default machine>")
     return _default_cache
-
-
-# ------------------------------------------------------- plc-variables.xml
-_NUMBER = re.compile(r"^\s*(-?)(0[xX][0-9a-fA-F]+|[0-9]+)\s*$")
-
-
-def parse_int_value(text: str) -> int:
-    """A decimal or 0x-hex integer (optionally negative) as a signed 32-bit value.
-
-    Raises ValueError for anything else or for a value that does not fit 32 bits
-    (-2147483648 .. 4294967295; hex above 0x7fffffff wraps, as in C).
-    """
-    m = _NUMBER.match(text)
-    if not m:
-        raise ValueError(f"{text!r} is not a decimal or 0x-hex integer")
-    v = int(m.group(2), 0) if not re.fullmatch(r"0[0-9]+", m.group(2)) else int(m.group(2), 10)
-    if m.group(1):
-        v = -v
-    if v < -(1 << 31) or v > 0xFFFFFFFF:
-        raise ValueError(f"{text.strip()} does not fit in 32 bits")
-    if v > 0x7FFFFFFF:
-        v -= 1 << 32
-    return v
-
-
-def load_variables(path) -> list[int]:
-    """Read ``plc-variables.xml``: the initial values of var00..var15.
-
-    The format (see README.md, "The simulated machine")::
-
-        <plc-variables>
-          <var name="var00" value="5"/>
-          <var name="var03" value="0x10"/>
-        </plc-variables>
-
-    Variables not listed are 0. Raises :class:`ConfigError` naming the file and
-    line for a bad file; a DTD, entity declaration (XML bomb) or external
-    entity is refused.
-    """
-    p = Path(path)
-    try:
-        data = p.read_bytes()
-    except OSError as e:
-        raise ConfigError(f"cannot read the variables file: {e.strerror or e}", str(p)) from None
-    return parse_variables(data, str(p))
-
-
-def parse_variables(data: bytes | str, name: str = "plc-variables.xml") -> list[int]:
-    """Parse the text of a plc-variables.xml (see :func:`load_variables`)."""
-    import xml.sax
-    import xml.sax.handler
-
-    import defusedxml
-    import defusedxml.sax
-
-    if isinstance(data, str):
-        data = data.encode("utf-8")
-    if len(data) > _VARIABLES_MAX_BYTES:
-        raise ConfigError(f"the file is too large ({len(data)} bytes; at most "
-                          f"{_VARIABLES_MAX_BYTES})", name)
-    values = [0] * VARIABLE_COUNT
-    seen: dict[int, int] = {}
-
-    class Handler(xml.sax.handler.ContentHandler):
-        def __init__(self):
-            super().__init__()
-            self.locator = None
-            self.depth = 0
-
-        def setDocumentLocator(self, locator):
-            self.locator = locator
-
-        def line(self):
-            return self.locator.getLineNumber() if self.locator else None
-
-        def fail(self, msg, key=None):
-            raise ConfigError(msg, name, self.line(), key)
-
-        def startElement(self, tag, attrs):
-            self.depth += 1
-            if self.depth == 1:
-                if tag != "plc-variables":
-                    self.fail(f"the root element must be <plc-variables>, not <{tag}>")
-                if attrs.getNames():
-                    self.fail(f"<plc-variables> takes no attributes "
-                              f"(found {', '.join(attrs.getNames())})")
-                return
-            if self.depth > 2 or tag != "var":
-                self.fail(f"unexpected element <{tag}> (expected <var name=\"varNN\" value=\"N\"/>)")
-            names = set(attrs.getNames())
-            extra = names - {"name", "value"}
-            if extra:
-                self.fail(f"<var> has unknown attribute(s) {', '.join(sorted(extra))}")
-            if "name" not in names or "value" not in names:
-                self.fail("<var> needs both name=\"varNN\" and value=\"N\"")
-            vname = attrs.getValue("name").strip()
-            m = re.fullmatch(r"var(\d\d)", vname)
-            if not m or int(m.group(1)) >= VARIABLE_COUNT:
-                self.fail(f"unknown variable {vname!r} (var00..var15)", vname or "name")
-            idx = int(m.group(1))
-            if idx in seen:
-                self.fail(f"{vname} is given twice (first on line {seen[idx]})", vname)
-            try:
-                values[idx] = parse_int_value(attrs.getValue("value"))
-            except ValueError as e:
-                self.fail(str(e), vname)
-            seen[idx] = self.line()
-
-        def endElement(self, tag):
-            self.depth -= 1
-
-        def characters(self, content):
-            if content.strip():
-                self.fail(f"unexpected text {content.strip()[:20]!r}")
-
-    handler = Handler()
-    try:
-        defusedxml.sax.parseString(data, handler, forbid_dtd=True, forbid_entities=True,
-                                   forbid_external=True)
-    except ConfigError:
-        raise
-    except defusedxml.DefusedXmlException as e:
-        raise ConfigError(
-            f"refused: the file contains a DTD, entity declaration or external reference "
-            f"({type(e).__name__}); plc-variables.xml must be plain XML (this protects "
-            f"against XML bombs and external entities)", name, handler.line()) from None
-    except xml.sax.SAXParseException as e:
-        raise ConfigError(f"XML syntax error: {e.getMessage()}", name, e.getLineNumber()) from None
-    return values

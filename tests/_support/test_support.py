@@ -1,0 +1,101 @@
+"""_support: atomic writes, pid checks, strict JSON, TOML line numbers."""
+
+import os
+import stat
+import sys
+import tomllib
+
+import pytest
+
+from plcbuilder._support.files import atomic_write
+from plcbuilder._support.procs import pid_alive
+from plcbuilder._support.strictjson import strict_json_loads
+from plcbuilder._support.toml_errors import TomlLocator, decode_error
+
+
+def test_atomic_write(tmp_path):
+    f = tmp_path / "M03.plc"
+    atomic_write(f, "main(){};\n")
+    assert f.read_text() == "main(){};\n"
+    atomic_write(f, b"\x00\x01")
+    assert f.read_bytes() == b"\x00\x01"
+    os.chmod(f, 0o600)
+    atomic_write(f, "é")
+    assert f.read_bytes() == "é".encode() and stat.S_IMODE(f.stat().st_mode) == 0o600
+    assert sorted(os.listdir(tmp_path)) == ["M03.plc"]
+    with pytest.raises(TypeError):
+        atomic_write(f, 42)
+
+
+def test_atomic_write_failure_keeps_the_old_file(tmp_path, monkeypatch):
+    f = tmp_path / "M03.plc"
+    f.write_text("old")
+
+    def boom(src, dst):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(os, "replace", boom)
+    with pytest.raises(OSError):
+        atomic_write(f, "new")
+    assert f.read_text() == "old"
+    assert sorted(os.listdir(tmp_path)) == ["M03.plc"]
+
+
+def test_atomic_write_with_a_mode_has_exactly_that_mode(tmp_path):
+    f = tmp_path / "controller.json"
+    old = os.umask(0)
+    try:
+        atomic_write(f, "{}", mode=0o600)
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(f.stat().st_mode) == 0o600
+    os.chmod(f, 0o644)
+    atomic_write(f, "{}", mode=0o600)
+    assert stat.S_IMODE(f.stat().st_mode) == 0o600
+
+
+def test_pid_alive():
+    assert pid_alive(os.getpid())
+    assert not pid_alive(0) and not pid_alive(-5)
+    if sys.platform != "win32":
+        assert pid_alive(1)              # exists, even where it may not be signalled
+
+
+def test_strict_json_refuses_repeated_keys_and_nan():
+    assert strict_json_loads('{"a": [1, 2.5]}') == {"a": [1, 2.5]}
+    for bad in ('{"a": 1, "a": 2}', '[NaN]', '[Infinity]', '{"x": -Infinity}'):
+        with pytest.raises(ValueError):
+            strict_json_loads(bad)
+
+
+TOML = """\
+name = "x"
+
+[axes.Z]
+accel = 5
+"rapid" = 7
+
+[[inputs]]
+pin = 1
+
+[[inputs]]
+pin = 2
+"""
+
+
+def test_toml_locator_finds_keys_tables_and_array_entries():
+    loc = TomlLocator(TOML)
+    assert loc.line_of(("name",)) == 1
+    assert loc.line_of(("axes", "Z")) == 3
+    assert loc.line_of(("axes", "Z", "accel")) == 4
+    assert loc.line_of(("axes", "Z", "rapid")) == 5
+    assert loc.line_of(("axes", "Z", "missing")) == 3     # the table's header
+    assert loc.line_of(("inputs", 1, "pin")) == 11
+    assert loc.line_of(("nowhere",)) is None
+
+
+def test_decode_error_gives_the_message_and_its_line():
+    for text, line in (("a = 1\nb = \n", 2), ("a = 1\nb = [1,", 2)):
+        with pytest.raises(tomllib.TOMLDecodeError) as ei:
+            tomllib.loads(text)
+        msg, at = decode_error(ei.value, text)
+        assert at == line and "(at" not in msg
