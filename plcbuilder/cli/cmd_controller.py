@@ -101,7 +101,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     from plcbuilder.link import runtime
-    from plcbuilder.link.server import ConfigError, ControllerServer, Refused, make_controller
+    from plcbuilder.link.server import ConfigError, ControllerServer, make_controller
+    from plcbuilder.link.service import Refused
 
     def say(text: str, err: bool = False) -> None:
         stream = sys.stderr if err else sys.stdout

@@ -45,8 +45,10 @@ import enum
 import json
 import math
 import re
+import os
 import socket
 import struct
+import sys
 from typing import Any, Iterable, Optional
 
 from plcbuilder.controller.events import Sample, from_dict, to_dict
@@ -116,6 +118,16 @@ class BadRequest(ProtocolError):
 
 
 # ------------------------------------------------------------------ frames
+
+DEBUG_ENV = "PLCBUILDER_DEBUG"
+
+
+def debug(text: str) -> None:
+    """With ``PLCBUILDER_DEBUG`` set, a line about the link on standard error
+    (a developer's switch; nothing is written otherwise)."""
+    if os.environ.get(DEBUG_ENV):
+        print(text, file=sys.stderr, flush=True)
+
 
 def _json_default(obj: Any):
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):

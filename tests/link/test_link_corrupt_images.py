@@ -13,7 +13,7 @@ from plcbuilder.image.manifest import MANIFEST_NAME, Limits, manifest_text, writ
 from plcbuilder.image.romfs import read_romfs, write_romfs
 from plcbuilder.link.client import RefusedError
 from plcbuilder.link.protocol import MAX_IMAGE
-from plcbuilder.link.server import Refused
+from plcbuilder.link.service import Refused
 from tests.link.linkkit import compile_programs, wait_for
 
 VOLUME = "plcbuilder"

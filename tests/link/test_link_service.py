@@ -10,7 +10,8 @@ from plcbuilder.controller.events import Ended, Print, Started
 from plcbuilder.image.manifest import Limits, write_image
 from plcbuilder.link import protocol
 from plcbuilder.link.protocol import BadRequest, ProtocolError
-from plcbuilder.link.server import (Refused, Service, Session, Simulation, TelemetryQueue)
+from plcbuilder.link.pacing import Simulation, TelemetryQueue
+from plcbuilder.link.service import Refused, Service, Session
 from tests.link.linkkit import compile_programs, image_of, wait_for
 
 

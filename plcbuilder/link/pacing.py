@@ -1,0 +1,336 @@
+"""The simulation thread: a controller run on its own thread, paced to the wall clock.
+
+:class:`Simulation` owns the :class:`~plcbuilder.controller.controller.Controller`
+and runs it on its own thread (real time, N times real time, as fast as it
+computes, or paused). Everything that touches the controller runs on that
+thread, between batches of ticks: other threads hand it work with
+:meth:`Simulation.call`. After every batch the new events and samples go to the
+:class:`TelemetryQueue` of each subscribed client; a queue is bounded, drops the
+oldest samples when full and counts them, so a slow client never holds the
+simulation up.
+
+Real-time pacing uses absolute deadlines: the ticks due are computed from a
+monotonic start time (``base_t + (now - base_wall) * rate``), run, and the
+thread sleeps until the next batch is due, so no error accumulates. When the
+simulation cannot keep up for more than :attr:`Simulation.max_lag` seconds it
+drops the backlog (counted in ``state.speed.dropped_ms``) instead of racing.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+import traceback
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Callable, Optional
+
+from plcbuilder.controller.controller import Controller
+from plcbuilder.link import protocol
+from plcbuilder.link.protocol import debug as _debug
+
+__all__ = ["Simulation", "SimulationDown", "TelemetryQueue"]
+
+
+class SimulationDown(RuntimeError):
+    """The simulation thread is not running any more."""
+
+
+# ===================================================================== telemetry
+
+class TelemetryQueue:
+    """One subscriber's bounded queue of samples and events.
+
+    :meth:`push` (the simulation thread) never blocks for longer than a list
+    append; when more than ``max_samples`` samples wait, the oldest go and are
+    counted in ``missed`` (likewise events beyond ``max_events``).
+    """
+
+    def __init__(self, max_samples: int = 1000, max_events: int = 20000, samples: bool = True,
+                 events: bool = True):
+        self.want_samples = samples
+        self.want_events = events
+        self._samples: deque = deque(maxlen=max(1, max_samples))
+        self._events: deque = deque(maxlen=max(1, max_events))
+        self._lock = threading.Lock()
+        self.missed = 0
+        self.missed_events = 0
+        self.t_ms = 0
+
+    def push(self, samples: list, events: list, t_ms: int) -> None:
+        with self._lock:
+            self.t_ms = t_ms
+            if self.want_samples and samples:
+                q = self._samples
+                over = len(q) + len(samples) - q.maxlen
+                if over > 0:
+                    self.missed += over
+                q.extend(samples)
+            if self.want_events and events:
+                q = self._events
+                over = len(q) + len(events) - q.maxlen
+                if over > 0:
+                    self.missed_events += over
+                q.extend(events)
+
+    def take(self) -> Optional[tuple[list, list, int, int, int]]:
+        """(samples, events, missed, missed_events, t_ms) since the last take, or
+        None when there is nothing new."""
+        with self._lock:
+            if not self._samples and not self._events and not self.missed \
+                    and not self.missed_events:
+                return None
+            out = (list(self._samples), list(self._events), self.missed, self.missed_events,
+                   self.t_ms)
+            self._samples.clear()
+            self._events.clear()
+            self.missed = self.missed_events = 0
+            return out
+
+
+# ===================================================================== simulation
+
+@dataclass
+class _Call:
+    fn: Callable
+    done: threading.Event = field(default_factory=threading.Event)
+    result: object = None
+    error: Optional[BaseException] = None
+
+
+class Simulation:
+    """Runs a controller on its own thread, paced to the wall clock."""
+
+    #: Seconds between paced batches (real time: about 4 ticks a batch).
+    batch = 0.004
+    #: Wall time one batch of ticks may take before the thread looks at its queue again.
+    slice = 0.002
+    #: Seconds of backlog after which a paced simulation drops the ticks it could not run.
+    max_lag = 1.0
+
+    def __init__(self, controller: Controller, mode: str = "realtime", factor: float = 1.0):
+        self.controller = controller
+        self._commands: "queue.SimpleQueue[Optional[_Call]]" = queue.SimpleQueue()
+        self._queues: list[TelemetryQueue] = []
+        self._qlock = threading.Lock()
+        self._inline = threading.RLock()        # used while the thread is not running
+        self._thread: Optional[threading.Thread] = None
+        self._stop = False
+        self._shutdown_on_stop = True
+        self.mode = "pause"
+        self.factor = 1.0
+        self.dropped_ms = 0
+        self.error: Optional[str] = None
+        self._tick_cost = 2e-6                  # seconds a tick takes, averaged
+        self._base_wall = time.monotonic()
+        self._base_t = controller.t_ms
+        self.set_speed(mode, factor)
+        self._update_recording()
+
+    # ---------------------------------------------------------------- threads
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def start(self) -> None:
+        if self._thread is not None:
+            return
+        self._rebase()
+        self._thread = threading.Thread(target=self._run, name="plcbuilder-simulation",
+                                        daemon=True)
+        self._thread.start()
+
+    def stop(self, shutdown: bool = True, timeout: float = 15.0) -> None:
+        """Stop the thread; with ``shutdown`` run ``__HANDLER_EXIT`` first
+        (Controller.shutdown) and publish its events."""
+        if self._thread is None:
+            if shutdown:
+                with self._inline:
+                    self._shutdown_controller()
+            return
+        self._shutdown_on_stop = shutdown
+        self._stop = True
+        self._commands.put(None)
+        self._thread.join(timeout)
+
+    def call(self, fn: Callable, timeout: float = 30.0):
+        """Run ``fn()`` on the simulation thread between two batches; return
+        its result or raise its exception."""
+        t = self._thread
+        if t is None or threading.current_thread() is t:
+            with self._inline:
+                return fn()
+        if not t.is_alive():
+            raise SimulationDown("the simulation has stopped")
+        c = _Call(fn)
+        self._commands.put(c)
+        if not c.done.wait(timeout):
+            raise SimulationDown(f"the simulation did not answer within {timeout:g} s")
+        if c.error is not None:
+            raise c.error
+        return c.result
+
+    # ---------------------------------------------------------------- speed
+    def set_speed(self, mode: str, factor: Optional[float] = None) -> None:
+        """realtime, factor (with ``factor``), max or pause. Call on the
+        simulation thread (through :meth:`call`) once it runs."""
+        if mode not in protocol.SPEED_MODES:
+            raise ValueError(f"unknown speed mode {mode!r}")
+        if mode == "realtime":
+            factor = 1.0
+        elif mode == "factor":
+            if factor is None or not protocol.MIN_FACTOR <= factor <= protocol.MAX_FACTOR:
+                raise ValueError(f"a speed factor must be from {protocol.MIN_FACTOR:g} "
+                                 f"to {protocol.MAX_FACTOR:g}")
+            if factor == 1.0:
+                mode = "realtime"
+        else:
+            factor = self.factor if factor is None else factor
+        self.mode = mode
+        self.factor = float(factor)
+        self._rebase()
+
+    def speed(self) -> dict:
+        return {"mode": self.mode, "factor": self.factor if self.mode in ("realtime", "factor")
+                else None, "dropped_ms": self.dropped_ms}
+
+    def _rebase(self) -> None:
+        self._base_wall = time.monotonic()
+        self._base_t = self.controller.t_ms
+
+    def rebase(self) -> None:
+        """Restart pacing from now (after ticks were run by hand, or a new controller)."""
+        self._rebase()
+
+    # ---------------------------------------------------------------- subscribers
+    def subscribe(self, q: TelemetryQueue) -> None:
+        with self._qlock:
+            if q not in self._queues:
+                self._queues = self._queues + [q]
+        self._update_recording()
+
+    def unsubscribe(self, q: TelemetryQueue) -> None:
+        with self._qlock:
+            self._queues = [x for x in self._queues if x is not q]
+        self._update_recording()
+
+    @property
+    def subscribers(self) -> int:
+        return len(self._queues)
+
+    def _update_recording(self) -> None:
+        want = any(q.want_samples for q in self._queues)
+        try:
+            self.controller.record_samples = want      # samples cost; record only when wanted
+        except AttributeError:
+            pass
+
+    def publish(self) -> None:
+        """Hand the controller's new events and samples to every subscriber."""
+        c = self.controller
+        events = c.drain_events()
+        samples = c.drain_samples()
+        queues = self._queues
+        if queues and (events or samples):
+            t = c.t_ms
+            for q in queues:
+                q.push(samples, events, t)
+
+    def replace_controller(self, controller: Controller) -> None:
+        """Swap the controller (reset); on the simulation thread."""
+        self.publish()
+        self.controller = controller
+        self._update_recording()
+        self._rebase()
+
+    # ---------------------------------------------------------------- the thread
+    def _run_ticks(self, n: int) -> None:
+        t0 = time.perf_counter()
+        try:
+            self.controller.step(n)
+        except Exception as exc:  # noqa: BLE001 - a controller bug must not kill the server
+            self.error = f"{type(exc).__name__}: {exc}"
+            _debug(traceback.format_exc())
+            self.mode = "pause"
+            return
+        dt = time.perf_counter() - t0
+        self._tick_cost = 0.8 * self._tick_cost + 0.2 * (dt / n)
+        self.publish()
+
+    def _chunk(self) -> int:
+        """Ticks that fit one slice of wall time."""
+        return max(1, min(100_000, int(self.slice / max(self._tick_cost, 1e-8))))
+
+    def _exec(self, c: _Call) -> None:
+        try:
+            c.result = c.fn()
+        except BaseException as exc:  # noqa: BLE001 - handed back to the caller
+            c.error = exc
+        finally:
+            c.done.set()
+        time.sleep(0)            # let the waiting thread take the GIL and answer now
+
+    def _drain_commands(self) -> None:
+        while True:
+            try:
+                c = self._commands.get_nowait()
+            except queue.Empty:
+                return
+            if c is not None:
+                self._exec(c)
+
+    def _wait(self, timeout: float) -> None:
+        try:
+            c = self._commands.get(timeout=max(0.0, timeout))
+        except queue.Empty:
+            return
+        if c is not None:
+            self._exec(c)
+
+    def _shutdown_controller(self) -> None:
+        try:
+            self.controller.shutdown()
+        except Exception:  # noqa: BLE001
+            _debug(traceback.format_exc())
+        self.publish()
+
+    def _run(self) -> None:
+        self._rebase()
+        while not self._stop:
+            self._drain_commands()
+            if self._stop:
+                break
+            mode = self.mode
+            if mode == "pause":
+                self._wait(0.5)
+                continue
+            if mode == "max":
+                self._run_ticks(self._chunk())
+                time.sleep(0)        # give the network thread the GIL between batches
+                continue
+            rate = 1000.0 * self.factor                  # ticks per second
+            now = time.monotonic()
+            due = self._base_t + int((now - self._base_wall) * rate) - self.controller.t_ms
+            if due > 0:
+                lag = int(self.max_lag * rate)
+                if due > lag:                            # cannot keep up: drop the backlog
+                    self.dropped_ms += due - lag
+                    self._base_t += due - lag
+                    due = lag
+                self._run_ticks(min(due, self._chunk()))
+                continue
+            next_due = self._base_wall + (self.controller.t_ms + 1 - self._base_t) / rate
+            self._wait(max(next_due - now, self.batch))
+        self._drain_commands()
+        if self._shutdown_on_stop:
+            self._shutdown_controller()
+        # Whoever still waits gets an answer rather than a timeout.
+        while True:
+            try:
+                c = self._commands.get_nowait()
+            except queue.Empty:
+                break
+            if c is not None:
+                c.error = SimulationDown("the simulation has stopped")
+                c.done.set()

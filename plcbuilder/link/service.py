@@ -1,0 +1,301 @@
+"""The controller's verbs: one ``handle_<type>(msg, session)`` method per request
+type, returning the ``result`` object or raising :class:`Refused` /
+:class:`~plcbuilder.link.protocol.BadRequest`. No sockets: tests call it
+directly; :mod:`plcbuilder.link.server` puts it on the network.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+import traceback
+import zlib
+from dataclasses import dataclass
+from typing import Callable, Optional
+
+from plcbuilder.controller.controller import Controller, ControllerError
+from plcbuilder.image.manifest import Image, ImageError, Limits, read_image
+from plcbuilder.link import protocol
+from plcbuilder.link.pacing import Simulation, SimulationDown, TelemetryQueue
+from plcbuilder.link.protocol import (MAX_IMAGE, REQUESTS, SAMPLE_FIELDS, BadRequest, ErrorCode,
+                                      ProtocolError)
+from plcbuilder.link.protocol import debug as _debug
+
+__all__ = ["EVENT_HANDLERS", "Refused", "Service", "Session", "image_summary"]
+
+#: Handlers that a host may start with the ``event`` request.
+EVENT_HANDLERS = ("__HANDLER_GCODE_START", "__HANDLER_GCODE_STOP")
+
+
+class Refused(Exception):
+    """The controller refuses a request; ``reason`` goes back to the client."""
+
+    def __init__(self, reason: str):
+        super().__init__(reason)
+        self.reason = reason
+
+
+# ===================================================================== the verbs
+
+@dataclass
+class Session:
+    """What the service keeps per client."""
+    telemetry: Optional[TelemetryQueue] = None
+    peer: str = ""
+
+
+def image_summary(image: Optional[Image]) -> list[dict]:
+    if image is None:
+        return []
+    return [{"name": p.name, "kind": p.kind.label, "size": p.code_size, "code_size": p.code_size,
+             "file_size": p.file_size, "crc32": f"{p.crc32:08x}"} for p in image.procedures]
+
+
+class Service:
+    """The controller's verbs, one ``handle_<type>`` per request type.
+
+    ``controller_factory`` makes a fresh controller for ``reset`` (None: reset
+    is refused). ``limits`` are the controller's code size limits that an
+    uploaded image is checked against.
+    """
+
+    def __init__(self, sim: Simulation, *, limits: Optional[Limits] = None,
+                 controller_factory: Optional[Callable[[], Controller]] = None,
+                 max_image: int = MAX_IMAGE):
+        self.sim = sim
+        self.limits = limits or Limits()
+        self.controller_factory = controller_factory
+        self.max_image = max_image
+        self.image: Optional[Image] = None
+        self.image_crc32: Optional[int] = None
+        self.image_size = 0
+        self.uploads = 0
+        self.refused = 0
+        self.clients = 0            # kept up to date by the Server
+        self.step_budget = 2.0      # seconds of wall time one step request may take
+
+    # ---------------------------------------------------------------- dispatch
+    def dispatch(self, msg: dict, session: Session) -> dict:
+        mtype = msg.get("type")
+        if mtype not in REQUESTS:
+            raise ProtocolError(f"unknown request type {mtype!r}", ErrorCode.UNKNOWN_TYPE)
+        handler = getattr(self, f"handle_{mtype}", None)
+        if handler is None:
+            raise ProtocolError(f"{mtype} is not handled here", ErrorCode.UNKNOWN_TYPE)
+        return handler(msg, session)
+
+    def _on_sim(self, fn: Callable):
+        """Run fn on the simulation thread; a ControllerError becomes Refused."""
+        try:
+            return self.sim.call(fn)
+        except ControllerError as exc:
+            raise Refused(str(exc)) from None
+        except SimulationDown as exc:
+            raise Refused(str(exc)) from None
+
+    # ---------------------------------------------------------------- image
+    def check_image(self, data: bytes) -> Image:
+        """read_image against the controller's limits; Refused with the reason."""
+        if len(data) > self.max_image:
+            raise Refused(f"image refused: it is {len(data)} bytes, more than {self.max_image}")
+        try:
+            return read_image(data, self.limits)
+        except ImageError as exc:
+            raise Refused(f"image refused: {exc}") from None
+        except Exception as exc:  # noqa: BLE001 - a reader bug still means "refused"
+            _debug(traceback.format_exc())
+            raise Refused(f"image refused: unreadable ({type(exc).__name__}: {exc})") from None
+
+    def load_image(self, data: bytes) -> dict:
+        """Validate a whole image, then load it at once; on refusal nothing changes."""
+        try:
+            image = self.check_image(data)
+        except Refused:
+            self.refused += 1
+            raise
+
+        def swap():
+            controller = self.sim.controller
+            previous = list(controller.programs.values())
+            try:
+                controller.load([p.program for p in image.procedures])
+            except ControllerError:
+                raise
+            except Exception as exc:  # noqa: BLE001 - a loader bug: put the old image back
+                _debug(traceback.format_exc())
+                try:
+                    controller.load(previous)
+                except Exception:  # noqa: BLE001
+                    _debug(traceback.format_exc())
+                raise ControllerError(f"the controller could not load it "
+                                      f"({type(exc).__name__}: {exc})") from None
+            self.image = image
+            self.image_crc32 = zlib.crc32(data)
+            self.image_size = len(data)
+            return self.sim.controller.t_ms
+
+        try:
+            t = self._on_sim(swap)
+        except Refused as exc:
+            self.refused += 1
+            raise Refused(f"image refused: {exc.reason}") from None
+        self.uploads += 1
+        return {"accepted": True, "t_ms": t, "size": len(data),
+                "image_crc32": f"{self.image_crc32:08x}", "procedures": image_summary(image),
+                "hw_total": image.hw_total}
+
+    def handle_upload(self, msg: dict, session: Session) -> dict:
+        try:
+            data = protocol.decode_image(msg, self.max_image)
+        except BadRequest:
+            self.refused += 1
+            raise
+        return self.load_image(data)
+
+    # ---------------------------------------------------------------- procedures
+    def handle_start(self, msg: dict, session: Session) -> dict:
+        eparam = protocol.field_int(msg, "eparam", 0)
+        has_name, has_mcode = "name" in msg, "mcode" in msg
+        if has_name == has_mcode:
+            raise BadRequest("start: give either 'name' or 'mcode'")
+        if has_name:
+            name = protocol.field_str(msg, "name", max_len=128)
+
+            def go():
+                self.sim.controller.start(name, eparam)
+                return name, self.sim.controller.t_ms
+        else:
+            n = protocol.field_int(msg, "mcode", lo=0, hi=1_000_000)
+
+            def go():
+                started = self.sim.controller.start_mcode(n, eparam)
+                return started, self.sim.controller.t_ms
+        started, t = self._on_sim(go)
+        return {"started": started, "eparam": eparam, "t_ms": t}
+
+    def handle_stop(self, msg: dict, session: Session) -> dict:
+        def go():
+            return self.sim.controller.stop(), self.sim.controller.t_ms
+        started, t = self._on_sim(go)
+        return {"started": started, "t_ms": t}
+
+    def handle_event(self, msg: dict, session: Session) -> dict:
+        handler = protocol.field_str(msg, "handler", max_len=64)
+        if handler not in EVENT_HANDLERS:
+            raise BadRequest(f"event: handler must be one of {', '.join(EVENT_HANDLERS)}")
+        started = self._on_sim(lambda: self.sim.controller.event(handler))
+        return {"handler": handler, "started": bool(started)}
+
+    # ---------------------------------------------------------------- I/O
+    def handle_input(self, msg: dict, session: Session) -> dict:
+        pin = protocol.field_int(msg, "pin", lo=0, hi=1 << 16)
+        value = protocol.field_int(msg, "value", lo=0, hi=1)
+        t = self._on_sim(lambda: (self.sim.controller.set_input(pin, value),
+                                  self.sim.controller.t_ms)[1])
+        return {"pin": pin, "value": value, "t_ms": t}
+
+    def handle_adc(self, msg: dict, session: Session) -> dict:
+        ch = protocol.field_int(msg, "channel", lo=0, hi=1 << 16)
+        value = protocol.field_int(msg, "value")
+        t = self._on_sim(lambda: (self.sim.controller.set_adc(ch, value),
+                                  self.sim.controller.t_ms)[1])
+        return {"channel": ch, "value": value, "t_ms": t}
+
+    # ---------------------------------------------------------------- state
+    def state(self) -> dict:
+        def go():
+            st = dict(self.sim.controller.state())
+            st["t_ms"] = self.sim.controller.t_ms
+            return st
+        st = self._on_sim(go)
+        st.setdefault("running", None)
+        st.setdefault("software", [])
+        st["image"] = image_summary(self.image)
+        st["image_crc32"] = None if self.image_crc32 is None else f"{self.image_crc32:08x}"
+        st["speed"] = self.sim.speed()
+        st["server"] = {"clients": self.clients, "subscribers": self.sim.subscribers,
+                        "uploads": self.uploads, "refused": self.refused, "pid": os.getpid(),
+                        "error": self.sim.error}
+        return st
+
+    def handle_state(self, msg: dict, session: Session) -> dict:
+        return self.state()
+
+    def handle_variables(self, msg: dict, session: Session) -> dict:
+        return {"variables": self._on_sim(self.sim.controller.variables)}
+
+    # ---------------------------------------------------------------- time
+    def handle_speed(self, msg: dict, session: Session) -> dict:
+        mode = protocol.field_str(msg, "mode", max_len=16)
+        if mode not in protocol.SPEED_MODES:
+            raise BadRequest(f"speed: mode must be one of {', '.join(protocol.SPEED_MODES)}")
+        factor = None
+        if mode == "factor":
+            factor = protocol.field_number(msg, "factor", protocol.MIN_FACTOR, protocol.MAX_FACTOR)
+
+        def go():
+            self.sim.set_speed(mode, factor)
+            return self.sim.speed()
+        return self._on_sim(go)
+
+    def handle_step(self, msg: dict, session: Session) -> dict:
+        ms = protocol.field_int(msg, "ms", lo=1, hi=600_000)
+        budget = self.step_budget
+
+        def go():
+            # In slices, and at most ``step_budget`` seconds of wall time, so that
+            # a runaway procedure cannot hold every client up for minutes.
+            c = self.sim.controller
+            start, done = time.perf_counter(), 0
+            while done < ms:
+                n = min(ms - done, self.sim._chunk())
+                c.step(n)
+                done += n
+                self.sim.publish()
+                if time.perf_counter() - start > budget:
+                    break
+            self.sim.rebase()
+            return c.t_ms, done
+        t, done = self._on_sim(go)
+        return {"t_ms": t, "stepped": done, "complete": done == ms}
+
+    def handle_reset(self, msg: dict, session: Session) -> dict:
+        if self.controller_factory is None:
+            raise Refused("reset is not available on this controller")
+        factory = self.controller_factory
+
+        def go():
+            new = factory()
+            if self.image is not None:
+                new.load([p.program for p in self.image.procedures])
+            self.sim.replace_controller(new)
+            return new.t_ms
+        return {"t_ms": self._on_sim(go)}
+
+    def handle_ping(self, msg: dict, session: Session) -> dict:
+        return {"pong": True}
+
+    # ---------------------------------------------------------------- telemetry
+    def handle_subscribe(self, msg: dict, session: Session) -> dict:
+        samples = protocol.field_bool(msg, "samples", True)
+        events = protocol.field_bool(msg, "events", True)
+        size = protocol.field_int(msg, "queue", 1000, lo=16, hi=100_000)
+        if session.telemetry is not None:
+            self.sim.unsubscribe(session.telemetry)
+        q = TelemetryQueue(max_samples=size, samples=samples, events=events)
+        session.telemetry = q
+        self.sim.call(lambda: self.sim.subscribe(q))
+        return {"sample_fields": list(SAMPLE_FIELDS), "interval_ms": 20, "samples": samples,
+                "events": events, "queue": size}
+
+    def handle_unsubscribe(self, msg: dict, session: Session) -> dict:
+        self.end_session(session)
+        return {}
+
+    def end_session(self, session: Session) -> None:
+        if session.telemetry is not None:
+            q, session.telemetry = session.telemetry, None
+            try:
+                self.sim.call(lambda: self.sim.unsubscribe(q), timeout=5.0)
+            except SimulationDown:
+                self.sim.unsubscribe(q)
