@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from plcbuilder.bytecode import disasm
+from plcbuilder.bytecode.abi import proc_name
 from plcbuilder.bytecode.program import Kind, LoadError, Program
 from plcbuilder.lang.compiler import (CompileOptions, CompileResult, compile_bytes, compile_file,
                                       compile_source)
@@ -21,7 +22,7 @@ from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header, builtin_h
 from plcbuilder._support.files import atomic_write
 from plcbuilder.project import BuildResult, Project, ProjectError, build_project, create_project
 
-__all__ = ["atomic_write", "BUILTIN_PREFIX", "builtin_header", "builtin_header_names", "BuildResult", "CompileOptions", "CompileResult", "Kind", "LoadError", "Program",
+__all__ = ["atomic_write", "proc_name", "BUILTIN_PREFIX", "builtin_header", "builtin_header_names", "BuildResult", "CompileOptions", "CompileResult", "Kind", "LoadError", "Program",
            "Project", "ProjectError", "build_project", "compile_bytes", "compile_file",
            "compile_source", "create_project", "disassemble", "kind_for_path", "load_program"]
 

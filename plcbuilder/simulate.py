@@ -326,8 +326,8 @@ class _Collector:
             "faults": self.faults,
             "notes": self.notes,
             "axes": m.axis_positions(),
-            "proc": st["proc"],
-            "proc_name": st["proc_name"],
-            "running": st["running"],
-            "software": st["software"],
+            "proc": st.proc,
+            "proc_name": st.proc_name,
+            "running": st.running,
+            "software": list(st.software),
         }

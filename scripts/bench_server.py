@@ -80,7 +80,7 @@ def _pct(values: list[float], q: float) -> float:
 def _timed_t(c: Client) -> tuple[float, int]:
     """(wall time in s at the middle of the request, controller t_ms)."""
     a = time.monotonic()
-    t = c.state()["t_ms"]
+    t = c.state().t_ms
     b = time.monotonic()
     return (a + b) / 2, t
 
@@ -127,7 +127,7 @@ def realtime(seconds: float, image: bytes) -> list[str]:
         lines.append(f"real-time drift over {wall_ms / 1000:.1f} s: {drift:+.4f}% "
                      f"(simulated {sim_ms} ms, wall {wall_ms:.1f} ms; goal |drift| < 0.1%) "
                      f"{'OK' if abs(drift) < 0.1 else 'MISSED'}")
-        lines.append(f"dropped backlog: {c.state()['speed']['dropped_ms']} ms (goal 0)")
+        lines.append(f"dropped backlog: {c.state().speed['dropped_ms']} ms (goal 0)")
         got = s1 - s0
         lines.append(f"telemetry at real time: {got / (w1 - w0):.0f} samples/s received "
                      f"(1000 expected), {received['batches'] / (w1 - w0 + 0.5):.1f} batches/s "

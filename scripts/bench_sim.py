@@ -279,7 +279,7 @@ def realtime(sim_ms: int, machine=None, backend: str = "fast") -> float:
         t0 = time.perf_counter()
         c.step(sim_ms)
         best = min(best, time.perf_counter() - t0)
-        assert c.state()["running"] == "M88" and len(c.state()["software"]) == 20
+        assert c.state().running == "M88" and len(c.state().software) == 20
     return sim_ms / 1000 / best
 
 

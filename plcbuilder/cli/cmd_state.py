@@ -29,30 +29,27 @@ def _pins(pins) -> str:
     return ", ".join(str(p) for p in pins) if pins else "none"
 
 
-def render(st: dict, out) -> None:
-    speed = st.get("speed") or {}
+def render(st, out) -> None:
+    """A ControllerStatus as lines of text."""
+    speed = st.speed
     mode = speed.get("mode", "?")
     if mode == "factor":
         mode = f"{speed.get('factor'):g}x"
-    out.print(f"{out.paint('heading', 't')} = {st.get('t_ms')} ms ({mode})")
-    running = st.get("running")
-    proc = st.get("proc")
-    proc_name = st.get("proc_name")
-    out.print(f"running: {running or 'nothing'}" +
-              (f" (proc {proc}{' ' + proc_name if proc_name else ''})" if proc is not None else ""))
-    out.print(f"software: {', '.join(st.get('software') or []) or 'none'}")
-    out.print(f"inputs on: {_pins(st.get('inputs'))}")
-    out.print(f"outputs on: {_pins(st.get('outputs'))}")
-    axes = st.get("axes") or {}
-    if axes:
-        out.print("axes: " + "  ".join(f"{k} {v / 100:.2f}" for k, v in axes.items()))
-    image = st.get("image") or []
-    crc = st.get("image_crc32")
-    out.print(f"image: {len(image)} procedures" + (f" (CRC-32 {crc})" if crc else ""))
-    for p in image:
+    out.print(f"{out.paint('heading', 't')} = {st.t_ms} ms ({mode})")
+    proc_name = st.proc_name
+    out.print(f"running: {st.running or 'nothing'}"
+              f" (proc {st.proc}{' ' + proc_name if proc_name else ''})")
+    out.print(f"software: {', '.join(st.software) or 'none'}")
+    out.print(f"inputs on: {_pins(st.inputs)}")
+    out.print(f"outputs on: {_pins(st.outputs)}")
+    if st.axes:
+        out.print("axes: " + "  ".join(f"{k} {v / 100:.2f}" for k, v in st.axes.items()))
+    crc = st.image_crc32
+    out.print(f"image: {len(st.image)} procedures" + (f" (CRC-32 {crc})" if crc else ""))
+    for p in st.image:
         out.print(f"  {p.get('name'):<24} {p.get('kind'):<9} {p.get('size'):>6} bytes  "
                   f"crc {p.get('crc32')}")
-    err = (st.get("server") or {}).get("error")
+    err = st.server.get("error")
     if err:
         out.print(out.paint("bad", f"simulation error: {err}"))
 
@@ -61,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     def body(client, out) -> int:
         st = client.state()
         if args.json:
-            out.print(json.dumps(st, indent=2, sort_keys=True))
+            out.print(json.dumps(st.to_dict(), indent=2, sort_keys=True))
         else:
             render(st, out)
         return 0

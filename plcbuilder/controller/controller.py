@@ -22,7 +22,7 @@ from typing import Iterable, Optional
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import DecodeError, validate
 from plcbuilder.bytecode.program import Kind, Program
-from plcbuilder.controller.events import Event, Note, Sample
+from plcbuilder.controller.events import ControllerStatus, Event, Note, Sample
 from plcbuilder.controller.plc import BACKENDS, PLC, mcode_names
 
 HANDLER_INIT = "__HANDLER_INIT"
@@ -274,29 +274,29 @@ class Controller:
         return self._plc.take_sample_rows()
 
     # -------------------------------------------------------------- state
-    def state(self) -> dict:
+    def state(self) -> ControllerStatus:
         plc = self._plc
         m = self.machine
         f = m.sample_fields()
         inputs = [w * 32 + b for w, word in enumerate(f["inputs"]) for b in range(32)
                   if (word >> b) & 1]
-        return {
-            "t_ms": plc.t,
-            "running": plc.hw.name if plc.hw is not None else None,
-            "software": plc.software_running,
-            "idle": plc.idle(),
-            "proc": plc.proc,
-            "proc_name": abi.proc_name(plc.proc),
-            "inputs": inputs,
-            "outputs": m.outputs_on(),
-            "pwm": list(f["pwm"]),
-            "dac": list(f["dac"]),
-            "adc": list(f["adc"]),
-            "axes": m.axis_positions(),
-            "image": [{"name": p.name, "kind": p.kind.label, "size": p.code_size,
-                       "crc32": self._crc.get(p.name, 0)} for p in sorted(plc.programs.values(),
-                                                          key=lambda q: q.name)],
-        }
+        return ControllerStatus(
+            t_ms=plc.t,
+            running=plc.hw.name if plc.hw is not None else None,
+            software=tuple(plc.software_running),
+            idle=plc.idle(),
+            proc=plc.proc,
+            proc_name=abi.proc_name(plc.proc),
+            inputs=tuple(inputs),
+            outputs=tuple(m.outputs_on()),
+            pwm=tuple(f["pwm"]),
+            dac=tuple(f["dac"]),
+            adc=tuple(f["adc"]),
+            axes=m.axis_positions(),
+            image=tuple({"name": p.name, "kind": p.kind.label, "size": p.code_size,
+                         "crc32": self._crc.get(p.name, 0)}
+                        for p in sorted(plc.programs.values(), key=lambda q: q.name)),
+        )
 
     def variables(self) -> dict[str, dict[str, int]]:
         """Each procedure that has run: its variables' latest values, by name."""

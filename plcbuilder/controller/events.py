@@ -113,3 +113,49 @@ def from_dict(d: dict):
         if k in s:
             s[k] = tuple(s[k])
     return Sample(**s)
+
+
+# ------------------------------------------------------------------ status
+@dataclass(frozen=True)
+class ControllerStatus:
+    """The controller's state now, as ``plcbuilder state`` and the IDE see it.
+
+    The controller fills the first part; a server adds the loaded image as it
+    was uploaded (``image`` with sizes and CRCs, ``image_crc32``), its speed and
+    its own counters. On the wire it is :meth:`to_dict`'s JSON object, read back
+    with :meth:`from_dict` (keys it does not know are ignored, missing ones take
+    their defaults, so either side may be newer)."""
+    t_ms: int = 0
+    running: Optional[str] = None          # the hardware procedure running
+    software: tuple[str, ...] = ()         # the software procedures running, by name
+    idle: bool = True                      # nothing running and nothing due
+    proc: int = 0
+    proc_name: Optional[str] = None
+    inputs: tuple[int, ...] = ()           # input pins that read 1
+    outputs: tuple[int, ...] = ()          # output pins that are on
+    pwm: tuple[int, ...] = ()
+    dac: tuple[int, ...] = ()
+    adc: tuple[int, ...] = ()
+    axes: dict = field(default_factory=dict)       # {"X": machine position in 0.01 mm, …}
+    image: tuple[dict, ...] = ()           # {name, kind, size, crc32, …} per procedure
+    image_crc32: Optional[str] = None      # the uploaded image's CRC-32 (hex), None if none
+    speed: dict = field(default_factory=dict)      # {"mode", "factor", "dropped_ms", …}
+    server: dict = field(default_factory=dict)     # {"clients", "uploads", "error", …}
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        for k in ("software", "inputs", "outputs", "pwm", "dac", "adc", "image"):
+            d[k] = list(d[k])
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "ControllerStatus":
+        known = {f for f in cls.__dataclass_fields__}
+        kw = {k: v for k, v in d.items() if k in known}
+        for k in ("software", "inputs", "outputs", "pwm", "dac", "adc", "image"):
+            if k in kw:
+                kw[k] = tuple(kw[k] or ())
+        for k in ("axes", "speed", "server"):
+            if k in kw and not isinstance(kw[k], dict):
+                kw[k] = {}
+        return cls(**kw)

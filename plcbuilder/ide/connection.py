@@ -36,7 +36,8 @@ from typing import Optional, Sequence
 from PySide6 import QtCore
 
 from plcbuilder.link import runtime
-from plcbuilder.link.client import Client, ConnectionLost, LinkError, RefusedError, Telemetry
+from plcbuilder.link.client import (Client, ConnectionLost, ControllerStatus, LinkError,
+                                    RefusedError, Telemetry)
 
 Signal = QtCore.Signal
 
@@ -409,7 +410,7 @@ class ControllerConnection(QtCore.QObject):
     """The connection is gone: why (the child's exit status and last stderr line
     when the embedded controller died). It reconnects on its own."""
 
-    sig_state = Signal(dict)
+    sig_state = Signal(object, int)
     """The controller's state, about 5 times a second: ``t_ms``, ``running``,
     ``software``, ``proc``, ``proc_name``, ``image``, ``speed``, ``inputs``,
     ``outputs``, ``axes``... plus ``missed`` (samples this IDE dropped or was not
@@ -446,7 +447,7 @@ class ControllerConnection(QtCore.QObject):
         self.connected = False
         self.address = ""
         self.child_pid: Optional[int] = None
-        self.last_state: dict = {}
+        self.last_state = ControllerStatus()
         self.missed = 0
         self.welcome: dict = {}
 
@@ -573,10 +574,8 @@ class ControllerConnection(QtCore.QObject):
                 continue
             flush()                     # keep the order of telemetry and the rest
             if kind == "state":
-                st = dict(payload)
-                st["missed"] = self.missed
-                self.last_state = st
-                self.sig_state.emit(st)
+                self.last_state = payload
+                self.sig_state.emit(payload, self.missed)
             elif kind == "connected":
                 self.address, self.welcome = payload
                 self.connected = True

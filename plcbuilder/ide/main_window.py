@@ -27,6 +27,7 @@ from PySide6.QtWidgets import (QApplication, QComboBox, QDockWidget, QFileDialog
                                QVBoxLayout, QWidget)
 
 from plcbuilder import api
+from plcbuilder.link.client import ControllerStatus
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.diagnostics import Severity
 from plcbuilder.ide import completion, dialogs, hover
@@ -125,7 +126,7 @@ class MainWindow(QMainWindow):
         self._last_start = ""
         self._upload_after_build = False
         self._closing = False
-        self._last_state: dict = {}
+        self._last_state = ControllerStatus()
         self.start_controller = start_controller
         self.connection = connection
         self.run_panels = None
@@ -1568,21 +1569,14 @@ class MainWindow(QMainWindow):
             self.statusBar().showMessage(f"Controller: {reason}", 6000)
         self._update_actions()
 
-    def _on_state(self, st: dict) -> None:
+    def _on_state(self, st: ControllerStatus, missed: int = 0) -> None:
         self._last_state = st
-        t = st.get("t_ms")
-        if isinstance(t, (int, float)):
-            self.time_label.setText(f"t = {t / 1000:.3f} s")
-        running = st.get("running")
+        self.time_label.setText(f"t = {st.t_ms / 1000:.3f} s")
+        running = st.running
         self.running_label.setText(f"▶ {running}" if running else "idle")
         self.running_label.setStyleSheet("color: #1a7f37; font-weight: 600;" if running else "")
-        proc = st.get("proc")
-        if proc is not None:
-            name = st.get("proc_name")
-            if not name:
-                from plcbuilder.bytecode import abi
-                name = abi.proc_name(int(proc))
-            self.proc_label.setText(f"proc {proc}" + (f" {name}" if name else ""))
+        name = st.proc_name or api.proc_name(st.proc)
+        self.proc_label.setText(f"proc {st.proc}" + (f" {name}" if name else ""))
         self.tree.set_running(running)
 
     def connected(self) -> bool:

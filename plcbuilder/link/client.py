@@ -6,7 +6,7 @@
     with Client.connect() as c:             # address and token from the runtime file
         c.upload(open("build/eeprom.rom", "rb").read())
         c.start("M03", eparam=12000)
-        print(c.state()["running"])
+        print(c.state().running)
         c.subscribe(lambda batch: print(batch.t_ms, len(batch.samples)))
 
 The API is blocking and thread-safe: any thread may call the request methods
@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator, Optional
 
+from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.link import protocol, runtime
 from plcbuilder.link.protocol import MAX_FRAME, PROTOCOL_VERSION, REPLIES, ProtocolError
 
@@ -286,8 +287,8 @@ class Client:
 
     adc = set_adc
 
-    def state(self) -> dict:
-        return self.request("state")
+    def state(self) -> ControllerStatus:
+        return ControllerStatus.from_dict(self.request("state"))
 
     def variables(self) -> dict[str, dict[str, int]]:
         return self.request("variables").get("variables", {})

@@ -10,10 +10,11 @@ import os
 import time
 import traceback
 import zlib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Optional
 
 from plcbuilder.controller.controller import Controller, ControllerError
+from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.image.manifest import Image, ImageError, Limits, read_image
 from plcbuilder.link import protocol
 from plcbuilder.link.pacing import Simulation, SimulationDown, TelemetryQueue
@@ -202,24 +203,18 @@ class Service:
         return {"channel": ch, "value": value, "t_ms": t}
 
     # ---------------------------------------------------------------- state
-    def state(self) -> dict:
-        def go():
-            st = dict(self.sim.controller.state())
-            st["t_ms"] = self.sim.controller.t_ms
-            return st
-        st = self._on_sim(go)
-        st.setdefault("running", None)
-        st.setdefault("software", [])
-        st["image"] = image_summary(self.image)
-        st["image_crc32"] = None if self.image_crc32 is None else f"{self.image_crc32:08x}"
-        st["speed"] = self.sim.speed()
-        st["server"] = {"clients": self.clients, "subscribers": self.sim.subscribers,
-                        "uploads": self.uploads, "refused": self.refused, "pid": os.getpid(),
-                        "error": self.sim.error}
-        return st
+    def state(self) -> ControllerStatus:
+        st = self._on_sim(self.sim.controller.state)
+        return replace(
+            st, image=tuple(image_summary(self.image)),
+            image_crc32=None if self.image_crc32 is None else f"{self.image_crc32:08x}",
+            speed=self.sim.speed(),
+            server={"clients": self.clients, "subscribers": self.sim.subscribers,
+                    "uploads": self.uploads, "refused": self.refused, "pid": os.getpid(),
+                    "error": self.sim.error})
 
     def handle_state(self, msg: dict, session: Session) -> dict:
-        return self.state()
+        return self.state().to_dict()
 
     def handle_variables(self, msg: dict, session: Session) -> dict:
         return {"variables": self._on_sim(self.sim.controller.variables)}

@@ -167,7 +167,7 @@ def test_controller_process_serves_and_stops_cleanly_on_signals(rt_file, image_f
         assert ep.host == "127.0.0.1" and ep.pid == proc.pid
         assert stat.S_IMODE(rt_file.stat().st_mode) == 0o600
         c = Client.connect()                                  # found through the runtime file
-        assert c.state()["image"] and c.welcome["pid"] == proc.pid
+        assert c.state().image and c.welcome["pid"] == proc.pid
         c.subscribe(samples=False)
         proc.send_signal(sig)
         out, err = proc.communicate(timeout=30)

@@ -8,6 +8,7 @@ import pytest
 
 from plcbuilder.bytecode.opcodes import Op
 from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import Started, to_dict
 from plcbuilder.controller.scenario import (Scenario, ScenarioError, drive, parse_adc,
@@ -56,21 +57,21 @@ def test_state_reports_what_the_server_needs():
     c.start("M03")
     c.step(3)
     st = c.state()
-    assert st["t_ms"] == 3 and st["running"] == "M03" and st["software"] == ["lube"]
-    assert st["proc"] == 70 and st["proc_name"] == "plc_proc_spindle"
-    assert st["outputs"] == [1] and st["pwm"][1] == 5 and len(st["dac"]) == 8
-    assert st["axes"] == {"X": 10000, "Y": 10000, "Z": 2000}
-    assert [(i["name"], i["kind"], i["size"]) for i in st["image"]] == \
+    assert st.t_ms == 3 and st.running == "M03" and st.software == ("lube",)
+    assert st.proc == 70 and st.proc_name == "plc_proc_spindle"
+    assert st.outputs == (1,) and st.pwm[1] == 5 and len(st.dac) == 8
+    assert st.axes == {"X": 10000, "Y": 10000, "Z": 2000}
+    assert [(i["name"], i["kind"], i["size"]) for i in st.image] == \
         [("M03", "hardware", hw.code_size), ("lube", "software", sw.code_size)]
-    assert st["image"][0]["crc32"] == hw.crc32
-    json.dumps(st)
+    assert st.image[0]["crc32"] == hw.crc32
+    json.dumps(st.to_dict())
 
 
 def test_proc_is_kept_after_the_procedure_ends():
     c = controller(compile_proc("main(){ proc = 33; exit(99); };", "M03"))
     c.start("M03")
     c.step(5)
-    assert c.state()["proc"] == 33 and c.state()["running"] is None
+    assert c.state().proc == 33 and c.state().running is None
 
 
 def test_variables_by_procedure_and_name():
@@ -222,3 +223,19 @@ def test_started_events_carry_the_kind():
     c = controller(compile_proc("main(){ do { } while (1); };", "S", software=True))
     c.step(1)
     assert c.drain_events() == [Started(0, "S", "software", 0)]
+
+
+def test_the_status_goes_over_the_wire_and_back():
+    """ControllerStatus is a JSON object on the link; from_dict ignores keys it
+    does not know and gives missing ones their defaults (either side may be newer)."""
+    c = controller(compile_proc("main(){ portset(2); do { } while (1); };", "M03"))
+    c.start("M03")
+    c.step(2)
+    st = c.state()
+    wire = json.loads(json.dumps(st.to_dict()))
+    assert wire["outputs"] == [2] and wire["running"] == "M03"
+    assert ControllerStatus.from_dict(wire) == st
+    newer = ControllerStatus.from_dict({**wire, "something_new": 1})
+    assert newer == st
+    older = ControllerStatus.from_dict({"t_ms": 5})
+    assert older.t_ms == 5 and older.running is None and older.software == ()

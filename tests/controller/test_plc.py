@@ -42,7 +42,7 @@ def test_one_hardware_procedure_runs_at_a_time(backend):
     c.step(3)
     c.start("M11")
     c.step(3)
-    assert c.state()["running"] == "M11"
+    assert c.state().running == "M11"
     assert [e.name for e in c.drain_events() if isinstance(e, Ended)] == ["M10"]
 
 
@@ -142,7 +142,7 @@ def test_the_motion_controller_advances_1_ms_each_tick(backend):
         do { c = gvarget(6060); } while (c != 0);
         do { c = gvarget(6060); } while (c != 0x4d); exit(99); };"""
     c, ev = run_hw(src, ms=20_000, backend=backend)
-    assert c.state()["axes"]["X"] == 10100
+    assert c.state().axes["X"] == 10100
     assert c.machine.t_ms == c.t_ms
 
 
@@ -232,7 +232,7 @@ def test_a_runtime_fault_ends_the_procedure_names_the_line_and_sends_err_vm(src,
     assert ended(ev).exit_code == -1
     m = of(ev, Message)
     assert [(x.message, x.name) for x in m] == [(-1, "PLC_MESSAGE_ERR_VM")]
-    assert c.state()["running"] is None
+    assert c.state().running is None
 
 
 def test_too_many_instructions_in_one_tick_is_a_fault(backend):
@@ -280,7 +280,7 @@ def test_stop_once_starts_m02_twice_starts_off_and_leaves_outputs(backend):
     ev = c.drain_events()
     assert [p[2] for p in prints(ev)] == [2, 3]
     assert [e.name for e in of(ev, Started)] == ["M03", "M02", "OFF"]
-    assert 4 in c.state()["outputs"]
+    assert 4 in c.state().outputs
 
 
 def test_stop_without_off_ends_the_running_procedure(backend):
@@ -289,7 +289,7 @@ def test_stop_without_off_ends_the_running_procedure(backend):
     c.step(2)
     assert c.stop() is None
     c.step(1)
-    assert c.state()["running"] is None
+    assert c.state().running is None
     assert ended(c.drain_events(), "M02").exit_code == 100
 
 
@@ -384,7 +384,7 @@ def test_software_procedures_jog_with_100020_plus_axis(backend):
                       software=True)
     c = controller(sw, backend=backend)
     c.step(1000)
-    assert c.state()["axes"]["X"] < 10000 - 500
+    assert c.state().axes["X"] < 10000 - 500
 
 
 def test_variables_start_at_0_except_eparam_var00_15_and_param(backend):
@@ -422,7 +422,7 @@ def test_software_procedures_start_with_the_controller_and_after_build_all(backe
     sys_ = compile_proc("main(){ do { n++; } while (1); };", "__SYS", software=True)
     c = controller(a, b, sys_, backend=backend)
     c.step(250)
-    assert c.state()["software"] == ["A", "B"]
+    assert c.state().software == ("A", "B")
     c.load([a, b, sys_])               # Build All again: they restart
     c.step(100)
     ev = c.drain_events()
@@ -466,7 +466,7 @@ def test_software_procedures_reach_the_hardware_through_the_host(backend):
     c.step(1)
     v = c.variables()["S"]
     assert (v["a"], v["b"], v["c"]) == (1, 1, 99)      # input 6 (air pressure) reads 1
-    assert 5 in c.state()["outputs"] and c.state()["pwm"][0] == 99
+    assert 5 in c.state().outputs and c.state().pwm[0] == 99
 
 
 def test_system_procedures_start_on_their_events(backend):

@@ -41,7 +41,7 @@ def check_expectations(g, program, c, events) -> None:
     name = program.name
     ended = [e for e in events if e.type == "ended" and e.name == name]
     variables = c.variables().get(name, {})
-    outputs = set(c.state()["outputs"])
+    outputs = set(c.state().outputs)
     for line, text in g.expects:
         where = f"{g.id}:{line}: expect {text}"
         words = text.split()

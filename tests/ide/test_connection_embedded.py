@@ -61,7 +61,7 @@ class Recorder:
         c.sig_events.connect(self.events.extend)
         c.sig_samples.connect(self.samples.extend)
         c.sig_error.connect(self.errors.append)
-        c.sig_state.connect(self.states.append)
+        c.sig_state.connect(lambda st, missed: self.states.append(st))
         c.sig_connected.connect(self.connected.append)
         c.sig_disconnected.connect(self.disconnected.append)
         c.sig_result.connect(lambda verb, r: self.results.append((verb, r)))
@@ -103,10 +103,10 @@ def test_embedded_upload_start_and_telemetry(qtbot, conn):
     during = [s for s in rec.samples if starts[0].t_ms <= s.t_ms < end.t_ms]
     assert during and all((s.outputs[0] >> 3) & 1 for s in during)
     assert all(s.proc == 70 for s in during)
-    qtbot.waitUntil(lambda: bool(rec.states) and rec.states[-1]["t_ms"] > end.t_ms,
+    qtbot.waitUntil(lambda: bool(rec.states) and rec.states[-1].t_ms > end.t_ms,
                     timeout=WAIT)
     st = rec.states[-1]
-    assert st["running"] is None and [p["name"] for p in st["image"]] == ["COUNT"]
+    assert st.running is None and [p["name"] for p in st.image] == ["COUNT"]
     assert rec.errors == []
 
 
@@ -137,7 +137,7 @@ def test_variables_and_speed(qtbot, conn):
     conn.request_variables()
     qtbot.waitUntil(lambda: bool(got), timeout=WAIT)
     assert got[-1]["COUNT"]["eparam"] == 3 and got[-1]["COUNT"]["proc"] == 70
-    qtbot.waitUntil(lambda: bool(rec.states) and rec.states[-1]["speed"]["mode"] == "max",
+    qtbot.waitUntil(lambda: bool(rec.states) and rec.states[-1].speed["mode"] == "max",
                     timeout=WAIT)
 
 

@@ -13,6 +13,7 @@ from plcbuilder.ide import dialogs
 from plcbuilder.ide.editor import IND_ERROR, IND_WARNING, MK_ERROR
 from plcbuilder.ide.main_window import Act, MainWindow
 from plcbuilder.ide.settings import Preferences, Settings
+from plcbuilder.link.client import ControllerStatus
 
 SB = QMessageBox.StandardButton
 
@@ -84,7 +85,7 @@ class FakeConnection(QObject):
     """The connection interface of part B, recording what the window asks."""
     sig_connected = Signal(str)
     sig_disconnected = Signal(str)
-    sig_state = Signal(dict)
+    sig_state = Signal(object, int)
     sig_events = Signal(list)
     sig_samples = Signal(list)
     sig_error = Signal(str)
@@ -573,12 +574,12 @@ def test_state_goes_to_the_status_bar(runwin, project):
     conn.connected = True
     conn.sig_connected.emit("127.0.0.1:5555")
     assert "127.0.0.1:5555" in w.connection_label.text()
-    conn.sig_state.emit({"t_ms": 12345, "running": "M03", "proc": 70,
-                         "proc_name": "plc_proc_spindle"})
+    conn.sig_state.emit(ControllerStatus(t_ms=12345, running="M03", proc=70,
+                                         proc_name="plc_proc_spindle"), 0)
     assert w.time_label.text() == "t = 12.345 s"
     assert w.running_label.text() == "▶ M03"
     assert w.proc_label.text() == "proc 70 plc_proc_spindle"
-    conn.sig_state.emit({"t_ms": 20000, "running": None, "proc": 33})
+    conn.sig_state.emit(ControllerStatus(t_ms=20000, running=None, proc=33), 0)
     assert w.running_label.text() == "idle"
     assert w.proc_label.text() == "proc 33 plc_proc_probing"       # named by abi.proc_name
     conn.sig_disconnected.emit("gone")

@@ -16,6 +16,7 @@ from plcbuilder.ide.panels import (RunPanels, default_pin_names,  # noqa: E402
 from plcbuilder.ide.panels.log import CATEGORY, TEXT, event_row  # noqa: E402
 from plcbuilder.ide.panels.model import RunModel  # noqa: E402
 from plcbuilder.ide.ringbuffer import RingBuffer  # noqa: E402
+from plcbuilder.link.client import ControllerStatus  # noqa: E402
 
 Qt = QtCore.Qt
 
@@ -25,7 +26,7 @@ class FakeConnection(QtCore.QObject):
     """The ControllerConnection interface, recording the requests."""
     sig_connected = QtCore.Signal(str)
     sig_disconnected = QtCore.Signal(str)
-    sig_state = QtCore.Signal(dict)
+    sig_state = QtCore.Signal(object, int)
     sig_events = QtCore.Signal(list)
     sig_samples = QtCore.Signal(list)
     sig_error = QtCore.Signal(str)
@@ -353,7 +354,7 @@ def test_inputs_panel_sends_and_shows(qtbot, panels, fake):
 
 def test_watch_panel_orders_and_follows(qtbot, panels, fake):
     fake.connected = True
-    fake.sig_state.emit({"t_ms": 10, "running": "M03", "software": [], "proc": 70})
+    fake.sig_state.emit(ControllerStatus(t_ms=10, running="M03", software=(), proc=70), 0)
     panels._poll_variables()
     assert fake.calls[-1] == ("variables",)
     assert "Running M03" in panels.proc.status.text()

@@ -168,8 +168,8 @@ def test_corrupted_images_are_all_refused_and_the_old_image_keeps_running(server
         assert set(sim.call(lambda: sim.controller.programs)) == names, label
         t = wait_for(lambda: (lambda now: now if now > t else None)(t_of()), timeout=5)
     st = svc.state()
-    assert st["running"] == "M88"              # never interrupted: nothing was loaded
-    assert "LUBE" in st["software"]
+    assert st.running == "M88"              # never interrupted: nothing was loaded
+    assert "LUBE" in st.software
     assert svc.refused == len(bad_images) and svc.uploads == 1
     assert len(reasons) > 10                   # the reasons say different things
 
@@ -185,9 +185,9 @@ def test_a_subset_over_a_real_socket(server, client, bad_images, image):
         assert e.value.code in ("refused", "bad_request"), label
         assert e.value.reason, label
         st = client.state()
-        assert st["image"] == before["image"] and st["running"] == "M88", label
-    t = client.state()["t_ms"]
-    wait_for(lambda: client.state()["t_ms"] > t)
+        assert st.image == before.image and st.running == "M88", label
+    t = client.state().t_ms
+    wait_for(lambda: client.state().t_ms > t)
     # the good image is still accepted afterwards (and restarts the procedures)
     r = client.upload(image)
-    assert r["accepted"] and client.state()["running"] is None
+    assert r["accepted"] and client.state().running is None

@@ -14,6 +14,7 @@ from typing import Mapping, Optional
 from PySide6 import QtCore, QtWidgets
 
 from plcbuilder.bytecode import abi
+from plcbuilder.link.client import ControllerStatus
 from plcbuilder.controller import events as ev
 from plcbuilder.ide.panels.inputs import InputsPanel
 from plcbuilder.ide.panels.log import LogPanel
@@ -123,7 +124,7 @@ class RunPanels(QtCore.QObject):
             dock.setWidget(widgets[key])
             dock.setAllowedAreas(Qt.DockWidgetArea.AllDockWidgetAreas)
             self._docks[key] = dock
-        self._state: dict = {}
+        self._state = ControllerStatus()
         self._missed = 0
         self._running: Optional[str] = None
         self._final_poll = 0          # polls still due after something ended
@@ -217,26 +218,24 @@ class RunPanels(QtCore.QObject):
             self._final_poll = 2
             self._poll_variables()
 
-    def _on_state(self, st: dict) -> None:
+    def _on_state(self, st: ControllerStatus, missed: int = 0) -> None:
         self._state = st
-        self._running = st.get("running")
-        t = st.get("t_ms")
+        self._running = st.running
+        t = st.t_ms
         parts = []
         if self._running:
             parts.append(f"<b>Running {self._running}</b>")
         else:
             parts.append("Idle")
-        soft = st.get("software") or []
+        soft = st.software
         if soft:
             parts.append("software: " + ", ".join(map(str, soft[:4]))
                          + (" …" if len(soft) > 4 else ""))
-        proc = st.get("proc")
-        if proc is not None:
-            name = st.get("proc_name") or abi.proc_name(proc)
-            parts.append(f"proc {name} ({proc})" if name else f"proc {proc}")
-        if t is not None:
-            parts.append(f"t = {t / 1000:.3f} s")
-        speed = st.get("speed")
+        proc = st.proc
+        name = st.proc_name or abi.proc_name(proc)
+        parts.append(f"proc {name} ({proc})" if name else f"proc {proc}")
+        parts.append(f"t = {t / 1000:.3f} s")
+        speed = st.speed
         fast = False
         if isinstance(speed, dict) and speed.get("mode"):
             mode = speed["mode"]
@@ -244,7 +243,6 @@ class RunPanels(QtCore.QObject):
             if mode == "factor":
                 mode = f"{speed.get('factor', 0):g}×"
             parts.append(mode)
-        missed = int(st.get("missed") or 0)
         if fast:
             parts.append("plots thinned")
         elif missed > self._missed:
@@ -265,7 +263,7 @@ class RunPanels(QtCore.QObject):
     def _poll_variables(self) -> None:
         if not getattr(self.connection, "connected", False):
             return
-        busy = bool(self._running) or bool(self._state.get("software"))
+        busy = bool(self._running) or bool(self._state.software)
         if busy or self._final_poll > 0:
             if not busy:
                 self._final_poll -= 1
