@@ -19,23 +19,15 @@ after a restart it uploads the last image again.
 
 from __future__ import annotations
 
-import atexit
-import os
 import queue
-import shutil
-import signal
-import subprocess
-import sys
-import tempfile
 import threading
 import time
-import weakref
-from pathlib import Path
 from typing import Optional, Sequence
 
 from PySide6 import QtCore
 
 from plcbuilder.link import runtime
+from plcbuilder.link.process import ControllerProcess
 from plcbuilder.link.client import (Client, ConnectionLost, ControllerStatus, LinkError,
                                     RefusedError, Telemetry)
 
@@ -93,106 +85,6 @@ def parse_speed(mode) -> tuple[str, Optional[float]]:
     return "factor", factor
 
 
-# ====================================================================== child
-
-class _Child:
-    """One embedded controller process and its private runtime folder."""
-
-    def __init__(self, extra_args: Sequence[str] = ()):
-        self.dir = Path(tempfile.mkdtemp(prefix="plcbuilder-ide-"))   # 0700
-        self.runtime_file = self.dir / "controller.json"
-        self.stderr_path = self.dir / "controller.err"
-        env = dict(os.environ)
-        env[runtime.ENV_FILE] = str(self.runtime_file)
-        env.setdefault("PYTHONUNBUFFERED", "1")
-        args = ["controller", "--port", "0", "--runtime-file", str(self.runtime_file),
-                *extra_args]
-        if sys.platform.startswith("linux"):
-            # end with the IDE even when the IDE is killed (PR_SET_PDEATHSIG)
-            code = ("import ctypes, signal, sys\n"
-                    "try:\n ctypes.CDLL(None).prctl(1, signal.SIGTERM)\n"
-                    "except Exception:\n pass\n"
-                    "from plcbuilder.cli.main import main\n"
-                    f"sys.argv[0] = 'plcbuilder'\nraise SystemExit(main({args!r}))\n")
-            cmd = [sys.executable, "-c", code]
-        else:
-            cmd = [sys.executable, "-m", "plcbuilder", *args]
-        self._err = open(self.stderr_path, "wb")
-        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                     stderr=self._err, env=env, close_fds=True)
-
-    @property
-    def pid(self) -> int:
-        return self.proc.pid
-
-    def alive(self) -> bool:
-        return self.proc.poll() is None
-
-    def endpoint(self) -> Optional[runtime.Endpoint]:
-        try:
-            ep = runtime.read(self.runtime_file)
-        except runtime.RuntimeFileError:
-            return None
-        return ep if ep.pid == self.proc.pid else None
-
-    def why_dead(self) -> str:
-        code = self.proc.poll()
-        if code is None:
-            return "the controller process is running"
-        if code < 0:
-            try:
-                name = signal.Signals(-code).name
-            except ValueError:
-                name = f"signal {-code}"
-            text = f"the controller process was killed ({name})"
-        else:
-            text = f"the controller process exited with status {code}"
-        tail = self.stderr_tail()
-        return f"{text}: {tail}" if tail else text
-
-    def stderr_tail(self, lines: int = 3) -> str:
-        try:
-            data = self.stderr_path.read_bytes()[-4000:].decode("utf-8", "replace")
-        except OSError:
-            return ""
-        rows = [r for r in data.strip().splitlines() if r.strip()]
-        return " | ".join(rows[-lines:])
-
-    def stop(self, timeout: float = 3.0) -> None:
-        p = self.proc
-        if p.poll() is None:
-            try:
-                p.terminate()
-                p.wait(timeout)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                try:
-                    p.wait(timeout)
-                except subprocess.TimeoutExpired:
-                    pass
-            except OSError:
-                pass
-        try:
-            self._err.close()
-        except OSError:
-            pass
-        shutil.rmtree(self.dir, ignore_errors=True)
-
-
-_CHILDREN: "weakref.WeakSet[_Child]" = weakref.WeakSet()
-
-
-def _reap_children() -> None:           # at interpreter exit: no orphans
-    for c in list(_CHILDREN):
-        try:
-            c.stop(1.0)
-        except Exception:  # noqa: BLE001
-            pass
-
-
-atexit.register(_reap_children)
-
-
 # ===================================================================== worker
 
 class _Worker(threading.Thread):
@@ -208,7 +100,7 @@ class _Worker(threading.Thread):
         self.commands: "queue.Queue" = queue.Queue()
         self.stopping = threading.Event()
         self.client: Optional[Client] = None
-        self.child: Optional[_Child] = None
+        self.child: Optional[ControllerProcess] = None
         self.image: Optional[bytes] = None      # re-uploaded after a restart
         self.speed: Optional[tuple[str, Optional[float]]] = None
         self.variables_pending = False
@@ -289,8 +181,7 @@ class _Worker(threading.Thread):
             if self.child is None or not self.child.alive():
                 if self.child is not None:
                     self.child.stop()
-                self.child = _Child(self.extra_args)
-                _CHILDREN.add(self.child)
+                self.child = ControllerProcess(self.extra_args)
                 self.post("child", self.child.pid)
             ep = self._wait_endpoint(self.child)
             host, port, token = ep.host, ep.port, ep.token
@@ -314,21 +205,11 @@ class _Worker(threading.Thread):
                 self.post("error", f"speed: {exc.reason}")
         self.post("connected", (f"{host}:{port}", client.welcome))
 
-    def _wait_endpoint(self, child: _Child) -> runtime.Endpoint:
-        deadline = time.monotonic() + SPAWN_TIMEOUT
-        while True:
-            ep = child.endpoint()
-            if ep is not None:
-                return ep
-            if not child.alive():
-                raise LinkError(child.why_dead())
-            if time.monotonic() > deadline:
-                tail = child.stderr_tail()
-                child.stop()                    # hung: the next try starts a fresh one
-                raise LinkError(f"the controller process did not start within "
-                                f"{SPAWN_TIMEOUT:g} s" + (f": {tail}" if tail else ""))
-            if self.stopping.wait(0.02):
-                raise _Stop()
+    def _wait_endpoint(self, child: ControllerProcess) -> runtime.Endpoint:
+        ep = child.wait_endpoint(SPAWN_TIMEOUT, cancel=self.stopping)
+        if ep is None:
+            raise _Stop()
+        return ep
 
     def _on_telemetry(self, batch: Telemetry) -> None:   # on the client's reader thread
         self.post("telemetry", batch)

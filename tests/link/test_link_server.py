@@ -346,7 +346,8 @@ def test_upload_of_a_good_image_over_the_socket(client, image):
 
 
 def test_controller_process_for_the_ide(tmp_path, image):
-    from plcbuilder.link.client import ControllerProcess, LinkError
+    from plcbuilder.link.client import LinkError
+    from plcbuilder.link.process import ControllerProcess
     img = tmp_path / "eeprom.rom"
     img.write_bytes(image)
     proc = ControllerProcess.start(image=img, speed="10")
