@@ -1,31 +1,62 @@
-"""The facade: plain functions that compose the pipeline.
+"""The facade: what the command line and the IDE call, composing the stages.
 
-    compile_source / compile_file   source -> diagnostics + Program
-    load_program / disassemble      binary -> Program -> listing
-    run (plcbuilder.simulate)       procedures -> a simulated controller run
-    build_project                   a project folder -> build/*.bin + build/eeprom.rom
+    check / compile     compile_source, compile_file, compile_bytes -> CompileResult
+    binaries            load_program, disassemble (text), instructions (records)
+    projects            Project, create_project, build_project, compile_all
+    run                 run(target, RunOptions) -> RunResult: compile, load, simulate
+    rendering           render_text, summary (diagnostics as text)
 
-Options are passed in; nothing here keeps global state.
+and the names a caller needs with them (``Kind``, ``Diagnostic``, the ABI tables
+as ``abi``, the controller's events as ``events``). Options are passed in;
+nothing here keeps global state or prints.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Optional
+from typing import Callable, Optional, Sequence
 
-from plcbuilder.bytecode import disasm
+from plcbuilder._support.files import atomic_write
+from plcbuilder.bytecode import abi, disasm
 from plcbuilder.bytecode.abi import proc_name
-from plcbuilder.bytecode.program import Kind, LoadError, Program
+from plcbuilder.bytecode.program import MAGIC, Kind, LoadError, Program
+from plcbuilder.controller import events
+from plcbuilder.controller.controller import Controller, ControllerError
+from plcbuilder.controller.events import ControllerStatus
+from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
+from plcbuilder.controller.session import UsageError, build_scenario, run_session
+from plcbuilder.controller.scenario import Action
+from plcbuilder.controller.variables_xml import load_variables
+from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
+                                    summary)
+from plcbuilder.image.manifest import ImageError, read_image, write_image
 from plcbuilder.lang.compiler import (CompileOptions, CompileResult, compile_bytes, compile_file,
                                       compile_source)
+from plcbuilder.lang.highlight import PlcLexer
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header, builtin_header_names
-from plcbuilder._support.files import atomic_write
-from plcbuilder.project import BuildResult, Project, ProjectError, build_project, create_project
+from plcbuilder.project import (BuildResult, ProcedureBuild, Project, ProjectError, build_project,
+                                create_project)
+from plcbuilder.project.build import compile_all
+from plcbuilder.project.model import DEFAULT_MACHINE, kind_of
 
-__all__ = ["atomic_write", "proc_name", "BUILTIN_PREFIX", "builtin_header", "builtin_header_names", "BuildResult", "CompileOptions", "CompileResult", "Kind", "LoadError", "Program",
-           "Project", "ProjectError", "build_project", "compile_bytes", "compile_file",
-           "compile_source", "create_project", "disassemble", "kind_for_path", "load_program"]
+__all__ = [
+    "Action", "BUILTIN_PREFIX", "BuildResult", "CompileOptions", "CompileResult", "ConfigError",
+    "Controller", "ControllerError", "ControllerStatus", "DEFAULT_MS", "Diagnostic", "ImageError",
+    "Kind", "LoadError", "MAGIC", "MAX_MS", "PlcLexer", "ProcedureBuild", "Program", "Project",
+    "ProjectError", "Related", "RunOptions", "RunResult", "Severity", "Span", "UsageError", "abi",
+    "atomic_write", "build_project", "builtin_header", "builtin_header_names", "compile_all",
+    "compile_bytes", "compile_file", "compile_source", "create_project", "default_machine",
+    "disassemble", "error", "events", "image_of", "instructions", "kind_of", "load_machine", "load_program",
+    "load_variables", "options_for", "proc_name", "read_image", "render_text", "run", "summary",
+    "write_image",
+]
 
+DEFAULT_MS = 60_000
+MAX_MS = 7 * 24 * 3600 * 1000          # a week of simulated time
+
+
+# --------------------------------------------------------------- binaries
 
 def load_program(path) -> Program:
     """Read a compiled procedure (.bin); raises LoadError saying why it is refused."""
@@ -36,12 +67,164 @@ def load_program(path) -> Program:
     return Program.from_bytes(data)
 
 
+def image_of(sources: dict[str, str]) -> bytes:
+    """An eeprom.rom of hardware procedures ``{name: source}`` with the built-in
+    headers only (raises ValueError naming the first that does not compile)."""
+    items = []
+    for name, text in sources.items():
+        r = compile_source(text, f"{name}.plc")
+        if not r.ok:
+            raise ValueError(f"{name}: " + "; ".join(str(d) for d in r.diagnostics))
+        items.append((name, r.kind, r.program.to_bytes()))
+    return write_image(items)
+
+
 def disassemble(program: Program, source_line: Optional[Callable[[str, int], Optional[str]]] = None) -> str:
     return disasm.render_text(program, source_line)
 
 
-def kind_for_path(path, software: bool = False) -> Kind:
-    """A procedure in a folder named ``software`` is a software procedure."""
-    if software or Path(path).parent.name == "software":
-        return Kind.SOFTWARE
-    return Kind.HARDWARE
+def instructions(program: Program) -> list:
+    """The disassembly as records (one per instruction, with its source line)."""
+    return disasm.instructions(program)
+
+
+# ---------------------------------------------------------------- sources
+
+def options_for(path, *, software: bool = False, strict: Optional[bool] = None,
+                extra_includes: Sequence = (), project: Optional[Project] = None,
+                ) -> CompileOptions:
+    """How a source file is compiled: as Build All does when it belongs to a
+    project (``project``, or the one it sits in), else with the options given.
+    ``strict`` None: as its project says (not strict outside a project).
+    Raises ProjectError when its project's settings cannot be read."""
+    if project is None:
+        project = Project.find_for(path)
+    if project is not None:
+        return project.compile_options(path, software=software, strict=strict,
+                                       extra_includes=tuple(extra_includes))
+    return CompileOptions(kind=kind_of(path, software), strict=bool(strict),
+                          include_dirs=tuple(extra_includes))
+
+
+# -------------------------------------------------------------------- run
+
+@dataclass
+class RunOptions:
+    ms: Optional[int] = None             # the time limit (None: DEFAULT_MS)
+    eparam: int = 0                      # for a single-file target
+    starts: Sequence[str] = ()           # "NAME[:EPARAM]@MS"
+    inputs: Sequence[str] = ()           # "PIN=0|1@MS"
+    adcs: Sequence[str] = ()             # "CH=VALUE@MS"
+    scenario: Optional[Path] = None
+    machine: Optional[Path] = None
+    software: bool = False
+    strict: bool = False
+    include_dirs: tuple = ()
+    trace: Optional[Path] = None         # CSV, one row per tick (gzip when it ends in .gz)
+    backend: str = "fast"
+    gvarget_latency_ms: int = 0
+
+
+@dataclass
+class RunResult:
+    compiled: list = field(default_factory=list)     # per procedure: diagnostics, ok, name
+    report: Optional[dict] = None                    # None when a procedure has errors
+
+    @property
+    def ok(self) -> bool:
+        return self.report is not None
+
+
+@dataclass
+class _Target:
+    programs: list[Program]
+    compiled: list
+    machine_path: Optional[Path]
+    variables: Optional[list[int]]
+    single: Optional[Program]            # the procedure of a single-file target
+
+
+def run(target, options: Optional[RunOptions] = None) -> RunResult:
+    """``plcbuilder run``: compile a procedure or a project, simulate it, report.
+
+    1. compile the target: one ``.plc`` file (a hardware procedure, or a software
+       one with ``software=True``) or a project folder (as Build All compiles it);
+    2. build a controller on the machine (the option's, the project's, or the
+       default one) with the project's plc-variables.xml, and load the procedures;
+    3. run the scenario (``--start``/``--input``/``--adc`` and a scenario file)
+       until the time limit, or until no procedure runs and none is due to start;
+    4. report what happened as the dict of docs/controller.md.
+
+    Bad usage raises :class:`UsageError`; compile errors come back as the
+    procedures' diagnostics with ``report`` None."""
+    opts = options or RunOptions()
+    limit = DEFAULT_MS if opts.ms is None else opts.ms
+    if not 0 <= limit <= MAX_MS:
+        raise UsageError(f"--ms must be from 0 to {MAX_MS}, not {limit}")
+    target = Path(target)
+    sc = build_scenario(opts.scenario, opts.starts, opts.inputs, opts.adcs)
+    tg = _compile_target(target, opts)
+    if any(not r.ok for r in tg.compiled):
+        return RunResult(tg.compiled, None)
+    machine_path = opts.machine if opts.machine is not None else tg.machine_path
+    try:
+        mconf = load_machine(machine_path) if machine_path is not None else default_machine()
+    except ConfigError as exc:
+        raise UsageError(str(exc)) from None
+    try:
+        c = Controller(mconf, backend=opts.backend, variables=tg.variables,
+                       gvarget_latency_ms=opts.gvarget_latency_ms,
+                       record_samples=opts.trace is not None)
+        c.load(tg.programs, autostart=tg.single is None)
+    except ControllerError as exc:
+        raise UsageError(str(exc)) from None
+    if tg.single is not None:
+        sc.actions.insert(0, Action(0, "start", tg.single.name, opts.eparam))
+    report = run_session(c, sc, limit, trace=opts.trace, target=str(target))
+    return RunResult(tg.compiled, report)
+
+
+def _compile_target(target: Path, opts: RunOptions) -> _Target:
+    if target.is_dir():
+        return _compile_project(target, opts)
+    if not target.exists():
+        raise UsageError(f"{target}: no such file or folder")
+    try:                             # a file of a project: as Build All compiles it
+        options = options_for(target, software=opts.software, strict=opts.strict or None,
+                              extra_includes=opts.include_dirs)
+    except (ProjectError, OSError):  # a project that cannot be read: the options alone
+        options = CompileOptions(kind=kind_of(target, opts.software), strict=opts.strict,
+                                 include_dirs=tuple(opts.include_dirs))
+    r = compile_file(target, options)
+    program = r.program if r.ok else None
+    return _Target([program] if program else [], [r], None, None, program)
+
+
+def _compile_project(root: Path, opts: RunOptions) -> _Target:
+    try:
+        project = Project.open(root)
+        procs = project.procedures()
+    except ProjectError as exc:
+        raise UsageError(str(exc)) from None
+    if not procs:
+        raise UsageError(f"{root}: no procedures (a project has hardware/*.plc and "
+                         f"software/*.plc)")
+    names: dict[str, Path] = {}
+    for proc in procs:
+        if proc.name in names:
+            raise UsageError(f"two procedures named {proc.name}: {names[proc.name]} and "
+                             f"{proc.path}")
+        names[proc.name] = proc.path
+    compiled = compile_all(project, strict=opts.strict or None, extra_includes=tuple(opts.include_dirs))
+    programs = [p for p in (pb.program() for pb in compiled) if p is not None]
+    variables = None
+    if project.variables_path.is_file():
+        try:
+            variables = load_variables(project.variables_path)
+        except ConfigError as exc:
+            raise UsageError(str(exc)) from None
+    machine = project.machine_path if project.machine_path.is_file() else None
+    if machine is None and project.settings.machine != DEFAULT_MACHINE:
+        raise UsageError(f"{project.settings_path}: machine: no such file "
+                         f"{project.machine_path}")
+    return _Target(programs, compiled, machine, variables, None)

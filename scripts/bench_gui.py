@@ -17,6 +17,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from plcbuilder import api
+
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
 
@@ -137,11 +139,128 @@ def run() -> list[str]:
         win.shutdown()
         win.hide()
     out.append(_startup())
-    from plcbuilder.ide.panels.bench import measure_fps
     fps = measure_fps(5.0)
     out.append(f"run panels, 16 signals x 10k points, controller in real time: {fps:.0f} fps "
                f"(goal >= 30 fps)")
     return out
+
+
+# ------------------------------------------------------------ plot frame rate
+
+#: Runs until stopped: toggles 8 outputs and moves 8 PWM/DAC channels every tick.
+BUSY_SOURCE = """\
+main() {
+  n = 0;
+  do {
+    n++;
+    if (n & 1) portset(0); else portclear(0);
+    if (n & 2) portset(1); else portclear(1);
+    if (n & 4) portset(2); else portclear(2);
+    if (n & 8) portset(3); else portclear(3);
+    if (n & 16) portset(4); else portclear(4);
+    if (n & 64) portset(5); else portclear(5);
+    if (n & 256) portset(6); else portclear(6);
+    if (n & 1024) portset(7); else portclear(7);
+    pwm01 = n & 1023; pwm02 = (n * 3) & 1023; pwm03 = (n * 7) & 1023; pwm04 = (n >> 2) & 1023;
+    dac01 = (n * 5) & 4095; dac02 = (n * 11) & 4095;
+    gvarset(7282, (n * 13) & 1023); gvarset(7272, (n * 17) & 4095);   // PWM4, DAC2
+  } while (1);
+}
+"""
+
+
+class _PaintCounter:
+    """Counts the paint events of the viewports it filters."""
+
+    def __new__(cls):
+        from PySide6 import QtCore
+
+        class Counter(QtCore.QObject):
+            def __init__(self):
+                super().__init__()
+                self.counts: dict[int, int] = {}
+
+            def eventFilter(self, obj, event):  # noqa: N802
+                if event.type() == QtCore.QEvent.Type.Paint:
+                    self.counts[id(obj)] = self.counts.get(id(obj), 0) + 1
+                return False
+        return Counter()
+
+
+def measure_fps(seconds: float = 5.0, points: int = 10000, show: bool = True) -> float:
+    """Frames a second of the outputs + PWM/DAC docks (16 signals × ``points``)
+    redrawn back to back for ``seconds`` while an embedded controller runs a
+    busy procedure in real time. Each frame feeds the telemetry that arrived,
+    redraws both docks and paints them (synchronously)."""
+    os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
+    from PySide6 import QtCore, QtWidgets
+
+    from plcbuilder.ide.connection import ControllerConnection
+    from plcbuilder.ide.panels.runpanels import RunPanels
+
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([])
+    win = QtWidgets.QMainWindow()
+    conn = ControllerConnection()
+    panels = RunPanels(win, conn, capacity=points)
+    panels.timer.stop()                 # frames are driven here, as fast as they go
+    panels.var_timer.stop()
+    panels.timebase.set_window(points / 1000.0)   # the whole buffer in view
+    for key in ("outputs", "analog"):
+        win.addDockWidget(QtCore.Qt.DockWidgetArea.TopDockWidgetArea, panels.dock(key))
+    for key in ("proc", "axes", "inputs", "watch", "log"):
+        d = panels.dock(key)
+        win.addDockWidget(QtCore.Qt.DockWidgetArea.BottomDockWidgetArea, d)
+        d.hide()
+    win.resize(1600, 700)
+    if show:
+        win.show()
+    conn.start_embedded()
+
+    def pump(until: float, cond=lambda: False) -> bool:
+        while time.monotonic() < until and not cond():
+            app.processEvents()
+            time.sleep(0.002)
+        return cond()
+
+    try:
+        if not pump(time.monotonic() + 20, lambda: conn.connected):
+            raise RuntimeError("the embedded controller did not come up")
+        conn.upload(api.image_of({"BUSY": BUSY_SOURCE}))
+        conn.start("BUSY", 0)
+        # fill the buffers quickly (10x real time: still every tick), then
+        # measure in real time
+        conn.set_speed("10")
+        if not pump(time.monotonic() + 20, lambda: len(panels.model) >= points):
+            raise RuntimeError(f"only {len(panels.model)} samples arrived")
+        conn.set_speed("realtime")
+        pump(time.monotonic() + 0.3)
+        a, b = panels.model.window(*panels.lanes.visible_span())
+        if b - a < points * 0.95:
+            raise RuntimeError(f"only {b - a} samples in view")
+        lanes, analog = panels.lanes, panels.analog
+        for pin in range(8):
+            lanes.pin_lane("outputs", pin)
+        painted = _PaintCounter()
+        for w in (lanes.widget, analog.widget):
+            w.viewport().installEventFilter(painted)
+        app.processEvents()
+        painted.counts.clear()
+        start = time.monotonic()
+        end = start + seconds
+        while time.monotonic() < end:
+            lanes.refresh(force=True)       # the telemetry that came is in the model
+            analog.refresh(force=True)
+            app.processEvents()             # receives telemetry, paints both docks
+        elapsed = time.monotonic() - start
+        frames = min(painted.counts.values()) if len(painted.counts) == 2 else 0
+        return frames / elapsed if elapsed > 0 else 0.0
+    finally:
+        conn.shutdown()
+        panels.shutdown()
+        win.close()
+        win.deleteLater()
+        app.processEvents()
+
 
 
 _PROBE = """

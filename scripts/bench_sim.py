@@ -314,7 +314,7 @@ def vm_ratios(ticks: int = 200_000) -> tuple[float, float, float]:
 
 _HOUR_SCRIPT = """
 import sys, time, resource
-from plcbuilder.simulate import run, RunOptions
+from plcbuilder.api import run, RunOptions
 t0 = time.perf_counter()
 r = run(sys.argv[1], RunOptions(ms=3_600_000, starts=["M03:12000@1000", "M88@2000"],
                                 trace=sys.argv[2]))

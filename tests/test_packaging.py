@@ -34,7 +34,7 @@ def test_wheel_declares_the_console_script_and_lexer(wheel):
     (ep,) = [n for n in z.namelist() if n.endswith("entry_points.txt")]
     text = z.read(ep).decode()
     assert "plcbuilder = plcbuilder.cli.main:main" in text
-    assert "plc = plcbuilder.lang.lexer:PlcLexer" in text
+    assert "plc = plcbuilder.lang.highlight:PlcLexer" in text
 
 
 def test_installed_wheel_compiles_with_builtin_headers(wheel, tmp_path):

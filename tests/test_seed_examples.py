@@ -3,7 +3,7 @@
 
 from pathlib import Path
 
-from plcbuilder.simulate import RunOptions, run
+from plcbuilder.api import RunOptions, run
 
 SEED = Path(__file__).parent / "lang" / "golden" / "seed"
 

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Callable
 
 from plcbuilder.cli import term
-from plcbuilder.cli.cmd_check import DEBUG_ENV, safe_streams
+from plcbuilder.cli.common import DEBUG_ENV, safe_streams
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 

@@ -15,9 +15,9 @@ import argparse
 import sys
 from pathlib import Path
 
+from plcbuilder import api
 from plcbuilder.cli import term
-from plcbuilder.cli.cmd_check import guarded, safe_streams
-from plcbuilder.diagnostics import render_text, summary
+from plcbuilder.cli.common import guarded, safe_streams
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -65,7 +65,7 @@ def _procedure_line(pb, out: term.Out) -> str:
     status = out.paint("ok", "ok") if pb.ok else out.paint("bad", "failed")
     used = "-" if pb.size is None else str(pb.size)
     note = " (unchanged)" if pb.cached else ""
-    return (f"{out.paint('location', str(pb.path) + ':')} {status}: {summary(pb.diagnostics)}; "
+    return (f"{out.paint('location', str(pb.path) + ':')} {status}: {api.summary(pb.diagnostics)}; "
             f"{pb.kind.label} procedure {pb.name}, {used}/{pb.limit} bytes{note}")
 
 
@@ -74,15 +74,14 @@ def run(args: argparse.Namespace) -> int:
     out = term.Out(args.color)
 
     def body() -> int:
-        from plcbuilder.project import Project, ProjectError, build_project
         try:
-            project = Project.open(args.project)
-        except ProjectError as exc:
+            project = api.Project.open(args.project)
+        except api.ProjectError as exc:
             out.print(f"plcbuilder build: error: {exc}", err=True)
             return 1
         progress = _Progress(not args.quiet and _isatty(sys.stderr))
         try:
-            result = build_project(project, progress, strict=args.strict or None,
+            result = api.build_project(project, progress, strict=args.strict or None,
                                        use_cache=not args.no_cache)
         except OSError as exc:
             progress.clear()
@@ -108,11 +107,11 @@ def report(result, out: term.Out, quiet: bool = False) -> None:
     colorize = out.colorize()
     for pb in result.procedures:
         for d in pb.diagnostics:
-            out.print(render_text(d, pb.source_line, colorize))
+            out.print(api.render_text(d, pb.source_line, colorize))
         if not quiet:
             out.print(_procedure_line(pb, out))
     for d in result.diagnostics:
-        out.print(render_text(d, result.source_line, colorize))
+        out.print(api.render_text(d, result.source_line, colorize))
     hw = [p for p in result.procedures if p.kind.label == "hardware"]
     sw = [p for p in result.procedures if p.kind.label == "software"]
     if not quiet:
@@ -127,7 +126,7 @@ def report(result, out: term.Out, quiet: bool = False) -> None:
     elif not result.image_written:
         out.print(result.image_message)
     n = len(result.procedures)
-    counts = summary(result.all_diagnostics)
+    counts = api.summary(result.all_diagnostics)
     status = out.paint("ok", "Build All ok") if result.ok else out.paint("bad", "Build All failed")
     out.print(f"{status}: {n} procedure{'s' * (n != 1)}, {counts} "
               f"({result.compiled} compiled, {result.reused} unchanged)")

@@ -11,9 +11,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from plcbuilder import api
 from plcbuilder.cli import term
-from plcbuilder.diagnostics import summary
-from plcbuilder.cli.cmd_check import (add_compile_options, compile_options, guarded,
+from plcbuilder.cli.common import (add_compile_options, compile_options, guarded,
                                       print_diagnostics, safe_streams, size_text)
 
 
@@ -50,13 +50,12 @@ def run(args: argparse.Namespace) -> int:
     out = term.Out(args.color)
 
     def body() -> int:
-        from plcbuilder import api
         src: Path = args.file
         result = api.compile_file(src, compile_options(args, src, out))
         print_diagnostics(result, out, err=True)
         if not result.ok or result.program is None:
             out.print(f"{out.paint('location', str(src) + ':', err=True)} "
-                      f"{out.paint('bad', 'not compiled', err=True)}: {summary(result.diagnostics)}",
+                      f"{out.paint('bad', 'not compiled', err=True)}: {api.summary(result.diagnostics)}",
                       err=True)
             return 1
         dest = output_path(src, args.output, result.name)

@@ -92,7 +92,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="host round-trip latency of gvarget on plain registers (default 0)")
     p.add_argument("--runtime-file", type=Path, metavar="FILE",
                    help="where to write the address and token (default: the user's runtime "
-                        "folder; see README.md, 'The controller as a server')")
+                        "folder; see docs/protocol.md)")
     p.add_argument("--parent", type=int, metavar="PID",
                    help="stop (as on SIGTERM) when process PID has ended: the IDE passes its "
                         "own id for the controller it starts")

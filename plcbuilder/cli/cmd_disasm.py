@@ -18,9 +18,8 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from plcbuilder import api
-from plcbuilder.bytecode.program import MAGIC, LoadError
 from plcbuilder.cli import term
-from plcbuilder.cli.cmd_check import (add_compile_options, compile_options, guarded,
+from plcbuilder.cli.common import (add_compile_options, compile_options, guarded,
                                       print_diagnostics, safe_streams)
 
 MAX_SOURCE_FILE = 1 << 20
@@ -42,7 +41,7 @@ def is_binary(path: Path) -> bool:
         return True
     try:
         with open(path, "rb") as f:
-            return f.read(len(MAGIC)) == MAGIC
+            return f.read(len(api.MAGIC)) == api.MAGIC
     except OSError:
         return False
 
@@ -95,13 +94,11 @@ def run(args: argparse.Namespace) -> int:
     out = term.Out(args.color)
 
     def body() -> int:
-        from plcbuilder import api
-        from plcbuilder.bytecode import disasm
         path: Path = args.file
         if is_binary(path):
             try:
                 program = api.load_program(path)
-            except LoadError as exc:
+            except api.LoadError as exc:
                 out.print(f"{out.paint('location', str(path) + ':', err=True)} "
                           f"{out.paint('error', 'error:', err=True)} {exc}", err=True)
                 return 1
@@ -119,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
                 print_diagnostics(result, out, err=True)   # warnings only matter then too
                 return 1
             program, source_line = result.program, result.source_line
-        text = disasm.render_text(program, source_line=_highlighted(source_line, out))
+        text = api.disassemble(program, _highlighted(source_line, out))
         out.print(text.rstrip("\n"))
         return 0
 

@@ -13,7 +13,7 @@ import argparse
 from pathlib import Path
 
 from plcbuilder.cli import term
-from plcbuilder.cli.cmd_check import guarded, safe_streams
+from plcbuilder.cli.common import guarded, safe_streams
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -33,10 +33,10 @@ def run(args: argparse.Namespace) -> int:
     out = term.Out(args.color)
 
     def body() -> int:
-        from plcbuilder.project import ProjectError, create_project
+        from plcbuilder import api
         try:
-            project = create_project(args.dir, args.name)
-        except ProjectError as exc:
+            project = api.create_project(args.dir, args.name)
+        except api.ProjectError as exc:
             out.print(f"plcbuilder new: error: {exc}", err=True)
             return 1
         procs = project.procedures()

@@ -15,7 +15,7 @@ import json
 from pathlib import Path
 
 from plcbuilder.cli import term
-from plcbuilder.cli.cmd_check import guarded, include_dirs, print_diagnostics, safe_streams
+from plcbuilder.cli.common import guarded, print_diagnostics, safe_streams
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -28,7 +28,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         epilog="Scenario lines (--scenario FILE): 'start NAME[:EPARAM] @ MS', "
                "'input PIN=0|1 @ MS', 'adc CH=VALUE @ MS', 'stop @ MS', "
                "'event GCODE_START @ MS', 'bind PIN=NAME[:EPARAM] @ MS'; '#' starts a "
-               "comment. See README.md, 'The simulated controller'.")
+               "comment. See docs/controller.md, 'Scenario files'.")
     p.add_argument("target", type=Path, metavar="TARGET",
                    help="a .plc file (a hardware procedure) or a project folder")
     p.add_argument("--ms", type=_nonneg, default=None, metavar="N",
@@ -84,17 +84,16 @@ def run(args: argparse.Namespace) -> int:
     out = term.Out(args.color)
 
     def body() -> int:
-        from plcbuilder.simulate import RunOptions, UsageError, run as simulate
+        from plcbuilder import api
         target: Path = args.target
-        incs = include_dirs(target, args.include) if not target.is_dir() else tuple(args.include)
-        opts = RunOptions(ms=args.ms, eparam=args.eparam, starts=args.start, inputs=args.input,
+        opts = api.RunOptions(ms=args.ms, eparam=args.eparam, starts=args.start, inputs=args.input,
                           adcs=args.adc, scenario=args.scenario, machine=args.machine,
-                          software=args.software, strict=args.strict, include_dirs=incs,
+                          software=args.software, strict=args.strict, include_dirs=tuple(args.include),
                           trace=args.trace, backend=args.backend,
                           gvarget_latency_ms=args.gvarget_latency)
         try:
-            result = simulate(target, opts)
-        except UsageError as exc:
+            result = api.run(target, opts)
+        except api.UsageError as exc:
             out.print(f"plcbuilder run: error: {exc}", err=True)
             return 2
         for r in result.compiled:

@@ -74,7 +74,7 @@ def paint(kind: str, text: str) -> str:
 @functools.lru_cache(maxsize=1)
 def _highlighter():
     from pygments.formatters import TerminalFormatter
-    from plcbuilder.lang.lexer import PlcLexer
+    from plcbuilder.api import PlcLexer
     return PlcLexer(ensurenl=False), TerminalFormatter()
 
 

@@ -21,7 +21,7 @@ from PySide6.QtGui import QColor, QFont, QFontDatabase, QTextCharFormat, QTextCu
 from PySide6.QtWidgets import (QHBoxLayout, QLabel, QPlainTextEdit, QProgressBar, QToolButton,
                                QVBoxLayout, QWidget)
 
-from plcbuilder.diagnostics import Severity, render_text
+from plcbuilder.api import Severity, render_text
 from plcbuilder.ide.icons import icon
 
 _LOCATION_RE = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): (error|warning|note)")

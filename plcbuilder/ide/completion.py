@@ -13,12 +13,12 @@ import re
 from pathlib import Path
 from typing import Iterable, Optional
 
-from plcbuilder.bytecode import abi
-from plcbuilder.bytecode.program import Kind
+from plcbuilder.api import abi
+from plcbuilder.api import Kind
 from plcbuilder.ide.editor import (KIND_CONSTANT, KIND_DEFINE, KIND_FUNCTION, KIND_KEYWORD,
                                    KIND_PREDEFINED, KIND_PROCEDURE, KIND_VARIABLE)
 from plcbuilder.lang.checker import BUILTINS
-from plcbuilder.lang.lexer import KEYWORDS
+from plcbuilder.lang.highlight import KEYWORDS
 from plcbuilder.lang.preprocess import builtin_header
 
 _DEFINE_RE = re.compile(r"^[ \t]*#[ \t]*define[ \t]+([A-Za-z_][A-Za-z0-9_]*)[ \t]*([^\n]*)$",

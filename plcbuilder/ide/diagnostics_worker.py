@@ -20,7 +20,7 @@ from typing import Callable, Optional
 from PySide6.QtCore import QObject, QTimer, Signal
 
 from plcbuilder import api
-from plcbuilder.diagnostics import Span, error
+from plcbuilder.api import Span, error
 from plcbuilder.lang.compiler import procedure_name
 from plcbuilder.lang.source import SourceSet
 

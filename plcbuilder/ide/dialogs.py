@@ -19,7 +19,7 @@ from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDialogButtonBox, 
                                QListWidget, QListWidgetItem, QPushButton, QRadioButton,
                                QSpinBox, QTabWidget, QToolButton, QVBoxLayout, QWidget)
 
-from plcbuilder.bytecode.program import Kind
+from plcbuilder.api import Kind
 from plcbuilder.ide.icons import icon
 from plcbuilder.ide.settings import Preferences
 

@@ -25,7 +25,7 @@ from PySide6.QtWidgets import QFrame, QMenu, QWidget
 
 from pyside6_scintilla import Scintilla, ScintillaEdit
 
-from plcbuilder.diagnostics import Diagnostic, Severity
+from plcbuilder.api import Diagnostic, Severity
 from plcbuilder.ide import highlighter as hl
 from plcbuilder.ide.offsets import byte_to_char, char_to_byte, utf8_len
 

@@ -1,5 +1,5 @@
 """Syntax highlighting and folding for the editor, driven by the project's
-pygments lexer (:class:`plcbuilder.lang.lexer.PlcLexer`).
+pygments lexer (:class:`plcbuilder.lang.highlight.PlcLexer`).
 
 Scintilla runs as a *container lexer*: it asks for styling (``styleNeeded``)
 up to the end of what it is about to paint, and everything before its
@@ -27,7 +27,7 @@ from pygments.token import (Comment, Error, Keyword, Name, Number, Operator, Pun
                             String)
 
 from plcbuilder.ide.offsets import utf8_len
-from plcbuilder.lang.lexer import PlcLexer
+from plcbuilder.lang.highlight import PlcLexer
 
 # ------------------------------------------------------------------ styles
 S_DEFAULT = 0
@@ -98,15 +98,12 @@ def lexer_for(path: str):
     suffix = path.rsplit(".", 1)[-1].lower() if "." in path else ""
     if suffix in ("plc", "h"):
         return None
-    try:
-        if suffix == "toml":
-            from pygments.lexers import TOMLLexer
-            return TOMLLexer(stripnl=False)
-        if suffix == "xml":
-            from pygments.lexers import XmlLexer
-            return XmlLexer(stripnl=False)
-    except ImportError:
-        pass
+    if suffix == "toml":
+        from pygments.lexers import TOMLLexer
+        return TOMLLexer(stripnl=False)
+    if suffix == "xml":
+        from pygments.lexers import XmlLexer
+        return XmlLexer(stripnl=False)
     return False
 
 

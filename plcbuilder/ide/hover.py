@@ -18,10 +18,10 @@ import re
 from pathlib import Path
 from typing import Optional
 
-from plcbuilder.bytecode import abi
-from plcbuilder.bytecode.program import Kind
+from plcbuilder.api import abi
+from plcbuilder.api import Kind
 from plcbuilder.lang.checker import BUILTINS
-from plcbuilder.lang.lexer import KEYWORDS
+from plcbuilder.lang.highlight import KEYWORDS
 from plcbuilder.lang.preprocess import parse_number
 
 PREDEFINED_HELP = {

@@ -6,7 +6,7 @@ from __future__ import annotations
 from functools import lru_cache
 from importlib import resources
 
-from PySide6.QtCore import QByteArray, QRectF, QSize, Qt
+from PySide6.QtCore import QByteArray, QRectF, Qt
 from PySide6.QtGui import QIcon, QImage, QPainter, QPixmap
 
 ICON_DIR = ("resources", "icons")
@@ -56,11 +56,7 @@ def pixmap(name: str, size: int = 16) -> QPixmap:
 
 
 def _render(data: bytes, size: int) -> QPixmap:
-    try:
-        from PySide6.QtSvg import QSvgRenderer
-    except ImportError:        # no QtSvg: let the image plugin read the SVG
-        img = QImage.fromData(QByteArray(data), "SVG")
-        return QPixmap.fromImage(img.scaled(QSize(size, size)))
+    from PySide6.QtSvg import QSvgRenderer
     renderer = QSvgRenderer(QByteArray(data))
     img = QImage(size, size, QImage.Format.Format_ARGB32_Premultiplied)
     img.fill(Qt.GlobalColor.transparent)

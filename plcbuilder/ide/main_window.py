@@ -28,8 +28,8 @@ from PySide6.QtWidgets import (QApplication, QComboBox, QDockWidget, QFileDialog
 
 from plcbuilder import api
 from plcbuilder.link.client import ControllerStatus
-from plcbuilder.bytecode.program import Kind
-from plcbuilder.diagnostics import Severity
+from plcbuilder.api import Kind
+from plcbuilder.api import Severity
 from plcbuilder.ide import completion, dialogs, hover
 from plcbuilder.ide.build_panel import BuildPanel, BuildRunner
 from plcbuilder.ide.diagnostics_worker import DiagnosticsWorker
@@ -354,7 +354,7 @@ class MainWindow(QMainWindow):
     def _reload_project_settings(self) -> None:
         """plcbuilder.toml was saved: use its limits, strict mode and machine now;
         a mistake in it becomes a problem on its line."""
-        from plcbuilder.diagnostics import Span, error
+        from plcbuilder.api import Span, error
         try:
             project = Project.open(self.project.root)
         except ProjectError as exc:
@@ -871,37 +871,28 @@ class MainWindow(QMainWindow):
         self._set_connection_text("no controller", False)
 
     def _setup_run_side(self) -> None:
-        """The controller connection and the run docks (from part B), when
-        they are there."""
+        """The controller connection and the run docks."""
         if self.connection is None and self.start_controller:
-            try:
-                from plcbuilder.ide.connection import ControllerConnection
-            except ImportError:
-                ControllerConnection = None
-            if ControllerConnection is not None:
-                self.connection = ControllerConnection(self)
+            from plcbuilder.ide.connection import ControllerConnection
+            self.connection = ControllerConnection(self)
         if self.connection is not None:
             c = self.connection
             c.sig_connected.connect(self._on_connected)
             c.sig_disconnected.connect(self._on_disconnected)
             c.sig_state.connect(self._on_state)
             c.sig_error.connect(lambda t: self.statusBar().showMessage(t, 6000))
+            from plcbuilder.ide.panels import RunPanels
             try:
-                from plcbuilder.ide.panels import RunPanels
-            except ImportError:
-                RunPanels = None
-            if RunPanels is not None:
-                try:
-                    self.run_panels = RunPanels(self, c)
-                except Exception as exc:  # noqa: BLE001 - the editor side works without them
-                    import traceback
-                    traceback.print_exc()
-                    self.run_panels = None
-                    self.statusBar().showMessage(f"The run panels are not available: {exc}")
-                if self.run_panels is not None:
-                    self.run_panels.sig_open_location.connect(
-                        lambda f, ln: self.open_location(f, ln))
-                    self._place_run_docks(self.run_panels.docks())
+                self.run_panels = RunPanels(self, c)
+            except Exception as exc:  # noqa: BLE001 - the editor side works without them
+                import traceback
+                traceback.print_exc()
+                self.run_panels = None
+                self.statusBar().showMessage(f"The run panels are not available: {exc}")
+            if self.run_panels is not None:
+                self.run_panels.sig_open_location.connect(
+                    lambda f, ln: self.open_location(f, ln))
+                self._place_run_docks(self.run_panels.docks())
         self._fill_view_menu()
 
     def _place_run_docks(self, docks: list) -> None:
@@ -1049,7 +1040,7 @@ class MainWindow(QMainWindow):
         ed.force_dirty = False
         ed.kind = None
         if path.endswith(".plc"):
-            ed.kind = api.kind_for_path(path)
+            ed.kind = api.kind_of(path)
         lexer = lexer_for(path)
         if lexer is not None:
             ed.highlighter.lexer = lexer if lexer is not False else _PlainLexer()
@@ -1300,13 +1291,9 @@ class MainWindow(QMainWindow):
 
     # =========================================================== diagnostics
     def _options_for(self, path: str) -> api.CompileOptions:
-        kind = api.kind_for_path(path)
         if self.project is None:
-            return api.CompileOptions(kind=kind)
-        p = self.project
-        return api.CompileOptions(kind=kind, strict=p.settings.strict,
-                                  include_dirs=p.include_dirs(),
-                                  code_limit=p.limits.proc_limit(kind))
+            return api.CompileOptions(kind=api.kind_of(path))
+        return self.project.compile_options(path)
 
     def _schedule_compile(self, ed: CodeEditor, immediate: bool = False) -> None:
         if ed.kind is None or ed.builtin:
@@ -1597,7 +1584,7 @@ class MainWindow(QMainWindow):
             self.disk.unwatch(old)
             self.worker.cancel(file_key(old))
             ed.path = new
-            ed.kind = api.kind_for_path(new) if new.endswith(".plc") else None
+            ed.kind = api.kind_of(new) if new.endswith(".plc") else None
             self.tabs.setTabToolTip(self.tabs.indexOf(ed), new)
             self.disk.watch(new, file_digest(new))
             self._update_tab(ed)

@@ -18,7 +18,7 @@ from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import (QHBoxLayout, QHeaderView, QLabel, QLineEdit, QToolButton,
                                QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget)
 
-from plcbuilder.diagnostics import Diagnostic, Severity
+from plcbuilder.api import Diagnostic, Severity
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.icons import icon
 

@@ -25,7 +25,7 @@ from PySide6.QtGui import QAction, QBrush, QColor
 from PySide6.QtWidgets import (QAbstractItemView, QLabel, QMenu, QStyle, QStyledItemDelegate, QMessageBox, QTreeWidget,
                                QTreeWidgetItem, QVBoxLayout, QWidget)
 
-from plcbuilder.bytecode.program import Kind
+from plcbuilder.api import Kind
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.icons import icon

@@ -1,10 +1,12 @@
 """Build All: compile every procedure of a project, write build/ and the image.
 
+    compile_all(project) -> [ProcedureBuild]     compile, write nothing (also ``run``'s)
     build_project(project, progress) -> BuildResult
 
 1. Every ``hardware/*.plc`` and ``software/*.plc`` is compiled (going on past
-   errors), with the project's include folder and size limits; each
-   procedure's diagnostics and size against its limit are in the result.
+   errors) as :meth:`Project.compile_options` says: the project's include folder
+   and size limits; each procedure's diagnostics and size against its limit are
+   in the result (:func:`compile_all`).
 2. Each procedure that compiles is written to ``build/NAME.bin``; the binary of
    a procedure that no longer compiles (or no longer exists) is removed, so
    ``build/`` never holds a stale binary.
@@ -37,8 +39,8 @@ from pathlib import Path
 from typing import Callable, Optional
 
 import plcbuilder
-from plcbuilder.bytecode.program import Kind
-from plcbuilder.diagnostics import Diagnostic, Related, Severity, Span, error
+from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.lang import Diagnostic, Related, Severity, Span, error
 from plcbuilder.image.manifest import ImageError, Limits, valid_name, write_image
 from plcbuilder.lang import compiler as _compiler
 from plcbuilder.lang.compiler import CompileOptions, compile_file
@@ -86,6 +88,10 @@ class ProcedureBuild:
     @property
     def bin_name(self) -> str:
         return self.name + BIN_SUFFIX
+
+    def program(self) -> Optional[Program]:
+        """The compiled procedure, as the controller loads it (None if it did not compile)."""
+        return Program.from_bytes(self.binary) if self.ok else None
 
     def source_line(self, file: str, line: int) -> Optional[str]:
         """A source line for diagnostics.render_text."""
@@ -143,42 +149,52 @@ class BuildResult:
 
 # -------------------------------------------------------------- build all
 
+def compile_all(project: Project, progress: Optional[Progress] = None, *,
+                strict: Optional[bool] = None,
+                extra_includes: tuple = (), reuse: Optional[tuple[Path, dict, dict]] = None
+                ) -> list[ProcedureBuild]:
+    """Compile every procedure of the project, going on past errors; writes
+    nothing. A name that cannot be a procedure's, or that two files share, is an
+    error of that procedure. ``reuse`` is Build All's incremental build: (the
+    build folder, the cache read from it, the cache to fill); a procedure whose
+    key is unchanged and whose binary is still there is taken from it."""
+    procs = project.procedures()
+    total = len(procs)
+    out: list[ProcedureBuild] = []
+    by_name: dict[str, Procedure] = {}
+    if progress:
+        progress(0, total, "")
+    for i, proc in enumerate(procs):
+        options = project.compile_options(proc.path, strict=strict, extra_includes=extra_includes)
+        problem = _name_problem(proc, by_name)
+        by_name.setdefault(proc.name, proc)
+        if problem is not None:
+            pb = ProcedureBuild(proc, [problem], None, options.limit)
+        else:
+            pb = _build_one(proc, options, reuse)
+        out.append(pb)
+        if progress:
+            progress(i + 1, total, proc.name)
+    return out
+
+
 def build_project(project: Project, progress: Optional[Progress] = None, *,
                   strict: Optional[bool] = None, use_cache: bool = True) -> BuildResult:
-    """Build All (see the module docstring). Never raises for problems in the
-    sources; an unwritable build folder raises OSError."""
-    strict = project.settings.strict if strict is None else strict
+    """Build All (see the module docstring); ``strict`` None: as the project's
+    settings say. Never raises for problems in the sources; an unwritable build
+    folder raises OSError."""
     limits = project.limits
-    procs = project.procedures()
     build_dir = project.build_dir
     build_dir.mkdir(parents=True, exist_ok=True)
     previous = _load_cache(build_dir, any_compiler=True)   # to find stale binaries
     old_cache = _load_cache(build_dir) if use_cache else {}
     new_cache: dict[str, dict] = {}
     result = BuildResult(project, [], [], limits, 0, project.image_path)
-    include_dirs = project.include_dirs()
-    by_name: dict[str, Procedure] = {}
-    total = len(procs)
-    if progress:
-        progress(0, total, "")
-
-    for i, proc in enumerate(procs):
-        limit = limits.proc_limit(proc.kind)
-        problem = _name_problem(proc, by_name)
-        by_name.setdefault(proc.name, proc)
-        if problem is not None:
-            pb = ProcedureBuild(proc, [problem], None, limit)
-        else:
-            options = CompileOptions(kind=proc.kind, strict=strict, include_dirs=include_dirs,
-                                     code_limit=limit)
-            pb = _build_one(proc, options, build_dir, old_cache, new_cache)
-            if pb.cached:
-                result.reused += 1
-            else:
-                result.compiled += 1
-        result.procedures.append(pb)
-        if progress:
-            progress(i + 1, total, proc.name)
+    result.procedures = compile_all(project, progress, strict=strict,
+                                    reuse=(build_dir, old_cache, new_cache))
+    result.reused = sum(1 for p in result.procedures if p.cached)
+    result.compiled = sum(1 for p in result.procedures
+                          if not p.cached and not _is_name_problem(p))
 
     # binaries: write what compiled, remove what no longer does
     good = {p.bin_name: p.binary for p in result.procedures if p.ok}
@@ -240,10 +256,15 @@ def _name_problem(proc: Procedure, seen: dict[str, Procedure]) -> Optional[Diagn
     return None
 
 
-def _build_one(proc: Procedure, options: CompileOptions, build_dir: Path,
-               old_cache: dict, new_cache: dict) -> ProcedureBuild:
+def _is_name_problem(pb: ProcedureBuild) -> bool:
+    return any(d.code in ("procedure-name", "duplicate-procedure") for d in pb.diagnostics)
+
+
+def _build_one(proc: Procedure, options: CompileOptions,
+               reuse: Optional[tuple[Path, dict, dict]]) -> ProcedureBuild:
+    build_dir, old_cache, new_cache = reuse if reuse is not None else (None, {}, None)
     cache_id = f"{proc.kind.label}/{proc.name}"
-    key = _cache_key(proc, options)
+    key = _cache_key(proc, options) if reuse is not None else None
     entry = old_cache.get(cache_id)
     if key is not None and entry and entry.get("key") == key:
         reused = _from_cache(proc, options, entry, build_dir)

@@ -41,6 +41,7 @@ from typing import Optional, Union
 from plcbuilder._support.files import atomic_write
 from plcbuilder._support.toml_errors import TomlLocator, decode_error
 from plcbuilder.bytecode.program import Kind
+from plcbuilder.lang.compiler import CompileOptions
 from plcbuilder.image.manifest import MAX_LIMIT, Limits
 
 SETTINGS_FILE = "plcbuilder.toml"
@@ -187,6 +188,14 @@ def _type_word(t: type) -> str:
 
 # ----------------------------------------------------------------- project
 
+def kind_of(path: Union[str, Path], software: bool = False) -> Kind:
+    """A procedure's kind: software when asked for, or when its file sits in a
+    folder named ``software``; hardware otherwise."""
+    if software or Path(path).parent.name == SOFTWARE_DIR:
+        return Kind.SOFTWARE
+    return Kind.HARDWARE
+
+
 @dataclass(frozen=True)
 class Procedure:
     name: str          # the file stem: what the M-code / the name starts
@@ -234,6 +243,34 @@ class Project:
             line = raw[:exc.start].count(b"\n") + 1
             raise ProjectError("not UTF-8 text", sp, line) from None
         return cls(p, parse_settings(text, sp, default_name))
+
+    @classmethod
+    def find_for(cls, path: Union[str, Path]) -> Optional["Project"]:
+        """The project a source file belongs to: the file sits in the ``hardware/``
+        or ``software/`` folder of a folder with a settings file or an ``include/``
+        folder. None when it is not in a project; raises ProjectError when the
+        project's settings cannot be read."""
+        path = Path(path)
+        if path.parent.name not in (HARDWARE_DIR, SOFTWARE_DIR):
+            return None
+        root = path.parent.parent
+        if not (root / SETTINGS_FILE).is_file() and not (root / INCLUDE_DIR).is_dir():
+            return None
+        return cls.open(root)
+
+    def compile_options(self, path: Union[str, Path], *, software: bool = False,
+                        strict: Optional[bool] = None,
+                        extra_includes: tuple = ()) -> CompileOptions:
+        """How Build All compiles the file at ``path``: its kind by its folder (or
+        software when asked), the include folders (``extra_includes`` first, then the
+        project's), the project's size limit for that kind, and strict as the
+        project's settings say unless ``strict`` says otherwise."""
+        kind = kind_of(path, software)
+        dirs = list(extra_includes)
+        dirs += [d for d in self.include_dirs() if d not in dirs]
+        strict = self.settings.strict if strict is None else strict
+        return CompileOptions(kind=kind, strict=strict,
+                              include_dirs=tuple(dirs), code_limit=self.limits.proc_limit(kind))
 
     # -------------------------------------------------------------- paths
     @property

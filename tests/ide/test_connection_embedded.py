@@ -12,7 +12,7 @@ pytest.importorskip("PySide6")
 
 from plcbuilder.controller import events as ev  # noqa: E402
 from plcbuilder.ide.connection import ControllerConnection, parse_speed  # noqa: E402
-from plcbuilder.ide.panels.bench import build_image  # noqa: E402
+from plcbuilder.api import image_of as build_image  # noqa: E402
 
 WAIT = 15_000      # ms: generous bounds for a loaded CI machine; passing runs take far less
 

@@ -14,7 +14,8 @@ from PySide6 import QtCore, QtWidgets  # noqa: E402
 
 from plcbuilder.ide.connection import ControllerConnection  # noqa: E402
 from plcbuilder.ide.panels import RunPanels  # noqa: E402
-from plcbuilder.ide.panels.bench import DEMO_SOURCE, build_image  # noqa: E402
+from plcbuilder.api import image_of as build_image  # noqa: E402
+from tests.ide._demo import DEMO_SOURCE  # noqa: E402
 from plcbuilder.ide.panels.log import CATEGORY, LINE, TEXT  # noqa: E402
 
 Qt = QtCore.Qt

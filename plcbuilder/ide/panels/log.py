@@ -7,8 +7,8 @@ from typing import Iterable, Optional
 
 from PySide6 import QtCore, QtWidgets
 
-from plcbuilder.bytecode import abi
-from plcbuilder.controller import events as ev
+from plcbuilder.api import abi
+from plcbuilder.api import events as ev
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import decode_message
 from plcbuilder.ide.panels.tables import RowsModel

@@ -12,8 +12,8 @@ from typing import Iterable, Optional
 
 import numpy as np
 
-from plcbuilder.bytecode import abi
-from plcbuilder.controller import events as ev
+from plcbuilder.api import abi
+from plcbuilder.api import events as ev
 from plcbuilder.ide.ringbuffer import RingBuffer
 
 __all__ = ["RunModel", "MessageRow", "decode_message", "ANALOG_NAMES", "AXES", "WORDS", "PINS"]

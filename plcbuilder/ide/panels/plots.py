@@ -16,7 +16,7 @@ import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets  # before pyqtgraph (it takes the loaded binding)
 import pyqtgraph as pg  # noqa: E402,I001
 
-from plcbuilder.bytecode import abi
+from plcbuilder.api import abi
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import ANALOG_NAMES, AXES, PINS, RunModel
 from plcbuilder.ide.panels.tables import RowsModel

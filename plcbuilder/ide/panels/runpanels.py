@@ -13,9 +13,9 @@ from typing import Mapping, Optional
 
 from PySide6 import QtCore, QtWidgets
 
-from plcbuilder.bytecode import abi
+from plcbuilder.api import abi
 from plcbuilder.link.client import ControllerStatus
-from plcbuilder.controller import events as ev
+from plcbuilder.api import events as ev
 from plcbuilder.ide.panels.inputs import InputsPanel
 from plcbuilder.ide.panels.log import LogPanel
 from plcbuilder.ide.panels.model import RunModel

@@ -12,7 +12,7 @@ from typing import Optional
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from plcbuilder.bytecode import abi
+from plcbuilder.api import abi
 
 Qt = QtCore.Qt
 

@@ -1,4 +1,4 @@
-"""``plcbuilder.simulate``: the composition behind ``plcbuilder run`` (SPEC §5)."""
+"""``api.run``: the composition behind ``plcbuilder run`` (docs/controller.md)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from plcbuilder.project.new import create_project
-from plcbuilder.simulate import RunOptions, UsageError, run
+from plcbuilder.api import RunOptions, UsageError, run
 
 DELAY = "main(){ timer=10; do{timer--;}while(timer>0); exit(99); };\n"
 

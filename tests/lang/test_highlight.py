@@ -14,7 +14,7 @@ from pygments.token import Comment, Error, Keyword, Name, Number, Operator, Punc
 from pygments.util import ClassNotFound
 
 from plcbuilder.bytecode import abi
-from plcbuilder.lang.lexer import PlcLexer
+from plcbuilder.lang.highlight import PlcLexer
 
 SEED_M03 = """#include pins.h
   #define SPEED 0x10 // speed

@@ -1,0 +1,210 @@
+"""A run of the simulated controller from start to end, headless: what
+``plcbuilder run`` and the scenario tests drive once the procedures are compiled.
+
+    run_session(controller, scenario, limit_ms, trace=PATH) -> report dict
+
+The controller (already loaded) runs the scenario until ``limit_ms``, or until
+no procedure runs and none is due to start; the events become the report of
+docs/controller.md ("The JSON object"), and, with a trace, one CSV row per tick
+is streamed to the file while it runs. A run that cannot go as asked (a scenario
+that names a procedure that is not loaded, a trace that cannot be written)
+raises :class:`UsageError`. Nothing here prints.
+"""
+
+from __future__ import annotations
+
+import gzip
+import io
+from pathlib import Path
+from typing import Optional, Sequence
+
+from plcbuilder.bytecode import abi
+from plcbuilder.controller.controller import Controller, ControllerError
+from plcbuilder.controller.events import Ended, Fault, Message, Note, Print, Started
+from plcbuilder.controller.scenario import (Scenario, ScenarioError, drive, parse_adc,
+                                            parse_input, parse_start)
+
+__all__ = ["CHUNK_MS", "ReportCollector", "TraceWriter", "UsageError", "build_scenario",
+           "check_scenario", "run_session"]
+
+CHUNK_MS = 1000
+
+
+class UsageError(Exception):
+    """The run cannot go as asked; the message says why (exit status 2)."""
+
+
+class TraceWriter:
+    """One CSV row per tick: ``t_ms, proc, message, running``, the input and
+    output words the machine has (``in0``…, ``out0``…; pin n is bit n%32 of
+    word n//32), ``pwm0..7``, ``dac0..7`` and the machine position of each
+    configured axis in 0.01 mm. A path ending in ``.gz`` is gzip-compressed."""
+
+    def __init__(self, path: Path, machine):
+        self.path = Path(path)
+        self.n_in = max(1, (getattr(machine, "input_count", 256) + 31) // 32)
+        self.n_out = max(1, (getattr(machine, "output_count", 256) + 31) // 32)
+        axes = list(machine.axis_positions())
+        self.axis_idx = [abi.AXES.index(a) for a in axes]
+        try:
+            if self.path.suffix == ".gz":
+                raw = gzip.open(self.path, "wb", compresslevel=3)
+                self.f = io.TextIOWrapper(raw, encoding="ascii", newline="")
+            else:
+                self.f = open(self.path, "w", encoding="ascii", newline="",
+                              buffering=1 << 20)
+        except OSError as exc:
+            raise UsageError(f"{self.path}: cannot write the trace: {exc.strerror or exc}") \
+                from None
+        head = (["t_ms", "proc", "message", "running"]
+                + [f"in{i}" for i in range(self.n_in)] + [f"out{i}" for i in range(self.n_out)]
+                + [f"pwm{i}" for i in range(8)] + [f"dac{i}" for i in range(8)] + axes)
+        self.f.write(",".join(head) + "\n")
+        self._key = None
+        self._tail = ""
+        self.rows = 0
+
+    def write(self, rows) -> None:
+        """Write sample rows ``(t_ms, running, proc, message, fields)`` as given
+        by Controller.drain_sample_rows()."""
+        n_in, n_out, idx = self.n_in, self.n_out, self.axis_idx
+        key, tail = self._key, self._tail
+        out = []
+        for t, running, proc, msg, f in rows:
+            if f is not key:                # the machine's dict is shared while unchanged
+                key = f
+                ax = f["axes"]
+                tail = ",".join(map(str, (*f["inputs"][:n_in], *f["outputs"][:n_out], *f["pwm"],
+                                          *f["dac"], *(ax[i] for i in idx))))
+            out.append(f"{t},{proc},{msg},{running or ''},{tail}\n")
+        self._key, self._tail = key, tail
+        self.rows += len(out)
+        self.f.write("".join(out))
+
+    def close(self) -> None:
+        self.f.close()
+
+
+# --------------------------------------------------------------------- run
+
+def build_scenario(scenario: Optional[Path] = None, starts: Sequence[str] = (),
+                   inputs: Sequence[str] = (), adcs: Sequence[str] = ()) -> Scenario:
+    """A scenario file's actions, then ``--start``/``--input``/``--adc`` options."""
+    sc = Scenario()
+    try:
+        if scenario is not None:
+            sc.extend(Scenario.load(scenario).actions)
+        sc.extend(parse_start(s) for s in starts)
+        sc.extend(parse_input(s) for s in inputs)
+        sc.extend(parse_adc(s) for s in adcs)
+    except ScenarioError as exc:
+        raise UsageError(str(exc)) from None
+    return sc
+
+
+def check_scenario(sc: Scenario, controller) -> None:
+    """Refuse a scenario that names a procedure that is not loaded, or a pin or
+    channel the machine does not have."""
+    machine = controller.machine
+    programs = controller.programs
+    n_in = getattr(machine, "input_count", 256)
+    for a in sc.actions:
+        if a.kind in ("start", "bind") and a.name not in programs:
+            loaded = ", ".join(sorted(programs)) or "none"
+            raise UsageError(f"--start {a.name}: no procedure named {a.name} (loaded: {loaded})")
+        if a.kind in ("input", "bind") and not 0 <= a.a < n_in:
+            raise UsageError(f"--input {a.a}: no such input (the machine has inputs "
+                             f"0..{n_in - 1})")
+        if a.kind == "adc" and not 0 <= a.a < 8:
+            raise UsageError(f"--adc {a.a}: no such ADC channel (0..7)")
+
+
+def run_session(c: Controller, sc: Scenario, limit_ms: int, *, trace: Optional[Path] = None,
+                target="", chunk_ms: int = CHUNK_MS) -> dict:
+    """Run the loaded controller through the scenario (see the module docstring)."""
+    check_scenario(sc, c)
+    collector = ReportCollector(c)
+    writer = TraceWriter(trace, c.machine) if trace is not None else None
+
+    def drain() -> None:
+        collector.take(c.drain_events())
+        if writer is not None:
+            writer.write(c.drain_sample_rows())
+
+    try:
+        ended = drive(c, sc, limit_ms, until_idle=True, chunk_ms=chunk_ms, on_chunk=drain)
+        drain()
+    except ControllerError as exc:
+        raise UsageError(str(exc)) from None
+    finally:
+        if writer is not None:
+            writer.close()
+    return collector.report(ended, target)
+
+
+class ReportCollector:
+    """Turns the controller's events into the lists of the report."""
+
+    def __init__(self, controller):
+        self.c = controller
+        self.procedures: list[dict] = []
+        self.open: dict[str, dict] = {}
+        self.messages: list[dict] = []
+        self.prints: list[dict] = []
+        self.faults: list[dict] = []
+        self.notes: list[dict] = []
+
+    def take(self, events) -> None:
+        for e in events:
+            if isinstance(e, Print):
+                self.prints.append({"t_ms": e.t_ms, "register": e.register, "value": e.value,
+                                    "from": e.source})
+            elif isinstance(e, Message):
+                self.messages.append({"t_ms": e.t_ms, "message": e.message, "name": e.name,
+                                      "command": e.command, "parameter": e.parameter,
+                                      "from": e.source})
+            elif isinstance(e, Started):
+                entry = {"name": e.name, "kind": e.kind, "started_at_ms": e.t_ms,
+                         "ended_at_ms": None, "exit_code": None, "exit_name": None,
+                         "vexit": None, "eparam": e.eparam}
+                self.procedures.append(entry)
+                self.open[e.name] = entry
+            elif isinstance(e, Ended):
+                entry = self.open.pop(e.name, None)
+                if entry is not None:
+                    entry.update(ended_at_ms=e.t_ms, exit_code=e.exit_code,
+                                 exit_name=e.exit_name, vexit=e.vexit)
+            elif isinstance(e, Fault):
+                self.faults.append({"t_ms": e.t_ms, "from": e.source, "file": e.file,
+                                    "line": e.line, "text": e.text,
+                                    "calls": [{"file": f, "line": ln, "procedure": pr}
+                                              for f, ln, pr in e.calls]})
+            elif isinstance(e, Note):
+                self.notes.append({"t_ms": e.t_ms, "level": e.level, "text": e.text})
+
+    def report(self, ended: int, target) -> dict:
+        c = self.c
+        m = c.machine
+        fields = m.sample_fields()
+        variables = c.variables()
+        for name, entry in self.open.items():          # still running: its vexit so far
+            entry["vexit"] = variables.get(name, {}).get("vexit")
+        st = c.state()
+        return {
+            "target": str(target),
+            "ended_at_ms": ended,
+            "procedures": self.procedures,
+            "vars": variables,
+            "outputs": m.outputs_on(),
+            "pwm": list(fields["pwm"]),
+            "dac": list(fields["dac"]),
+            "messages": self.messages,
+            "prints": self.prints,
+            "faults": self.faults,
+            "notes": self.notes,
+            "axes": m.axis_positions(),
+            "proc": st.proc,
+            "proc_name": st.proc_name,
+            "running": st.running,
+            "software": list(st.software),
+        }
