@@ -244,9 +244,9 @@ def test_default_machine_loads_from_a_zip_import(tmp_path, monkeypatch):
 
 
 def test_docs_examples_parse():
-    """The machine file and plc-variables.xml examples in the README are valid."""
+    """The machine file and plc-variables.xml examples in docs/machine.md are valid."""
     from pathlib import Path
-    doc = Path(__file__).resolve().parents[2] / "README.md"
+    doc = Path(__file__).resolve().parents[2] / "docs" / "machine.md"
     text = doc.read_text(encoding="utf-8")
     toml_blocks = [b for b in re.findall(r"```toml\n(.*?)```", text, re.S) if "[axes." in b]
     xml_blocks = [b for b in re.findall(r"```xml\n(.*?)```", text, re.S) if "<plc-variables" in b]
