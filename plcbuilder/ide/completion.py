@@ -17,7 +17,7 @@ from plcbuilder.api import abi
 from plcbuilder.api import Kind
 from plcbuilder.ide.editor import (KIND_CONSTANT, KIND_DEFINE, KIND_FUNCTION, KIND_KEYWORD,
                                    KIND_PREDEFINED, KIND_PROCEDURE, KIND_VARIABLE)
-from plcbuilder.lang.checker import BUILTINS
+from plcbuilder.lang.builtins import FUNCTIONS as BUILTINS
 from plcbuilder.lang.highlight import KEYWORDS
 from plcbuilder.lang.preprocess import builtin_header
 

@@ -20,9 +20,9 @@ from typing import Optional
 
 from plcbuilder.api import abi
 from plcbuilder.api import Kind
-from plcbuilder.lang.checker import BUILTINS
+from plcbuilder.lang.builtins import FUNCTIONS as BUILTINS
 from plcbuilder.lang.highlight import KEYWORDS
-from plcbuilder.lang.preprocess import parse_number
+from plcbuilder.lang.tokens import parse_number
 
 PREDEFINED_HELP = {
     "eparam": "the parameter the procedure was started with (M-code P/eparam)",

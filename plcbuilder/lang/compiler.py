@@ -25,7 +25,8 @@ from plcbuilder.bytecode.program import Kind, LineEntry, Program
 from plcbuilder.bytecode.semantics import BINARY_SYMBOL, UNARY_SYMBOL
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
-from plcbuilder.lang.checker import BUILTINS, Checker, Resolved, Symbols, const_value
+from plcbuilder.lang.builtins import FUNCTIONS
+from plcbuilder.lang.checker import Checker, Resolved, Symbols, const_value
 from plcbuilder.lang.parser import parse_tokens
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocessor
 from plcbuilder.lang.source import SourceSet, decode_source, read_source
@@ -313,7 +314,7 @@ class Generator:
                 self.emit(Op.INC if s.op == "++" else Op.DEC, self.res.slots[n])
         elif t is A.CallStmt:
             c = s.call
-            b = BUILTINS.get(c.name)
+            b = FUNCTIONS.get(c.name)
             if b is not None:
                 for a in c.args:
                     self.expr(a)
@@ -460,7 +461,7 @@ class Generator:
         elif t is A.Call:
             for a in e.args:
                 self.expr(a)
-            self.emit(BUILTINS[e.name].op)
+            self.emit(FUNCTIONS[e.name].op)
 
     def logical(self, e: A.Binary) -> None:
         false_l, end = self.label(), self.label()

@@ -23,7 +23,7 @@ from lark.lexer import Lexer as _LarkLexer
 
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
-from plcbuilder.lang.preprocess import TERMINAL_TEXT, Tok
+from plcbuilder.lang.tokens import TERMINAL_TEXT, Tok
 
 MAX_DEPTH = 256
 MAX_SYNTAX_ERRORS = 25
