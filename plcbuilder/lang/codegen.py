@@ -21,9 +21,18 @@ from plcbuilder.lang.builtins import FUNCTIONS
 from plcbuilder.lang.checker import Resolved, const_value
 
 
-def generate(res: Resolved, name: str, kind: Kind, file_namer) -> Program:
-    """The Program of the procedures ``res.reachable`` (main first).
-    ``file_namer`` maps a span's file to the name stored in the file table."""
+#: Code is addressed with 16 bits: a CALL's target (Operand.ABS16) is below this,
+ADDRESS_LIMIT = 1 << 16
+#: and a long jump's offset (Operand.REL16) reaches at most this far either way.
+JUMP_LIMIT = (1 << 15) - 1
+
+
+def generate(res: Resolved, name: str, kind: Kind, file_namer) -> tuple[Optional[Program], int]:
+    """(the Program of the procedures ``res.reachable``, main first; its code
+    size). The Program is None when the code is too large to address (a CALL
+    target at or above ADDRESS_LIMIT, a jump further than a 16-bit offset): the
+    size says how large it is. ``file_namer`` maps a span's file to the name
+    stored in the file table."""
     return Generator(res, name, kind, file_namer).run()
 
 
@@ -76,7 +85,7 @@ class Generator:
             self.emit(Op.PUSH32, v)
 
     # --------------------------------------------------------------- driver
-    def run(self) -> Program:
+    def run(self) -> tuple[Optional[Program], int]:
         proc_labels = {n: self.label() for n in self.res.reachable}
         self.proc_labels = proc_labels
         for n in self.res.reachable:
@@ -289,7 +298,7 @@ class Generator:
         self.place(end)
 
     # --------------------------------------------------------------- assembly
-    def assemble(self) -> Program:
+    def assemble(self) -> tuple[Optional[Program], int]:
         items = self.items
         long: set[int] = set()   # indexes of jumps that need the long form
         while True:
@@ -313,6 +322,9 @@ class Generator:
                     changed = True
             if not changed:
                 break
+        if pos > ADDRESS_LIMIT or any(
+                not fits(Operand.REL16, offsets[items[i].label] - (ins_pos[i] + 3)) for i in long):
+            return None, pos
         code = bytearray()
         lines: list[LineEntry] = []
         files: list[str] = []
@@ -344,7 +356,7 @@ class Generator:
             else:
                 code += encode(op, it.arg)
         return Program(self.name, self.kind, bytes(code), 0, list(self.res.user_vars), files, lines,
-                       procs)
+                       procs), len(code)
 
 
 def _size(it: _Ins, long: bool) -> int:

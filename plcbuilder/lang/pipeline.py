@@ -21,7 +21,7 @@ from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
 from plcbuilder.lang.checker import Checker, Symbols
-from plcbuilder.lang.codegen import generate
+from plcbuilder.lang.codegen import ADDRESS_LIMIT, JUMP_LIMIT, generate
 from plcbuilder.lang.parser import parse_tokens
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocessor
 from plcbuilder.lang.source import SourceSet, decode_source, read_source
@@ -176,18 +176,24 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
     program = None
     size = None
     if not any(d.is_error for d in diags):
-        program = generate(resolved, name, options.kind, _file_namer(path, file_path))
-        size = program.code_size
+        program, size = generate(resolved, name, options.kind, _file_namer(path, file_path))
+        main = resolved.procs.get("main")
+        at = main.name_span if main else Span.point(path, 1, 1)
         if size > options.limit:
-            main = resolved.procs.get("main")
             diags.append(error(
                 "size-limit",
                 f"procedure {name} is {size} bytes of code; the limit for a "
                 f"{options.kind.label} procedure is {options.limit} ({size}/{options.limit} bytes)",
-                main.name_span if main else Span.point(path, 1, 1),
-                "move work into a software procedure, or split it into procedures started "
-                "one after another"))
+                at, "move work into a software procedure, or split it into procedures started "
+                    "one after another"))
             program = None
+        elif program is None:      # within the limit, but beyond what 16-bit addresses reach
+            why = (f"code is addressed with 16 bits: a procedure is at most {ADDRESS_LIMIT} bytes "
+                   f"({size}/{ADDRESS_LIMIT} bytes)" if size > ADDRESS_LIMIT else
+                   f"a jump in it spans more than {JUMP_LIMIT} bytes, the farthest a 16-bit "
+                   "offset reaches")
+            diags.append(error("size-limit", f"procedure {name} is {size} bytes of code; {why}", at,
+                               "split it into procedures started one after another"))
     diags.sort(key=lambda d: (d.sort_key(), d.severity))
     return CompileResult(name, path, options.kind, program, diags, pre.sources, size, options.limit,
                          symbols, module, list(pre.includes))
