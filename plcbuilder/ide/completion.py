@@ -39,8 +39,8 @@ def index(text: str) -> lang_symbols.SymbolIndex:
 
 
 def scan_defines(text: str) -> dict[str, str]:
-    """{name: replacement text} of every #define of the text."""
-    return {n: s.value for n, s in index(text).defines.items() if s.span.file == "<editor>"}
+    """{name: replacement text} of every #define of the text (not its headers')."""
+    return {n: s.value for n, s in lang_symbols.own_defines(text, "<editor>").items()}
 
 
 def scan_variables(text: str) -> list[str]:

@@ -128,3 +128,10 @@ def test_the_same_defines_as_the_compiler():
         {n: s.value for n, s in idx.defines.items()}
     assert set(r.symbols.procedures) == set(idx.procedures)
     assert set(r.symbols.variables) == set(idx.variables)
+
+
+def test_own_defines_read_only_the_directive_lines():
+    text = "#include pins.h\n#define LIMIT 10 // ten\n#ifdef X\n#define Y 2\n#endif\nmain() { a = 1; }\n"
+    found = symbols.own_defines(text, "M1.plc")
+    assert {n: s.value for n, s in found.items()} == {"LIMIT": "10"}
+    assert found["LIMIT"].span.line == 2
