@@ -67,9 +67,10 @@ class SymbolIndex:
 
     def __post_init__(self):
         starts = [0]
-        for i, ch in enumerate(self.text):
-            if ch == "\n":
-                starts.append(i + 1)
+        i = self.text.find("\n")
+        while i >= 0:
+            starts.append(i + 1)
+            i = self.text.find("\n", i + 1)
         self._line_starts = starts
         self._starts = [self.offset_of(t.span.line, t.span.col) for t in self.tokens]
 
@@ -180,6 +181,12 @@ def tokens_of(text: str, name: str = "<input>") -> list[Tok]:
     return [t for _hash, toks in _lines(text, name) for t in toks]
 
 
+def _only_lines(text: str, keep) -> str:
+    """The text with the lines ``keep(number, line)`` refuses made blank (so
+    the others keep their line numbers)."""
+    return "\n".join(t if keep(n, t) else "" for n, t in enumerate(text.split("\n"), 1))
+
+
 def _defines(pp: Preprocessor) -> dict[str, Symbol]:
     out: dict[str, Symbol] = {}
     for d in pp.all_defines:
@@ -201,12 +208,9 @@ def index(text: str, name: str = "<input>", path: Optional[Path] = None,
             code.extend(line)
         else:
             directive_lines.add(hash_span.line)
-    # The preprocessor reads only the directives (code lines left blank, so
-    # lines keep their numbers): the defines and headers, at little cost.
-    directives = "\n".join(t if n in directive_lines else ""
-                            for n, t in enumerate(text.split("\n"), 1))
+    # The preprocessor reads only the directives: the defines and headers, at little cost.
     pp = Preprocessor(include_dirs)
-    pre = pp.run_text(directives, name, path)
+    pre = pp.run_text(_only_lines(text, lambda n, _t: n in directive_lines), name, path)
     procedures: dict[str, Symbol] = {}
     variables: dict[str, Symbol] = {}
     for i, t in enumerate(code):
@@ -227,10 +231,8 @@ def own_defines(text: str, name: str = "<input>") -> dict[str, Symbol]:
     """The defines a text makes itself (not its headers'), quickly: only lines
     that start with ``#`` are read (so a ``#define`` inside a ``/* */`` comment
     counts too), for colouring define names on every edit."""
-    directives = "\n".join(t if t.lstrip().startswith("#") else ""
-                            for t in normalise(text).split("\n"))
     pp = Preprocessor(())
-    pp.run_text(directives, name, None)
+    pp.run_text(_only_lines(normalise(text), lambda _n, t: t.lstrip().startswith("#")), name, None)
     return {n: sym for n, sym in _defines(pp).items() if sym.span.file == name}
 
 
