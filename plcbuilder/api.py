@@ -31,7 +31,7 @@ from plcbuilder.controller.variables_xml import load_variables
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
                                     summary)
 from plcbuilder.image.manifest import ImageError, read_image, write_image
-from plcbuilder.lang.compiler import (CompileOptions, CompileResult, compile_bytes, compile_file,
+from plcbuilder.lang.pipeline import (CompileOptions, CompileResult, compile_bytes, compile_file,
                                       compile_source)
 from plcbuilder.lang.highlight import PlcLexer
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header, builtin_header_names

@@ -114,7 +114,7 @@ def test_support_uses_the_standard_library_only():
 
 
 def test_importing_the_cli_and_core_loads_no_qt():
-    code = ("import sys, plcbuilder.cli.main as m, plcbuilder.api, plcbuilder.lang.compiler;"
+    code = ("import sys, plcbuilder.cli.main as m, plcbuilder.api, plcbuilder.lang.pipeline;"
             "m.build_parser();"
             "bad=[k for k in sys.modules if k.split('.')[0] in %r]; print(bad); "
             "raise SystemExit(1 if bad else 0)" % (QT,))

@@ -1,119 +1,80 @@
 """Autocompletion: what may be typed at the caret.
 
-The list holds the keywords, the built-in functions (with call tips giving
-their signatures), the predefined variables, the built-in names of the
-myCNC tables, the project's defines and pins (from the last compile of the
-file, or — before there is one — from the project's headers and the
-built-in ``pins.h``), and the file's own variables and procedures.
+The candidates come from :mod:`plcbuilder.lang.symbols` (the real tokens of
+the editor's text, so they are there while the file does not compile): the
+keywords, the built-in functions (with call tips giving their signatures), the
+predefined variables, the built-in names of the myCNC tables, the file's
+defines, variables and procedures, plus the last compile's symbols and the
+project's header defines (and the built-in ``pins.h``).
 """
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Iterable, Optional
 
-from plcbuilder.api import abi
 from plcbuilder.api import Kind
 from plcbuilder.ide.editor import (KIND_CONSTANT, KIND_DEFINE, KIND_FUNCTION, KIND_KEYWORD,
                                    KIND_PREDEFINED, KIND_PROCEDURE, KIND_VARIABLE)
-from plcbuilder.lang.checker import BUILTINS
-from plcbuilder.lang.highlight import KEYWORDS
-from plcbuilder.lang.preprocess import builtin_header
+from plcbuilder.lang import symbols as lang_symbols
 
-_DEFINE_RE = re.compile(r"^[ \t]*#[ \t]*define[ \t]+([A-Za-z_][A-Za-z0-9_]*)[ \t]*([^\n]*)$",
-                        re.MULTILINE)
-_ASSIGN_RE = re.compile(r"(?<![A-Za-z0-9_])([A-Za-z_][A-Za-z0-9_]*)\s*(?:=(?!=)|\+\+|--)")
-_PROC_RE = re.compile(r"^[ \t]*([A-Za-z_][A-Za-z0-9_]*)[ \t]*\([ \t]*\)[ \t]*(?:\{|$)",
-                      re.MULTILINE)
-_COMMENT_RE = re.compile(r"//[^\n]*|/\*[\s\S]*?(?:\*/|$)")
+#: the language's kinds of item -> the editor's
+KINDS = {
+    lang_symbols.KEYWORD: KIND_KEYWORD, lang_symbols.FUNCTION: KIND_FUNCTION,
+    lang_symbols.PREDEFINED_VARIABLE: KIND_PREDEFINED, lang_symbols.DEFINE: KIND_DEFINE,
+    lang_symbols.PROCEDURE: KIND_PROCEDURE, lang_symbols.VARIABLE: KIND_VARIABLE,
+    lang_symbols.CONSTANT: KIND_CONSTANT,
+}
+
+_last: Optional[tuple[str, lang_symbols.SymbolIndex]] = None
+
+
+def index(text: str) -> lang_symbols.SymbolIndex:
+    """The symbols of an editor's text (the last one is kept: hover and
+    completion ask again and again about text that did not change)."""
+    global _last
+    if _last is None or _last[0] != text:
+        _last = (text, lang_symbols.index(text, "<editor>"))
+    return _last[1]
 
 
 def scan_defines(text: str) -> dict[str, str]:
-    """{name: replacement text} of every #define in text (comments dropped)."""
-    out = {}
-    for m in _DEFINE_RE.finditer(text):
-        value = _COMMENT_RE.sub("", m.group(2)).strip()
-        out.setdefault(m.group(1), value)
-    return out
+    """{name: replacement text} of every #define of the text (not its headers')."""
+    return {n: s.value for n, s in lang_symbols.own_defines(text, "<editor>").items()}
 
 
 def scan_variables(text: str) -> list[str]:
     """Names the text assigns (``x = …``, ``x++``): its own variables, found
     even while the file does not compile."""
-    code = _COMMENT_RE.sub(" ", text)
-    names = []
-    seen = set()
-    for m in _ASSIGN_RE.finditer(code):
-        n = m.group(1)
-        if n not in seen and n not in KEYWORDS and n not in BUILTINS:
-            seen.add(n)
-            names.append(n)
-    return names
+    return list(index(text).variables)
 
 
 def scan_procedures(text: str) -> list[str]:
-    code = _COMMENT_RE.sub(" ", text)
-    return [m.group(1) for m in _PROC_RE.finditer(code)
-            if m.group(1) not in KEYWORDS and m.group(1) not in BUILTINS]
+    return list(index(text).procedures)
 
 
 class HeaderDefines:
-    """The defines of a project's include folder plus the built-in pins.h,
-    re-read only when a header changed."""
+    """The defines of a project's include folders plus the built-in pins.h,
+    a header re-read only when it changed."""
 
     def __init__(self):
-        self._cache: dict[str, tuple[float, dict[str, tuple[str, str, int]]]] = {}
+        self._cache: dict[str, tuple[float, dict]] = {}
 
     def defines(self, include_dirs: Iterable[Path]) -> dict[str, tuple[str, str, int]]:
         """{name: (value text, file, line)}."""
-        out: dict[str, tuple[str, str, int]] = {}
-        for folder in include_dirs:
-            try:
-                headers = sorted(p for p in Path(folder).glob("*.h") if p.is_file())
-            except OSError:
-                continue
-            for h in headers:
-                for name, v in self._file(h).items():
-                    out.setdefault(name, v)
-        pins = builtin_header("pins.h")
-        if pins:
-            for name, v in self._text("<builtin>/pins.h", pins).items():
-                out.setdefault(name, v)
-        return out
+        found = lang_symbols.header_defines(include_dirs, read=self._file)
+        return {n: (s.value, s.span.file, s.span.line) for n, s in found.items()}
 
     def _file(self, path: Path) -> dict:
         try:
             mtime = path.stat().st_mtime
         except OSError:
             return {}
-        key = str(path)
-        hit = self._cache.get(key)
-        if hit and hit[0] == mtime:
-            return hit[1]
-        try:
-            text = path.read_text(encoding="utf-8", errors="replace")
-        except OSError:
-            return {}
-        found = self._text(key, text)
-        self._cache[key] = (mtime, found)
-        return found
-
-    @staticmethod
-    def _text(name: str, text: str) -> dict:
-        out = {}
-        for m in _DEFINE_RE.finditer(text):
-            value = _COMMENT_RE.sub("", m.group(2)).strip()
-            line = text.count("\n", 0, m.start()) + 1
-            out.setdefault(m.group(1), (value, name, line))
-        return out
-
-
-def predefined_variables(kind: Kind) -> list[str]:
-    names = list(abi.SLOT_NAMES) + list(abi.MAPPED_VARIABLES)
-    if kind is Kind.SOFTWARE:
-        names += list(abi.SOFTWARE_SLOT_NAMES)
-    return names
+        hit = self._cache.get(str(path))
+        if hit is None or hit[0] != mtime:
+            hit = (mtime, lang_symbols.read_header(path))
+            self._cache[str(path)] = hit
+        return hit[1]
 
 
 def completions(prefix: str, *, kind: Kind = Kind.HARDWARE, text: str = "",
@@ -122,35 +83,32 @@ def completions(prefix: str, *, kind: Kind = Kind.HARDWARE, text: str = "",
 
     ``symbols`` is the last compile's CompileResult.symbols (or None);
     ``defines`` the project's header defines (name -> anything)."""
-    out: list[tuple[str, int]] = []
-    out += [(k, KIND_KEYWORD) for k in sorted(KEYWORDS)]
-    out += [(b, KIND_FUNCTION) for b in BUILTINS]
-    out += [(v, KIND_PREDEFINED) for v in predefined_variables(kind)]
+    items = index(text).completions(prefix, software=kind is Kind.SOFTWARE)
     if symbols is not None:
-        out += [(n, KIND_DEFINE) for n in getattr(symbols, "defines", {}) or {}]
-        out += [(n, KIND_PROCEDURE) for n in getattr(symbols, "procedures", {}) or {}]
-        out += [(n, KIND_VARIABLE) for n in getattr(symbols, "variables", []) or []]
-    if defines:
-        out += [(n, KIND_DEFINE) for n in defines]
-    if text:
-        out += [(n, KIND_DEFINE) for n in scan_defines(text)]
-        out += [(n, KIND_PROCEDURE) for n in scan_procedures(text)]
-        out += [(n, KIND_VARIABLE) for n in scan_variables(text) if n != prefix]
-    if len(prefix) >= 1:
-        out += [(n, KIND_CONSTANT) for n in abi.BUILTIN_NAMES]
-    seen: set[str] = set()
-    unique = []
-    for name, k in out:
-        if name not in seen:
-            seen.add(name)
-            unique.append((name, k))
-    return unique
+        items += [(n, lang_symbols.DEFINE) for n in getattr(symbols, "defines", {}) or {}]
+        items += [(n, lang_symbols.PROCEDURE) for n in getattr(symbols, "procedures", {}) or {}]
+        items += [(n, lang_symbols.VARIABLE) for n in getattr(symbols, "variables", []) or []]
+    items += [(n, lang_symbols.DEFINE) for n in defines or {}]
+    return [(n, KINDS[k]) for n, k in lang_symbols.unique(items)]
 
 
 def signature(name: str) -> Optional[str]:
     """The call tip of a built-in function: its signature and what it does."""
-    b = BUILTINS.get(name)
+    b = lang_symbols.FUNCTIONS.get(name)
     if b is None:
         return None
-    ret = "returns a value" if b.returns else "returns nothing"
-    return f"{b.name}({', '.join(b.params)})  — {ret}\n{b.doc}"
+    return f"{b.call_text}  — {b.returns_text}\n{b.doc}"
+
+
+def definition(word: str, text: str, path: Optional[str], include_dirs: Iterable[Path] = (),
+               header_defines: Optional[dict] = None) -> Optional[tuple[str, int, int]]:
+    """(file, line, column) where ``word`` is defined: a define of the file or
+    of a header it includes (the built-in pins.h too), a procedure of the file,
+    else a define of the project's other headers (``header_defines``, as
+    :meth:`HeaderDefines.defines` gives them). None for built-in names."""
+    file_path = Path(path) if path and not path.startswith("<") else None
+    span = lang_symbols.index(text, path or "<editor>", file_path, tuple(include_dirs)).definition(word)
+    if span is not None:
+        return span.file, span.line, span.col
+    hd = (header_defines or {}).get(word)
+    return (hd[1], hd[2], 1) if hd is not None else None

@@ -21,7 +21,7 @@ from PySide6.QtCore import QObject, QTimer, Signal
 
 from plcbuilder import api
 from plcbuilder.api import Span, error
-from plcbuilder.lang.compiler import procedure_name
+from plcbuilder.lang.pipeline import procedure_name
 from plcbuilder.lang.source import SourceSet
 
 DEBOUNCE_MS = 200          # + compile time: results land well within 300 ms for normal files

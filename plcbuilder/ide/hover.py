@@ -14,37 +14,11 @@ a widget; the editor supplies the word and the text before it.
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Optional
 
-from plcbuilder.api import abi
-from plcbuilder.api import Kind
-from plcbuilder.lang.checker import BUILTINS
-from plcbuilder.lang.highlight import KEYWORDS
-from plcbuilder.lang.preprocess import parse_number
-
-PREDEFINED_HELP = {
-    "eparam": "the parameter the procedure was started with (M-code P/eparam)",
-    "proc": "the procedure's state code, shown by myCNC (plc_proc_* / proc_* names)",
-    "timer": "an ordinary variable; the manual's delays count it down by hand, one per tick",
-    "vexit": "a value sent with the exit event (beside the exit code)",
-    "message": "a message to the host: at the end of the tick it is sent with command "
-               "(var00) and parameter (var01), then set back to 0",
-    "command": "the same variable as var00 (sent with a message)",
-    "parameter": "the same variable as var01 (sent with a message)",
-    "Param": "software procedures: the procedure's parameter",
-}
-for _i in range(16):
-    PREDEFINED_HELP.setdefault(f"var{_i:02d}", "initialised from plc-variables.xml before the "
-                                              "procedure starts" + (" (also 'command')" if _i == 0 else
-                                                                    " (also 'parameter')" if _i == 1 else ""))
-_MAPPED_HELP = {
-    "pwm01": "PWM0", "pwm02": "PWM1", "pwm03": "PWM2", "pwm04": "PWM3",
-    "dac01": "DAC0", "dac02": "DAC1", "adc01": "ADC0 (read-only)", "adc02": "ADC1 (read-only)",
-}
-
-_NUMBER_RE = re.compile(r"0[xX][0-9A-Fa-f]+|[0-9]+")
+from plcbuilder.api import Kind, abi
+from plcbuilder.lang import symbols as lang_symbols
 
 
 def _num(v: int) -> str:
@@ -56,23 +30,6 @@ def register_text(value: int) -> Optional[str]:
     if desc is None:
         return None
     return f"register {_num(value)}: {desc}"
-
-
-def _context(before: str) -> str:
-    """What the text just before a number makes of it: 'register', 'exit',
-    'message', 'proc', 'pin' or ''."""
-    b = before.rstrip()
-    if re.search(r"\b(gvarget|gvarset)\s*\(\s*$", b):
-        return "register"
-    if re.search(r"\bexit\s*\(\s*$", b):
-        return "exit"
-    if re.search(r"\bmessage\s*=\s*$", b):
-        return "message"
-    if re.search(r"\bproc\s*=\s*$", b):
-        return "proc"
-    if re.search(r"\bport(set|clear|clr|get)\s*\(\s*$", b):
-        return "pin"
-    return ""
 
 
 def value_text(value: int, context: str = "") -> Optional[str]:
@@ -109,22 +66,21 @@ def hover_text(word: str, before: str = "", *, kind: Kind = Kind.HARDWARE, symbo
     CompileResult.symbols; ``header_defines`` {name: (value, file, line)}."""
     if not word:
         return None
-    if _NUMBER_RE.fullmatch(word):
-        value = parse_number(word)
+    if word[:1].isdigit():
+        value = lang_symbols.number_of(word)
         if value is None:
             return None
-        return value_text(value, _context(before))
-    if word in KEYWORDS:
+        return value_text(value, lang_symbols.number_context(before))
+    if word in lang_symbols.KEYWORDS:
         return None
-    b = BUILTINS.get(word)
+    b = lang_symbols.FUNCTIONS.get(word)
     if b is not None:
-        ret = "returns a value" if b.returns else "returns nothing"
-        return f"{b.name}({', '.join(b.params)}) — built-in function, {ret}\n{b.doc}"
-    if word in _MAPPED_HELP:
-        addr = abi.MAPPED_VARIABLES[word]
-        return f"{word}: predefined variable, {_MAPPED_HELP[word]} (register {addr})"
-    if word in PREDEFINED_HELP and (word != "Param" or kind is Kind.SOFTWARE):
-        return f"{word}: predefined variable — {PREDEFINED_HELP[word]}"
+        return f"{b.call_text} — built-in function, {b.returns_text}\n{b.doc}"
+    v = lang_symbols.PREDEFINED.get(word)
+    if v is not None and v.register is not None:
+        return f"{word}: predefined variable, {v.doc} (register {v.register})"
+    if v is not None and (not v.software_only or kind is Kind.SOFTWARE):
+        return f"{word}: predefined variable — {v.doc}"
     defines = getattr(symbols, "defines", None) or {}
     if word in defines:
         value, span = defines[word]
@@ -160,8 +116,8 @@ def _define_text(name: str, value: str, where: str) -> str:
     text = f"#define {name} {value}".rstrip()
     if where:
         text += f"    ({where})"
-    n = parse_number(value.strip()) if value.strip() else None
-    if n is not None:
+    n = lang_symbols.number_of(value)
+    if n is not None and n >= 0:
         reg = abi.describe_register(n) if n >= 1000 else None
         if reg:
             text += f"\nas a register: {reg}"

@@ -15,7 +15,6 @@ and its docks (:mod:`plcbuilder.ide.connection`, :mod:`plcbuilder.ide.panels`).
 from __future__ import annotations
 
 import os
-import re
 from pathlib import Path
 from typing import Optional
 
@@ -1264,27 +1263,12 @@ class MainWindow(QMainWindow):
         if not word:
             return False
         ed = self.current_editor()
-        result = self._results.get(file_key(ed.path)) if ed is not None else None
-        symbols = getattr(result, "symbols", None)
-        if symbols is not None:
-            d = (symbols.defines or {}).get(word)
-            if d is not None and d[1] is not None:
-                self.open_location(d[1].file, d[1].line, d[1].col)
-                return True
-            span = (symbols.procedures or {}).get(word)
-            if span is not None:
-                self.open_location(span.file, span.line, span.col)
-                return True
-        hd = self._header_defines.get(word)
-        if hd is not None:
-            self.open_location(hd[1], hd[2], 1)
+        dirs = self.project.include_dirs() if self.project is not None else ()
+        where = completion.definition(word, ed.text() if ed is not None else "",
+                                      ed.path if ed is not None else None, dirs, self._header_defines)
+        if where is not None:
+            self.open_location(*where)
             return True
-        if ed is not None:
-            m = re.search(rf"^[ \t]*{re.escape(word)}[ \t]*\([ \t]*\)", ed.text(), re.M)
-            if m:
-                line = ed.text().count("\n", 0, m.start()) + 1
-                ed.goto_line(line)
-                return True
         self.statusBar().showMessage(f"No definition of {word} in the project "
                                      "(built-in names have none)", 4000)
         return False

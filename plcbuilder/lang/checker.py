@@ -13,44 +13,11 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 from plcbuilder.bytecode import abi, semantics
-from plcbuilder.bytecode.opcodes import Op
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.diagnostics import Diagnostic, Related, Span, error, warning
 from plcbuilder.lang import ast as A
+from plcbuilder.lang.builtins import FUNCTIONS, PREDEFINED, REGISTERS, VALUE_TWIN, slot_names
 
-
-@dataclass(frozen=True)
-class Builtin:
-    name: str
-    params: tuple[str, ...]
-    returns: bool
-    op: Optional[Op]
-    doc: str
-
-    @property
-    def arity(self) -> int:
-        return len(self.params)
-
-    @property
-    def signature(self) -> str:
-        ret = "value = " if self.returns else ""
-        return f"{ret}{self.name}({', '.join(self.params)})"
-
-
-BUILTINS: dict[str, Builtin] = {b.name: b for b in (
-    Builtin("portset", ("pin",), False, Op.PORTSET, "Set output pin to 1."),
-    Builtin("portclear", ("pin",), False, Op.PORTCLR, "Clear output pin to 0."),
-    Builtin("portclr", ("pin",), False, Op.PORTCLR, "Clear output pin to 0 (same as portclear)."),
-    Builtin("portget", ("pin",), True, Op.PORTGET, "The state of input pin (0 or 1)."),
-    Builtin("gvarget", ("addr",), True, Op.GVARGET, "Read global variable register addr."),
-    Builtin("gvarset", ("addr", "value"), False, Op.GVARSET, "Write value to global register addr."),
-    Builtin("g0moveA", ("flags", "axis_mask", "distance"), False, Op.G0MOVE,
-            "Positioning move: flags bit0 absolute, bit1 machine coordinates, bit7 delayed start; "
-            "axis_mask X=1 Y=2 Z=4 ...; distance in 0.01 mm."),
-    Builtin("exit", ("code",), False, Op.EXIT, "End the procedure with an exit code (99 = normal)."),
-)}
-#: what to suggest when a function that returns nothing is used as a value
-VALUE_TWIN = {"gvarset": "gvarget", "portset": "portget", "portclear": "portget", "portclr": "portget"}
 
 SHIFT_OPS = {"<<", ">>"}
 ADD_OPS = {"+", "-"}
@@ -100,9 +67,7 @@ class Checker:
         self.res = Resolved()
         self.vars: dict[str, VarInfo] = {}
         self.calls: dict[str, list[tuple[str, Span]]] = {}
-        self.slot_names = dict(abi.SLOT_NAMES)
-        if kind is Kind.SOFTWARE:
-            self.slot_names.update(abi.SOFTWARE_SLOT_NAMES)
+        self.slot_names = slot_names(kind is Kind.SOFTWARE)
         self._falls_cache: dict[str, bool] = {}
         self._in_progress: set[str] = set()
 
@@ -115,11 +80,11 @@ class Checker:
                                         p.name_span,
                                         related=[Related(procs[p.name].name_span, "first defined here")]))
                 continue
-            if p.name in BUILTINS:
+            if p.name in FUNCTIONS:
                 self.diags.append(error("reserved-name", f"'{p.name}' is a built-in function; "
                                         "a procedure cannot have its name", p.name_span))
                 continue
-            if p.name in self.slot_names or p.name in abi.MAPPED_VARIABLES \
+            if p.name in self.slot_names or p.name in REGISTERS \
                     or p.name in abi.BUILTIN_NAMES:
                 self.diags.append(error("reserved-name", f"'{p.name}' is a predefined name; "
                                         "a procedure cannot have its name", p.name_span))
@@ -183,18 +148,18 @@ class Checker:
         if n in self.slot_names:
             self.res.slots[n] = self.slot_names[n]
             return
-        if n in abi.MAPPED_VARIABLES:
-            if n in abi.READ_ONLY_VARIABLES:
+        if n in REGISTERS:
+            if PREDEFINED[n].read_only:
                 self.diags.append(error("read-only", f"'{n}' is read-only (it reads ADC{int(n[-2:]) - 1})",
                                         name.span))
-            self.res.mapped[n] = abi.MAPPED_VARIABLES[n]
+            self.res.mapped[n] = REGISTERS[n]
             return
         if n in abi.BUILTIN_NAMES:
             self.diags.append(error("assign-constant",
                                     f"'{n}' is a built-in constant ({abi.BUILTIN_NAMES[n]}); "
                                     "it cannot be assigned", name.span))
             return
-        if n in self.res.procs or n in BUILTINS:
+        if n in self.res.procs or n in FUNCTIONS:
             self.diags.append(error("assign-procedure", f"'{n}' is a procedure, not a variable",
                                     name.span))
             return
@@ -218,11 +183,11 @@ class Checker:
             n = e.id
             if n in self.slot_names:
                 self.res.slots[n] = self.slot_names[n]
-            elif n in abi.MAPPED_VARIABLES:
-                self.res.mapped[n] = abi.MAPPED_VARIABLES[n]
+            elif n in REGISTERS:
+                self.res.mapped[n] = REGISTERS[n]
             elif n in abi.BUILTIN_NAMES:
                 self.res.constants[n] = abi.BUILTIN_NAMES[n]
-            elif n in self.res.procs or n in BUILTINS:
+            elif n in self.res.procs or n in FUNCTIONS:
                 self.diags.append(error("procedure-as-value",
                                         f"'{n}' is a procedure; call it as a statement: {n}();",
                                         e.span))
@@ -256,7 +221,7 @@ class Checker:
     def _call(self, c: A.Call, as_value: bool) -> None:
         for a in c.args:
             self._expr(a)
-        b = BUILTINS.get(c.name)
+        b = FUNCTIONS.get(c.name)
         if b is not None:
             if as_value and not b.returns:
                 if c.name == "exit":
@@ -272,7 +237,7 @@ class Checker:
                         args = self._text(c.args[0].span) or "addr"
                     msg += f"; did you mean {twin}({args})?"
                 self.diags.append(error("void-value", msg, c.span,
-                                        f"{BUILTINS[twin].signature if twin else b.signature}"))
+                                        f"{FUNCTIONS[twin].signature if twin else b.signature}"))
                 return
             if len(c.args) != b.arity:
                 self.diags.append(error(
@@ -291,7 +256,7 @@ class Checker:
                                                            "sizeof"):
             return
         if p is None:
-            close = difflib.get_close_matches(c.name, list(self.res.procs) + list(BUILTINS), n=1)
+            close = difflib.get_close_matches(c.name, list(self.res.procs) + list(FUNCTIONS), n=1)
             hints = [f"did you mean {close[0]}()?"] if close else []
             self.diags.append(error("undefined-procedure", f"no procedure or function named '{c.name}'",
                                     c.name_span, *hints))

@@ -33,21 +33,19 @@ from pygments.lexer import RegexLexer, default
 from pygments.token import (Comment, Error, Keyword, Name, Number, Operator,
                             Punctuation, Whitespace)
 
-from plcbuilder.bytecode import abi
+from plcbuilder.lang import builtins
 
 __all__ = ["PlcLexer", "KEYWORDS", "BUILTIN_FUNCTIONS", "PREDEFINED_VARIABLES",
            "BUILTIN_CONSTANTS"]
 
 #: Statement keywords.
-KEYWORDS = frozenset({"if", "else", "do", "while"})
+KEYWORDS = frozenset(builtins.KEYWORDS)
 #: Built-in functions (``portclr`` is myCNC's own spelling of ``portclear``).
-BUILTIN_FUNCTIONS = frozenset({"portset", "portclear", "portclr", "portget",
-                               "gvarget", "gvarset", "g0moveA", "exit"})
+BUILTIN_FUNCTIONS = frozenset(builtins.FUNCTIONS)
 #: Predefined variables: slot variables, register-mapped ones, and ``Param``.
-PREDEFINED_VARIABLES = frozenset(abi.SLOT_NAMES) | frozenset(abi.SOFTWARE_SLOT_NAMES) \
-    | frozenset(abi.MAPPED_VARIABLES)
+PREDEFINED_VARIABLES = frozenset(builtins.PREDEFINED)
 #: Built-in constant names (every name with a value in the manual's tables).
-BUILTIN_CONSTANTS = frozenset(abi.BUILTIN_NAMES)
+BUILTIN_CONSTANTS = frozenset(builtins.CONSTANTS)
 
 _IDENT = r"[A-Za-z_][A-Za-z0-9_]*"
 _WS = r"[ \t\f\v\r\n]*"

@@ -8,6 +8,7 @@
 - Syntax errors resynchronise on ``;``, ``{`` and ``}`` (panic mode): the
   parser is brought to a state that accepts the synchronising token by feeding
   it made-up tokens, so one mistake gives one error, and the count is capped.
+  :mod:`plcbuilder.lang.syntax_errors` words each error.
 """
 
 from __future__ import annotations
@@ -23,15 +24,14 @@ from lark.lexer import Lexer as _LarkLexer
 
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
-from plcbuilder.lang.preprocess import TERMINAL_TEXT, Tok
+from plcbuilder.lang.syntax_errors import c_statement_header, syntax_error, token_span
+from plcbuilder.lang.tokens import Tok
 
 MAX_DEPTH = 256
 MAX_SYNTAX_ERRORS = 25
 SYNC = ("SEMI", "RBRACE", "LBRACE")
 #: tokens fed to reach a state that accepts the synchronising token, in order of preference
 FIXUPS = ("NUMBER", "RPAR", "SEMI", "RBRACE")
-C_TYPES = {"int", "long", "short", "char", "unsigned", "signed", "void", "float", "double", "bool",
-           "const", "static", "uint32_t", "int32_t"}
 
 
 def grammar_text() -> str:
@@ -256,126 +256,6 @@ class _Recovery:
         self.quiet_until = -1     # errors at or before this index are cascades
         self.count = 0
 
-    # ---------------------------------------------------------- reporting
-    def _tok_span(self, i: int) -> Span:
-        if 0 <= i < len(self.toks):
-            return self.toks[i].span
-        if self.toks:
-            s = self.toks[-1].span
-            return Span(s.file, s.end_line, s.end_col, s.end_line, s.end_col + 1)
-        return Span("<input>", 1, 1, 1, 2)
-
-    def _statement_start(self, i: int) -> int:
-        j = min(i, len(self.toks)) - 1
-        depth = 0
-        while j >= 0:
-            k = self.toks[j].kind
-            if k == "RPAR":
-                depth += 1
-            elif k == "LPAR":
-                if depth == 0:
-                    pass
-                else:
-                    depth -= 1
-            elif depth == 0 and k in ("SEMI", "LBRACE", "RBRACE"):
-                break
-            j -= 1
-        return j + 1
-
-    def _c_statement_header(self, i: int) -> int:
-        """For a C statement the language lacks (for, switch), the index of the
-        ')' closing its header: errors up to there are one mistake."""
-        s = self._statement_start(i)
-        toks = self.toks
-        if s < len(toks) and toks[s].kind == "NAME" and toks[s].value in ("for", "switch") \
-                and s + 1 < len(toks) and toks[s + 1].kind == "LPAR":
-            depth = 0
-            for j in range(s + 1, len(toks)):
-                if toks[j].kind == "LPAR":
-                    depth += 1
-                elif toks[j].kind == "RPAR":
-                    depth -= 1
-                    if depth == 0:
-                        return j
-        return -1
-
-    def _prev_real(self, i: int) -> int:
-        j = i - 1
-        while j >= 0 and self.toks[j].kind == "BAD":
-            j -= 1
-        return j
-
-    def _message(self, i: int, expected: set[str]) -> Diagnostic:
-        toks = self.toks
-        at_end = i >= len(toks)
-        tok = None if at_end else toks[i]
-        span = self._tok_span(i)
-        what = "the end of the file" if at_end else f"'{tok.value}'"
-        p = self._prev_real(i)
-        prev = toks[p] if p >= 0 else None
-        # Friendly messages for the usual mistakes (C habits, typos).
-        if prev is not None and prev.kind == "NAME" and prev.value in C_TYPES and tok is not None \
-                and tok.kind == "NAME":
-            return error("syntax", f"unexpected '{tok.value}' after '{prev.value}'", prev.span,
-                         "variables need no declaration: write the name and assign it "
-                         f"(e.g. {tok.value}=0;)", "procedures are written name() { ... }")
-        start = self._statement_start(i)
-        first = toks[start] if start < len(toks) else None
-        if first is not None and first.kind == "NAME" and first.value in ("for", "switch") \
-                and start + 1 < len(toks) and toks[start + 1].kind == "LPAR":
-            if first.value == "for":
-                return error("syntax", "'for' loops are not part of the PLC language", first.span,
-                             "write i=0; do { ...; i++; } while (i<N);")
-            return error("syntax", "'switch' is not part of the PLC language", first.span,
-                         "use if (...) { ... } else if (...) { ... }")
-        if prev is not None and prev.kind == "NAME" and tok is not None:
-            word = prev.value
-            if word == "return":
-                return error("syntax", "'return' is not part of the PLC language", prev.span,
-                             "a procedure ends at its closing brace; use exit(code) to end the "
-                             "whole PLC procedure")
-            if word in ("break", "continue"):
-                return error("syntax", f"'{word}' is not part of the PLC language", prev.span,
-                             "leave a loop by making its condition false (e.g. set a flag)")
-        nxt = toks[i + 1] if i + 1 < len(toks) else None
-        if tok is not None and nxt is not None and nxt.kind == "ASSIGN" \
-                and tok.kind in ("PLUS", "MINUS", "STAR", "SLASH", "PERCENT", "AMP", "PIPE",
-                                 "CARET", "SHL", "SHR") and tok.span.end_col == nxt.span.col:
-            return error("syntax", f"compound assignment '{tok.value}=' is not supported",
-                         tok.span.cover(nxt.span), f"write x = x {tok.value} value;")
-        if tok is not None and tok.kind == "ASSIGN" and prev is not None \
-                and prev.kind in ("PLUS", "MINUS", "STAR", "SLASH", "PERCENT", "AMP", "PIPE",
-                                  "CARET", "SHL", "SHR"):
-            return error("syntax", f"compound assignment '{prev.value}=' is not supported",
-                         prev.span.cover(tok.span), f"write x = x {prev.value} value;")
-        if tok is not None and tok.kind == "ASSIGN" and "RPAR" in expected:
-            return error("syntax", "'=' in a condition", tok.span,
-                         "compare with '=='; assignments are statements of their own")
-        if at_end and "RBRACE" in expected:
-            return error("syntax", "expected '}' before the end of the file", span,
-                         "a block or procedure is not closed")
-        operand = tok is not None and tok.kind in ("NAME", "NUMBER", "IF", "DO", "WHILE", "LBRACE")
-        if "RPAR" in expected and "SEMI" not in expected and prev is not None and operand:
-            ps = prev.span
-            return error("syntax", f"expected ')' after '{prev.value}'",
-                         Span(ps.file, ps.end_line, ps.end_col, ps.end_line, ps.end_col + 1))
-        if "SEMI" in expected and prev is not None and (at_end or operand or tok.span.line > prev.span.line
-                                                         or len(expected) <= 3):
-            ps = prev.span
-            return error("syntax", f"expected ';' after '{prev.value}'",
-                         Span(ps.file, ps.end_line, ps.end_col, ps.end_line, ps.end_col + 1))
-        if {"NAME", "NUMBER", "LPAR"} <= expected and "SEMI" not in expected:
-            return error("syntax", f"expected an expression before {what}", span)
-        names = sorted(TERMINAL_TEXT.get(e, e) for e in expected if e != "$END")
-        names = [n if n.startswith(("a ", "the ")) else f"'{n}'" for n in names]
-        if not names:
-            return error("syntax", f"unexpected {what}", span)
-        if len(names) > 6:
-            hint = "expected a statement or an expression here" if "'('" in names else ""
-            return error("syntax", f"unexpected {what}", span, *([hint] if hint else []))
-        return error("syntax", f"unexpected {what}; expected {', '.join(names[:-1])}"
-                     + (" or " if len(names) > 1 else "") + names[-1], span)
-
     # ---------------------------------------------------------- recovery
     def on_error(self, e) -> bool:
         if not isinstance(e, UnexpectedToken):
@@ -394,11 +274,11 @@ class _Recovery:
             if self.count > MAX_SYNTAX_ERRORS:
                 self.diags.append(error("too-many-errors",
                                         f"too many syntax errors; stopped after {MAX_SYNTAX_ERRORS}",
-                                        self._tok_span(idx)))
+                                        token_span(self.toks, idx)))
                 return False
-            self.diags.append(self._message(idx, set(ip.accepts())))
+            self.diags.append(syntax_error(self.toks, idx, set(ip.accepts())))
         self.last_error_idx = idx
-        header_end = self._c_statement_header(idx)
+        header_end = c_statement_header(self.toks, idx)
         # find a synchronising token at or after the error
         j = idx
         toks = self.toks
@@ -423,7 +303,7 @@ class _Recovery:
         while True:
             plan = self._plan(ip.copy(), target)
             if plan is not None:
-                s = self._tok_span(at)
+                s = token_span(self.toks, at)
                 for kind in plan:
                     ip.feed_token(Token(kind, "", at, s.line, s.col, s.end_line, s.end_col, at))
                 return True
@@ -454,4 +334,4 @@ class _Recovery:
             idx = getattr(getattr(exc, "token", None), "start_pos", len(self.toks))
             if not isinstance(idx, int):
                 idx = len(self.toks)
-            self.diags.append(error("syntax", "cannot parse this", self._tok_span(idx)))
+            self.diags.append(error("syntax", "cannot parse this", token_span(self.toks, idx)))

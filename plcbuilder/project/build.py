@@ -42,8 +42,8 @@ import plcbuilder
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.lang import Diagnostic, Related, Severity, Span, error
 from plcbuilder.image.manifest import ImageError, Limits, valid_name, write_image
-from plcbuilder.lang import compiler as _compiler
-from plcbuilder.lang.compiler import CompileOptions, compile_file
+from plcbuilder.lang import pipeline as _pipeline
+from plcbuilder.lang.pipeline import CompileOptions, compile_file
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
 from plcbuilder._support.files import atomic_write
 from plcbuilder.project.model import Procedure, Project
@@ -335,7 +335,7 @@ def compiler_fingerprint() -> str:
     """A hash of the compiler (its version and its own source files), so that a
     changed compiler never reuses a cached build."""
     h = hashlib.sha256()
-    h.update(f"plcbuilder {plcbuilder.__version__} compiler {_compiler.COMPILER_VERSION}".encode())
+    h.update(f"plcbuilder {plcbuilder.__version__} compiler {_pipeline.COMPILER_VERSION}".encode())
     pkg = Path(plcbuilder.__file__).parent
     for sub in ("lang", "bytecode"):
         folder = pkg / sub

@@ -41,7 +41,7 @@ from typing import Optional, Union
 from plcbuilder._support.files import atomic_write
 from plcbuilder._support.toml_errors import TomlLocator, decode_error
 from plcbuilder.bytecode.program import Kind
-from plcbuilder.lang.compiler import CompileOptions
+from plcbuilder.lang.pipeline import CompileOptions
 from plcbuilder.image.manifest import MAX_LIMIT, Limits
 
 SETTINGS_FILE = "plcbuilder.toml"

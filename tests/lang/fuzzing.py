@@ -47,10 +47,44 @@ def mutate(data: bytes, rng: random.Random) -> bytes:
     return bytes(b)
 
 
-def check_one(data: bytes, software: bool = False, strict: bool = False) -> None:
+def large_program(rng: random.Random, target_bytes: int) -> bytes:
+    """A program of about target_bytes of code: long runs of statements, some
+    inside ifs and loops (long jumps), calls to procedures defined after them
+    (far CALL targets), in random order."""
+    procs = ["helper0", "helper1", "helper2"]
+
+    def run(n: int) -> str:
+        return "".join(f"var03 = var04 * {100000 + rng.randrange(1 << 20)};\n" for _ in range(n))
+
+    def body(budget: int, depth: int = 0) -> str:
+        out = []
+        while budget > 0:
+            n = min(budget, rng.randint(1, 4000) // 10)
+            kind = rng.randrange(6)
+            if kind == 0 and depth < 3:
+                out.append(f"if (eparam == {rng.randrange(9)}) {{\n{body(n, depth + 1)}}}\n")
+            elif kind == 1 and depth < 3:
+                out.append(f"do {{\n{body(n, depth + 1)}}} while (timer == {rng.randrange(9)});\n")
+            elif kind == 2:
+                out.append(f"{rng.choice(procs)}();\n")
+                n = 1
+            else:
+                out.append(run(n))
+            budget -= n
+        return "".join(out)
+
+    lines = target_bytes // 10                     # a line of run() is 10 bytes of code
+    main = f"main() {{\n{body(lines * 3 // 4)}exit(99);\n}}\n"
+    helpers = "".join(f"{name}() {{\n{body(lines // 12)}}}\n" for name in procs)
+    return (main + helpers).encode()
+
+
+def check_one(data: bytes, software: bool = False, strict: bool = False,
+              code_limit: int | None = None) -> None:
     """Compile; anything but diagnostics (an exception, a bad span, an invalid
     binary) is a failure."""
-    opts = CompileOptions(kind=Kind.SOFTWARE if software else Kind.HARDWARE, strict=strict)
+    opts = CompileOptions(kind=Kind.SOFTWARE if software else Kind.HARDWARE, strict=strict,
+                          code_limit=code_limit)
     r = compile_bytes(data, "fuzz.plc", opts)
     for d in r.diagnostics:
         assert isinstance(d.severity, Severity)

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from plcbuilder.lang import compiler
-from plcbuilder.lang.compiler import compile_source
+from plcbuilder.lang import pipeline
+from plcbuilder.lang.pipeline import compile_source
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_importing_the_compiler_leaves_the_recursion_limit_alone():
     code = ("import sys\n"
             "sys.setrecursionlimit(1234)\n"
-            "import plcbuilder.lang.compiler, plcbuilder.api\n"
+            "import plcbuilder.lang.pipeline, plcbuilder.api\n"
             "print(sys.getrecursionlimit())\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          cwd=ROOT).stdout
@@ -42,7 +42,7 @@ def default_limit():
 
 
 def test_a_long_define_chain_compiles_and_the_limit_is_restored_after(default_limit):
-    assert default_limit < 1500 < compiler.RECURSION_LIMIT
+    assert default_limit < 1500 < pipeline.RECURSION_LIMIT
     r = compile_source(define_chain(1500), "M1.plc")
     assert r.ok, [d.message for d in r.errors]
     assert r.program is not None

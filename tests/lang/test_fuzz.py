@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.lark import from_lark
 
 from plcbuilder.lang.parser import grammar_text
-from tests.lang.fuzzing import check_one, mutate, seeds
+from tests.lang.fuzzing import check_one, large_program, mutate, seeds
 
 GRAMMAR = lark.Lark(grammar_text(), parser="lalr")
 #: names that reach every part of the checker: main, built-ins, predefined
@@ -37,3 +37,13 @@ def test_mutated_programs():
     for i in range(2000):
         data = mutate(rng.choice(corpus), rng)
         check_one(data, software=i % 5 == 0, strict=i % 7 == 0)
+
+
+def test_large_programs():
+    """Programs around and beyond what 16-bit code addresses reach (64 KiB of
+    code, 32 KiB jumps), under the default and raised limits: a diagnostic,
+    never an exception."""
+    rng = random.Random(20261125)
+    for target, limit in ((40_000, 65536), (80_000, None), (80_000, 1_000_000)):
+        check_one(large_program(rng, target), software=True, code_limit=limit)
+    check_one(mutate(large_program(rng, 70_000), rng), software=True, code_limit=1_000_000)

@@ -2,30 +2,14 @@
 
 import pytest
 
-from tests.lang.golden_util import compile_golden, goldens, listing
+from tests.lang.golden_util import check_diagnostics, compile_golden, goldens, listing, read_golden
 
 GOLDENS = goldens()
 
 
 @pytest.mark.parametrize("g", GOLDENS, ids=[g.id for g in GOLDENS])
 def test_diagnostics(g):
-    r = compile_golden(g)
-    main = str(g.path)
-    actual = [d for d in r.diagnostics if d.span is None or d.span.file == main]
-    unmatched = list(actual)
-    for line, sev, text in g.diags:
-        hits = [d for d in unmatched if d.span and d.span.line == line and d.severity.label == sev
-                and (text in d.message or any(text in h for h in d.hints))]
-        assert hits, f"{g.id}:{line}: expected {sev} containing {text!r}; got " + \
-            "; ".join(f"{d.span.line if d.span else '-'}: {d.severity.label}: {d.message}" for d in actual)
-        assert len(hits) == 1, f"{g.id}:{line}: {sev} {text!r} reported {len(hits)} times"
-        unmatched.remove(hits[0])
-    assert not unmatched, f"{g.id}: unexpected diagnostics: " + \
-        "; ".join(f"{d.span.line if d.span else '-'}: {d.severity.label}: {d.message}" for d in unmatched)
-    expects_error = any(sev == "error" for _, sev, _ in g.diags)
-    assert (r.program is None) == expects_error
-    if r.program is not None:
-        assert r.size <= r.limit
+    check_diagnostics(g, compile_golden(g))
 
 
 @pytest.mark.parametrize("g", [g for g in GOLDENS if not any(s == "error" for _, s, _ in g.diags)],
@@ -43,3 +27,46 @@ def test_deterministic(g):
     a = compile_golden(g).program.to_bytes()
     b = compile_golden(g).program.to_bytes()
     assert a == b
+
+
+# Programs too large to store: generated here, checked the same way. Each line
+# of STEPS is 20 bytes of code; at 64 KiB the assembler used to crash on a
+# 16-bit CALL target instead of reporting the size.
+STEPS = "    var03 = var04 * {i}; var05 = var06 * {i};\n"
+LARGE = {
+    # (options, lines before the call, wrap the lines in an if, expected error on main's line)
+    "over_the_limit_and_64k": ("--software", 3500, False,
+                               "the limit for a software procedure is 16384"),
+    "beyond_16_bit_calls": ("--software --code-limit=1000000", 3500, False,
+                            "code is addressed with 16 bits: a procedure is at most 65536 bytes"),
+    "beyond_16_bit_jumps": ("--software --code-limit=60000", 1700, True,
+                            "a jump in it spans more than 32767 bytes"),
+}
+
+
+def large_program(options: str, lines: int, wrapped: bool, expected: str) -> str:
+    body = "".join(STEPS.format(i=100000 + i) for i in range(lines))
+    if wrapped:
+        body = "    if (eparam == 3) {\n" + body + "    }\n"
+    error = f" // error: {expected}" if expected else ""
+    return (f"// options: {options}\nmain(){error}\n{{\n{body}    helper();\n    exit(99);\n}}\n"
+            "helper() { timer = 1; }\n")
+
+
+@pytest.mark.parametrize("name", sorted(LARGE))
+def test_large_programs_are_a_size_diagnostic(name, tmp_path):
+    path = tmp_path / f"{name}.plc"
+    path.write_text(large_program(*LARGE[name]), encoding="utf-8")
+    g = read_golden(path)
+    r = compile_golden(g)
+    check_diagnostics(g, r)
+    assert r.size > 32767
+
+
+def test_the_largest_addressable_program_compiles(tmp_path):
+    path = tmp_path / "just_fits.plc"
+    path.write_text(large_program("--software --code-limit=65536", 3250, False, ""), encoding="utf-8")
+    g = read_golden(path)
+    r = compile_golden(g)
+    check_diagnostics(g, r)
+    assert 60000 < r.size <= 65536 and r.program is not None

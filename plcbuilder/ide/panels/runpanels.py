@@ -7,8 +7,6 @@ which hand pyqtgraph views of the buffers cut to the visible time window.
 
 from __future__ import annotations
 
-import re
-from importlib import resources
 from typing import Mapping, Optional
 
 from PySide6 import QtCore, QtWidgets
@@ -21,6 +19,7 @@ from plcbuilder.ide.panels.log import LogPanel
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.plots import AnalogPanel, AxesPanel, LanesPanel, ProcPanel, TimeBase
 from plcbuilder.ide.panels.watch import WatchPanel
+from plcbuilder.lang import symbols as lang_symbols
 
 Qt = QtCore.Qt
 Signal = QtCore.Signal
@@ -31,57 +30,18 @@ FPS = 40                       # redraws a second (at most)
 VARIABLES_INTERVAL_MS = 250    # watch polls while something runs
 
 
-def _int_value(text) -> Optional[int]:
-    if isinstance(text, int) and not isinstance(text, bool):
-        return text
-    if isinstance(text, (tuple, list)) and text:
-        text = text[0]
-    if not isinstance(text, str):
-        return None
-    t = text.split("//")[0].split("/*")[0].strip().strip("()").strip()
-    try:
-        return int(t, 0)
-    except ValueError:
-        return None
-
-
-def pin_names_from_defines(defines: Mapping) -> tuple[dict[int, str], dict[int, str]]:
-    """Pin names from a project's defines: ``INPUT_*`` name inputs, ``OUTPUT_*``
-    name outputs. ``defines`` maps a name to its value text, to ``(value_text,
-    span)`` (as ``CompileResult.symbols.defines``) or to an int. When several
-    names give one pin, they are joined with " / "."""
-    inputs: dict[int, str] = {}
-    outputs: dict[int, str] = {}
-    for name, value in defines.items():
-        if name.startswith("INPUT_"):
-            target = inputs
-        elif name.startswith("OUTPUT_"):
-            target = outputs
-        else:
-            continue
-        pin = _int_value(value)
-        if pin is None or not 0 <= pin < 256:
-            continue
-        target[pin] = f"{target[pin]} / {name}" if pin in target else name
-    return inputs, outputs
-
-
-_DEFINE = re.compile(r"^\s*#\s*define\s+([A-Za-z_]\w*)\s+([^\s/]+)", re.M)
+#: Pin names from defines (INPUT_* / OUTPUT_*): a name -> value text, (text, span) or int.
+pin_names_from_defines = lang_symbols.pin_names
 
 
 def pin_names_from_header(text: str) -> tuple[dict[int, str], dict[int, str]]:
-    """Pin names from the text of a pins.h (object-like #defines only)."""
-    return pin_names_from_defines({m.group(1): m.group(2) for m in _DEFINE.finditer(text)})
+    """Pin names from the text of a pins.h."""
+    return lang_symbols.pin_names(lang_symbols.file_defines(text, "pins.h"))
 
 
 def default_pin_names() -> tuple[dict[int, str], dict[int, str]]:
     """The names of the built-in pins.h (the default machine's wiring)."""
-    try:
-        text = resources.files("plcbuilder.resources").joinpath("include/pins.h").read_text(
-            encoding="utf-8")
-    except (OSError, ModuleNotFoundError, FileNotFoundError):
-        return {}, {}
-    return pin_names_from_header(text)
+    return lang_symbols.pin_names(lang_symbols.header_defines(()))
 
 
 class RunPanels(QtCore.QObject):

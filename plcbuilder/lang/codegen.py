@@ -1,7 +1,4 @@
-"""The code generator and the whole compile pipeline.
-
-    compile_source / compile_file:
-        preprocess -> parse -> check -> generate -> Program (+ diagnostics)
+"""The code generator: the checked tree -> bytecode, with a line table.
 
 The encoding is compact: constants are folded, small numbers take one or two
 bytes, conditions jump directly (``if (a==0)`` is ``LOAD a; JNZ``), jumps are
@@ -12,211 +9,33 @@ bytes.
 
 from __future__ import annotations
 
-import os
-import sys
-import threading
-from contextlib import contextmanager
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass
 from typing import Optional
 
 from plcbuilder.bytecode.opcodes import LONG_FORM, Op, Operand, encode, fits, size_of
 from plcbuilder.bytecode.program import Kind, LineEntry, Program
 from plcbuilder.bytecode.semantics import BINARY_SYMBOL, UNARY_SYMBOL
-from plcbuilder.diagnostics import Diagnostic, Span, error
+from plcbuilder.diagnostics import Span
 from plcbuilder.lang import ast as A
-from plcbuilder.lang.checker import BUILTINS, Checker, Resolved, Symbols, const_value
-from plcbuilder.lang.parser import parse_tokens
-from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocessor
-from plcbuilder.lang.source import SourceSet, decode_source, read_source
-
-COMPILER_VERSION = "1"
-
-#: The recursion limit while compiling: the preprocessor expands a chain of
-#: #defines (each naming the next) one Python frame a link, and a chain may be
-#: longer than Python's default limit allows. (The checker and generator recurse
-#: over the tree too, but the parser caps its depth at 256 levels.)
-RECURSION_LIMIT = 4000
-_limit_lock = threading.Lock()
-_limit_users = 0                   # compiles running (in any thread)
-_limit_saved: Optional[int] = None  # the limit to restore when the last one ends
+from plcbuilder.lang.builtins import FUNCTIONS
+from plcbuilder.lang.checker import Resolved, const_value
 
 
-@contextmanager
-def _recursion_limit():
-    """Raise the recursion limit to RECURSION_LIMIT while the block runs. The
-    limit is global to the process: the first compile to start raises it and
-    the last to end restores it, so concurrent compiles do not undo each other."""
-    global _limit_users, _limit_saved
-    with _limit_lock:
-        if _limit_users == 0:
-            old = sys.getrecursionlimit()
-            _limit_saved = old if old < RECURSION_LIMIT else None
-            if _limit_saved is not None:
-                sys.setrecursionlimit(RECURSION_LIMIT)
-        _limit_users += 1
-    try:
-        yield
-    finally:
-        with _limit_lock:
-            _limit_users -= 1
-            if _limit_users == 0 and _limit_saved is not None:
-                if sys.getrecursionlimit() == RECURSION_LIMIT:   # unless changed meanwhile
-                    sys.setrecursionlimit(_limit_saved)
-                _limit_saved = None
+#: Code is addressed with 16 bits: a CALL's target (Operand.ABS16) is below this,
+ADDRESS_LIMIT = 1 << 16
+#: and a long jump's offset (Operand.REL16) reaches at most this far either way.
+JUMP_LIMIT = (1 << 15) - 1
 
 
-# ====================================================================== options
-@dataclass(frozen=True)
-class CompileOptions:
-    kind: Kind = Kind.HARDWARE
-    strict: bool = False
-    include_dirs: tuple = ()
-    code_limit: Optional[int] = None   # None: the kind's default (512 / 16384)
-
-    @property
-    def limit(self) -> int:
-        return self.code_limit if self.code_limit is not None else self.kind.code_limit
+def generate(res: Resolved, name: str, kind: Kind, file_namer) -> tuple[Optional[Program], int]:
+    """(the Program of the procedures ``res.reachable``, main first; its code
+    size). The Program is None when the code is too large to address (a CALL
+    target at or above ADDRESS_LIMIT, a jump further than a 16-bit offset): the
+    size says how large it is. ``file_namer`` maps a span's file to the name
+    stored in the file table."""
+    return Generator(res, name, kind, file_namer).run()
 
 
-@dataclass
-class CompileResult:
-    name: str
-    path: str
-    kind: Kind
-    program: Optional[Program]
-    diagnostics: list[Diagnostic]
-    sources: SourceSet
-    size: Optional[int]
-    limit: int
-    symbols: Symbols = field(default_factory=Symbols)
-    module: Optional[A.Module] = None
-    includes: list[str] = field(default_factory=list)
-
-    @property
-    def ok(self) -> bool:
-        return not any(d.is_error for d in self.diagnostics)
-
-    @property
-    def errors(self) -> list[Diagnostic]:
-        return [d for d in self.diagnostics if d.is_error]
-
-    @property
-    def warnings(self) -> list[Diagnostic]:
-        return [d for d in self.diagnostics if not d.is_error]
-
-    def source_line(self, file: str, line: int) -> Optional[str]:
-        return self.sources.line(file, line)
-
-
-# ====================================================================== pipeline
-def procedure_name(path: str) -> str:
-    stem = Path(path).stem
-    return stem if stem and not stem.startswith("<") else "main"
-
-
-def compile_source(text: str, path: str = "<input>", options: CompileOptions = CompileOptions(),
-                   *, file_path: Optional[Path] = None) -> CompileResult:
-    """Compile source text. ``path`` is the name diagnostics use; ``file_path``
-    (when the text is a file's) locates the procedure's folder for #include."""
-    if file_path is None and not path.startswith("<"):
-        p = Path(path)
-        file_path = p if p.parent != Path("") or p.exists() else None
-    return _compile(Preprocessor(options.include_dirs), text, path, file_path, options)
-
-
-def compile_bytes(data: bytes, path: str, options: CompileOptions = CompileOptions(),
-                  *, file_path: Optional[Path] = None) -> CompileResult:
-    text, diags = decode_source(data, path)
-    if text is None:
-        return _failed(path, options, diags)
-    r = compile_source(text, path, options, file_path=file_path)
-    r.diagnostics = sorted(diags + r.diagnostics, key=lambda d: (d.sort_key(), d.severity))
-    return r
-
-
-def compile_file(path, options: CompileOptions = CompileOptions()) -> CompileResult:
-    """Compile a .plc file. Never raises on bad input: it becomes diagnostics."""
-    p = Path(path)
-    name = str(path)
-    text, diags = read_source(p, name)
-    if text is None:
-        return _failed(name, options, diags)
-    pp = Preprocessor(options.include_dirs)
-    pp.diags.extend(diags)
-    return _compile(pp, text, name, p, options)
-
-
-def _failed(path: str, options: CompileOptions, diags: list[Diagnostic]) -> CompileResult:
-    return CompileResult(procedure_name(path), path, options.kind, None, diags, SourceSet(), None,
-                         options.limit)
-
-
-def _compile(pp: Preprocessor, text: str, path: str, file_path: Optional[Path],
-             options: CompileOptions) -> CompileResult:
-    with _recursion_limit():
-        return _compile_preprocessed(pp.run_text(text, path, file_path), path, file_path, options)
-
-
-def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path],
-                          options: CompileOptions) -> CompileResult:
-    name = procedure_name(path)
-    diags = list(pre.diagnostics)
-    if options.strict:
-        for span in pre.block_comments:
-            diags.append(error("strict", "/* */ comments are not accepted by the controller's "
-                                         "compiler (--strict)", span, "use // comments"))
-        for word, span in pre.directives:
-            if word not in ("include", "define"):
-                diags.append(error("strict", f"#{word} is not accepted by the controller's "
-                                             "compiler (--strict)", span))
-    module, parse_diags = parse_tokens(pre.tokens)
-    diags += parse_diags
-    checker = Checker(module, options.kind, options.strict, path, pre.sources.line,
-                      syntax_errors=any(d.is_error for d in diags))
-    check_diags, resolved, symbols = checker.run()
-    diags += check_diags
-    symbols.defines = {n: (d.text, d.span) for n, d in pre.defines.items()}
-    program = None
-    size = None
-    if not any(d.is_error for d in diags):
-        program = Generator(resolved, name, options.kind, _file_namer(path, file_path)).run()
-        size = program.code_size
-        if size > options.limit:
-            main = resolved.procs.get("main")
-            diags.append(error(
-                "size-limit",
-                f"procedure {name} is {size} bytes of code; the limit for a "
-                f"{options.kind.label} procedure is {options.limit} ({size}/{options.limit} bytes)",
-                main.name_span if main else Span.point(path, 1, 1),
-                "move work into a software procedure, or split it into procedures started "
-                "one after another"))
-            program = None
-    diags.sort(key=lambda d: (d.sort_key(), d.severity))
-    return CompileResult(name, path, options.kind, program, diags, pre.sources, size, options.limit,
-                         symbols, module, list(pre.includes))
-
-
-def _file_namer(path: str, file_path: Optional[Path]):
-    """Display name of a file -> the name stored in the binary's file table:
-    relative to the procedure's folder, so a build does not depend on where the
-    project lives."""
-    base = file_path.resolve().parent if file_path is not None else None
-    main_stored = file_path.name if file_path is not None else path
-
-    def name(display: str) -> str:
-        if display == path:
-            return main_stored
-        if display.startswith(BUILTIN_PREFIX) or base is None:
-            return display
-        try:
-            return os.path.relpath(Path(display).resolve(), base).replace(os.sep, "/")
-        except (ValueError, OSError):
-            return Path(display).name
-    return name
-
-
-# ====================================================================== generator
 @dataclass
 class _Ins:
     op: Op
@@ -266,7 +85,7 @@ class Generator:
             self.emit(Op.PUSH32, v)
 
     # --------------------------------------------------------------- driver
-    def run(self) -> Program:
+    def run(self) -> tuple[Optional[Program], int]:
         proc_labels = {n: self.label() for n in self.res.reachable}
         self.proc_labels = proc_labels
         for n in self.res.reachable:
@@ -313,7 +132,7 @@ class Generator:
                 self.emit(Op.INC if s.op == "++" else Op.DEC, self.res.slots[n])
         elif t is A.CallStmt:
             c = s.call
-            b = BUILTINS.get(c.name)
+            b = FUNCTIONS.get(c.name)
             if b is not None:
                 for a in c.args:
                     self.expr(a)
@@ -460,7 +279,7 @@ class Generator:
         elif t is A.Call:
             for a in e.args:
                 self.expr(a)
-            self.emit(BUILTINS[e.name].op)
+            self.emit(FUNCTIONS[e.name].op)
 
     def logical(self, e: A.Binary) -> None:
         false_l, end = self.label(), self.label()
@@ -479,7 +298,7 @@ class Generator:
         self.place(end)
 
     # --------------------------------------------------------------- assembly
-    def assemble(self) -> Program:
+    def assemble(self) -> tuple[Optional[Program], int]:
         items = self.items
         long: set[int] = set()   # indexes of jumps that need the long form
         while True:
@@ -503,6 +322,9 @@ class Generator:
                     changed = True
             if not changed:
                 break
+        if pos > ADDRESS_LIMIT or any(
+                not fits(Operand.REL16, offsets[items[i].label] - (ins_pos[i] + 3)) for i in long):
+            return None, pos
         code = bytearray()
         lines: list[LineEntry] = []
         files: list[str] = []
@@ -534,7 +356,7 @@ class Generator:
             else:
                 code += encode(op, it.arg)
         return Program(self.name, self.kind, bytes(code), 0, list(self.res.user_vars), files, lines,
-                       procs)
+                       procs), len(code)
 
 
 def _size(it: _Ins, long: bool) -> int:

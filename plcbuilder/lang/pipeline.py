@@ -1,0 +1,218 @@
+"""The compile pipeline, one stage after another:
+
+    compile_source / compile_bytes / compile_file:
+        read -> preprocess -> parse -> check -> generate -> Program (+ diagnostics)
+
+Everything a compile depends on is passed in (:class:`CompileOptions`); bad
+input becomes diagnostics, never an exception.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional
+
+from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.diagnostics import Diagnostic, Span, error
+from plcbuilder.lang import ast as A
+from plcbuilder.lang.checker import Checker, Symbols
+from plcbuilder.lang.codegen import ADDRESS_LIMIT, JUMP_LIMIT, generate
+from plcbuilder.lang.parser import parse_tokens
+from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocessor
+from plcbuilder.lang.source import SourceSet, decode_source, read_source
+
+COMPILER_VERSION = "1"
+
+#: The recursion limit while compiling: the preprocessor expands a chain of
+#: #defines (each naming the next) one Python frame a link, and a chain may be
+#: longer than Python's default limit allows. (The checker and generator recurse
+#: over the tree too, but the parser caps its depth at 256 levels.)
+RECURSION_LIMIT = 4000
+_limit_lock = threading.Lock()
+_limit_users = 0                   # compiles running (in any thread)
+_limit_saved: Optional[int] = None  # the limit to restore when the last one ends
+
+
+@contextmanager
+def _recursion_limit():
+    """Raise the recursion limit to RECURSION_LIMIT while the block runs. The
+    limit is global to the process: the first compile to start raises it and
+    the last to end restores it, so concurrent compiles do not undo each other."""
+    global _limit_users, _limit_saved
+    with _limit_lock:
+        if _limit_users == 0:
+            old = sys.getrecursionlimit()
+            _limit_saved = old if old < RECURSION_LIMIT else None
+            if _limit_saved is not None:
+                sys.setrecursionlimit(RECURSION_LIMIT)
+        _limit_users += 1
+    try:
+        yield
+    finally:
+        with _limit_lock:
+            _limit_users -= 1
+            if _limit_users == 0 and _limit_saved is not None:
+                if sys.getrecursionlimit() == RECURSION_LIMIT:   # unless changed meanwhile
+                    sys.setrecursionlimit(_limit_saved)
+                _limit_saved = None
+
+
+# ====================================================================== options
+@dataclass(frozen=True)
+class CompileOptions:
+    kind: Kind = Kind.HARDWARE
+    strict: bool = False
+    include_dirs: tuple = ()
+    code_limit: Optional[int] = None   # None: the kind's default (512 / 16384)
+
+    @property
+    def limit(self) -> int:
+        return self.code_limit if self.code_limit is not None else self.kind.code_limit
+
+
+@dataclass
+class CompileResult:
+    name: str
+    path: str
+    kind: Kind
+    program: Optional[Program]
+    diagnostics: list[Diagnostic]
+    sources: SourceSet
+    size: Optional[int]
+    limit: int
+    symbols: Symbols = field(default_factory=Symbols)
+    module: Optional[A.Module] = None
+    includes: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not any(d.is_error for d in self.diagnostics)
+
+    @property
+    def errors(self) -> list[Diagnostic]:
+        return [d for d in self.diagnostics if d.is_error]
+
+    @property
+    def warnings(self) -> list[Diagnostic]:
+        return [d for d in self.diagnostics if not d.is_error]
+
+    def source_line(self, file: str, line: int) -> Optional[str]:
+        return self.sources.line(file, line)
+
+
+# ====================================================================== pipeline
+def procedure_name(path: str) -> str:
+    stem = Path(path).stem
+    return stem if stem and not stem.startswith("<") else "main"
+
+
+def compile_source(text: str, path: str = "<input>", options: CompileOptions = CompileOptions(),
+                   *, file_path: Optional[Path] = None) -> CompileResult:
+    """Compile source text. ``path`` is the name diagnostics use; ``file_path``
+    (when the text is a file's) locates the procedure's folder for #include."""
+    if file_path is None and not path.startswith("<"):
+        p = Path(path)
+        file_path = p if p.parent != Path("") or p.exists() else None
+    return _compile(Preprocessor(options.include_dirs), text, path, file_path, options)
+
+
+def compile_bytes(data: bytes, path: str, options: CompileOptions = CompileOptions(),
+                  *, file_path: Optional[Path] = None) -> CompileResult:
+    text, diags = decode_source(data, path)
+    if text is None:
+        return _failed(path, options, diags)
+    r = compile_source(text, path, options, file_path=file_path)
+    r.diagnostics = sorted(diags + r.diagnostics, key=lambda d: (d.sort_key(), d.severity))
+    return r
+
+
+def compile_file(path, options: CompileOptions = CompileOptions()) -> CompileResult:
+    """Compile a .plc file. Never raises on bad input: it becomes diagnostics."""
+    p = Path(path)
+    name = str(path)
+    text, diags = read_source(p, name)
+    if text is None:
+        return _failed(name, options, diags)
+    pp = Preprocessor(options.include_dirs)
+    pp.diags.extend(diags)
+    return _compile(pp, text, name, p, options)
+
+
+def _failed(path: str, options: CompileOptions, diags: list[Diagnostic]) -> CompileResult:
+    return CompileResult(procedure_name(path), path, options.kind, None, diags, SourceSet(), None,
+                         options.limit)
+
+
+def _compile(pp: Preprocessor, text: str, path: str, file_path: Optional[Path],
+             options: CompileOptions) -> CompileResult:
+    with _recursion_limit():
+        return _compile_preprocessed(pp.run_text(text, path, file_path), path, file_path, options)
+
+
+def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path],
+                          options: CompileOptions) -> CompileResult:
+    name = procedure_name(path)
+    diags = list(pre.diagnostics)
+    if options.strict:
+        for span in pre.block_comments:
+            diags.append(error("strict", "/* */ comments are not accepted by the controller's "
+                                         "compiler (--strict)", span, "use // comments"))
+        for word, span in pre.directives:
+            if word not in ("include", "define"):
+                diags.append(error("strict", f"#{word} is not accepted by the controller's "
+                                             "compiler (--strict)", span))
+    module, parse_diags = parse_tokens(pre.tokens)
+    diags += parse_diags
+    checker = Checker(module, options.kind, options.strict, path, pre.sources.line,
+                      syntax_errors=any(d.is_error for d in diags))
+    check_diags, resolved, symbols = checker.run()
+    diags += check_diags
+    symbols.defines = {n: (d.text, d.span) for n, d in pre.defines.items()}
+    program = None
+    size = None
+    if not any(d.is_error for d in diags):
+        program, size = generate(resolved, name, options.kind, _file_namer(path, file_path))
+        main = resolved.procs.get("main")
+        at = main.name_span if main else Span.point(path, 1, 1)
+        if size > options.limit:
+            diags.append(error(
+                "size-limit",
+                f"procedure {name} is {size} bytes of code; the limit for a "
+                f"{options.kind.label} procedure is {options.limit} ({size}/{options.limit} bytes)",
+                at, "move work into a software procedure, or split it into procedures started "
+                    "one after another"))
+            program = None
+        elif program is None:      # within the limit, but beyond what 16-bit addresses reach
+            why = (f"code is addressed with 16 bits: a procedure is at most {ADDRESS_LIMIT} bytes "
+                   f"({size}/{ADDRESS_LIMIT} bytes)" if size > ADDRESS_LIMIT else
+                   f"a jump in it spans more than {JUMP_LIMIT} bytes, the farthest a 16-bit "
+                   "offset reaches")
+            diags.append(error("size-limit", f"procedure {name} is {size} bytes of code; {why}", at,
+                               "split it into procedures started one after another"))
+    diags.sort(key=lambda d: (d.sort_key(), d.severity))
+    return CompileResult(name, path, options.kind, program, diags, pre.sources, size, options.limit,
+                         symbols, module, list(pre.includes))
+
+
+def _file_namer(path: str, file_path: Optional[Path]):
+    """Display name of a file -> the name stored in the binary's file table:
+    relative to the procedure's folder, so a build does not depend on where the
+    project lives."""
+    base = file_path.resolve().parent if file_path is not None else None
+    main_stored = file_path.name if file_path is not None else path
+
+    def name(display: str) -> str:
+        if display == path:
+            return main_stored
+        if display.startswith(BUILTIN_PREFIX) or base is None:
+            return display
+        try:
+            return os.path.relpath(Path(display).resolve(), base).replace(os.sep, "/")
+        except (ValueError, OSError):
+            return Path(display).name
+    return name
