@@ -27,13 +27,13 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Optional
 
-from PySide6.QtCore import QSize, Qt, QTimer, Signal
-from PySide6.QtGui import QAction, QKeySequence
-from PySide6.QtWidgets import (QApplication, QDockWidget, QFileDialog, QLabel, QMainWindow,
-                               QMessageBox, QToolBar)
+from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtGui import QAction
+from PySide6.QtWidgets import QApplication, QFileDialog, QMainWindow, QMessageBox
 
 from plcbuilder.api import Kind
-from plcbuilder.ide import dialogs
+from plcbuilder.ide import actions, dialogs, docks
+from plcbuilder.ide.actions import Act
 from plcbuilder.ide.build_panel import BuildPanel
 from plcbuilder.ide.editor import CodeEditor, file_key
 from plcbuilder.ide.editor_stack import EditorStack
@@ -55,52 +55,6 @@ SOURCE_SUFFIXES = (".plc", ".h")
 TEXT_SUFFIXES = (".plc", ".h", ".toml", ".xml", ".md", ".txt")
 
 
-class Act:
-    """Names of the window's actions (``window.action(Act.BUILD_ALL)``)."""
-    NEW_PROCEDURE = "new_procedure"
-    NEW_HEADER = "new_header"
-    OPEN_PROJECT = "open_project"
-    OPEN_EXAMPLE = "open_example"
-    CLOSE_PROJECT = "close_project"
-    SAVE = "save"
-    SAVE_ALL = "save_all"
-    REVERT = "revert"
-    CLOSE_EDITOR = "close_editor"
-    CLOSE_ALL = "close_all"
-    PREFERENCES = "preferences"
-    QUIT = "quit"
-    UNDO = "undo"
-    REDO = "redo"
-    CUT = "cut"
-    COPY = "copy"
-    PASTE = "paste"
-    SELECT_ALL = "select_all"
-    TOGGLE_COMMENT = "toggle_comment"
-    FIND = "find"
-    REPLACE = "replace"
-    FIND_NEXT = "find_next"
-    FIND_PREVIOUS = "find_previous"
-    GOTO_LINE = "goto_line"
-    GOTO_DEFINITION = "goto_definition"
-    COMPLETE = "complete"
-    ZOOM_IN = "zoom_in"
-    ZOOM_OUT = "zoom_out"
-    ZOOM_RESET = "zoom_reset"
-    NEXT_TAB = "next_tab"
-    PREVIOUS_TAB = "previous_tab"
-    RESET_LAYOUT = "reset_layout"
-    BUILD_ALL = "build_all"
-    UPLOAD = "upload"
-    START = "start"
-    START_CURRENT = "start_current"
-    STOP = "stop"
-    RESET_CONTROLLER = "reset_controller"
-    CONNECT = "connect"
-    EMBEDDED = "embedded"
-    ABOUT = "about"
-
-
-
 class MainWindow(QMainWindow):
     """The IDE's main window."""
 
@@ -119,13 +73,12 @@ class MainWindow(QMainWindow):
         self.settings = settings or Settings()
         self.prefs: Preferences = self.settings.preferences()
         self._project: Optional[Project] = None
-        self._actions: dict[str, QAction] = {}
         self._closing = False
         self._last_state = ControllerStatus()
         self.run_panels = None
-        self._right_docks: list = []
+        self.right_docks: list = []          # the docks the default sizes apply to
         self._shown_once = False
-        self._layout_restored = False
+        self.layout_restored = False
 
         self.setWindowTitle(APP_NAME)
         self.setWindowIcon(icon("app"))
@@ -151,14 +104,14 @@ class MainWindow(QMainWindow):
         self.welcome, self.welcome_recent = es.welcome, es.welcome.welcome_recent
         self.recovery, self.store = es.recovery, self.lint.store
 
-        self._build_docks()
-        self._build_actions()
-        self._build_menus()
-        self._build_toolbar()
+        docks.build_docks(self)
+        self._actions = actions.build_actions(self)
+        actions.build_menus(self)
+        actions.build_toolbar(self)
         self._wire()
         self._setup_run_side()
-        self._default_state = self.saveState()
-        self._restore_layout()
+        self.default_state = self.saveState()
+        docks.restore_layout(self)
         self._update_actions()
         self._show_welcome()
         self.recovery.start()
@@ -289,7 +242,7 @@ class MainWindow(QMainWindow):
         except ProjectError as exc:
             QMessageBox.critical(self, "Open Project", f"Cannot open the project:\n\n{exc}")
             self.settings.remove_recent_project(str(Path(path).expanduser().resolve()))
-            self._fill_recent_menu()
+            actions.fill_recent_menu(self)
             return False
         self.editor_stack.close_all(force=True)
         self.project = project
@@ -297,7 +250,7 @@ class MainWindow(QMainWindow):
         self.problems.set_root(project.root)
         self.tree.set_project(project)
         self.settings.add_recent_project(project.root)
-        self._fill_recent_menu()
+        actions.fill_recent_menu(self)
         self.lint.refresh_header_defines()
         self.lint.lint_project()
         for f in self.settings.open_files(project.root):
@@ -370,7 +323,7 @@ class MainWindow(QMainWindow):
         return ok
 
 
-    def _open_project_dialog(self) -> bool:
+    def open_project_dialog(self) -> bool:
         start = str(self.project.root.parent) if self.project else str(Path.home())
         folder = QFileDialog.getExistingDirectory(self, "Open Project Folder", start)
         if not folder:
@@ -412,212 +365,6 @@ class MainWindow(QMainWindow):
 
 
     # ========================================================= construction
-    def _build_docks(self) -> None:
-        self.project_dock = self._dock("Project", "projectDock", self.tree,
-                                       Qt.DockWidgetArea.LeftDockWidgetArea)
-        self.problems_dock = self._dock("Problems", "problemsDock", self.problems,
-                                        Qt.DockWidgetArea.BottomDockWidgetArea)
-        self.build_dock = self._dock("Build Output", "buildDock", self.build_panel,
-                                     Qt.DockWidgetArea.BottomDockWidgetArea)
-        self.tabifyDockWidget(self.problems_dock, self.build_dock)
-        self.problems_dock.raise_()
-        self.resizeDocks([self.project_dock], [250], Qt.Orientation.Horizontal)
-        self.resizeDocks([self.problems_dock], [200], Qt.Orientation.Vertical)
-
-    def _dock(self, title, name, widget, area) -> QDockWidget:
-        dock = QDockWidget(title, self)
-        dock.setObjectName(name)
-        dock.setWidget(widget)
-        dock.setFeatures(QDockWidget.DockWidgetFeature.DockWidgetClosable |
-                         QDockWidget.DockWidgetFeature.DockWidgetMovable |
-                         QDockWidget.DockWidgetFeature.DockWidgetFloatable)
-        self.addDockWidget(area, dock)
-        return dock
-
-    def _add_action(self, name, text, slot=None, shortcut=None, ic=None, tip=None,
-                    editor_scope=False, checkable=False) -> QAction:
-        act = QAction(text, self)
-        act.setObjectName(name)
-        if ic:
-            act.setIcon(icon(ic))
-        if shortcut:
-            act.setShortcuts(shortcut if isinstance(shortcut, list) else [QKeySequence(shortcut)])
-        if tip:
-            act.setStatusTip(tip)
-            act.setToolTip(f"{tip} ({act.shortcut().toString(QKeySequence.SequenceFormat.NativeText)})"
-                           if shortcut else tip)
-        act.setCheckable(checkable)
-        if slot is not None:
-            act.triggered.connect(lambda _checked=False: slot())
-        if editor_scope:
-            act.setShortcutContext(Qt.ShortcutContext.WidgetWithChildrenShortcut)
-            self.stack.addAction(act)
-        else:
-            self.addAction(act)
-        self._actions[name] = act
-        return act
-
-    def _build_actions(self) -> None:
-        A, K = self._add_action, QKeySequence.StandardKey
-        ed = self._with_editor
-        A(Act.NEW_PROCEDURE, "&New Procedure…", lambda: self.tree.new_procedure(Kind.HARDWARE),
-          "Ctrl+N", "new", "Create a procedure")
-        A(Act.NEW_HEADER, "New &Header…", self.tree.new_header, None, "file-header",
-          "Create a header in include/")
-        A(Act.OPEN_PROJECT, "&Open Project…", self._open_project_dialog, "Ctrl+Shift+O", "open",
-          "Open a project folder")
-        A(Act.OPEN_EXAMPLE, "Open &Example Project…", self.open_example_project, None, "example",
-          "Make a copy of the example project and open it")
-        A(Act.CLOSE_PROJECT, "Close Project", self.close_project)
-        A(Act.SAVE, "&Save", self.save_editor, "Ctrl+S", "save", "Save the file")
-        A(Act.SAVE_ALL, "Save A&ll", self.save_all, "Ctrl+Shift+S", "save-all", "Save every file")
-        A(Act.REVERT, "&Revert to Saved", self.revert_editor)
-        A(Act.CLOSE_EDITOR, "&Close Editor", self.close_editor, "Ctrl+W")
-        A(Act.CLOSE_ALL, "Close All Editors", lambda: self.editor_stack.close_all(), "Ctrl+Shift+W")
-        A(Act.PREFERENCES, "&Preferences…", self.edit_preferences, "Ctrl+,")
-        A(Act.QUIT, "&Quit", self.close, "Ctrl+Q")
-        A(Act.UNDO, "&Undo", ed(lambda e: e.undo()), K.Undo, editor_scope=True)
-        A(Act.REDO, "&Redo", ed(lambda e: e.redo()), [QKeySequence("Ctrl+Y"),
-                                                     QKeySequence("Ctrl+Shift+Z")], editor_scope=True)
-        A(Act.CUT, "Cu&t", ed(lambda e: e.cut()), K.Cut, editor_scope=True)
-        A(Act.COPY, "&Copy", ed(lambda e: e.copy()), K.Copy, editor_scope=True)
-        A(Act.PASTE, "&Paste", ed(lambda e: e.paste()), K.Paste, editor_scope=True)
-        A(Act.SELECT_ALL, "Select &All", ed(lambda e: e.selectAll()), K.SelectAll,
-          editor_scope=True)
-        A(Act.TOGGLE_COMMENT, "Toggle &Comment", ed(lambda e: e.toggle_comment()), "Ctrl+/",
-          "comment", "Comment or uncomment the selected lines", editor_scope=True)
-        A(Act.FIND, "&Find…", lambda: self.show_find(False), "Ctrl+F", "find", "Find in the file")
-        A(Act.REPLACE, "R&eplace…", lambda: self.show_find(True), "Ctrl+H", None,
-          "Find and replace in the file")
-        A(Act.FIND_NEXT, "Find &Next", self.find_bar.find_next, "F3")
-        A(Act.FIND_PREVIOUS, "Find Pre&vious", self.find_bar.find_previous, "Shift+F3")
-        A(Act.GOTO_LINE, "&Go to Line…", self.goto_line_dialog, "Ctrl+G", "goto",
-          "Go to a line of the file")
-        A(Act.GOTO_DEFINITION, "Go to &Definition", ed(lambda e: self.goto_definition(
-            e.word_under_caret())), "F12", None, "Go to where the name under the caret is defined",
-          editor_scope=True)
-        A(Act.COMPLETE, "Complete", ed(lambda e: e.show_completions(explicit=True)), "Ctrl+Space",
-          editor_scope=True)
-        A(Act.ZOOM_IN, "Zoom &In", ed(lambda e: e.zoomIn()), [QKeySequence("Ctrl++"),
-                                                           QKeySequence("Ctrl+=")])
-        A(Act.ZOOM_OUT, "Zoom &Out", ed(lambda e: e.zoomOut()), "Ctrl+-")
-        A(Act.ZOOM_RESET, "Reset Zoom", ed(lambda e: e.setZoom(0)), "Ctrl+0")
-        A(Act.NEXT_TAB, "Next Editor", lambda: self.editor_stack.cycle_tab(1), "Ctrl+PgDown")
-        A(Act.PREVIOUS_TAB, "Previous Editor", lambda: self.editor_stack.cycle_tab(-1), "Ctrl+PgUp")
-        A(Act.RESET_LAYOUT, "Reset Layout", self.reset_layout)
-        A(Act.BUILD_ALL, "&Build All", self.build_all, "Ctrl+B", "build",
-          "Compile every procedure and write build/eeprom.rom")
-        A(Act.UPLOAD, "&Upload", self.upload, "Ctrl+U", "upload",
-          "Upload build/eeprom.rom to the controller")
-        A(Act.START, "&Start…", self.start_procedure, "F5", "start",
-          "Start a procedure on the controller (by name or M-code, with eparam)")
-        A(Act.START_CURRENT, "Start &This Procedure", self.run_actions.start_current, "Ctrl+F5", None,
-          "Start the procedure of the current editor with the last eparam")
-        A(Act.STOP, "S&top", self.stop, "Shift+F5", "stop",
-          "Stop: the first press starts M02, the second OFF")
-        A(Act.RESET_CONTROLLER, "&Reset Controller", self.run_actions.reset_controller, None, "reset",
-          "A fresh controller with the same image (time starts again at 0)")
-        A(Act.CONNECT, "&Connect to Controller…", self.connect_dialog, None, "connect",
-          "Connect to a running plcbuilder controller")
-        A(Act.EMBEDDED, "Use the &Embedded Controller", self.run_actions.use_embedded, None, "controller",
-          "Run the simulated controller as a child process of the IDE")
-        A(Act.ABOUT, "&About PLC Builder", self.about)
-        context = [self._actions[a] for a in (Act.TOGGLE_COMMENT, Act.GOTO_DEFINITION)] + \
-            [None] + [self._actions[a] for a in (Act.FIND, Act.GOTO_LINE)]
-        self.editor_stack.context_actions = context
-
-    def _build_menus(self) -> None:
-        mb = self.menuBar()
-        a = self.action
-        m = mb.addMenu("&File")
-        for name in (Act.NEW_PROCEDURE, Act.NEW_HEADER, None, Act.OPEN_PROJECT, Act.OPEN_EXAMPLE):
-            m.addAction(a(name)) if name else m.addSeparator()
-        self.recent_menu = m.addMenu("Recent &Projects")
-        m.addAction(a(Act.CLOSE_PROJECT))
-        m.addSeparator()
-        for name in (Act.SAVE, Act.SAVE_ALL, Act.REVERT, None, Act.CLOSE_EDITOR, Act.CLOSE_ALL,
-                     None, Act.PREFERENCES, None, Act.QUIT):
-            m.addAction(a(name)) if name else m.addSeparator()
-        m = mb.addMenu("&Edit")
-        for name in (Act.UNDO, Act.REDO, None, Act.CUT, Act.COPY, Act.PASTE, Act.SELECT_ALL, None,
-                     Act.TOGGLE_COMMENT, Act.COMPLETE, None, Act.FIND, Act.REPLACE, Act.FIND_NEXT,
-                     Act.FIND_PREVIOUS, None, Act.GOTO_LINE, Act.GOTO_DEFINITION):
-            m.addAction(a(name)) if name else m.addSeparator()
-        self.view_menu = mb.addMenu("&View")
-        m = mb.addMenu("&Build")
-        for name in (Act.BUILD_ALL, Act.UPLOAD):
-            m.addAction(a(name))
-        m = mb.addMenu("&Run")
-        for name in (Act.START, Act.START_CURRENT, Act.STOP):
-            m.addAction(a(name))
-        m.addSeparator()
-        speed = m.addMenu(icon("speed"), "Simulation &Speed")
-        for act in self.run_actions.speed_actions.values():
-            speed.addAction(act)
-        m.addAction(a(Act.RESET_CONTROLLER))
-        m.addSeparator()
-        m.addAction(a(Act.CONNECT))
-        m.addAction(a(Act.EMBEDDED))
-        m = mb.addMenu("&Help")
-        m.addAction(a(Act.ABOUT))
-        self._fill_recent_menu()
-
-    def _fill_view_menu(self) -> None:
-        m = self.view_menu
-        m.clear()
-        for dock in self.findChildren(QDockWidget):
-            if dock.parent() is self:
-                m.addAction(dock.toggleViewAction())
-        m.addSeparator()
-        m.addAction(self.toolbar.toggleViewAction())
-        m.addSeparator()
-        for name in (Act.ZOOM_IN, Act.ZOOM_OUT, Act.ZOOM_RESET, None, Act.NEXT_TAB,
-                     Act.PREVIOUS_TAB, None, Act.RESET_LAYOUT):
-            m.addAction(self.action(name)) if name else m.addSeparator()
-
-    def _fill_recent_menu(self) -> None:
-        m = self.recent_menu
-        m.clear()
-        recent = self.settings.recent_projects()
-        for path in recent:
-            act = m.addAction(icon("project"), path)
-            act.triggered.connect(lambda _c=False, p=path: self.open_project(p))
-        if recent:
-            m.addSeparator()
-            m.addAction("Clear List", self._clear_recent)
-        else:
-            act = m.addAction("(none yet)")
-            act.setEnabled(False)
-        self.welcome.set_recent(recent)
-
-    def _clear_recent(self) -> None:
-        self.settings.clear_recent_projects()
-        self._fill_recent_menu()
-
-    def _build_toolbar(self) -> None:
-        tb = QToolBar("Main Toolbar", self)
-        tb.setObjectName("mainToolbar")
-        tb.setIconSize(QSize(20, 20))
-        tb.setMovable(False)
-        tb.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextBesideIcon)
-        for name in (Act.NEW_PROCEDURE, Act.SAVE, Act.SAVE_ALL):
-            tb.addAction(self.action(name))
-            tb.widgetForAction(self.action(name)).setToolButtonStyle(
-                Qt.ToolButtonStyle.ToolButtonIconOnly)
-        tb.addSeparator()
-        tb.addAction(self.action(Act.BUILD_ALL))
-        tb.addAction(self.action(Act.UPLOAD))
-        tb.addSeparator()
-        tb.addAction(self.action(Act.START))
-        tb.addAction(self.action(Act.STOP))
-        tb.addSeparator()
-        lab = QLabel(" Speed ", tb)
-        lab.setPixmap(icon("speed").pixmap(16, 16))
-        tb.addWidget(lab)
-        tb.addWidget(self.run_actions.make_speed_combo(tb))
-        self.toolbar = tb
-        self.addToolBar(Qt.ToolBarArea.TopToolBarArea, tb)
-
     def _wire(self) -> None:
         """Connect the parts' signals."""
         msg = self.statusBar().showMessage
@@ -636,7 +383,7 @@ class MainWindow(QMainWindow):
         es.sig_changes_discarded.connect(lint.on_changes_discarded)
         es.sig_reveal.connect(self._reveal)
         es.welcome.sig_open_project.connect(self.open_project)
-        es.welcome.sig_open_project_dialog.connect(self._open_project_dialog)
+        es.welcome.sig_open_project_dialog.connect(self.open_project_dialog)
         es.welcome.sig_open_example.connect(self.open_example_project)
         es.welcome.sig_new_procedure.connect(lambda: tree.new_procedure(Kind.HARDWARE))
         # the project tree
@@ -694,74 +441,19 @@ class MainWindow(QMainWindow):
             if self.run_panels is not None:
                 self.run_panels.sig_open_location.connect(
                     lambda f, ln: self.open_location(f, ln))
-                self._place_run_docks(self.run_panels.docks())
-        self._fill_view_menu()
-
-    def _place_run_docks(self, docks: list) -> None:
-        """Right: the plots (tabbed) over inputs and watch (tabbed); the run log
-        beside Problems and Build Output at the bottom."""
-        by_name = {d.objectName(): d for d in docks}
-        right = [by_name[n] for n in ("runOutputsDock", "runProcDock", "runAnalogDock",
-                                      "runAxesDock") if n in by_name]
-        lower = [by_name[n] for n in ("runInputsDock", "runWatchDock") if n in by_name]
-        log = by_name.get("runLogDock")
-        placed = set(right) | set(lower) | ({log} if log else set())
-        area = Qt.DockWidgetArea.RightDockWidgetArea
-        if right:
-            self.addDockWidget(area, right[0])
-        if lower:
-            if right:
-                self.splitDockWidget(right[0], lower[0], Qt.Orientation.Vertical)
-            else:
-                self.addDockWidget(area, lower[0])
-        for d in right[1:]:
-            self.tabifyDockWidget(right[0], d)
-        for d in lower[1:]:
-            self.tabifyDockWidget(lower[0], d)
-        if log is not None:
-            self.tabifyDockWidget(self.build_dock, log)
-        for d in docks:
-            if d not in placed:
-                self.addDockWidget(area, d)
-        for d in (right[:1] + lower[:1]):
-            d.raise_()
-        self.problems_dock.raise_()
-        self._right_docks = right[:1] + lower[:1]
+                docks.place_run_docks(self, self.run_panels.docks())
+        actions.fill_view_menu(self)
 
     # ============================================================ settings
-    def _restore_layout(self) -> None:
-        geom, state = self.settings.window_state()
-        if geom is not None:
-            self.restoreGeometry(geom)
-        self._layout_restored = state is not None and self.restoreState(state)
-
-    def _default_dock_sizes(self) -> None:
-        """Sizes for the default layout (they only apply once the window is shown)."""
-        w = max(self.width(), 800)
-        self.resizeDocks([self.project_dock], [230], Qt.Orientation.Horizontal)
-        if self._right_docks:
-            self.resizeDocks(self._right_docks[:1], [int(w * 0.32)], Qt.Orientation.Horizontal)
-            if len(self._right_docks) > 1:
-                h = max(self.height() - 200, 400)
-                self.resizeDocks(self._right_docks, [int(h * 0.62), int(h * 0.38)],
-                                 Qt.Orientation.Vertical)
-        self.resizeDocks([self.problems_dock], [max(190, int(self.height() * 0.24))],
-                         Qt.Orientation.Vertical)
+    def reset_layout(self) -> None:
+        docks.reset_layout(self)
 
     def showEvent(self, event) -> None:  # noqa: N802 - Qt override
         super().showEvent(event)
         if not self._shown_once:
             self._shown_once = True
-            if not self._layout_restored:
-                QTimer.singleShot(0, self._default_dock_sizes)
-
-    def reset_layout(self) -> None:
-        self.restoreState(self._default_state)
-        for dock in self.findChildren(QDockWidget):
-            if dock.parent() is self:
-                dock.show()
-        self.problems_dock.raise_()
-        self._default_dock_sizes()
+            if not self.layout_restored:
+                QTimer.singleShot(0, lambda: docks.default_dock_sizes(self))
 
     def _save_session(self) -> None:
         if self.project is not None:
@@ -787,13 +479,6 @@ class MainWindow(QMainWindow):
             apply_theme(app, prefs.theme)
 
     # ====================================================== the parts' news
-    def _with_editor(self, fn):
-        def run():
-            ed = self.current_editor()
-            if ed is not None:
-                fn(ed)
-        return run
-
     def _show_welcome(self) -> None:
         self.editor_stack.show_welcome()
 
@@ -854,6 +539,9 @@ class MainWindow(QMainWindow):
         if state == Qt.ApplicationState.ApplicationActive and not self._closing:
             self.editor_stack.check_disk()
 
+    def _update_actions(self) -> None:
+        actions.update_actions(self)
+
     def _update_title(self) -> None:
         ed = self.current_editor()
         parts = []
@@ -866,30 +554,6 @@ class MainWindow(QMainWindow):
             parts.append(self.project.name)
         parts.append(APP_NAME)
         self.setWindowTitle(" — ".join(parts))
-
-    def _update_actions(self) -> None:
-        has_project = self.project is not None
-        ed = self.current_editor()
-        has_editor = ed is not None
-        for name in (Act.NEW_PROCEDURE, Act.NEW_HEADER, Act.CLOSE_PROJECT):
-            self.action(name).setEnabled(has_project)
-        self.action(Act.BUILD_ALL).setEnabled(has_project and not self.run_actions.building())
-        for name in (Act.SAVE, Act.REVERT, Act.CLOSE_EDITOR, Act.CLOSE_ALL, Act.FIND,
-                     Act.REPLACE, Act.GOTO_LINE, Act.TOGGLE_COMMENT, Act.GOTO_DEFINITION):
-            self.action(name).setEnabled(has_editor)
-        if has_editor and ed.builtin:
-            self.action(Act.SAVE).setEnabled(False)
-            self.action(Act.TOGGLE_COMMENT).setEnabled(False)
-        run = self.connection is not None and has_project
-        for name in (Act.UPLOAD, Act.START, Act.START_CURRENT, Act.STOP, Act.RESET_CONTROLLER):
-            self.action(name).setEnabled(run)
-        for name in (Act.CONNECT, Act.EMBEDDED):
-            self.action(name).setEnabled(self.connection is not None)
-        self.run_actions.speed_combo.setEnabled(self.connection is not None)
-        if self.connection is None:
-            tip = "The run side (controller connection) is not available"
-            for name in (Act.UPLOAD, Act.START, Act.STOP):
-                self.action(name).setToolTip(tip)
 
     # ---------------------------------------------------------- drag & drop
     def dragEnterEvent(self, event) -> None:  # noqa: N802 - Qt override

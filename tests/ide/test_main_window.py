@@ -505,7 +505,7 @@ def test_open_project_dialog(win, project, monkeypatch):
     win.action(Act.OPEN_PROJECT).trigger()
     assert win.project.root == project.resolve()
     monkeypatch.setattr(QFileDialog, "getExistingDirectory", lambda *a, **k: "")
-    assert not win._open_project_dialog()
+    assert not win.open_project_dialog()
 
 
 def test_close_project_shows_the_welcome_page(win, project):
