@@ -21,6 +21,7 @@ from plcbuilder import api
 from plcbuilder.api import Kind
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.editor import CodeEditor, file_key, normalise_newlines
+from plcbuilder.ide.editor.find_bar import FindReplaceBar
 from plcbuilder.ide.highlighter import lexer_for
 from plcbuilder.ide.icons import icon
 from plcbuilder.ide.recovery import (DiskWatcher, RecoveryManager, digest, encode_text,
@@ -99,7 +100,7 @@ class EditorStack(QWidget):
         self.welcome = WelcomePage()
         self.stack.addWidget(self.welcome)
         self.stack.addWidget(self.tabs)
-        self.find_bar = dialogs.FindReplaceBar(self)
+        self.find_bar = FindReplaceBar(self)
         self.find_bar.sig_message.connect(lambda m: self.sig_message.emit(m, 3000))
         lay.addWidget(self.stack, 1)
         lay.addWidget(self.find_bar)
