@@ -7,6 +7,8 @@ from PySide6.QtGui import QKeySequence, QShortcut
 from PySide6.QtWidgets import (QCheckBox, QHBoxLayout, QLabel, QLineEdit, QPushButton, QToolButton,
                                QVBoxLayout, QWidget)
 
+from plcbuilder.ide.editor.widget import CodeEditor
+
 
 class FindReplaceBar(QWidget):
     """The find/replace bar under the editors (Ctrl+F, Ctrl+H), searching
@@ -113,7 +115,6 @@ class FindReplaceBar(QWidget):
         self.sig_closed.emit()
 
     def flags(self) -> int:
-        from plcbuilder.ide.editor import CodeEditor
         return CodeEditor.search_flags(self.case_box.isChecked(), self.word_box.isChecked(),
                                        self.regex_box.isChecked())
 
