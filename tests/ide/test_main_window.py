@@ -569,6 +569,23 @@ def test_upload_builds_first(runwin, qtbot, project):
     assert data == (project / "build" / "eeprom.rom").read_bytes()
 
 
+def test_a_build_alone_does_not_upload(runwin, qtbot, project):
+    from plcbuilder.ide.run_actions import Step
+    w, conn = runwin
+    with qtbot.waitSignal(w.sig_build_finished, timeout=20000):
+        assert w.build_all()
+        assert w.run_actions.step is Step.BUILD
+    assert w.run_actions.step is Step.IDLE
+    assert not any(c[0] == "upload" for c in conn.calls)
+    from dataclasses import replace
+    w.apply_preferences(replace(w.prefs, build_before_upload=True))
+    with qtbot.waitSignal(w.sig_build_finished, timeout=20000):
+        assert w.upload()
+        assert w.run_actions.step is Step.BUILD_THEN_UPLOAD
+    assert w.run_actions.step is Step.IDLE
+    qtbot.waitUntil(lambda: any(c[0] == "upload" for c in conn.calls), timeout=5000)
+
+
 def test_state_goes_to_the_status_bar(runwin, project):
     w, conn = runwin
     conn.connected = True

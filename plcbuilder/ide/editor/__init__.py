@@ -9,7 +9,7 @@
   comment toggling;
 * :mod:`.search` — find, replace and highlighted matches;
 * :mod:`.diagnostics` — squiggles, margin markers and hover text;
-* :mod:`.find_bar` — the find/replace bar under the editors (it imports the widget);
+* :mod:`.find_bar` — the find/replace bar under the editors;
 * :mod:`.files` — file keys and line ends.
 
 Positions: Scintilla counts UTF-8 bytes, Python and the diagnostics count
