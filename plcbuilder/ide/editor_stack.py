@@ -505,18 +505,13 @@ class EditorStack(QWidget):
             self._reload_editor(ed)
             self.sig_message.emit(f"Reloaded {name}: it changed on disk", 5000)
             return
-        self._prompting.add(path)
-        try:
-            answer = QMessageBox.question(
-                self.window(), "File Changed on Disk",
-                f"{name} was changed on disk by another program."
-                + ("\n\nReload it and lose your unsaved changes?" if self.is_modified(ed)
-                   else "\n\nReload it?"),
-                QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.No,
-                QMessageBox.StandardButton.Yes if not self.is_modified(ed)
-                else QMessageBox.StandardButton.No)
-        finally:
-            self._prompting.discard(path)
+        answer = self._ask_about_file(
+            path, "File Changed on Disk",
+            f"{name} was changed on disk by another program."
+            + ("\n\nReload it and lose your unsaved changes?" if self.is_modified(ed)
+               else "\n\nReload it?"),
+            QMessageBox.StandardButton.Yes if not self.is_modified(ed)
+            else QMessageBox.StandardButton.No)
         if answer == QMessageBox.StandardButton.Yes:
             self._reload_editor(ed)
         else:
@@ -527,21 +522,25 @@ class EditorStack(QWidget):
         ed = self.editor_for(path)
         if ed is None or path in self._prompting or self.closing:
             return
-        self._prompting.add(path)
-        try:
-            answer = QMessageBox.question(
-                self.window(), "File Deleted",
-                f"{Path(path).name} was deleted from disk.\n\nKeep it open in the editor "
-                "(save it to write it back)?",
-                QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.No,
-                QMessageBox.StandardButton.Yes)
-        finally:
-            self._prompting.discard(path)
+        answer = self._ask_about_file(
+            path, "File Deleted",
+            f"{Path(path).name} was deleted from disk.\n\nKeep it open in the editor "
+            "(save it to write it back)?", QMessageBox.StandardButton.Yes)
         if answer == QMessageBox.StandardButton.Yes:
             ed.force_dirty = True
             self._update_tab(ed)
         else:
             self.close_editor(ed, force=True)
+
+    def _ask_about_file(self, path: str, title: str, text: str, default):
+        """Yes or No about a file on disk (no second prompt for it meanwhile)."""
+        self._prompting.add(path)
+        try:
+            return QMessageBox.question(
+                self.window(), title, text,
+                QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.No, default)
+        finally:
+            self._prompting.discard(path)
 
     def _recovery_snapshot(self) -> list:
         root = str(self.project.root) if self.project is not None else ""
