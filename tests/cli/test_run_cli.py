@@ -115,3 +115,14 @@ def test_the_installed_command_runs(tmp_path):
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert json.loads(r.stdout)["ended_at_ms"] == 10
+
+
+@pytest.mark.parametrize("key", ["accel", "rapid"])
+def test_a_machine_value_too_small_to_move_is_refused_not_a_crash(tmp_path, capsys, key):
+    # issue 17 item 7: ZeroDivisionError in motion.trapezoid ("internal error")
+    src = write(tmp_path / "M03.plc", "main(){ g0moveA(0, 4, 1000); exit(99); };\n")
+    mach = write(tmp_path / "m.toml", f"[axes.Z]\n{key} = 5e-324\n")
+    rc, out, err = run_cli(capsys, "run", str(src), "--machine", str(mach), "--json")
+    assert rc == 2 and out == ""
+    assert f"m.toml:2: axes.Z.{key}: 5e-324 is out of range (allowed: 0.01 to" in err
+    assert "internal error" not in err
