@@ -130,8 +130,10 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_FAIL
     image = None
     if args.image is not None:
+        from plcbuilder._support.files import read_bounded
+        from plcbuilder.link.protocol import MAX_IMAGE
         try:
-            image = args.image.read_bytes()
+            image = read_bounded(args.image, MAX_IMAGE, "controller image")
         except OSError as exc:
             say(f"plcbuilder controller: cannot read {args.image}: {exc.strerror or exc}", True)
             return EXIT_FAIL

@@ -26,10 +26,13 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping, Optional
 
+from plcbuilder._support.files import read_bounded
 from plcbuilder._support.toml_errors import TomlLocator, decode_error
+from plcbuilder._support.toml_errors import loads as toml_loads
 from plcbuilder.bytecode.abi import AXES
 
 MAX_PINS = 256          # 8 words of 32 pins
+MAX_MACHINE_BYTES = 1 << 20   # a machine description file is at most 1 MiB
 ADC_CHANNELS = 8
 
 
@@ -270,7 +273,7 @@ def parse_machine(text: str, name: str = "<machine>") -> MachineConfig:
     """Parse a machine description from TOML text. ``name`` is the file name
     used in error messages."""
     try:
-        data = tomllib.loads(text)
+        data = toml_loads(text)
     except tomllib.TOMLDecodeError as e:
         msg, line = decode_error(e, text)
         raise ConfigError(f"TOML syntax error: {msg}", name, line) from None
@@ -440,7 +443,7 @@ def load_machine(path) -> MachineConfig:
     """Read and parse a machine description file (TOML)."""
     p = Path(path)
     try:
-        text = p.read_bytes().decode("utf-8")
+        text = read_bounded(p, MAX_MACHINE_BYTES, "machine description").decode("utf-8")
     except OSError as e:
         raise ConfigError(f"cannot read the machine file: {e.strerror or e}", str(p)) from None
     except UnicodeDecodeError as e:

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable, Optional
 
+from plcbuilder._support.files import read_bounded
 from plcbuilder._support.numbers import INT32, WORD32, parse_int_in, to_int32
 
 MAX_SCENARIO_BYTES = 4 << 20
@@ -214,11 +215,9 @@ class Scenario:
     def load(cls, path) -> "Scenario":
         p = Path(path)
         try:
-            data = p.read_bytes()
+            data = read_bounded(p, MAX_SCENARIO_BYTES, "scenario file")
         except OSError as exc:
             raise ScenarioError(f"cannot read the scenario: {exc.strerror or exc}", str(p)) from None
-        if len(data) > MAX_SCENARIO_BYTES:
-            raise ScenarioError(f"the scenario is too large ({len(data)} bytes)", str(p))
         try:
             text = data.decode("utf-8")
         except UnicodeDecodeError as exc:

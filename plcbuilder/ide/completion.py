@@ -20,6 +20,8 @@ from plcbuilder.ide.editor import (KIND_CONSTANT, KIND_DEFINE, KIND_FUNCTION, KI
 from plcbuilder.lang.checker import BUILTINS
 from plcbuilder.lang.highlight import KEYWORDS
 from plcbuilder.lang.preprocess import builtin_header
+from plcbuilder.lang.source import MAX_SOURCE_BYTES
+from plcbuilder._support.files import read_bounded
 
 _DEFINE_RE = re.compile(r"^[ \t]*#[ \t]*define[ \t]+([A-Za-z_][A-Za-z0-9_]*)[ \t]*([^\n]*)$",
                         re.MULTILINE)
@@ -92,7 +94,7 @@ class HeaderDefines:
         if hit and hit[0] == mtime:
             return hit[1]
         try:
-            text = path.read_text(encoding="utf-8", errors="replace")
+            text = read_bounded(path, MAX_SOURCE_BYTES).decode("utf-8", errors="replace")
         except OSError:
             return {}
         found = self._text(key, text)

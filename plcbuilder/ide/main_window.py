@@ -38,7 +38,10 @@ from plcbuilder.ide.highlighter import lexer_for
 from plcbuilder.ide.icons import icon
 from plcbuilder.ide.problems import ProblemsPanel, ProblemStore
 from plcbuilder.ide.project_tree import ProjectTree
-from plcbuilder.ide.recovery import (DiskWatcher, RecoveryManager, digest, encode_text,
+from plcbuilder._support.files import read_bounded
+from plcbuilder.link.protocol import MAX_IMAGE
+from plcbuilder.ide.recovery import (MAX_EDIT_BYTES, DiskWatcher, RecoveryManager, digest,
+                                     encode_text,
                                      file_digest, save_text)
 from plcbuilder.ide.settings import Preferences, Settings
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
@@ -1022,9 +1025,9 @@ class MainWindow(QMainWindow):
                 return None
         elif text is None:
             try:
-                data = Path(path).read_bytes()
+                data = read_bounded(path, MAX_EDIT_BYTES, "file to edit")
             except OSError as exc:
-                if not missing_ok:
+                if not missing_ok or not isinstance(exc, FileNotFoundError):
                     QMessageBox.critical(self, "Open", f"Cannot open {path}:\n\n{exc.strerror or exc}")
                     return None
                 data = b""
@@ -1129,7 +1132,7 @@ class MainWindow(QMainWindow):
 
     def _reload_editor(self, ed: CodeEditor) -> None:
         try:
-            data = Path(ed.path).read_bytes()
+            data = read_bounded(ed.path, MAX_EDIT_BYTES, "file to edit")
         except OSError:
             return
         text, ed.eol = normalise_newlines(data.decode("utf-8", "replace"))
@@ -1449,7 +1452,7 @@ class MainWindow(QMainWindow):
         if self.project is None or self.connection is None:
             return False
         try:
-            data = self.project.image_path.read_bytes()
+            data = read_bounded(self.project.image_path, MAX_IMAGE, "controller image")
         except OSError as exc:
             QMessageBox.warning(self, "Upload", f"Cannot read {self.project.image_path}:\n\n"
                                                 f"{exc.strerror or exc}\n\nBuild the project first.")

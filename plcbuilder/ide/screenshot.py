@@ -21,7 +21,9 @@ from typing import Callable, Optional
 
 from PySide6.QtCore import QEventLoop, QTimer
 
+from plcbuilder._support.files import read_bounded
 from plcbuilder._support.numbers import WORD32, parse_int_in, to_int32
+from plcbuilder.link.protocol import MAX_IMAGE
 
 WINDOW_SIZE = (1500, 940)
 
@@ -144,7 +146,7 @@ def _run_procedure(app, win, target: tuple[str, int], after_ms: int) -> bool:
         c.sig_result.connect(lambda verb, res: results.append(verb))
     c.set_speed("pause")
     win.set_speed("pause")
-    c.upload(win.project.image_path.read_bytes())
+    c.upload(read_bounded(win.project.image_path, MAX_IMAGE, "controller image"))
     name, eparam = target
     win.start_procedure(name, eparam)
     t0 = None

@@ -39,16 +39,18 @@ from pathlib import Path
 from typing import Callable, Optional
 
 import plcbuilder
-from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.bytecode.program import MAX_FILE_SIZE, Kind, Program
 from plcbuilder.lang import Diagnostic, Related, Severity, Span, error
 from plcbuilder.image.manifest import ImageError, Limits, valid_name, write_image
 from plcbuilder.lang import compiler as _compiler
 from plcbuilder.lang.compiler import CompileOptions, compile_file
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
-from plcbuilder._support.files import atomic_write
+from plcbuilder.lang.source import MAX_SOURCE_BYTES
+from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.project.model import Procedure, Project
 
 CACHE_FILE = ".cache.json"
+MAX_CACHE_BYTES = 64 << 20      # a larger build/.cache.json is not ours: it is ignored
 CACHE_VERSION = 1
 BIN_SUFFIX = ".bin"
 
@@ -299,7 +301,7 @@ def _from_cache(proc: Procedure, options: CompileOptions, entry: dict,
         if entry.get("bin"):
             if entry["bin"] != proc.name + BIN_SUFFIX:
                 return None
-            binary = (build_dir / entry["bin"]).read_bytes()
+            binary = read_bounded(build_dir / entry["bin"], MAX_FILE_SIZE, "compiled procedure")
             if zlib.crc32(binary) != entry["crc32"]:
                 return None
         elif not any(d.is_error for d in diags):
@@ -315,9 +317,9 @@ def _from_cache(proc: Procedure, options: CompileOptions, entry: dict,
 def _write_if_changed(path: Path, data: bytes) -> bool:
     """Write data atomically unless path already holds it; whether it wrote."""
     try:
-        if path.read_bytes() == data:
+        if read_bounded(path, len(data)) == data:
             return False
-    except OSError:
+    except OSError:       # missing, different, or not a regular file (atomic_write says so)
         pass
     atomic_write(path, data)
     return True
@@ -378,7 +380,7 @@ def _cache_key(proc: Procedure, options: CompileOptions) -> Optional[str]:
             h.update(len(b).to_bytes(8, "little") + b)
 
     try:
-        source = proc.path.read_bytes()
+        source = read_bounded(proc.path, MAX_SOURCE_BYTES)
     except OSError:
         return None
     try:
@@ -412,7 +414,7 @@ def _cache_key(proc: Procedure, options: CompileOptions) -> Optional[str]:
                 return None
         if found is not None:
             try:
-                data = found.read_bytes()
+                data = read_bounded(found, MAX_SOURCE_BYTES)
             except OSError:
                 return None
             put("file", str(found), data)
@@ -433,8 +435,8 @@ def _text(data: bytes) -> str:
 
 def _load_cache(build_dir: Path, any_compiler: bool = False) -> dict:
     try:
-        doc = json.loads((build_dir / CACHE_FILE).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        doc = json.loads(read_bounded(build_dir / CACHE_FILE, MAX_CACHE_BYTES).decode("utf-8"))
+    except (OSError, ValueError, RecursionError):
         return {}
     if not isinstance(doc, dict):
         return {}
@@ -490,10 +492,7 @@ def _disk_line(file: str, line: int) -> Optional[str]:
         if file.startswith(BUILTIN_PREFIX):
             text = builtin_header(file[len(BUILTIN_PREFIX):])
         else:
-            data = Path(file).read_bytes()
-            if len(data) > (1 << 20):
-                return None
-            text = data.decode("utf-8", "replace")
+            text = read_bounded(file, MAX_SOURCE_BYTES).decode("utf-8", "replace")
     except (OSError, ValueError):
         return None
     if text is None:

@@ -38,8 +38,9 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Optional, Union
 
-from plcbuilder._support.files import atomic_write
+from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder._support.toml_errors import TomlLocator, decode_error
+from plcbuilder._support.toml_errors import loads as toml_loads
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.lang.compiler import CompileOptions
 from plcbuilder.image.manifest import MAX_LIMIT, Limits
@@ -132,7 +133,7 @@ def parse_settings(text: str, file: Union[str, Path] = SETTINGS_FILE,
                    default_name: str = "") -> Settings:
     """Settings from the text of a plcbuilder.toml; raises ProjectError."""
     try:
-        doc = tomllib.loads(text)
+        doc = toml_loads(text)
     except tomllib.TOMLDecodeError as exc:
         msg, line = decode_error(exc, text)
         raise ProjectError(f"not valid TOML: {msg}", file, line) from None
@@ -232,11 +233,9 @@ class Project:
         if not sp.exists():
             return cls(p, Settings(name=default_name), settings_found=False)
         try:
-            raw = sp.read_bytes()
+            raw = read_bounded(sp, MAX_SETTINGS_BYTES, "settings file")
         except OSError as exc:
             raise ProjectError(f"cannot read: {exc.strerror or exc}", sp) from None
-        if len(raw) > MAX_SETTINGS_BYTES:
-            raise ProjectError(f"the file is too large ({len(raw)} bytes)", sp)
         try:
             text = raw.decode("utf-8")
         except UnicodeDecodeError as exc:
