@@ -168,7 +168,7 @@ def compile_all(project: Project, progress: Optional[Progress] = None, *,
         progress(0, total, "")
     for i, proc in enumerate(procs):
         options = project.compile_options(proc.path, strict=strict, extra_includes=extra_includes)
-        problem = _name_problem(proc, by_name)
+        problem = _outside_problem(proc, project) or _name_problem(proc, by_name)
         by_name.setdefault(proc.name, proc)
         if problem is not None:
             pb = ProcedureBuild(proc, [problem], None, options.limit)
@@ -187,6 +187,14 @@ def build_project(project: Project, progress: Optional[Progress] = None, *,
     folder raises OSError."""
     limits = project.limits
     build_dir = project.build_dir
+    outside = _build_dir_problem(project)
+    if outside is not None:          # write nothing there: compile, report, keep the image
+        result = BuildResult(project, compile_all(project, progress, strict=strict), [outside],
+                             limits, 0, project.image_path)
+        result.compiled = sum(1 for p in result.procedures if not _is_name_problem(p))
+        result.image_message = (f"{project.image_path} not written: {build_dir} is outside "
+                                "the project")
+        return result
     build_dir.mkdir(parents=True, exist_ok=True)
     previous = _load_cache(build_dir, any_compiler=True)   # to find stale binaries
     old_cache = _load_cache(build_dir) if use_cache else {}
@@ -242,6 +250,39 @@ def build_project(project: Project, progress: Optional[Progress] = None, *,
     return result
 
 
+def _real(p: Path) -> Path:
+    try:
+        return p.resolve()
+    except (OSError, RuntimeError):     # a link loop
+        return p.absolute()
+
+
+def _outside_problem(proc: Procedure, project: Project) -> Optional[Diagnostic]:
+    """A source file that is a link out of the project: an error, and it is not
+    read (its lines would be echoed in diagnostics)."""
+    real = _real(proc.path)
+    if real.is_relative_to(_real(project.root)):
+        return None
+    return error("source-outside-project",
+                 f"{proc.path} is a link to {real}, outside the project; Build All compiles "
+                 "only files inside the project", None,     # no span: its lines are not shown
+                 "copy the file into the project instead of linking to it")
+
+
+def _build_dir_problem(project: Project) -> Optional[Diagnostic]:
+    """build/ (or something in the way of it) leading out of the project."""
+    build_dir = project.build_dir
+    if not os.path.lexists(build_dir):
+        return None
+    real = _real(build_dir)
+    if real.is_relative_to(_real(project.root)) and real != _real(project.root):
+        return None
+    return error("build-outside-project",
+                 f"{build_dir} leads to {real}, outside the project; Build All writes only "
+                 "inside the project", None,
+                 f"remove the link {build_dir} (Build All makes the folder)")
+
+
 def _name_problem(proc: Procedure, seen: dict[str, Procedure]) -> Optional[Diagnostic]:
     at = Span.point(str(proc.path), 1, 1)
     if not valid_name(proc.name):
@@ -259,7 +300,8 @@ def _name_problem(proc: Procedure, seen: dict[str, Procedure]) -> Optional[Diagn
 
 
 def _is_name_problem(pb: ProcedureBuild) -> bool:
-    return any(d.code in ("procedure-name", "duplicate-procedure") for d in pb.diagnostics)
+    return any(d.code in ("procedure-name", "duplicate-procedure", "source-outside-project")
+               for d in pb.diagnostics)
 
 
 def _build_one(proc: Procedure, options: CompileOptions,

@@ -147,3 +147,20 @@ def test_a_damaged_build_cache_is_ignored(tmp_path, capsys):
     (tmp_path / "build" / ".cache.json").write_text("[" * 100_000)
     code, out, err = cli(capsys, "build", tmp_path)
     assert code == 0 and "Build All ok" in out
+
+
+def test_check_does_not_echo_a_file_included_from_outside(tmp_path, capsys):
+    # issue 17 item 12: `#include "/etc/passwd"` printed its lines in diagnostics
+    other = tmp_path / "etc"
+    other.mkdir()
+    (other / "passwd").write_text("root:x:0:0:secret-line:/root:/bin/bash\n")
+    proc = tmp_path / "proc"
+    proc.mkdir()
+    (proc / "M03.plc").write_text(f'#include "{other / "passwd"}"\nmain(){{ exit(99); }};\n')
+    code, out, err = cli(capsys, "check", proc / "M03.plc")
+    assert code == 1 and "secret-line" not in out + err
+    assert f"error: '{other / 'passwd'}' resolves to {other / 'passwd'}, outside the " \
+           "procedure's folder" in out
+    assert f"--include {other}" in out
+    code, out, err = cli(capsys, "check", proc / "M03.plc", "--include", other)
+    assert code == 1 and "include-outside" not in out and "resolves to" not in out
