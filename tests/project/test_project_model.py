@@ -128,7 +128,8 @@ def test_build_include_setting(tmp_path):
     assert s.include == ("../shared", "/opt/h")
     assert parse_settings(s.to_toml()) == s
     assert parse_settings(Settings().to_toml()).include == ()
-    for bad in ('[build]\ninclude = "x"\n', '[build]\ninclude = [1]\n', '[build]\ninclude = [""]\n'):
+    for bad in ('[build]\ninclude = "x"\n', '[build]\ninclude = [1]\n',
+                '[build]\ninclude = [""]\n'):
         with pytest.raises(ProjectError) as ei:
             parse_settings(bad)
         assert ei.value.key == "build.include" and ei.value.line == 2
