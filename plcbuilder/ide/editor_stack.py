@@ -18,13 +18,15 @@ from PySide6.QtWidgets import (QApplication, QMessageBox, QStackedWidget, QTabWi
                                QWidget)
 
 from plcbuilder import api
+from plcbuilder._support.files import read_bounded
 from plcbuilder.api import Kind
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.editor import CodeEditor, file_key, normalise_newlines
 from plcbuilder.ide.editor.find_bar import FindReplaceBar
 from plcbuilder.ide.highlighter import lexer_for
 from plcbuilder.ide.icons import icon
-from plcbuilder.ide.recovery import (DiskWatcher, RecoveryManager, digest, encode_text,
+from plcbuilder.ide.recovery import (MAX_EDIT_BYTES, DiskWatcher, RecoveryManager, digest,
+                                     encode_text,
                                      file_digest, save_text)
 from plcbuilder.ide.settings import Preferences
 from plcbuilder.ide.welcome import WelcomePage
@@ -391,9 +393,9 @@ class EditorStack(QWidget):
                 return None
         elif text is None:
             try:
-                data = Path(path).read_bytes()
+                data = read_bounded(path, MAX_EDIT_BYTES, "file to edit")
             except OSError as exc:
-                if not missing_ok:
+                if not missing_ok or not isinstance(exc, FileNotFoundError):
                     QMessageBox.critical(self.window(), "Open",
                                          f"Cannot open {path}:\n\n{exc.strerror or exc}")
                     return None
@@ -456,7 +458,7 @@ class EditorStack(QWidget):
 
     def _reload_editor(self, ed: CodeEditor) -> None:
         try:
-            data = Path(ed.path).read_bytes()
+            data = read_bounded(ed.path, MAX_EDIT_BYTES, "file to edit")
         except OSError:
             return
         text, ed.eol = normalise_newlines(data.decode("utf-8", "replace"))

@@ -16,9 +16,11 @@ from PySide6.QtCore import QObject, Signal
 from PySide6.QtGui import QAction, QActionGroup
 from PySide6.QtWidgets import QComboBox, QMessageBox
 
+from plcbuilder._support.files import read_bounded
 from plcbuilder.api import Kind
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.build_panel import BuildPanel, BuildRunner
+from plcbuilder.link.protocol import MAX_IMAGE
 
 #: simulation speeds: (label, connection mode)
 SPEEDS = (("1×", "realtime"), ("10×", "10"), ("Max", "max"), ("Pause", "pause"))
@@ -108,7 +110,7 @@ class RunActions(QObject):
         if self.project is None or self.connection is None:
             return False
         try:
-            data = self.project.image_path.read_bytes()
+            data = read_bounded(self.project.image_path, MAX_IMAGE, "controller image")
         except OSError as exc:
             QMessageBox.warning(self.parent(), "Upload",
                                 f"Cannot read {self.project.image_path}:\n\n"

@@ -69,6 +69,9 @@ class CompileOptions:
     strict: bool = False
     include_dirs: tuple = ()
     code_limit: Optional[int] = None   # None: the kind's default (512 / 16384)
+    #: the folder headers must stay inside (a project's); None: the procedure's
+    #: own folder. Include folders named outside it are allowed too.
+    root: Optional[Path] = None
 
     @property
     def limit(self) -> int:
@@ -118,7 +121,8 @@ def compile_source(text: str, path: str = "<input>", options: CompileOptions = C
     if file_path is None and not path.startswith("<"):
         p = Path(path)
         file_path = p if p.parent != Path("") or p.exists() else None
-    return _compile(Preprocessor(options.include_dirs), text, path, file_path, options)
+    return _compile(Preprocessor(options.include_dirs, root=options.root), text, path, file_path,
+                    options)
 
 
 def compile_bytes(data: bytes, path: str, options: CompileOptions = CompileOptions(),
@@ -138,7 +142,7 @@ def compile_file(path, options: CompileOptions = CompileOptions()) -> CompileRes
     text, diags = read_source(p, name)
     if text is None:
         return _failed(name, options, diags)
-    pp = Preprocessor(options.include_dirs)
+    pp = Preprocessor(options.include_dirs, root=options.root)
     pp.diags.extend(diags)
     return _compile(pp, text, name, p, options)
 

@@ -39,16 +39,18 @@ from pathlib import Path
 from typing import Callable, Optional
 
 import plcbuilder
-from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.bytecode.program import MAX_FILE_SIZE, Kind, Program
 from plcbuilder.lang import Diagnostic, Related, Severity, Span, error
 from plcbuilder.image.manifest import ImageError, Limits, valid_name, write_image
 from plcbuilder.lang import pipeline as _pipeline
 from plcbuilder.lang.pipeline import CompileOptions, compile_file
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
-from plcbuilder._support.files import atomic_write
+from plcbuilder.lang.source import MAX_SOURCE_BYTES
+from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.project.model import Procedure, Project
 
 CACHE_FILE = ".cache.json"
+MAX_CACHE_BYTES = 64 << 20      # a larger build/.cache.json is not ours: it is ignored
 CACHE_VERSION = 1
 BIN_SUFFIX = ".bin"
 
@@ -166,7 +168,7 @@ def compile_all(project: Project, progress: Optional[Progress] = None, *,
         progress(0, total, "")
     for i, proc in enumerate(procs):
         options = project.compile_options(proc.path, strict=strict, extra_includes=extra_includes)
-        problem = _name_problem(proc, by_name)
+        problem = _outside_problem(proc, project) or _name_problem(proc, by_name)
         by_name.setdefault(proc.name, proc)
         if problem is not None:
             pb = ProcedureBuild(proc, [problem], None, options.limit)
@@ -185,6 +187,14 @@ def build_project(project: Project, progress: Optional[Progress] = None, *,
     folder raises OSError."""
     limits = project.limits
     build_dir = project.build_dir
+    outside = _build_dir_problem(project)
+    if outside is not None:          # write nothing there: compile, report, keep the image
+        result = BuildResult(project, compile_all(project, progress, strict=strict), [outside],
+                             limits, 0, project.image_path)
+        result.compiled = sum(1 for p in result.procedures if not _is_name_problem(p))
+        result.image_message = (f"{project.image_path} not written: {build_dir} is outside "
+                                "the project")
+        return result
     build_dir.mkdir(parents=True, exist_ok=True)
     previous = _load_cache(build_dir, any_compiler=True)   # to find stale binaries
     old_cache = _load_cache(build_dir) if use_cache else {}
@@ -240,6 +250,39 @@ def build_project(project: Project, progress: Optional[Progress] = None, *,
     return result
 
 
+def _real(p: Path) -> Path:
+    try:
+        return p.resolve()
+    except (OSError, RuntimeError):     # a link loop
+        return p.absolute()
+
+
+def _outside_problem(proc: Procedure, project: Project) -> Optional[Diagnostic]:
+    """A source file that is a link out of the project: an error, and it is not
+    read (its lines would be echoed in diagnostics)."""
+    real = _real(proc.path)
+    if real.is_relative_to(_real(project.root)):
+        return None
+    return error("source-outside-project",
+                 f"{proc.path} is a link to {real}, outside the project; Build All compiles "
+                 "only files inside the project", None,     # no span: its lines are not shown
+                 "copy the file into the project instead of linking to it")
+
+
+def _build_dir_problem(project: Project) -> Optional[Diagnostic]:
+    """build/ (or something in the way of it) leading out of the project."""
+    build_dir = project.build_dir
+    if not os.path.lexists(build_dir):
+        return None
+    real = _real(build_dir)
+    if real.is_relative_to(_real(project.root)) and real != _real(project.root):
+        return None
+    return error("build-outside-project",
+                 f"{build_dir} leads to {real}, outside the project; Build All writes only "
+                 "inside the project", None,
+                 f"remove the link {build_dir} (Build All makes the folder)")
+
+
 def _name_problem(proc: Procedure, seen: dict[str, Procedure]) -> Optional[Diagnostic]:
     at = Span.point(str(proc.path), 1, 1)
     if not valid_name(proc.name):
@@ -257,7 +300,8 @@ def _name_problem(proc: Procedure, seen: dict[str, Procedure]) -> Optional[Diagn
 
 
 def _is_name_problem(pb: ProcedureBuild) -> bool:
-    return any(d.code in ("procedure-name", "duplicate-procedure") for d in pb.diagnostics)
+    return any(d.code in ("procedure-name", "duplicate-procedure", "source-outside-project")
+               for d in pb.diagnostics)
 
 
 def _build_one(proc: Procedure, options: CompileOptions,
@@ -299,7 +343,7 @@ def _from_cache(proc: Procedure, options: CompileOptions, entry: dict,
         if entry.get("bin"):
             if entry["bin"] != proc.name + BIN_SUFFIX:
                 return None
-            binary = (build_dir / entry["bin"]).read_bytes()
+            binary = read_bounded(build_dir / entry["bin"], MAX_FILE_SIZE, "compiled procedure")
             if zlib.crc32(binary) != entry["crc32"]:
                 return None
         elif not any(d.is_error for d in diags):
@@ -315,9 +359,9 @@ def _from_cache(proc: Procedure, options: CompileOptions, entry: dict,
 def _write_if_changed(path: Path, data: bytes) -> bool:
     """Write data atomically unless path already holds it; whether it wrote."""
     try:
-        if path.read_bytes() == data:
+        if read_bounded(path, len(data)) == data:
             return False
-    except OSError:
+    except OSError:       # missing, different, or not a regular file (atomic_write says so)
         pass
     atomic_write(path, data)
     return True
@@ -378,7 +422,7 @@ def _cache_key(proc: Procedure, options: CompileOptions) -> Optional[str]:
             h.update(len(b).to_bytes(8, "little") + b)
 
     try:
-        source = proc.path.read_bytes()
+        source = read_bounded(proc.path, MAX_SOURCE_BYTES)
     except OSError:
         return None
     try:
@@ -412,7 +456,7 @@ def _cache_key(proc: Procedure, options: CompileOptions) -> Optional[str]:
                 return None
         if found is not None:
             try:
-                data = found.read_bytes()
+                data = read_bounded(found, MAX_SOURCE_BYTES)
             except OSError:
                 return None
             put("file", str(found), data)
@@ -433,8 +477,8 @@ def _text(data: bytes) -> str:
 
 def _load_cache(build_dir: Path, any_compiler: bool = False) -> dict:
     try:
-        doc = json.loads((build_dir / CACHE_FILE).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        doc = json.loads(read_bounded(build_dir / CACHE_FILE, MAX_CACHE_BYTES).decode("utf-8"))
+    except (OSError, ValueError, RecursionError):
         return {}
     if not isinstance(doc, dict):
         return {}
@@ -490,10 +534,7 @@ def _disk_line(file: str, line: int) -> Optional[str]:
         if file.startswith(BUILTIN_PREFIX):
             text = builtin_header(file[len(BUILTIN_PREFIX):])
         else:
-            data = Path(file).read_bytes()
-            if len(data) > (1 << 20):
-                return None
-            text = data.decode("utf-8", "replace")
+            text = read_bounded(file, MAX_SOURCE_BYTES).decode("utf-8", "replace")
     except (OSError, ValueError):
         return None
     if text is None:

@@ -223,3 +223,39 @@ def test_empty_project_builds_an_empty_image(tmp_path):
     p = small_project(tmp_path / "empty", {})
     r = build_project(p)
     assert r.ok and r.image_written and read_image(p.image_path.read_bytes()).procedures == ()
+
+
+# ------------------------------------- links out of the project (issue 17, item 12)
+
+def _linked_project(tmp_path):
+    other = tmp_path / "elsewhere"
+    other.mkdir()
+    (other / "passwd").write_text("root:x:0:0:secret-line:/root:/bin/bash\n")
+    root = tmp_path / "proj"
+    (root / "hardware").mkdir(parents=True)
+    (root / "hardware" / "M03.plc").write_text("main(){ exit(99); };\n")
+    return root, other
+
+
+def test_a_source_linked_out_of_the_project_is_refused_unread(tmp_path):
+    root, other = _linked_project(tmp_path)
+    (root / "hardware" / "M04.plc").symlink_to(other / "passwd")
+    r = build_project(Project.open(root))
+    assert not r.ok and not r.image_written
+    (d,) = r.get("M04").diagnostics
+    assert d.code == "source-outside-project" and str(other / "passwd") in d.message
+    assert d.span is None              # no span: rendering shows none of the file's lines
+    from plcbuilder.diagnostics import render_text
+    assert "secret-line" not in render_text(d, r.source_line)
+    assert r.get("M03").ok
+
+
+def test_a_build_folder_linked_out_of_the_project_is_refused(tmp_path):
+    root, other = _linked_project(tmp_path)
+    (root / "build").symlink_to(other, target_is_directory=True)
+    r = build_project(Project.open(root))
+    assert not r.ok and not r.image_written
+    (d,) = r.diagnostics
+    assert d.code == "build-outside-project" and str(other) in d.message
+    assert sorted(p.name for p in other.iterdir()) == ["passwd"]        # nothing written there
+    assert "outside the project" in r.image_message
