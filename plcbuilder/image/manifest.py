@@ -231,12 +231,12 @@ def write_image(programs: Sequence[ProgramInput], limits: Limits | None = None) 
         if not isinstance(data, (bytes, bytearray)):
             raise ImageError(f"procedure {name}: the binary must be bytes")
         data = bytes(data)
-        program = _load(name, kind, data)
-        rows.append((name, kind, data, program))
+        code_size = _load(name, kind, data).code_size    # the decoded program is not kept
+        rows.append((name, kind, data, code_size))
     rows.sort(key=lambda r: r[0])
-    _check_limits([(n, k, p.code_size) for n, k, _d, p in rows], limits)
-    entries = [{"name": n, "kind": _kind_label(k), "file": n + SUFFIX, "code_size": p.code_size,
-                "file_size": len(d), "crc32": f"{zlib.crc32(d):08x}"} for n, k, d, p in rows]
+    _check_limits([(n, k, size) for n, k, _d, size in rows], limits)
+    entries = [{"name": n, "kind": _kind_label(k), "file": n + SUFFIX, "code_size": size,
+                "file_size": len(d), "crc32": f"{zlib.crc32(d):08x}"} for n, k, d, size in rows]
     files: dict[str, bytes] = {n + SUFFIX: d for n, _k, d, _p in rows}
     files[MANIFEST_NAME] = manifest_text(entries, limits)
     # Each binary was loaded (validated) once above, and the layout is what
