@@ -135,11 +135,13 @@ def compile_bytes(data: bytes, path: str, options: CompileOptions = CompileOptio
     return r
 
 
-def compile_file(path, options: CompileOptions = CompileOptions()) -> CompileResult:
-    """Compile a .plc file. Never raises on bad input: it becomes diagnostics."""
+def compile_file(path, options: CompileOptions = CompileOptions(), *,
+                 data: Optional[bytes] = None) -> CompileResult:
+    """Compile a .plc file. Never raises on bad input: it becomes diagnostics.
+    ``data``: the file's bytes when the caller has read them already."""
     p = Path(path)
     name = str(path)
-    text, diags = read_source(p, name)
+    text, diags = read_source(p, name) if data is None else decode_source(data, name)
     if text is None:
         return _failed(name, options, diags)
     pp = Preprocessor(options.include_dirs, root=options.root)
