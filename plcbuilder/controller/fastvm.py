@@ -74,6 +74,11 @@ _UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT
                        abi.SLOT_VAR00 + 1})
 #: What the controller sends a suspended procedure to have its variables written back.
 SYNC = object()
+#: How a tick end that answers SYNC begins.
+_SYNC_ANSWER = "if (yield) is not None:"
+#: A pseudo slot that values read from the host's ``io`` depend on: any call
+#: out (which may change the pins) first writes them to temporaries.
+_IO = -1
 
 
 class Unsupported(Exception):
@@ -359,6 +364,12 @@ class _Gen:
             if slot in v.slots:
                 stack[k] = self.materialize(v, ind)
 
+    @staticmethod
+    def flushed_names(stack: list[_V]) -> set[str]:
+        """The position names flush(stack) assigns."""
+        return {f"_{k}" for k, v in enumerate(stack)
+                if not (v.e == f"_{k}" and v.exact and not v.isbool)}
+
     def flush(self, stack: list[_V], ind: int) -> list[_V]:
         names, values = [], []
         for k, v in enumerate(stack):
@@ -536,11 +547,11 @@ class _Gen:
         if self.syncs:
             # between ticks the controller may ask for the variables (send(SYNC)):
             # they go back to the slots, and are read again when the tick goes on
-            self.emit(ind, "_sig = yield")
-            self.emit(ind, "while _sig is not None:")
+            self.emit(ind, "if (yield) is not None:")
             if self.cached:
                 self.emit(ind + 1, self._store_cached())
-            self.emit(ind + 1, "_sig = yield")
+            self.emit(ind + 1, "while (yield) is not None:")
+            self.emit(ind + 2, "pass")
             if self.cached:
                 self.emit(ind + 1, self._load_cached())
         else:
@@ -550,13 +561,17 @@ class _Gen:
         self.known.pop(abi.SLOT_MESSAGE, None)    # the controller clears message at a tick end
 
     def branch(self, cond: str, on_true: int, on_false: int, stack: list[_V], ind: int,
-               ctx: _Ctx) -> None:
+               ctx: _Ctx, tick_end: bool = False) -> None:
         known = self.known
         self.emit(ind, f"if {cond}:")
         self.known = dict(known)
+        if tick_end:
+            self.tick_end(ind + 1)
         self.edge(on_true, stack, ind + 1, ctx)
         self.emit(ind, "else:")
         self.known = dict(known)
+        if tick_end:
+            self.tick_end(ind + 1)
         self.edge(on_false, stack, ind + 1, ctx)
 
     # --------------------------------------------------------------- blocks
@@ -660,6 +675,7 @@ class _Gen:
         elif op in (Op.PORTSET, Op.PORTCLR):
             a = stack.pop()
             fn = "portset" if op is Op.PORTSET else "portclr"
+            self.invalidate(stack, _IO, ind)
             if self.pins and a.const is not None and 0 <= a.const < self.pins[1]:
                 # called only when it changes the output (the host's io contract)
                 bit = f"io.out_bits & {1 << a.const}"
@@ -669,21 +685,25 @@ class _Gen:
                 self.emit(ind, f"{fn}({self.as_int(a)})")
         elif op is Op.PORTGET:
             a = stack.pop()
-            name = self.temp()
             if self.pins and a.const is not None and 0 <= a.const < self.pins[0]:
-                self.emit(ind, f"{name} = io.in_bits >> {a.const} & 1")
-                stack.append(_V(name, bits=1))
+                # read where it is used (until a call out might change the pins)
+                stack.append(_V(f"(io.in_bits >> {a.const} & 1)", slots=frozenset({_IO}),
+                                bits=1))
             else:
+                self.invalidate(stack, _IO, ind)
+                name = self.temp()
                 self.emit(ind, f"{name} = portget({self.as_int(a)})")
                 stack.append(_V(name))
         elif op is Op.GVARSET:
             v = stack.pop()
             a = stack.pop()
+            self.invalidate(stack, _IO, ind)
             self.emit(ind, self.gvarset(a, self.as_int(v)))
         elif op is Op.G0MOVE:
             d = stack.pop()
             m = stack.pop()
             f = stack.pop()
+            self.invalidate(stack, _IO, ind)
             self.emit(ind, f"g0move({self.as_int(f)}, {self.as_int(m)}, {self.as_int(d)})")
         else:  # pragma: no cover - every opcode is handled above or as a terminator
             raise Unsupported(f"{op.name} inside a block")
@@ -805,15 +825,17 @@ class _Gen:
             return None
         if op in _LOOPS:
             c = stack.pop()
-            cond = None
-            if c.const is None:
+            if c.const is not None:
+                stack = self.flush(stack, ind)
+                self.tick_end(ind)
+                return (i.target if c.const else i.end), stack
+            cond = self.as_cond(c)
+            if c.temps & self.flushed_names(stack):
                 cond = self.temp("_c")
                 self.emit(ind, f"{cond} = {self.as_cond(c)}")
             stack = self.flush(stack, ind)
-            self.tick_end(ind)
-            if cond is None:
-                return (i.target if c.const else i.end), stack
-            self.branch(cond, i.target, i.end, stack, ind, ctx)
+            # the condition is taken before the tick ends; each way ends it
+            self.branch(cond, i.target, i.end, stack, ind, ctx, tick_end=True)
             return None
         if op is Op.YIELD:
             stack = self.flush(stack, ind)
@@ -907,7 +929,7 @@ def factory(program: Program, latency: bool = False,
     exec(compile(src, filename, "exec"), ns)
     if len(_CACHE) > 256:
         _CACHE.clear()
-    _CACHE[key] = (program.code, ns["make"], "", "_sig = yield" in src)
+    _CACHE[key] = (program.code, ns["make"], "", _SYNC_ANSWER in src)
     return ns["make"]
 
 
