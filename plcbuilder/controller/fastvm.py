@@ -762,8 +762,10 @@ class _Gen:
         return frozenset(used - _UNCACHED)
 
     def _function_body(self, func: _Func) -> None:
-        params = "rets, n" if self.budget else "rets" if self.tracked else ""
-        self.emit(1, f"def f_{func.start}({params}):")
+        params = ["rets", "n"] if self.budget else ["rets"] if self.tracked else []
+        # the slots and the pins as the function's own locals (cheaper than the closure's)
+        params += ["s=s", "io=io"] if self.pins else ["s=s"]
+        self.emit(1, f"def f_{func.start}({', '.join(params)}):")
         mark = len(self.out)
         self.cached = self._cacheable(func)
         # ranges hold across tick ends in main (a SYNC that breaks one hands over)
