@@ -65,7 +65,7 @@ from plcbuilder.controller.vm import (FAULT_DEPTH, FAULT_DIV, FAULT_END, FAULT_M
                                       MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET, Handoff, Host,
                                       ProcExit, VMFault)
 
-__all__ = ["Unsupported", "translate", "make_runner", "factory"]
+__all__ = ["Unsupported", "translate", "make_runner", "factory", "io_shape"]
 
 _LOOPS = frozenset({Op.LOOP8, Op.LOOP16})
 _JZ = frozenset({Op.JZ8, Op.JZ16})
@@ -602,8 +602,10 @@ class _Gen:
     def __init__(self, program: Program, latency: bool, pins: Optional[tuple[int, int]] = None):
         self.program = program
         self.latency = latency
-        #: (input count, output count) of a host whose ``io`` may be read directly
+        #: (input count, output count[, levels]) of a host whose ``io`` may be read directly
         self.pins = pins
+        #: its io also keeps a list per pin (in_levels, out_on)
+        self.levels = bool(pins and len(pins) > 2 and pins[2])
         #: slots the function being written keeps in locals (``v<slot>``)
         self.cached: frozenset[int] = frozenset()
         self.software = program.kind is Kind.SOFTWARE
@@ -764,7 +766,9 @@ class _Gen:
     def _function_body(self, func: _Func) -> None:
         params = ["rets", "n"] if self.budget else ["rets"] if self.tracked else []
         # the slots and the pins as the function's own locals (cheaper than the closure's)
-        params += ["s=s", "io=io"] if self.pins else ["s=s"]
+        params += ["s=s"]
+        if self.pins:
+            params += ["ins=io.in_levels", "outs=io.out_on"] if self.levels else ["io=io"]
         self.emit(1, f"def f_{func.start}({', '.join(params)}):")
         mark = len(self.out)
         self.cached = self._cacheable(func)
@@ -990,7 +994,7 @@ class _Gen:
             self.invalidate(stack, _IO, ind)
             if self.pins and a.const is not None and 0 <= a.const < self.pins[1]:
                 # called only when it changes the output (the host's io contract)
-                bit = f"io.out_bits & {1 << a.const}"
+                bit = f"outs[{a.const}]" if self.levels else f"io.out_bits & {1 << a.const}"
                 self.emit(ind, f"if {'not ' if op is Op.PORTSET else ''}{bit}:")
                 self.emit(ind + 1, f"{fn}({a.const})")
             else:
@@ -999,8 +1003,8 @@ class _Gen:
             a = stack.pop()
             if self.pins and a.const is not None and 0 <= a.const < self.pins[0]:
                 # read where it is used (until a call out might change the pins)
-                stack.append(_V(f"(io.in_bits >> {a.const} & 1)", slots=frozenset({_IO}),
-                                rng=(0, 1)))
+                read = f"ins[{a.const}]" if self.levels else f"(io.in_bits >> {a.const} & 1)"
+                stack.append(_V(read, slots=frozenset({_IO}), rng=(0, 1)))
             else:
                 self.invalidate(stack, _IO, ind)
                 name = self.temp()
@@ -1223,10 +1227,11 @@ _CACHE: dict[tuple, tuple[bytes, Optional[Callable], str, bool]] = {}
 
 
 def translate(program: Program, latency: bool = False,
-              pins: Optional[tuple[int, int]] = None) -> str:
+              pins: Optional[tuple] = None) -> str:
     """The Python source the fast backend runs for ``program`` (raises Unsupported).
-    With ``pins`` (input and output count of a host with ``io``), constant-pin
-    port calls read and test ``io`` directly."""
+    With ``pins`` (input and output count of a host with ``io``, and whether it
+    keeps a list per pin: :func:`io_shape`), constant-pin port calls read and
+    test ``io`` directly."""
     return _Gen(program, latency, pins).generate()
 
 
@@ -1235,7 +1240,7 @@ def _key(program: Program, latency: bool, pins) -> tuple:
 
 
 def factory(program: Program, latency: bool = False,
-            pins: Optional[tuple[int, int]] = None) -> Optional[Callable]:
+            pins: Optional[tuple] = None) -> Optional[Callable]:
     """The compiled ``make(...)`` of ``program``, or None if it cannot be translated.
     Translated once per program (by CRC of its code, entry and kind) and host shape."""
     key = _key(program, latency, pins)
@@ -1263,9 +1268,16 @@ def unsupported_reason(program: Program, latency: bool = False) -> Optional[str]
     return _CACHE[_key(program, latency, None)][2]
 
 
-def _pins(host: Host) -> Optional[tuple[int, int]]:
-    io = host.io
-    return None if io is None else (io.input_count, io.output_count)
+def io_shape(io) -> Optional[tuple[int, int, bool]]:
+    """What the translation needs to know of a host's ``io`` (see :class:`Host`):
+    its pin counts, and whether it keeps a list per pin."""
+    if io is None:
+        return None
+    return io.input_count, io.output_count, hasattr(io, "in_levels") and hasattr(io, "out_on")
+
+
+def _pins(host: Host) -> Optional[tuple[int, int, bool]]:
+    return io_shape(host.io)
 
 
 def answers_sync(program: Program, host: Host) -> bool:

@@ -129,3 +129,46 @@ def test_a_pin_read_kept_on_the_stack_is_taken_before_a_later_port_call():
         results.append((outs, slots[r], slots[r + 1]))
     assert results[0] == results[1]
     assert results[0][1:] == (1, 1)          # 0 before the set + 1 after; 1 before the clear
+
+
+class _LevelsIO(_IO):
+    """A pin state that also keeps a list per pin (as the machine does)."""
+
+    def __init__(self):
+        super().__init__()
+        self.in_levels = [0] * 64
+        self.out_on = [False] * 64
+
+    def portset(self, pin):
+        super().portset(pin)
+        self.out_on[pin] = True
+
+    def portclr(self, pin):
+        super().portclr(pin)
+        self.out_on[pin] = False
+
+
+def test_a_host_io_with_a_list_per_pin_is_read_through_the_lists():
+    prog = compile_proc(SRC, "M10")
+    src = fastvm.translate(prog, pins=fastvm.io_shape(_LevelsIO()))
+    assert "ins[3]" in src and "outs[7]" in src and "io.in_bits" not in src
+    inputs = {0: 0, 2: 1 << 3, 4: 0}
+    runs = []
+    for make in (lambda s, io: fastvm.make_runner(prog, s, io.host(True)),
+                 lambda s, io: vm.run_reference(prog, s, io.host(True))):
+        io = _LevelsIO()
+        slots = [0] * 256
+        step = make(slots, io).__next__
+        outs = []
+        try:
+            for t in range(10):
+                io.in_bits = inputs.get(t, io.in_bits)
+                io.in_levels[:] = [(io.in_bits >> k) & 1 for k in range(64)]
+                step()
+                outs.append(io.out_bits)
+        except vm.ProcExit as e:
+            outs.append(("exit", e.code))
+        runs.append((outs, slots[:40]))
+        if len(runs) == 1:
+            assert [c for c in io.calls if c[0] != "get"] == [("set", 9), ("set", 7), ("clr", 7)]
+    assert runs[0] == runs[1]
