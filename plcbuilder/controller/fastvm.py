@@ -16,6 +16,16 @@ How the code is translated:
   bits is deferred while it cannot change the result (the operators marked
   ``modular``: ``+ - * & | ^ <<``, unary ``-`` and ``~``) and applied where a
   value is stored, compared, divided, shifted right or passed out.
+- Value ranges: in a function that keeps its variables in locals, the range
+  of each is known at every instruction (an interval analysis, see
+  :class:`_Ranges`), so ``n++`` under ``while (n < K)`` and sums of bounded
+  values need no wrap at all. After a SYNC (the controller may have written
+  the slots), the values read back are checked against those ranges, and one
+  outside hands the procedure to the reference interpreter where it is.
+- Tick ends: a plain ``yield`` whose answer is tested against None (SYNC);
+  a loop's condition is taken before the tick ends, and each way ends it.
+- A constant pin's ``portget`` reads ``io.in_bits`` where the value is used,
+  and ``portset``/``portclr`` test ``io.out_bits`` before calling.
 - Control flow: a block with exactly one predecessor is written inline at its
   predecessor's branch (``if``/``else``); every other block is a *label*. A
   function with several labels is a ``while True`` loop dispatching on ``pc``
@@ -55,7 +65,7 @@ from plcbuilder.controller.vm import (FAULT_DEPTH, FAULT_DIV, FAULT_END, FAULT_M
                                       MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET, Handoff, Host,
                                       ProcExit, VMFault)
 
-__all__ = ["Unsupported", "translate", "make_runner", "factory"]
+__all__ = ["Unsupported", "translate", "make_runner", "factory", "io_shape"]
 
 _LOOPS = frozenset({Op.LOOP8, Op.LOOP16})
 _JZ = frozenset({Op.JZ8, Op.JZ16})
@@ -74,6 +84,11 @@ _UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT
                        abi.SLOT_VAR00 + 1})
 #: What the controller sends a suspended procedure to have its variables written back.
 SYNC = object()
+#: How a tick end that answers SYNC begins.
+_SYNC_ANSWER = "if (yield) is not None:"
+#: A pseudo slot that values read from the host's ``io`` depend on: any call
+#: out (which may change the pins) first writes them to temporaries.
+_IO = -1
 
 
 class Unsupported(Exception):
@@ -263,21 +278,301 @@ def _plan(funcs: dict[int, _Func], entry: int, latency: bool) -> tuple[bool, boo
     return tracked or budget, budget
 
 
+# ------------------------------------------------------------- value ranges
+# In a function that keeps its variables in locals, the range of each one is
+# known at every instruction (an interval analysis over its blocks: widened at
+# joins, then narrowed): an increment, an add or a compare over values known
+# bounded needs no 32-bit wrap. Only the function itself writes those locals
+# between tick ends, except after a SYNC (the controller may have written the
+# slots): then the values read back are checked against what the code after
+# the tick end assumes, and if one falls outside, the reference interpreter
+# takes over from there (Handoff), exactly where the procedure is.
+
+_TOP = (INT_MIN, INT_MAX)
+_WIDEN_AFTER = 3          # joins at a block before its bounds jump to the extremes
+_NARROW_PASSES = 3
+_CMP = {Op.LT: "<", Op.LE: "<=", Op.GT: ">", Op.GE: ">=", Op.EQ: "==", Op.NE: "!="}
+_MIRROR = {"<": ">", "<=": ">=", ">": "<", ">=": "<=", "==": "==", "!=": "!="}
+_NEGATE = {"<": ">=", "<=": ">", ">": "<=", ">=": "<", "==": "!=", "!=": "=="}
+
+
+def _fits(lo: int, hi: int) -> tuple[int, int]:
+    return (lo, hi) if INT_MIN <= lo and hi <= INT_MAX else _TOP
+
+
+def _sum_range(op: Op, a: tuple[int, int], b: tuple[int, int]) -> tuple[int, int]:
+    """The range of a + b, a - b or a * b before any wrap; _TOP unless it fits in 32 bits
+    (then the unwrapped value is the 32-bit result)."""
+    (alo, ahi), (blo, bhi) = a, b
+    if op is Op.ADD:
+        return _fits(alo + blo, ahi + bhi)
+    if op is Op.SUB:
+        return _fits(alo - bhi, ahi - blo)
+    c = (alo * blo, alo * bhi, ahi * blo, ahi * bhi)
+    return _fits(min(c), max(c))
+
+
+def _binary_range(op: Op, a: tuple[int, int], b: tuple[int, int]) -> tuple[int, int]:
+    """The range of a OP b's 32-bit result over a and b in their ranges."""
+    (alo, ahi), (blo, bhi) = a, b
+    o = semantics.BINARY[op]
+    if alo == ahi and blo == bhi and not (o.divides and blo == 0):
+        v = o.fn(alo, blo)
+        return v, v
+    if op in (Op.ADD, Op.SUB, Op.MUL):
+        return _sum_range(op, a, b)
+    if op is Op.AND:
+        if alo >= 0 or blo >= 0:
+            return 0, min(h for lo, h in (a, b) if lo >= 0)
+        return _TOP
+    if op in (Op.OR, Op.XOR):
+        if alo >= 0 and blo >= 0:
+            return 0, (1 << max(ahi, bhi).bit_length()) - 1
+        return _TOP
+    if op in _CMP:
+        return 0, 1
+    if op is Op.MOD and alo >= 0 and blo > 0:
+        return 0, min(ahi, bhi - 1)
+    if op is Op.DIV and alo >= 0 and blo > 0:
+        return alo // bhi, ahi // blo
+    if op is Op.SHR and alo >= 0:
+        if blo == bhi:
+            sh = blo & SHIFT_MASK
+            return alo >> sh, ahi >> sh
+        return 0, ahi
+    return _TOP
+
+
+def _unary_range(op: Op, a: tuple[int, int]) -> tuple[int, int]:
+    lo, hi = a
+    if op is Op.NEG:
+        return (-hi, -lo) if lo > INT_MIN else _TOP
+    if op is Op.BNOT:
+        return ~hi, ~lo
+    return 0, 1                       # NOT, BOOL
+
+
+def _refine(state: dict, test, truth: bool) -> Optional[dict]:
+    """state where the branch condition ``test`` is ``truth``; None if it cannot be."""
+    if test is None:
+        return state
+    slot, rel, k = test
+    if not truth:
+        rel = _NEGATE[rel]
+    lo, hi = state.get(slot, _TOP)
+    if rel == "<":
+        hi = min(hi, k - 1)
+    elif rel == "<=":
+        hi = min(hi, k)
+    elif rel == ">":
+        lo = max(lo, k + 1)
+    elif rel == ">=":
+        lo = max(lo, k)
+    elif rel == "==":
+        lo, hi = max(lo, k), min(hi, k)
+    else:
+        lo += lo == k
+        hi -= hi == k
+    if lo > hi:
+        return None
+    out = dict(state)
+    if (lo, hi) == _TOP:
+        out.pop(slot, None)
+    else:
+        out[slot] = (lo, hi)
+    return out
+
+
+def _join_ranges(a: dict, b: dict) -> dict:
+    out = {}
+    for slot, (lo, hi) in a.items():
+        r = b.get(slot)
+        if r is not None:
+            j = (min(lo, r[0]), max(hi, r[1]))
+            if j != _TOP:
+                out[slot] = j
+    return out
+
+
+def _widen(old: dict, new: dict) -> dict:
+    out = {}
+    for slot, (lo, hi) in new.items():
+        olo, ohi = old.get(slot, _TOP)
+        r = (INT_MIN if lo < olo else lo, INT_MAX if hi > ohi else hi)
+        if r != _TOP:
+            out[slot] = r
+    return out
+
+
+class _Ranges:
+    """The ranges of a function's cached variables: ``entry[b]`` at the start of
+    each reachable block, ``at[offset]`` of the variable a LOAD, INC or DEC names."""
+
+    def __init__(self, func: _Func, cached: frozenset[int], across_ticks: bool,
+                 pins: Optional[tuple[int, int]]):
+        self.func, self.cached, self.across, self.pins = func, cached, across_ticks, pins
+        self.entry: dict[int, dict] = {}
+        self.at: dict[int, tuple[int, int]] = {}
+        if not cached:
+            return
+        blocks = func.blocks
+        entry = {func.start: {}}
+        seen: dict[int, int] = {}
+        work = [func.start]
+        while work:
+            b = work.pop()
+            for succ, st in self._transfer(blocks[b], entry[b]):
+                old = entry.get(succ)
+                if old is None:
+                    new = st
+                else:
+                    new = _join_ranges(old, st)
+                    if seen.get(succ, 0) >= _WIDEN_AFTER:
+                        new = _widen(old, new)
+                if new != old:
+                    entry[succ] = new
+                    seen[succ] = seen.get(succ, 0) + 1
+                    if succ not in work:
+                        work.append(succ)
+        # narrowing: a block's state again from its predecessors' (in address order,
+        # each update using the latest); from a post-fixpoint, each step stays one
+        preds: dict[int, list[int]] = {b: [] for b in blocks}
+        for b, blk in blocks.items():
+            for succ in blk.succ:
+                preds[succ].append(b)
+        for _ in range(_NARROW_PASSES):
+            for b in sorted(entry):
+                new = {} if b == func.start else None
+                for p in preds[b]:
+                    if p not in entry:
+                        continue
+                    for succ, st in self._transfer(blocks[p], entry[p]):
+                        if succ == b:
+                            new = st if new is None else _join_ranges(new, st)
+                if new is None:
+                    del entry[b]
+                else:
+                    entry[b] = new
+        self.entry = entry
+        for b in entry:
+            self._transfer(blocks[b], entry[b], self.at)
+
+    def _transfer(self, blk: _Block, state: dict, record: Optional[dict] = None):
+        """Run blk over state: the (successor, state) of each way out that can be taken."""
+        cached = self.cached
+        state = dict(state)
+        stack: list = [(_TOP, None)] * blk.depth     # (range, test or ("val", slot))
+
+        def modified(slot):
+            for k, (r, t) in enumerate(stack):
+                if t is not None and t[0 if len(t) == 3 else 1] == slot:
+                    stack[k] = (r, None)
+
+        test = None
+        for i in blk.ins:
+            op = i.op
+            if op in HAS_CONST or op in IMPLICIT_CONST:
+                v = IMPLICIT_CONST.get(op, i.arg)
+                stack.append(((v, v), None))
+            elif op is Op.LOAD:
+                r = state.get(i.arg, _TOP) if i.arg in cached else _TOP
+                if record is not None and i.arg in cached:
+                    record[i.offset] = r
+                stack.append((r, ("val", i.arg) if i.arg in cached else None))
+            elif op is Op.STORE:
+                (r, _t) = stack.pop()
+                modified(i.arg)
+                if i.arg in cached:
+                    if r == _TOP:
+                        state.pop(i.arg, None)
+                    else:
+                        state[i.arg] = r
+            elif op in (Op.INC, Op.DEC):
+                modified(i.arg)
+                if i.arg in cached:
+                    lo, hi = state.get(i.arg, _TOP)
+                    if record is not None:
+                        record[i.offset] = (lo, hi)
+                    d = 1 if op is Op.INC else -1
+                    r = _fits(lo + d, hi + d)
+                    if lo == hi:
+                        r = (semantics.wrap(lo + d),) * 2
+                    if r == _TOP:
+                        state.pop(i.arg, None)
+                    else:
+                        state[i.arg] = r
+            elif op in BINARY:
+                (b, tb), (a, ta) = stack.pop(), stack.pop()
+                t = None
+                if op in _CMP:
+                    if ta is not None and ta[0] == "val" and b[0] == b[1]:
+                        t = (ta[1], _CMP[op], b[0])
+                    elif tb is not None and tb[0] == "val" and a[0] == a[1]:
+                        t = (tb[1], _MIRROR[_CMP[op]], a[0])
+                stack.append((_binary_range(op, a, b), t))
+            elif op in UNARY:
+                a, ta = stack.pop()
+                t = None
+                if ta is not None and op in (Op.NOT, Op.BOOL):
+                    if ta[0] == "val":
+                        t = (ta[1], "==" if op is Op.NOT else "!=", 0)
+                    else:
+                        t = ta if op is Op.BOOL else (ta[0], _NEGATE[ta[1]], ta[2])
+                stack.append((_unary_range(op, a), t))
+            elif op is Op.PORTGET:
+                (a, _t) = stack.pop()
+                pin = a[0] if a[0] == a[1] else None
+                bit = self.pins is not None and pin is not None and 0 <= pin < self.pins[0]
+                stack.append(((0, 1) if bit else _TOP, None))
+            elif op is Op.GVARGET:
+                stack.pop()
+                stack.append((_TOP, None))
+            elif op in (Op.JZ8, Op.JZ16, Op.JNZ8, Op.JNZ16, Op.LOOP8, Op.LOOP16):
+                r, t = stack.pop()
+                if t is not None and t[0] == "val":
+                    t = (t[1], "!=", 0)
+                test = (r, t)
+            else:
+                pops, pushes = STACK_EFFECT[op]
+                for _ in range(pops):
+                    stack.pop()
+                stack.extend([(_TOP, None)] * pushes)
+        last = blk.last
+        outs = []
+        if last is not None and (last.op in _JZ or last.op in _JNZ or last.op in _LOOPS):
+            (lo, hi), t = test
+            for succ, truth in ((last.target, last.op not in _JZ), (last.end, last.op in _JZ)):
+                if (truth and hi == lo == 0) or (not truth and not lo <= 0 <= hi):
+                    continue                   # a condition that cannot be so
+                st = _refine(state, t, truth)
+                if st is not None:
+                    outs.append((succ, st if self.across or last.op not in _LOOPS else {}))
+            return outs
+        if blk.ends_tick and not self.across:
+            state = {}
+        return [(succ, state) for succ in blk.succ]
+
+
 # ---------------------------------------------------------------- code gen
 
 class _V:
     """A value on the simulated stack: a Python expression and what is known about it."""
 
-    __slots__ = ("e", "exact", "isbool", "slots", "temps", "bits", "const")
+    __slots__ = ("e", "exact", "isbool", "slots", "temps", "bits", "const", "rng")
 
     def __init__(self, e: str, exact: bool = True, isbool: bool = False, slots=frozenset(),
-                 temps=frozenset(), bits: int = 31, const: Optional[int] = None):
+                 temps=frozenset(), bits: int = 31, const: Optional[int] = None,
+                 rng: Optional[tuple[int, int]] = None):
         self.e, self.exact, self.isbool = e, exact, isbool
         self.slots, self.temps, self.bits, self.const = slots, temps, bits, const
+        #: the range of an exact value, where it is known narrower than 32 bits
+        self.rng = rng if rng != _TOP else None
+        if self.rng is not None:
+            self.bits = max(abs(rng[0]).bit_length(), abs(rng[1]).bit_length(), 1)
 
 
 def _const(v: int) -> _V:
-    return _V(str(v) if v >= 0 else f"({v})", const=v, bits=max(v.bit_length(), 1))
+    return _V(str(v) if v >= 0 else f"({v})", const=v, bits=max(v.bit_length(), 1), rng=(v, v))
 
 
 def _pos(k: int) -> _V:
@@ -307,8 +602,10 @@ class _Gen:
     def __init__(self, program: Program, latency: bool, pins: Optional[tuple[int, int]] = None):
         self.program = program
         self.latency = latency
-        #: (input count, output count) of a host whose ``io`` may be read directly
+        #: (input count, output count[, levels]) of a host whose ``io`` may be read directly
         self.pins = pins
+        #: its io also keeps a list per pin (in_levels, out_on)
+        self.levels = bool(pins and len(pins) > 2 and pins[2])
         #: slots the function being written keeps in locals (``v<slot>``)
         self.cached: frozenset[int] = frozenset()
         self.software = program.kind is Kind.SOFTWARE
@@ -316,6 +613,7 @@ class _Gen:
         self.tracked, self.budget = _plan(self.funcs, program.entry, latency)
         self.out: list[str] = []
         self.ntemp = 0
+        self.ranges = _Ranges(None, frozenset(), False, pins)
 
     # -------------------------------------------------------------- helpers
     def emit(self, ind: int, text: str) -> None:
@@ -352,12 +650,18 @@ class _Gen:
             return v
         name = self.temp()
         self.emit(ind, f"{name} = {self.as_int(v)}")
-        return _V(name)
+        return _V(name, rng=v.rng if v.exact and not v.isbool else None)
 
     def invalidate(self, stack: list[_V], slot: int, ind: int) -> None:
         for k, v in enumerate(stack):
             if slot in v.slots:
                 stack[k] = self.materialize(v, ind)
+
+    @staticmethod
+    def flushed_names(stack: list[_V]) -> set[str]:
+        """The position names flush(stack) assigns."""
+        return {f"_{k}" for k, v in enumerate(stack)
+                if not (v.e == f"_{k}" and v.exact and not v.isbool)}
 
     def flush(self, stack: list[_V], ind: int) -> list[_V]:
         names, values = [], []
@@ -460,10 +764,16 @@ class _Gen:
         return frozenset(used - _UNCACHED)
 
     def _function_body(self, func: _Func) -> None:
-        params = "rets, n" if self.budget else "rets" if self.tracked else ""
-        self.emit(1, f"def f_{func.start}({params}):")
+        params = ["rets", "n"] if self.budget else ["rets"] if self.tracked else []
+        # the slots and the pins as the function's own locals (cheaper than the closure's)
+        params += ["s=s"]
+        if self.pins:
+            params += ["ins=io.in_levels", "outs=io.out_on"] if self.levels else ["io=io"]
+        self.emit(1, f"def f_{func.start}({', '.join(params)}):")
         mark = len(self.out)
         self.cached = self._cacheable(func)
+        # ranges hold across tick ends in main (a SYNC that breaks one hands over)
+        self.ranges = _Ranges(func, self.cached, func.start == self.program.entry, self.pins)
         base = 2
         if self.cached:
             # locals from the slots at entry, back to the slots however the function
@@ -532,31 +842,48 @@ class _Gen:
         elif target <= ctx.label:
             self.emit(ind, "continue")
 
-    def tick_end(self, ind: int) -> None:
+    def tick_end(self, ind: int, resume: Optional[int] = None, depth: int = 0) -> None:
         if self.syncs:
             # between ticks the controller may ask for the variables (send(SYNC)):
             # they go back to the slots, and are read again when the tick goes on
-            self.emit(ind, "_sig = yield")
-            self.emit(ind, "while _sig is not None:")
+            self.emit(ind, "if (yield) is not None:")
             if self.cached:
                 self.emit(ind + 1, self._store_cached())
-            self.emit(ind + 1, "_sig = yield")
+            self.emit(ind + 1, "while (yield) is not None:")
+            self.emit(ind + 2, "pass")
             if self.cached:
                 self.emit(ind + 1, self._load_cached())
+                self._check_ranges(ind + 1, resume, depth)
         else:
             self.emit(ind, "yield")
         if self.budget:
             self.emit(ind, "n = 0")
         self.known.pop(abi.SLOT_MESSAGE, None)    # the controller clears message at a tick end
 
+    def _check_ranges(self, ind: int, resume: Optional[int], depth: int) -> None:
+        """After a SYNC: the variables read back must be in the ranges the code
+        from ``resume`` on assumes, or the reference interpreter goes on from there."""
+        ranges = self.ranges
+        facts = ranges.entry.get(resume) if ranges.across and resume is not None else None
+        if not facts:
+            return
+        tests = [f"{lo} <= v{slot} <= {hi}" for slot, (lo, hi) in sorted(facts.items())]
+        self.emit(ind, f"if not ({' and '.join(tests)}):")
+        stack = ", ".join(f"_{k}" for k in range(depth))
+        self.emit(ind + 1, f"raise Handoff({resume}, [{stack}], (), 0)")
+
     def branch(self, cond: str, on_true: int, on_false: int, stack: list[_V], ind: int,
-               ctx: _Ctx) -> None:
+               ctx: _Ctx, tick_end: bool = False) -> None:
         known = self.known
         self.emit(ind, f"if {cond}:")
         self.known = dict(known)
+        if tick_end:
+            self.tick_end(ind + 1, on_true, len(stack))
         self.edge(on_true, stack, ind + 1, ctx)
         self.emit(ind, "else:")
         self.known = dict(known)
+        if tick_end:
+            self.tick_end(ind + 1, on_false, len(stack))
         self.edge(on_false, stack, ind + 1, ctx)
 
     # --------------------------------------------------------------- blocks
@@ -601,7 +928,8 @@ class _Gen:
         if op in HAS_CONST or op in IMPLICIT_CONST:
             stack.append(_const(IMPLICIT_CONST.get(op, i.arg)))
         elif op is Op.LOAD and i.arg in self.cached:
-            stack.append(_V(f"v{i.arg}", slots=frozenset({i.arg})))
+            stack.append(_V(f"v{i.arg}", slots=frozenset({i.arg}),
+                            rng=self.ranges.at.get(i.offset)))
         elif op is Op.STORE and i.arg in self.cached:
             v = stack.pop()
             self.invalidate(stack, i.arg, ind)
@@ -609,14 +937,17 @@ class _Gen:
         elif op in (Op.INC, Op.DEC) and i.arg in self.cached:
             self.invalidate(stack, i.arg, ind)
             name = f"v{i.arg}"
+            lo, hi = self.ranges.at.get(i.offset, _TOP)
             if op is Op.INC:
                 self.emit(ind, f"{name} += 1")
-                self.emit(ind, f"if {name} > {INT_MAX}:")
-                self.emit(ind + 1, f"{name} = {INT_MIN}")
+                if hi == INT_MAX:             # it may wrap
+                    self.emit(ind, f"if {name} > {INT_MAX}:")
+                    self.emit(ind + 1, f"{name} = {INT_MIN}")
             else:
                 self.emit(ind, f"{name} -= 1")
-                self.emit(ind, f"if {name} < {INT_MIN}:")
-                self.emit(ind + 1, f"{name} = {INT_MAX}")
+                if lo == INT_MIN:
+                    self.emit(ind, f"if {name} < {INT_MIN}:")
+                    self.emit(ind + 1, f"{name} = {INT_MAX}")
         elif op is Op.LOAD:
             known = self.known.get(i.arg)
             stack.append(known if known is not None
@@ -660,30 +991,35 @@ class _Gen:
         elif op in (Op.PORTSET, Op.PORTCLR):
             a = stack.pop()
             fn = "portset" if op is Op.PORTSET else "portclr"
+            self.invalidate(stack, _IO, ind)
             if self.pins and a.const is not None and 0 <= a.const < self.pins[1]:
                 # called only when it changes the output (the host's io contract)
-                bit = f"io.out_bits & {1 << a.const}"
+                bit = f"outs[{a.const}]" if self.levels else f"io.out_bits & {1 << a.const}"
                 self.emit(ind, f"if {'not ' if op is Op.PORTSET else ''}{bit}:")
                 self.emit(ind + 1, f"{fn}({a.const})")
             else:
                 self.emit(ind, f"{fn}({self.as_int(a)})")
         elif op is Op.PORTGET:
             a = stack.pop()
-            name = self.temp()
             if self.pins and a.const is not None and 0 <= a.const < self.pins[0]:
-                self.emit(ind, f"{name} = io.in_bits >> {a.const} & 1")
-                stack.append(_V(name, bits=1))
+                # read where it is used (until a call out might change the pins)
+                read = f"ins[{a.const}]" if self.levels else f"(io.in_bits >> {a.const} & 1)"
+                stack.append(_V(read, slots=frozenset({_IO}), rng=(0, 1)))
             else:
+                self.invalidate(stack, _IO, ind)
+                name = self.temp()
                 self.emit(ind, f"{name} = portget({self.as_int(a)})")
                 stack.append(_V(name))
         elif op is Op.GVARSET:
             v = stack.pop()
             a = stack.pop()
+            self.invalidate(stack, _IO, ind)
             self.emit(ind, self.gvarset(a, self.as_int(v)))
         elif op is Op.G0MOVE:
             d = stack.pop()
             m = stack.pop()
             f = stack.pop()
+            self.invalidate(stack, _IO, ind)
             self.emit(ind, f"g0move({self.as_int(f)}, {self.as_int(m)}, {self.as_int(d)})")
         else:  # pragma: no cover - every opcode is handled above or as a terminator
             raise Unsupported(f"{op.name} inside a block")
@@ -726,12 +1062,22 @@ class _Gen:
             a, b = self.tight(a), self.tight(b)
             return _V(f"({o.text(a.e, b.e)})", isbool=True, slots=slots, temps=temps, bits=1)
         assert o.modular
+        if a.rng is not None and b.rng is not None:
+            # both exact and bounded: a result known to fit in 32 bits needs no wrap
+            if op in (Op.ADD, Op.SUB, Op.MUL):
+                r = _sum_range(op, a.rng, b.rng)
+            elif o.result is Result.EXACT:        # & | ^ of exact values are exact
+                r = _binary_range(op, a.rng, b.rng)
+            else:
+                r = _TOP
+            if r != _TOP:
+                return _V(f"({o.text(a.e, b.e)})", slots=slots, temps=temps, rng=r)
         if op is Op.AND:                  # a mask 0..INT_MAX bounds the value: no wrap
             c = a.const if a.const is not None else b.const
             if c is not None and 0 <= c <= INT_MAX:
                 x = b if a.const is not None else a
                 return _V(f"({o.text(x.e, str(c))})", slots=slots, temps=temps,
-                          bits=max(c.bit_length(), 1))
+                          rng=(0, c))
         if o.result is Result.EXACT:      # & | ^: exact when both operands are
             return _V(f"({o.text(a.e, b.e)})", exact=a.exact and b.exact,
                       isbool=a.isbool and b.isbool, slots=slots, temps=temps,
@@ -805,19 +1151,22 @@ class _Gen:
             return None
         if op in _LOOPS:
             c = stack.pop()
-            cond = None
-            if c.const is None:
+            if c.const is not None:
+                stack = self.flush(stack, ind)
+                resume = i.target if c.const else i.end
+                self.tick_end(ind, resume, len(stack))
+                return resume, stack
+            cond = self.as_cond(c)
+            if c.temps & self.flushed_names(stack):
                 cond = self.temp("_c")
                 self.emit(ind, f"{cond} = {self.as_cond(c)}")
             stack = self.flush(stack, ind)
-            self.tick_end(ind)
-            if cond is None:
-                return (i.target if c.const else i.end), stack
-            self.branch(cond, i.target, i.end, stack, ind, ctx)
+            # the condition is taken before the tick ends; each way ends it
+            self.branch(cond, i.target, i.end, stack, ind, ctx, tick_end=True)
             return None
         if op is Op.YIELD:
             stack = self.flush(stack, ind)
-            self.tick_end(ind)
+            self.tick_end(ind, i.end, len(stack))
             return i.end, stack
         if op is Op.CALL:
             callee = self.funcs[i.target]
@@ -878,10 +1227,11 @@ _CACHE: dict[tuple, tuple[bytes, Optional[Callable], str, bool]] = {}
 
 
 def translate(program: Program, latency: bool = False,
-              pins: Optional[tuple[int, int]] = None) -> str:
+              pins: Optional[tuple] = None) -> str:
     """The Python source the fast backend runs for ``program`` (raises Unsupported).
-    With ``pins`` (input and output count of a host with ``io``), constant-pin
-    port calls read and test ``io`` directly."""
+    With ``pins`` (input and output count of a host with ``io``, and whether it
+    keeps a list per pin: :func:`io_shape`), constant-pin port calls read and
+    test ``io`` directly."""
     return _Gen(program, latency, pins).generate()
 
 
@@ -890,7 +1240,7 @@ def _key(program: Program, latency: bool, pins) -> tuple:
 
 
 def factory(program: Program, latency: bool = False,
-            pins: Optional[tuple[int, int]] = None) -> Optional[Callable]:
+            pins: Optional[tuple] = None) -> Optional[Callable]:
     """The compiled ``make(...)`` of ``program``, or None if it cannot be translated.
     Translated once per program (by CRC of its code, entry and kind) and host shape."""
     key = _key(program, latency, pins)
@@ -907,7 +1257,7 @@ def factory(program: Program, latency: bool = False,
     exec(compile(src, filename, "exec"), ns)
     if len(_CACHE) > 256:
         _CACHE.clear()
-    _CACHE[key] = (program.code, ns["make"], "", "_sig = yield" in src)
+    _CACHE[key] = (program.code, ns["make"], "", _SYNC_ANSWER in src)
     return ns["make"]
 
 
@@ -918,9 +1268,16 @@ def unsupported_reason(program: Program, latency: bool = False) -> Optional[str]
     return _CACHE[_key(program, latency, None)][2]
 
 
-def _pins(host: Host) -> Optional[tuple[int, int]]:
-    io = host.io
-    return None if io is None else (io.input_count, io.output_count)
+def io_shape(io) -> Optional[tuple[int, int, bool]]:
+    """What the translation needs to know of a host's ``io`` (see :class:`Host`):
+    its pin counts, and whether it keeps a list per pin."""
+    if io is None:
+        return None
+    return io.input_count, io.output_count, hasattr(io, "in_levels") and hasattr(io, "out_on")
+
+
+def _pins(host: Host) -> Optional[tuple[int, int, bool]]:
+    return io_shape(host.io)
 
 
 def answers_sync(program: Program, host: Host) -> bool:

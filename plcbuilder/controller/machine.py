@@ -62,6 +62,10 @@ class Machine:
         self._get: dict[int, Callable[[int], int]] = {}
         self._set: dict[int, Callable[[int, int], None]] = {}
         self._build_register_map()
+        #: each pin's state as a list, kept equal to in_bits/out_bits and changed in
+        #: place (the fast backend reads them: Host.io)
+        self.in_levels = [0] * cfg.input_count
+        self.out_on = [False] * cfg.output_count
         self.reset()
 
     # ------------------------------------------------------------ setup
@@ -77,10 +81,12 @@ class Machine:
         self._notes.clear()
         self.motion.reset()
         self.out_bits = 0
+        self.out_on[:] = [False] * self.output_count
         self._ov_mask = 0
         self._ov_val = 0
         self.sensors.reset(self.motion.ipos, 0)
         self.in_bits = 0
+        self.in_levels[:] = [0] * self.input_count
         self._regs: dict[int, int] = {}
         self._special: dict[int, int] = {}
         self._pwm = [0] * 8
@@ -325,7 +331,14 @@ class Machine:
         m = self._ov_mask
         v = ((self.sensors.wired & ~m) | (self._ov_val & m)) & self._in_mask
         if v != self.in_bits:
+            changed = v ^ self.in_bits
             self.in_bits = v
+            levels = self.in_levels
+            while changed:
+                low = changed & -changed
+                pin = low.bit_length() - 1
+                levels[pin] = (v >> pin) & 1
+                changed ^= low
             self._sample = None
 
     def _set_outputs(self, new: int) -> None:
@@ -333,6 +346,12 @@ class Machine:
         if new == old:
             return
         self.out_bits = new
+        on = self.out_on
+        changed = old ^ new
+        while changed:
+            low = changed & -changed
+            on[low.bit_length() - 1] = bool(new & low)
+            changed ^= low
         self._sample = None
         if (old ^ new) & self.sensors.followed_mask:
             self.quiet = False             # a wired input may follow after a delay

@@ -127,7 +127,7 @@ class PLC:
         if self.backend != "fast":
             return
         m = self.machine
-        pins = (m.input_count, m.output_count) if hasattr(m, "in_bits") else None
+        pins = fastvm.io_shape(m if hasattr(m, "in_bits") else None)
         for p in programs:
             fastvm.factory(p, self.latency > 0 and p.kind is Kind.HARDWARE, pins)
 

@@ -96,7 +96,10 @@ class Host:
     ``input_count`` and ``output_count``): ``portget`` of a constant pin reads
     ``io.in_bits``, and ``portset``/``portclr`` of a constant pin are only called
     when they would change ``io.out_bits``. So ``portget(n)`` must return bit n of
-    ``in_bits``, and writing an output its current value must do nothing.
+    ``in_bits``, and writing an output its current value must do nothing. An
+    ``io`` may also keep a list per pin, ``in_levels`` (0 or 1) and ``out_on``
+    (False or True), always equal to the bits and never replaced (changed in
+    place): then those are read instead (a list item is cheaper than a bit).
     """
 
     __slots__ = ("portset", "portclr", "portget", "gvarget", "gvarset", "g0move", "plain",

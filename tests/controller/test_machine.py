@@ -547,3 +547,26 @@ def test_an_output_that_a_sensor_follows_wakes_the_machine():
     assert m.portget(40) == 0
     m.advance()
     assert m.portget(40) == 1
+
+
+def test_the_per_pin_lists_follow_the_bits():
+    """in_levels and out_on (what the fast backend reads) always equal in_bits and
+    out_bits, whichever way a pin changes, and stay the same list objects."""
+    m = bare("[io]\ninputs = 100\noutputs = 256\n")
+    ins, outs = m.in_levels, m.out_on
+
+    def check():
+        assert m.in_levels is ins and m.out_on is outs
+        assert ins == [(m.in_bits >> k) & 1 for k in range(100)]
+        assert outs == [bool((m.out_bits >> k) & 1) for k in range(256)]
+
+    check()
+    m.portset(3); m.portset(200); m.portclear(3); m.portclear(3)
+    check()
+    m.gvarset(7184, -1); m.gvarset(7195, 0x0F0F)
+    check()
+    m.set_input(5, 1); m.set_input(99, 1); m.set_input(5, 0)
+    check()
+    m.reset()
+    check()
+    assert not any(outs) and not any(ins)
