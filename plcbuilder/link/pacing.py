@@ -12,8 +12,12 @@ simulation up.
 Real-time pacing uses absolute deadlines: the ticks due are computed from a
 monotonic start time (``base_t + (now - base_wall) * rate``), run, and the
 thread sleeps until the next batch is due, so no error accumulates. When the
-simulation cannot keep up for more than :attr:`Simulation.max_lag` seconds it
-drops the backlog (counted in ``state.speed.dropped_ms``) instead of racing.
+simulation falls more than :attr:`Simulation.max_lag` seconds behind (it cannot
+keep up, or the process was stopped, suspended or held by a long pause) it
+skips the whole backlog at once: pacing restarts from now, the ticks skipped
+are added to ``state.speed.dropped_ms`` once, and the simulation never runs
+ahead of the wall clock. Time comes from :attr:`Simulation.clock` (replaceable
+in tests) and one pacing decision is :meth:`Simulation.pace`.
 """
 
 from __future__ import annotations
@@ -123,7 +127,8 @@ class Simulation:
         self.dropped_ms = 0
         self.error: Optional[str] = None
         self._tick_cost = 2e-6                  # seconds a tick takes, averaged
-        self._base_wall = time.monotonic()
+        self.clock: Callable[[], float] = time.monotonic
+        self._base_wall = self.clock()
         self._base_t = controller.t_ms
         self.set_speed(mode, factor)
         self._update_recording()
@@ -196,7 +201,7 @@ class Simulation:
                 else None, "dropped_ms": self.dropped_ms}
 
     def _rebase(self) -> None:
-        self._base_wall = time.monotonic()
+        self._base_wall = self.clock()
         self._base_t = self.controller.t_ms
 
     def rebase(self) -> None:
@@ -288,6 +293,29 @@ class Simulation:
         if c is not None:
             self._exec(c)
 
+    def pace(self) -> Optional[float]:
+        """One real-time pacing decision: run the ticks that are due (at most one
+        chunk) and return None, or return the seconds to wait for the next one.
+
+        When more than :attr:`max_lag` seconds of ticks are due, the backlog is
+        skipped: pacing restarts from now and the skipped ticks are counted in
+        ``dropped_ms``, so the simulation neither races to catch up nor ever runs
+        ahead of the wall clock."""
+        rate = 1000.0 * self.factor                      # ticks per second
+        now = self.clock()
+        t = self.controller.t_ms
+        due = self._base_t + int((now - self._base_wall) * rate) - t
+        if due > 0:
+            if due > max(1, int(self.max_lag * rate)):  # stalled, or cannot keep up: skip it
+                self.dropped_ms += due
+                self._base_wall = now
+                self._base_t = t
+                return self.batch
+            self._run_ticks(min(due, self._chunk()))
+            return None
+        next_due = self._base_wall + (t + 1 - self._base_t) / rate
+        return max(next_due - now, self.batch)
+
     def _shutdown_controller(self) -> None:
         try:
             self.controller.shutdown()
@@ -309,19 +337,9 @@ class Simulation:
                 self._run_ticks(self._chunk())
                 time.sleep(0)        # give the network thread the GIL between batches
                 continue
-            rate = 1000.0 * self.factor                  # ticks per second
-            now = time.monotonic()
-            due = self._base_t + int((now - self._base_wall) * rate) - self.controller.t_ms
-            if due > 0:
-                lag = int(self.max_lag * rate)
-                if due > lag:                            # cannot keep up: drop the backlog
-                    self.dropped_ms += due - lag
-                    self._base_t += due - lag
-                    due = lag
-                self._run_ticks(min(due, self._chunk()))
-                continue
-            next_due = self._base_wall + (self.controller.t_ms + 1 - self._base_t) / rate
-            self._wait(max(next_due - now, self.batch))
+            wait = self.pace()
+            if wait is not None:
+                self._wait(wait)
         self._drain_commands()
         if self._shutdown_on_stop:
             self._shutdown_controller()
