@@ -44,23 +44,35 @@ class SimulationDown(RuntimeError):
 # ===================================================================== telemetry
 
 class TelemetryQueue:
-    """One subscriber's bounded queue of samples and events.
+    """One subscriber's bounded queue of sample changes and events.
 
-    :meth:`push` (the simulation thread) never blocks for longer than a list
-    append; when more than ``max_samples`` samples wait, the oldest go and are
-    counted in ``missed`` (likewise events beyond ``max_events``).
+    The samples are the controller's raw rows (``t_ms, running, proc, message,
+    fields``), recorded only on ticks where something changed. :meth:`push`
+    (the simulation thread) never blocks for longer than a list append; when
+    more than ``max_samples`` rows wait, the oldest go and are counted in
+    ``missed`` (likewise events beyond ``max_events``). A ``lossless`` queue
+    makes a simulation at Max speed wait for it instead (see
+    :meth:`Simulation.room`), for at most :attr:`Simulation.lossless_wait`
+    seconds at a time.
     """
 
     def __init__(self, max_samples: int = 1000, max_events: int = 20000, samples: bool = True,
-                 events: bool = True):
+                 events: bool = True, lossless: bool = False):
         self.want_samples = samples
         self.want_events = events
-        self._samples: deque = deque(maxlen=max(1, max_samples))
+        self.lossless = lossless
+        self.max_samples = max(1, max_samples)
+        self._samples: deque = deque(maxlen=self.max_samples)
         self._events: deque = deque(maxlen=max(1, max_events))
         self._lock = threading.Lock()
         self.missed = 0
         self.missed_events = 0
         self.t_ms = 0
+
+    @property
+    def room(self) -> int:
+        """Rows that fit before the oldest would be dropped."""
+        return self.max_samples - len(self._samples)
 
     def push(self, samples: list, events: list, t_ms: int) -> None:
         with self._lock:
@@ -83,14 +95,17 @@ class TelemetryQueue:
         None when there is nothing new."""
         with self._lock:
             if not self._samples and not self._events and not self.missed \
-                    and not self.missed_events:
+                    and not self.missed_events and self.t_ms == self._taken_t:
                 return None
             out = (list(self._samples), list(self._events), self.missed, self.missed_events,
                    self.t_ms)
             self._samples.clear()
             self._events.clear()
             self.missed = self.missed_events = 0
+            self._taken_t = self.t_ms
             return out
+
+    _taken_t = -1
 
 
 # ===================================================================== simulation
@@ -112,6 +127,8 @@ class Simulation:
     slice = 0.002
     #: Seconds of backlog after which a paced simulation drops the ticks it could not run.
     max_lag = 1.0
+    #: Seconds a simulation at Max speed waits for a lossless subscriber before dropping.
+    lossless_wait = 1.0
 
     def __init__(self, controller: Controller, mode: str = "realtime", factor: float = 1.0):
         self.controller = controller
@@ -127,6 +144,7 @@ class Simulation:
         self.dropped_ms = 0
         self.error: Optional[str] = None
         self._tick_cost = 2e-6                  # seconds a tick takes, averaged
+        self._held_since: Optional[float] = None  # waiting for a lossless subscriber since
         self.clock: Callable[[], float] = time.monotonic
         self._base_wall = self.clock()
         self._base_t = controller.t_ms
@@ -210,10 +228,17 @@ class Simulation:
 
     # ---------------------------------------------------------------- subscribers
     def subscribe(self, q: TelemetryQueue) -> None:
+        """Add a subscriber (on the simulation thread); its first change holds
+        the whole sample of the next tick."""
+        self.publish()                          # what happened before is not for it
         with self._qlock:
             if q not in self._queues:
                 self._queues = self._queues + [q]
         self._update_recording()
+        try:
+            self.controller.record_next_sample()
+        except AttributeError:
+            pass
 
     def unsubscribe(self, q: TelemetryQueue) -> None:
         with self._qlock:
@@ -228,19 +253,26 @@ class Simulation:
         want = any(q.want_samples for q in self._queues)
         try:
             self.controller.record_samples = want      # samples cost; record only when wanted
+            self.controller.sample_changes_only = True  # and only the ticks that change
         except AttributeError:
             pass
 
     def publish(self) -> None:
-        """Hand the controller's new events and samples to every subscriber."""
+        """Hand the controller's new events and sample changes to every subscriber."""
         c = self.controller
         events = c.drain_events()
-        samples = c.drain_samples()
+        samples = c.drain_sample_rows()
         queues = self._queues
-        if queues and (events or samples):
+        if queues:
             t = c.t_ms
             for q in queues:
                 q.push(samples, events, t)
+
+    def room(self) -> Optional[int]:
+        """Ticks that may run before a lossless subscriber's queue could overflow
+        (a tick records one change at most); None without one."""
+        rooms = [q.room for q in self._queues if q.lossless and q.want_samples]
+        return min(rooms) if rooms else None
 
     def replace_controller(self, controller: Controller) -> None:
         """Swap the controller (reset); on the simulation thread."""
@@ -334,7 +366,23 @@ class Simulation:
                 self._wait(0.5)
                 continue
             if mode == "max":
-                self._run_ticks(self._chunk())
+                n = self._chunk()
+                room = self.room()
+                if room is not None:
+                    # a lossless subscriber: never run more ticks than its queue
+                    # holds; wait (answering requests) while it takes them, but
+                    # not for ever
+                    now = time.monotonic()
+                    if room < min(n, 64):
+                        if self._held_since is None:
+                            self._held_since = now
+                        if now - self._held_since < self.lossless_wait:
+                            self._wait(0.001)
+                            continue
+                    else:
+                        self._held_since = None
+                        n = min(n, room)
+                self._run_ticks(n)
                 time.sleep(0)        # give the network thread the GIL between batches
                 continue
             wait = self.pace()
