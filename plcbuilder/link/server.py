@@ -705,6 +705,7 @@ class ControllerServer:
         self.server = Server(self.service, host, port, token, **server_options)
         self.runtime_file = runtime_file
         self._endpoint = None
+        self._previous = None
         self._closed = False
 
     @property
@@ -724,6 +725,12 @@ class ControllerServer:
         self.server.start()
         if self.runtime_file is not None:
             from plcbuilder.link import runtime
+            try:
+                old = runtime.read(self.runtime_file)
+            except runtime.RuntimeFileError:
+                old = None
+            # another controller that still runs: its file is put back when this one ends
+            self._previous = old if old is not None and runtime.pid_alive(old.pid) else None
             self._endpoint = runtime.Endpoint(self.address[0], self.address[1], self.token,
                                               os.getpid())
             runtime.write(self._endpoint, self.runtime_file)
@@ -737,7 +744,7 @@ class ControllerServer:
         self._closed = True
         if self._endpoint is not None:
             from plcbuilder.link import runtime
-            runtime.remove(self._endpoint, self.runtime_file)
+            runtime.remove(self._endpoint, self.runtime_file, self._previous)
         self.sim.stop(shutdown=shutdown)
         self.server.stop()
 
