@@ -464,6 +464,7 @@ class PLC:
         rec = self.record_samples
         only = self.sample_changes_only
         last = self._last_row
+        last_f, last_p, last_code = self._row_state(last, name)
         while True:
             stop = min(end, t + (grid - t) % SOFTWARE_PERIOD_MS)
             while t < stop:
@@ -479,11 +480,15 @@ class PLC:
                 if code:
                     send(hw, code)
                 if rec:
-                    f, p = fields(), slots[proc_slot]
-                    if not only or code or last[3] or f is not last[4] or p != last[2] \
-                            or last[1] != name:
+                    # machine._sample is the cached sample_fields() dict (None once
+                    # something changed): no call on a tick where nothing did
+                    p = slots[proc_slot]
+                    if not only or code or last_code or machine._sample is not last_f \
+                            or p != last_p:
+                        f = fields()
                         last = (t, name, p, code, f)
                         add_sample(last)
+                        last_f, last_p, last_code = f, p, code
                 t += 1
                 if notes_pending or not machine.quiet:
                     notes = advance()
@@ -496,6 +501,7 @@ class PLC:
                 return t
             self._tick(t, software=True)
             last = self._last_row
+            last_f, last_p, last_code = self._row_state(last, name)
             t += 1
             if self.hw is not hw or hw.resume is not resume or self._due_hw or self.bindings:
                 return t
@@ -525,6 +531,12 @@ class PLC:
                 self._emit_notes(t, notes)
             t += 1
         return t
+
+    @staticmethod
+    def _row_state(last: tuple, name: str) -> tuple:
+        """(fields, proc, message) of the last recorded row, as the hardware fast
+        path compares them; fields that match nothing when it was another procedure's."""
+        return (last[4] if last[1] == name else _NO_ROW), last[2], last[3]
 
     def _same_row(self, running, proc, fields) -> bool:
         """Whether a sample of these values (no message) equals the last recorded one."""
