@@ -90,19 +90,26 @@ class TelemetryQueue:
                     self.missed_events += over
                 q.extend(events)
 
-    def take(self) -> Optional[tuple[list, list, int, int, int]]:
-        """(samples, events, missed, missed_events, t_ms) since the last take, or
-        None when there is nothing new."""
+    def take(self, limit: Optional[int] = None) -> Optional[tuple[list, list, int, int, int]]:
+        """(samples, events, missed, missed_events, t_ms) since the last take (the
+        oldest ``limit`` samples and events at most; ``t_ms`` is then the time of the
+        next sample left), or None when there is nothing new."""
         with self._lock:
             if not self._samples and not self._events and not self.missed \
                     and not self.missed_events and self.t_ms == self._taken_t:
                 return None
-            out = (list(self._samples), list(self._events), self.missed, self.missed_events,
-                   self.t_ms)
-            self._samples.clear()
-            self._events.clear()
+            sq, eq = self._samples, self._events
+            if limit is None or (len(sq) <= limit and len(eq) <= limit):
+                samples, events, t = list(sq), list(eq), self.t_ms
+                sq.clear()
+                eq.clear()
+            else:
+                samples = [sq.popleft() for _ in range(min(limit, len(sq)))]
+                events = [eq.popleft() for _ in range(min(limit, len(eq)))]
+                t = sq[0][0] if sq else self.t_ms
+            out = (samples, events, self.missed, self.missed_events, t)
             self.missed = self.missed_events = 0
-            self._taken_t = self.t_ms
+            self._taken_t = t
             return out
 
     _taken_t = -1

@@ -149,6 +149,7 @@ class Server:
         self._thread: Optional[threading.Thread] = None
         self._stopping = False
         self._next_flush = time.monotonic()
+        self._flushing: list[_Conn] = []          # subscribers still to serve this round
         self.stats = {"accepted": 0, "closed": 0, "bad_frames": 0, "unauthorized": 0,
                       "timeouts": 0, "requests": 0, "telemetry_frames": 0, "evicted": 0,
                       "busy": 0, "overflow": 0}
@@ -197,7 +198,7 @@ class Server:
     def _loop(self) -> None:
         try:
             while not self._stopping:
-                timeout = 0.0 if self._backlog else self._timeout()
+                timeout = 0.0 if self._backlog or self._flushing else self._timeout()
                 for key, mask in self._sel.select(timeout):
                     tag = key.data
                     if tag == "listen":
@@ -223,7 +224,7 @@ class Server:
         except Exception:  # noqa: BLE001 - log it; the finally closes everything
             traceback.print_exc()
         finally:
-            self._flush_telemetry(time.monotonic())
+            self._flush_telemetry(time.monotonic(), everything=True)
             self._close_all(self._stopping if isinstance(self._stopping, str) else "stopped")
             self._pool.shutdown(wait=False, cancel_futures=True)
 
@@ -276,9 +277,12 @@ class Server:
                 self.stats["timeouts"] += 1
                 self._fatal(c, ErrorCode.UNAUTHORIZED,
                             f"no hello within {self.hello_timeout:g} s")
-        if now >= self._next_flush:
+        if self._flushing:
             self._flush_telemetry(now)
+        elif now >= self._next_flush:
+            self._flushing = [c for c in self._conns.values() if c.session.telemetry is not None]
             self._next_flush = now + self.telemetry_interval
+            self._flush_telemetry(now)
 
     # ---------------------------------------------------------------- connections
     def _accept(self) -> None:
@@ -632,14 +636,27 @@ class Server:
             if not conn.closed:
                 self._update(conn)
 
-    def _flush_telemetry(self, now: float) -> None:
-        for conn in list(self._conns.values()):
+    #: Changes (and events) taken from one subscriber's queue per round at most.
+    telemetry_batch = protocol.TELEMETRY_PER_FRAME
+    #: Seconds of telemetry work per pass of the loop (the rest of the round waits).
+    flush_budget = 0.005
+
+    def _flush_telemetry(self, now: float, everything: bool = False) -> None:
+        """Send the subscribers of this round their telemetry, within
+        ``flush_budget`` (``everything``: all of it, when stopping)."""
+        t0 = time.perf_counter()
+        if everything:
+            self._flushing = [c for c in self._conns.values() if c.session.telemetry is not None]
+        while self._flushing:
+            if not everything and time.perf_counter() - t0 > self.flush_budget:
+                return
+            conn = self._flushing.pop()
             q = conn.session.telemetry
             if q is None or conn.closed or conn.close_at is not None:
                 continue
             if len(conn.out) > self.telemetry_high_water:
                 continue                       # it is not reading: the queue drops and counts
-            got = q.take()
+            got = q.take(None if everything else self.telemetry_batch)
             if got is None:
                 continue
             rows, events, missed, missed_events, t_ms = got
