@@ -43,7 +43,7 @@ PUMP_INTERVAL_MS = 15         # GUI-side drain of the worker's queue
 SPAWN_TIMEOUT = 20.0          # seconds a child gets to write its runtime file
 BACKOFF = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 STABLE_AFTER = 10.0           # a connection up this long resets the backoff
-MAX_SAMPLES_PER_EMIT = 60000  # never hand the GUI more than this many samples at once
+MAX_SAMPLES_PER_EMIT = 60000  # samples in one sig_samples emission at most
 #: Sample changes the controller keeps for this IDE between two telemetry frames
 #: (20 ms). The controller sends only the ticks where something changed, in
 #: MessagePack, and the IDE subscribes ``lossless``: at Max speed the controller
@@ -430,9 +430,9 @@ class ControllerConnection(QtCore.QObject):
         events: list = []
 
         def flush():
-            if samples:
-                self.sig_samples.emit(list(samples[-MAX_SAMPLES_PER_EMIT:]))
-                samples.clear()
+            for i in range(0, len(samples), MAX_SAMPLES_PER_EMIT):   # all of them, in pieces
+                self.sig_samples.emit(samples[i:i + MAX_SAMPLES_PER_EMIT])
+            samples.clear()
             if events:
                 self.sig_events.emit(list(events))
                 events.clear()
