@@ -10,11 +10,9 @@ budgets, ``accepted`` the ones that got through (the defect reproduced), and
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import signal
 import socket
-import statistics
 import struct
 import sys
 import tempfile
@@ -26,11 +24,12 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-from plcbuilder import api  # noqa: E402
+sys.path.insert(0, str(HERE))
+
+from bench_server import _busy_image, _image  # noqa: E402
 from plcbuilder.bytecode.program import Kind  # noqa: E402
-from plcbuilder.image.manifest import write_image  # noqa: E402
 from plcbuilder.link import protocol, runtime  # noqa: E402
-from plcbuilder.link.client import Client, LinkError  # noqa: E402
+from plcbuilder.link.client import LinkError  # noqa: E402
 from plcbuilder.link.process import ControllerProcess  # noqa: E402
 
 SECONDS = float(os.environ.get("PLCB_ATTACK_SECONDS", "5"))
@@ -38,22 +37,6 @@ SECONDS = float(os.environ.get("PLCB_ATTACK_SECONDS", "5"))
 
 def _counts(tried=0, refused=0, accepted=0, crashed=0) -> dict:
     return {"tried": tried, "refused": refused, "accepted": accepted, "crashed": crashed}
-
-
-def _image(sources: dict) -> bytes:
-    progs = []
-    for name, (kind, text) in sources.items():
-        r = api.compile_source(text, f"{name}.plc", api.CompileOptions(kind=kind))
-        assert r.ok, [str(d) for d in r.diagnostics]
-        progs.append((name, kind, r.program.to_bytes()))
-    return write_image(progs)
-
-
-def _busy_image(n: int) -> bytes:
-    r = api.compile_source("main(){ do{ var02++; a = a + 1; b = a * 3; }while(1); }", "S.plc",
-                           api.CompileOptions(kind=Kind.SOFTWARE))
-    progs = [dataclasses.replace(r.program, name=f"S{i:04d}") for i in range(n)]
-    return write_image([(p.name, Kind.SOFTWARE, p.to_bytes()) for p in progs])
 
 
 TOGGLE = {"TOGGLE": (Kind.HARDWARE, "main(){ do{ if (t) { portclear(6); t = 0; } else "
@@ -97,6 +80,21 @@ def _hello(sock: socket.socket, token: str) -> None:
     protocol.send_msg(sock, {"type": "hello", "id": 0, "token": token,
                              "version": protocol.PROTOCOL_VERSION})
     protocol.recv_msg(sock)
+
+
+def _non_reader(address, token: str) -> socket.socket:
+    """An authenticated connection with a tiny receive buffer (it will not read)."""
+    s = socket.socket()
+    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    s.settimeout(5)
+    s.connect(address)
+    _hello(s, token)
+    return s
+
+
+def _non_readers(proc: ControllerProcess, n: int) -> list[socket.socket]:
+    token = proc.endpoint().token
+    return [_non_reader(proc.address, token) for _ in range(n)]
 
 
 # ------------------------------------------------------------------ 17.1
@@ -224,22 +222,24 @@ def big_frames_before_hello() -> dict:
 
 # ------------------------------------------------------------------ 17.4
 
+def _memory_verdict(proc, rss0: float, socks: list, alive: bool, limit_mb: float,
+                    what: str) -> dict:
+    """Each socket is refused when the controller grew less than ``limit_mb``."""
+    grown = _rss_mb(proc.pid) - rss0
+    out = _counts(tried=len(socks), crashed=0 if alive else 1)
+    out["refused" if grown < limit_mb else "accepted"] = len(socks)
+    for s in socks:
+        s.close()
+    print(f"    {what}: the controller grew {grown:.0f} MB", file=sys.stderr)
+    return out
+
+
 def subscribers_that_never_read() -> dict:
     """60 subscribers that never read, with an output toggling every tick at Max."""
-    out = _counts()
     with controller(image=_image(TOGGLE), speed="pause") as proc:
-        host, port = proc.address
-        token = proc.endpoint().token
-        rss0 = _rss_mb(proc.pid)
-        socks = []
-        for _ in range(60):
-            s = socket.socket()
-            s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-            s.settimeout(5)
-            s.connect((host, port))
-            _hello(s, token)
+        rss0, socks = _rss_mb(proc.pid), _non_readers(proc, 60)
+        for s in socks:
             protocol.send_msg(s, {"type": "subscribe", "id": 1, "queue": 20000})
-            socks.append(s)
         c = proc.connect(timeout=10)
         c.start("TOGGLE")
         c.speed("max")
@@ -249,35 +249,16 @@ def subscribers_that_never_read() -> dict:
         print(f"    bystander answered: {alive} in {time.perf_counter() - a:.2f} s",
               file=sys.stderr)
         c.speed("pause")
-        grown = _rss_mb(proc.pid) - rss0
-        for s in socks:
-            out["tried"] += 1
-            out["refused" if grown < 200 else "accepted"] += 1
-            s.close()
         c.close()
-        if not alive:
-            out["crashed"] += 1
-        print(f"    60 subscribers that never read: the controller grew {grown:.0f} MB",
-              file=sys.stderr)
-    return out
+        return _memory_verdict(proc, rss0, socks, alive, 200, "60 subscribers that never read")
 
 
 def senders_that_never_read() -> dict:
     """24 clients pipelining state requests without reading a reply."""
-    out = _counts()
     with controller(image=_busy_image(200), speed="realtime") as proc:
-        host, port = proc.address
-        token = proc.endpoint().token
-        rss0 = _rss_mb(proc.pid)
-        socks = []
-        for _ in range(24):
-            s = socket.socket()
-            s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-            s.settimeout(5)
-            s.connect((host, port))
-            _hello(s, token)
+        rss0, socks = _rss_mb(proc.pid), _non_readers(proc, 24)
+        for s in socks:
             s.setblocking(False)
-            socks.append(s)
         burst = protocol.encode_frame({"type": "state", "id": 1}) * 1000
         end = time.monotonic() + SECONDS
         while time.monotonic() < end:
@@ -287,17 +268,8 @@ def senders_that_never_read() -> dict:
                 except (BlockingIOError, OSError):
                     pass
             time.sleep(0.01)
-        grown = _rss_mb(proc.pid) - rss0
-        alive = _alive(proc)
-        for s in socks:
-            out["tried"] += 1
-            out["refused" if grown < 120 else "accepted"] += 1
-            s.close()
-        if not alive:
-            out["crashed"] += 1
-        print(f"    24 senders that never read: the controller grew {grown:.0f} MB",
-              file=sys.stderr)
-    return out
+        return _memory_verdict(proc, rss0, socks, _alive(proc), 120,
+                               "24 senders that never read")
 
 
 # ------------------------------------------------------------------ 17.5
@@ -323,10 +295,20 @@ def _pings_while(proc: ControllerProcess, work) -> list[float]:
     return lat
 
 
+def _stalls(proc: ControllerProcess, work) -> dict:
+    """A bystander's pings while ``work`` runs: one slower than 100 ms is a stall."""
+    out = _counts()
+    for v in _pings_while(proc, work):
+        out["tried"] += 1
+        out["accepted" if v > 0.1 else "refused"] += 1
+    if not _alive(proc):
+        out["crashed"] += 1
+    return out
+
+
 def big_uploads_stall_others() -> dict:
     """Uploads of a 2,000-procedure image (its check takes a while) while a
     bystander pings: a ping slower than 100 ms is a stall."""
-    out = _counts()
     image = _busy_image(2000)
     with controller() as proc:
         def work():
@@ -334,18 +316,11 @@ def big_uploads_stall_others() -> dict:
                 end = time.monotonic() + SECONDS
                 while time.monotonic() < end:
                     c.upload(image)
-        lat = _pings_while(proc, work)
-        for v in lat:
-            out["tried"] += 1
-            out["accepted" if v > 0.1 else "refused"] += 1
-        if not _alive(proc):
-            out["crashed"] += 1
-    return out
+        return _stalls(proc, work)
 
 
 def pipelined_requests_stall_others() -> dict:
     """20,000 pipelined pings on one connection while a bystander pings."""
-    out = _counts()
     with controller() as proc:
         host, port = proc.address
         token = proc.endpoint().token
@@ -373,13 +348,7 @@ def pipelined_requests_stall_others() -> dict:
                 th.start()
             s.close()
             th.join(5)
-        lat = _pings_while(proc, work)
-        for v in lat:
-            out["tried"] += 1
-            out["accepted" if v > 0.1 else "refused"] += 1
-        if not _alive(proc):
-            out["crashed"] += 1
-    return out
+        return _stalls(proc, work)
 
 
 def busy_procedures_slow_state() -> dict:
@@ -406,10 +375,17 @@ def busy_procedures_slow_state() -> dict:
 
 # ------------------------------------------------------------------ 17.11
 
+def _posix_only(fn):
+    """Runtime-file ownership and modes are POSIX matters: elsewhere nothing is tried."""
+    def run() -> dict:
+        return fn() if os.name == "posix" else _counts()
+    run.__doc__ = fn.__doc__
+    return run
+
+
+@_posix_only
 def newer_controller_removes_older_file() -> dict:
     out = _counts()
-    if os.name != "posix":
-        return out
     import subprocess
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "rt" / "controller.json"
@@ -449,10 +425,9 @@ def newer_controller_removes_older_file() -> dict:
     return out
 
 
+@_posix_only
 def runtime_file_in_a_shared_folder() -> dict:
     out = _counts()
-    if os.name != "posix":
-        return out
     with tempfile.TemporaryDirectory() as tmp:
         for mode in (0o777, 0o1777, 0o775):
             out["tried"] += 1

@@ -41,9 +41,9 @@ SOURCES = {
 }
 
 
-def _image() -> bytes:
+def _image(sources: dict = SOURCES) -> bytes:
     progs = []
-    for name, (kind, text) in SOURCES.items():
+    for name, (kind, text) in sources.items():
         r = api.compile_source(text, f"{name}.plc", api.CompileOptions(kind=kind))
         assert r.ok, [str(d) for d in r.diagnostics]
         progs.append((name, kind, r.program.to_bytes()))
@@ -235,6 +235,7 @@ def speed(image: bytes) -> list[str]:
 
 
 def _busy_image(n: int = 1000) -> bytes:
+    """n copies of a busy software procedure (compiled once, renamed)."""
     r = api.compile_source("main(){ do{ var02++; a = a + 1; b = a * 3; }while(1); }", "S.plc",
                            api.CompileOptions(kind=Kind.SOFTWARE))
     progs = [dataclasses.replace(r.program, name=f"S{i:04d}") for i in range(n)]

@@ -20,6 +20,16 @@ from plcbuilder.link.server import ControllerServer
 from tests.link.linkkit import hello, msg_frame, raw_connect, read_until_closed, wait_for
 
 
+def non_reader(srv) -> socket.socket:
+    """An authenticated raw connection with a tiny receive buffer."""
+    s = socket.socket()
+    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    s.settimeout(5)
+    s.connect(srv.address)
+    hello(s, srv.token)
+    return s
+
+
 def held(srv) -> int:
     return sum(c.held for c in list(srv.server._conns.values()))
 
@@ -129,11 +139,7 @@ def test_a_hello_pipelined_with_big_requests_still_works(server, image):
 def test_subscribers_that_never_read_hold_bounded_memory(server, client):
     socks = []
     for _ in range(30):
-        s = socket.socket()
-        s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-        s.settimeout(5)
-        s.connect(server.address)
-        hello(s, server.token)
+        s = non_reader(server)
         s.sendall(msg_frame({"type": "subscribe", "id": 1, "queue": 100_000}))
         socks.append(s)
     client.start("M03")
@@ -152,11 +158,7 @@ def test_subscribers_that_never_read_hold_bounded_memory(server, client):
 
 
 def test_a_client_that_sends_but_never_reads_is_paused_then_closed(server, client):
-    s = socket.socket()
-    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-    s.settimeout(5)
-    s.connect(server.address)
-    hello(s, server.token)
+    s = non_reader(server)
     s.setblocking(False)
     burst = msg_frame({"type": "state", "id": 1}) * 2000
     sent = 0
@@ -175,11 +177,7 @@ def test_a_client_that_sends_but_never_reads_is_paused_then_closed(server, clien
 
 def test_above_the_total_budget_the_largest_holder_goes_with_a_reason(server, client):
     server.server.max_total_held = 64 << 10
-    s = socket.socket()
-    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-    s.settimeout(5)
-    s.connect(server.address)
-    hello(s, server.token)
+    s = non_reader(server)
     s.setblocking(False)
     burst = msg_frame({"type": "state", "id": 1}) * 500
     end = time.monotonic() + 10

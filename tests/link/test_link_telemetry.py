@@ -5,7 +5,6 @@ import threading
 import time
 
 import numpy as np
-import pytest
 
 from plcbuilder.controller.events import Sample
 from plcbuilder.ide.panels.model import RunModel, StepSamples
