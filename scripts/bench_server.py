@@ -135,7 +135,8 @@ def realtime(seconds: float, image: bytes) -> list[str]:
         lines.append(f"dropped backlog: {c.state().speed['dropped_ms']} ms (goal 0)")
         got = s1 - s0
         lines.append(f"telemetry at real time: {got / (w1 - w0):.0f} samples/s received "
-                     f"(1000 expected), {received['batches'] / (w1 - w0 + 0.5):.1f} batches/s "
+                     f"(protocol 2 sends changes only: input 5 toggles every 100 ms and M03 "
+                     f"follows it), {received['batches'] / (w1 - w0 + 0.5):.1f} batches/s "
                      f"(<= 50 by design), {received['missed']} missed")
         lines.append(f"request round trip while paced (input, {len(lat)} requests): median "
                      f"{statistics.median(lat) * 1e3:.2f} ms, p99 {_pct(lat, 0.99) * 1e3:.2f} ms, "
