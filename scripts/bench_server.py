@@ -1,17 +1,22 @@
 """Controller server benchmark: real-time pacing drift, request latency and
-telemetry while paced, simulation speed with and without a subscriber, and
-upload time, all over a real loopback socket, with the controller in its own
-process (``plcbuilder controller``), as the IDE runs it.
+telemetry while paced, simulation speed with and without a subscriber, state
+and stop under load, and upload time, all over a real loopback socket, with
+the controller in its own process (``plcbuilder controller``), as the IDE runs it.
 
     .venv/bin/python scripts/bench.py server
     PLCB_BENCH_SERVER_SECONDS=10 .venv/bin/python scripts/bench.py server   # shorter
 
-The drift run lasts 60 s by default (the goal is stated over 60 s).
+The drift run lasts 60 s by default (the goal is stated over 60 s). The cost
+of a subscriber is a ratio to its floor, the same run without one, measured
+interleaved (no subscriber, subscriber, no subscriber, ...) and the median of
+``PLCB_BENCH_ROUNDS`` (default 3) rounds.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import inspect
 import os
 import statistics
 import subprocess
@@ -36,9 +41,9 @@ SOURCES = {
 }
 
 
-def _image() -> bytes:
+def _image(sources: dict = SOURCES) -> bytes:
     progs = []
-    for name, (kind, text) in SOURCES.items():
+    for name, (kind, text) in sources.items():
         r = api.compile_source(text, f"{name}.plc", api.CompileOptions(kind=kind))
         assert r.ok, [str(d) for d in r.diagnostics]
         progs.append((name, kind, r.program.to_bytes()))
@@ -130,7 +135,8 @@ def realtime(seconds: float, image: bytes) -> list[str]:
         lines.append(f"dropped backlog: {c.state().speed['dropped_ms']} ms (goal 0)")
         got = s1 - s0
         lines.append(f"telemetry at real time: {got / (w1 - w0):.0f} samples/s received "
-                     f"(1000 expected), {received['batches'] / (w1 - w0 + 0.5):.1f} batches/s "
+                     f"(protocol 2 sends changes only: input 5 toggles every 100 ms and M03 "
+                     f"follows it), {received['batches'] / (w1 - w0 + 0.5):.1f} batches/s "
                      f"(<= 50 by design), {received['missed']} missed")
         lines.append(f"request round trip while paced (input, {len(lat)} requests): median "
                      f"{statistics.median(lat) * 1e3:.2f} ms, p99 {_pct(lat, 0.99) * 1e3:.2f} ms, "
@@ -140,34 +146,59 @@ def realtime(seconds: float, image: bytes) -> list[str]:
     return lines
 
 
+def _max_rate(c: Client, seconds: float) -> float:
+    """Ticks per second at Max speed over ``seconds``."""
+    w0, t0 = _timed_t(c)
+    c.speed("max")
+    time.sleep(seconds)
+    c.speed("pause")
+    w1, t1 = _timed_t(c)
+    return (t1 - t0) / (w1 - w0)
+
+
+def _subscribe(sub: Client, counts: dict, lossless: bool) -> None:
+    def on_batch(b, counts=counts):
+        counts["n"] += len(b.samples)
+        counts["missed"] += b.missed
+    extra = {}
+    if "lossless" in inspect.signature(sub.subscribe).parameters:     # protocol 2
+        extra = {"lossless": lossless, "queue": 20000 if lossless else 1000}
+    sub.subscribe(on_batch, **extra)
+
+
 def speed(image: bytes) -> list[str]:
     lines = []
+    rounds = int(os.environ.get("PLCB_BENCH_ROUNDS", "3"))
     with controller_process(image, "pause") as connect:
         c = connect()
         c.start("M03")
-        for label, subscribe in (("no subscriber", False), ("one subscriber (samples)", True)):
-            sub = None
-            if subscribe:
-                sub = connect()
-                counts = {"n": 0, "missed": 0}
-
-                def on_batch(b, counts=counts):
-                    counts["n"] += len(b.samples)
-                    counts["missed"] += b.missed
-                sub.subscribe(on_batch)
-            w0, t0 = _timed_t(c)
-            c.speed("max")
-            time.sleep(2.0)
-            c.speed("pause")
-            w1, t1 = _timed_t(c)
-            rate = (t1 - t0) / (w1 - w0)
-            extra = ""
-            if sub is not None:
-                time.sleep(0.1)
-                extra = f"; subscriber got {counts['n']} samples, told of {counts['missed']} missed"
-                sub.close()
-            lines.append(f"max speed, {label}: {rate / 1000:.0f}x real time "
-                         f"({rate:,.0f} ticks/s){extra}")
+        kinds = (("none", None), ("subscriber", False), ("IDE-style subscriber (lossless)", True))
+        rates: dict[str, list[float]] = {k: [] for k, _ in kinds}
+        got: dict[str, list[tuple[int, int]]] = {k: [] for k, _ in kinds}
+        for _ in range(rounds):                 # interleaved: each round runs every kind
+            for label, lossless in kinds:
+                sub, counts = None, {"n": 0, "missed": 0}
+                if lossless is not None:
+                    sub = connect()
+                    _subscribe(sub, counts, lossless)
+                rates[label].append(_max_rate(c, 2.0))
+                if sub is not None:
+                    time.sleep(0.1)
+                    got[label].append((counts["n"], counts["missed"]))
+                    sub.close()
+        floor = statistics.median(rates["none"])
+        lines.append(f"max speed, no subscriber (the floor): {floor / 1000:.0f}x real time "
+                     f"({floor:,.0f} ticks/s; median of {rounds} interleaved runs)")
+        for label, lossless in kinds[1:]:
+            rate = statistics.median(rates[label])
+            cost = 1 - rate / floor
+            n = statistics.median(g[0] for g in got[label])
+            missed = statistics.median(g[1] for g in got[label])
+            lines.append(f"max speed, {label}: {rate / 1000:.0f}x real time, costs "
+                         f"{cost * 100:.1f}% of the floor (goal <= 15%) "
+                         f"{'OK' if cost <= 0.15 else 'MISSED'}; it got {n:,.0f} samples "
+                         f"(changes with protocol 2), told of {missed:,.0f} missed")
+        c.speed("pause")
         # latency while running flat out
         c.speed("max")
         lat = []
@@ -204,10 +235,58 @@ def speed(image: bytes) -> list[str]:
     return lines
 
 
+def _busy_image(n: int = 1000) -> bytes:
+    """n copies of a busy software procedure (compiled once, renamed)."""
+    r = api.compile_source("main(){ do{ var02++; a = a + 1; b = a * 3; }while(1); }", "S.plc",
+                           api.CompileOptions(kind=Kind.SOFTWARE))
+    progs = [dataclasses.replace(r.program, name=f"S{i:04d}") for i in range(n)]
+    return write_image([(p.name, Kind.SOFTWARE, p.to_bytes()) for p in progs])
+
+
+def under_load() -> list[str]:
+    """state and stop while 1,000 software procedures run at Max speed, one client
+    pipelines pings without pause and another subscribes (issue 17 point 5)."""
+    image = _busy_image()
+    with controller_process(image, "max") as connect:
+        c = connect()
+        for i in range(1000):
+            c.start(f"S{i:04d}")
+        sub = connect()
+        _subscribe(sub, {"n": 0, "missed": 0}, False)
+        stop = threading.Event()
+
+        def flood():
+            f = connect()
+            while not stop.is_set():
+                for _ in range(500):
+                    f.request("ping", timeout=30)
+            f.close()
+        th = threading.Thread(target=flood)
+        th.start()
+        st, sp = [], []
+        for _ in range(200):
+            a = time.perf_counter()
+            c.state()
+            b = time.perf_counter()
+            c.stop()
+            sp.append(time.perf_counter() - b)
+            st.append(b - a)
+        stop.set()
+        th.join()
+        sub.close()
+        c.close()
+    p_st, p_sp = _pct(st, 0.99), _pct(sp, 0.99)
+    ok = "OK" if max(p_st, p_sp) < 0.1 else "MISSED"
+    return [f"under load (1,000 busy software procedures at Max, a ping flood, a subscriber): "
+            f"state median {statistics.median(st) * 1e3:.1f} ms p99 {p_st * 1e3:.1f} ms; stop "
+            f"median {statistics.median(sp) * 1e3:.1f} ms p99 {p_sp * 1e3:.1f} ms "
+            f"(goal p99 < 100 ms) {ok}"]
+
+
 def run() -> list[str]:
     seconds = float(os.environ.get("PLCB_BENCH_SERVER_SECONDS", "60"))
     image = _image()
-    return speed(image) + realtime(seconds, image)
+    return speed(image) + under_load() + realtime(seconds, image)
 
 
 if __name__ == "__main__":

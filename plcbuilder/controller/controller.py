@@ -77,6 +77,21 @@ class Controller:
             self._plc.samples.clear()
 
     @property
+    def sample_changes_only(self) -> bool:
+        """Record a sample only on a tick where it differs from the previous one
+        (each then holds until the next); the link's telemetry turns it on."""
+        return self._plc.sample_changes_only
+
+    @sample_changes_only.setter
+    def sample_changes_only(self, on: bool) -> None:
+        self._plc.sample_changes_only = bool(on)
+        self._plc.record_next_sample()
+
+    def record_next_sample(self) -> None:
+        """Record the next tick's sample even when nothing changed."""
+        self._plc.record_next_sample()
+
+    @property
     def programs(self) -> dict[str, Program]:
         return dict(self._plc.programs)
 

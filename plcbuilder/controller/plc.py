@@ -42,6 +42,9 @@ EVENT_BUFFER = 200_000
 SAMPLE_BUFFER = 120_000
 
 
+#: "no sample recorded yet": differs from every real one
+_NO_ROW = (-1, object(), None, 0, None)
+
 class Process:
     """One run of a procedure."""
 
@@ -99,6 +102,10 @@ class PLC:
         self.var_init = [wrap(int(v)) for v in vals] + [0] * (16 - len(vals))
         self.latency = max(0, int(gvarget_latency_ms))
         self.record_samples = record_samples
+        #: record a sample only when it differs from the previous one (t aside):
+        #: a sample then holds until the next (the link's telemetry sets this)
+        self.sample_changes_only = False
+        self._last_row: tuple = _NO_ROW
         self.events: deque = deque(maxlen=EVENT_BUFFER)
         self.samples: deque = deque(maxlen=SAMPLE_BUFFER)
         self.programs: dict[str, Program] = {}
@@ -426,8 +433,13 @@ class PLC:
                     msg = code
         if self.record_samples:
             hw = self.hw
-            self.samples.append((t, hw.name if hw is not None else None, self.proc, msg,
-                                 self.machine.sample_fields()))
+            row = (t, hw.name if hw is not None else None, self.proc, msg,
+                   self.machine.sample_fields())
+            last = self._last_row
+            if not self.sample_changes_only or msg or last[3] or row[4] is not last[4] \
+                    or row[2] != last[2] or row[1] != last[1]:
+                self.samples.append(row)
+                self._last_row = row
         notes = self.machine.advance()
         if notes:
             self._emit_notes(t, notes)
@@ -450,6 +462,9 @@ class PLC:
         send = self._send
         add_sample = self.samples.append
         rec = self.record_samples
+        only = self.sample_changes_only
+        last = self._last_row
+        last_f, last_p, last_code = self._row_state(last, name)
         while True:
             stop = min(end, t + (grid - t) % SOFTWARE_PERIOD_MS)
             while t < stop:
@@ -457,6 +472,7 @@ class PLC:
                 try:
                     resume()
                 except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                    self._last_row = last
                     self._outcome(hw, exc)
                     self._after_tick(t, (hw,))
                     return t + 1
@@ -464,7 +480,15 @@ class PLC:
                 if code:
                     send(hw, code)
                 if rec:
-                    add_sample((t, name, slots[proc_slot], code, fields()))
+                    # machine._sample is the cached sample_fields() dict (None once
+                    # something changed): no call on a tick where nothing did
+                    p = slots[proc_slot]
+                    if not only or code or last_code or machine._sample is not last_f \
+                            or p != last_p:
+                        f = fields()
+                        last = (t, name, p, code, f)
+                        add_sample(last)
+                        last_f, last_p, last_code = f, p, code
                 t += 1
                 if notes_pending or not machine.quiet:
                     notes = advance()
@@ -472,9 +496,12 @@ class PLC:
                         self._emit_notes(t - 1, notes)
                 else:
                     machine.t_ms += 1              # advance() would do only this
+            self._last_row = last
             if t == end:
                 return t
             self._tick(t, software=True)
+            last = self._last_row
+            last_f, last_p, last_code = self._row_state(last, name)
             t += 1
             if self.hw is not hw or hw.resume is not resume or self._due_hw or self.bindings:
                 return t
@@ -488,17 +515,38 @@ class PLC:
         add_sample = self.samples.append
         rec = self.record_samples
         notes_pending = self._notes_pending
+        only = self.sample_changes_only
         while t < stop:
-            if not rec and not notes_pending and machine.quiet:
+            if not notes_pending and machine.quiet and (not rec or only and self._same_row(
+                    None, proc, fields())):
                 machine.t_ms += stop - t           # nothing to record, nothing moves
                 return stop
             if rec:
-                add_sample((t, None, proc, 0, fields()))
+                f = fields()
+                if not only or not self._same_row(None, proc, f):
+                    self._last_row = (t, None, proc, 0, f)
+                    add_sample(self._last_row)
             notes = advance()
             if notes:
                 self._emit_notes(t, notes)
             t += 1
         return t
+
+    @staticmethod
+    def _row_state(last: tuple, name: str) -> tuple:
+        """(fields, proc, message) of the last recorded row, as the hardware fast
+        path compares them; fields that match nothing when it was another procedure's."""
+        return (last[4] if last[1] == name else _NO_ROW), last[2], last[3]
+
+    def _same_row(self, running, proc, fields) -> bool:
+        """Whether a sample of these values (no message) equals the last recorded one."""
+        last = self._last_row
+        return not last[3] and fields is last[4] and proc == last[2] and running == last[1]
+
+    def record_next_sample(self) -> None:
+        """With ``sample_changes_only``: record the next tick's sample even if
+        nothing changed (a new subscriber's starting point)."""
+        self._last_row = _NO_ROW
 
     def take_sample_rows(self) -> list[tuple]:
         """The samples recorded so far as raw rows ``(t_ms, running, proc,

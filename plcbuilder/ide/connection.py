@@ -26,6 +26,7 @@ from typing import Optional, Sequence
 
 from PySide6 import QtCore
 
+from plcbuilder.ide.panels.model import StepSamples
 from plcbuilder.link import runtime
 from plcbuilder.link.process import ControllerProcess
 from plcbuilder.link.client import (Client, ConnectionLost, ControllerStatus, LinkError,
@@ -42,23 +43,15 @@ PUMP_INTERVAL_MS = 15         # GUI-side drain of the worker's queue
 SPAWN_TIMEOUT = 20.0          # seconds a child gets to write its runtime file
 BACKOFF = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 STABLE_AFTER = 10.0           # a connection up this long resets the backoff
-MAX_SAMPLES_PER_EMIT = 60000  # never hand the GUI more than this many samples at once
-#: Samples the controller keeps for this IDE between two telemetry frames (20 ms):
-#: every tick up to 10x real time (with room for jitter). Faster than that, and
-#: at Max, each frame brings only the newest FAST_TELEMETRY_QUEUE ticks and the
-#: rest are dropped (``missed``): decoding telemetry takes the GIL from the GUI
-#: thread, and at Max the controller would send more than the IDE can decode.
-TELEMETRY_QUEUE = 400
-FAST_TELEMETRY_QUEUE = 100
-FAST_FACTOR = 10.0
+MAX_SAMPLES_PER_EMIT = 60000  # samples in one sig_samples emission at most
+#: Sample changes the controller keeps for this IDE between two telemetry frames
+#: (20 ms). The controller sends only the ticks where something changed, in
+#: MessagePack, and the IDE subscribes ``lossless``: at Max speed the controller
+#: waits for the IDE rather than drop a change (a paced one drops and counts).
+TELEMETRY_QUEUE = 20000
 
 
-def _telemetry_queue(speed: Optional[tuple[str, Optional[float]]]) -> int:
-    if speed is None:
-        return TELEMETRY_QUEUE
-    mode, factor = speed
-    if mode == "max" or (mode == "factor" and (factor or 0) > FAST_FACTOR):
-        return FAST_TELEMETRY_QUEUE
+def _telemetry_queue(speed: Optional[tuple[str, Optional[float]]] = None) -> int:
     return TELEMETRY_QUEUE
 
 
@@ -105,6 +98,7 @@ class _Worker(threading.Thread):
         self.speed: Optional[tuple[str, Optional[float]]] = None
         self.variables_pending = False
         self.restarts = 0
+        self.steps = StepSamples()
 
     # ----------------------------------------------------------------- plumbing
     def post(self, kind: str, payload=None) -> None:
@@ -189,7 +183,8 @@ class _Worker(threading.Thread):
             host, port, token = self.address
         client = Client.connect(host, port, token, timeout=30.0, connect_timeout=5.0)
         self.client = client
-        client.subscribe(self._on_telemetry, queue=_telemetry_queue(self.speed))
+        self.steps.reset()
+        client.subscribe(self._on_telemetry, queue=_telemetry_queue(self.speed), lossless=True)
         if self.image is not None and self.restarts:
             try:
                 result = client.upload(self.image)
@@ -212,6 +207,8 @@ class _Worker(threading.Thread):
         return ep
 
     def _on_telemetry(self, batch: Telemetry) -> None:   # on the client's reader thread
+        # changes -> the points to plot, here rather than on the GUI thread
+        batch.samples = self.steps.feed(batch.samples, batch.t_ms)
         self.post("telemetry", batch)
 
     def _serve(self) -> None:
@@ -246,11 +243,8 @@ class _Worker(threading.Thread):
             elif verb == "adc":
                 result = client.set_adc(int(args[0]), int(args[1]))
             elif verb == "speed":
-                before = _telemetry_queue(self.speed)
                 self.speed = (args[0], args[1])
                 result = client.speed(args[0], args[1])
-                if _telemetry_queue(self.speed) != before:
-                    client.subscribe(self._on_telemetry, queue=_telemetry_queue(self.speed))
             elif verb == "reset":
                 result = client.reset()
             elif verb == "event":
@@ -436,9 +430,9 @@ class ControllerConnection(QtCore.QObject):
         events: list = []
 
         def flush():
-            if samples:
-                self.sig_samples.emit(list(samples[-MAX_SAMPLES_PER_EMIT:]))
-                samples.clear()
+            for i in range(0, len(samples), MAX_SAMPLES_PER_EMIT):   # all of them, in pieces
+                self.sig_samples.emit(samples[i:i + MAX_SAMPLES_PER_EMIT])
+            samples.clear()
             if events:
                 self.sig_events.emit(list(events))
                 events.clear()

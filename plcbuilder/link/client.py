@@ -69,11 +69,15 @@ class AuthError(RefusedError):
 
 @dataclass
 class Telemetry:
-    """One telemetry batch: the samples and events since the previous one."""
+    """One telemetry batch: the sample changes and events since the previous one.
+
+    ``samples`` holds a whole :class:`~plcbuilder.controller.events.Sample` for
+    each tick where something changed; each holds until the next one, and the
+    last one until ``t_ms`` (the tick the controller runs next)."""
     t_ms: int
-    samples: list = field(default_factory=list)     # controller.events.Sample
+    samples: list = field(default_factory=list)     # controller.events.Sample, changes only
     events: list = field(default_factory=list)      # controller.events Event objects
-    missed: int = 0             # samples dropped because this client was slow
+    missed: int = 0             # changes dropped because this client was slow
     missed_events: int = 0
 
 
@@ -115,6 +119,7 @@ class Client:
         self._batch_ready = threading.Condition(self._lock)
         self.welcome: dict = {}
         self.sample_fields: tuple[str, ...] = protocol.SAMPLE_FIELDS
+        self._changes = protocol.ChangeDecoder()
         self._reader: Optional[threading.Thread] = None
         self.address: tuple = ("", 0)
 
@@ -315,15 +320,21 @@ class Client:
 
     # ------------------------------------------------------------ telemetry
     def subscribe(self, callback: Optional[Callable[[Telemetry], None]] = None, *,
-                  samples: bool = True, events: bool = True, queue: int = 1000) -> dict:
+                  samples: bool = True, events: bool = True, queue: int = 1000,
+                  lossless: bool = False) -> dict:
         """Receive telemetry batches (at most one every 20 ms): through
         ``callback(batch)`` on the reader thread, or without one from
-        :meth:`telemetry`."""
+        :meth:`telemetry`. ``queue``: changes the controller keeps for this
+        client between two batches (16 to 20,000); beyond it the oldest are
+        dropped and counted in ``missed``, except that with ``lossless`` a
+        controller at Max speed waits for this client (at most a second)."""
         self._callback = callback
-        result = self.request("subscribe", samples=samples, events=events, queue=queue)
+        result = self.request("subscribe", samples=samples, events=events, queue=queue,
+                              lossless=lossless)
         fields = result.get("sample_fields")
         if isinstance(fields, list):
             self.sample_fields = tuple(fields)
+            self._changes.set_fields(self.sample_fields)
         return result
 
     def unsubscribe(self) -> dict:
@@ -412,16 +423,22 @@ class Client:
         self.close_reason = str(msg.get("reason", "the controller said bye"))
 
     def on_telemetry(self, msg: dict) -> None:
-        fields = msg.get("sample_fields") or self.sample_fields
+        dec = self._changes
+        missed = msg.get("missed", 0)
+        missed = missed if type(missed) is int else 0
+        if missed:
+            dec.reset()                            # the next change holds every field
         try:
-            samples = [protocol.sample_from_row(r, fields) for r in msg.get("samples", ())]
+            samples = [dec.decode(c) for c in msg.get("changes", ()) if isinstance(c, dict)]
         except (TypeError, ValueError):
             samples = []
         events = [protocol.event_from_dict(e) for e in msg.get("events", ())
                   if isinstance(e, dict)]
-        batch = Telemetry(t_ms=msg.get("t_ms", 0), samples=samples, events=events,
-                          missed=int(msg.get("missed", 0) or 0),
-                          missed_events=int(msg.get("missed_events", 0) or 0))
+        missed_events = msg.get("missed_events", 0)
+        t_ms = msg.get("t_ms", 0)
+        batch = Telemetry(t_ms=t_ms if type(t_ms) is int else 0, samples=samples, events=events,
+                          missed=missed,
+                          missed_events=missed_events if type(missed_events) is int else 0)
         cb = self._callback
         if cb is not None:
             try:

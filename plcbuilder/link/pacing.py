@@ -12,8 +12,12 @@ simulation up.
 Real-time pacing uses absolute deadlines: the ticks due are computed from a
 monotonic start time (``base_t + (now - base_wall) * rate``), run, and the
 thread sleeps until the next batch is due, so no error accumulates. When the
-simulation cannot keep up for more than :attr:`Simulation.max_lag` seconds it
-drops the backlog (counted in ``state.speed.dropped_ms``) instead of racing.
+simulation falls more than :attr:`Simulation.max_lag` seconds behind (it cannot
+keep up, or the process was stopped, suspended or held by a long pause) it
+skips the whole backlog at once: pacing restarts from now, the ticks skipped
+are added to ``state.speed.dropped_ms`` once, and the simulation never runs
+ahead of the wall clock. Time comes from :attr:`Simulation.clock` (replaceable
+in tests) and one pacing decision is :meth:`Simulation.pace`.
 """
 
 from __future__ import annotations
@@ -40,23 +44,35 @@ class SimulationDown(RuntimeError):
 # ===================================================================== telemetry
 
 class TelemetryQueue:
-    """One subscriber's bounded queue of samples and events.
+    """One subscriber's bounded queue of sample changes and events.
 
-    :meth:`push` (the simulation thread) never blocks for longer than a list
-    append; when more than ``max_samples`` samples wait, the oldest go and are
-    counted in ``missed`` (likewise events beyond ``max_events``).
+    The samples are the controller's raw rows (``t_ms, running, proc, message,
+    fields``), recorded only on ticks where something changed. :meth:`push`
+    (the simulation thread) never blocks for longer than a list append; when
+    more than ``max_samples`` rows wait, the oldest go and are counted in
+    ``missed`` (likewise events beyond ``max_events``). A ``lossless`` queue
+    makes a simulation at Max speed wait for it instead (see
+    :meth:`Simulation.room`), for at most :attr:`Simulation.lossless_wait`
+    seconds at a time.
     """
 
     def __init__(self, max_samples: int = 1000, max_events: int = 20000, samples: bool = True,
-                 events: bool = True):
+                 events: bool = True, lossless: bool = False):
         self.want_samples = samples
         self.want_events = events
-        self._samples: deque = deque(maxlen=max(1, max_samples))
+        self.lossless = lossless
+        self.max_samples = max(1, max_samples)
+        self._samples: deque = deque(maxlen=self.max_samples)
         self._events: deque = deque(maxlen=max(1, max_events))
         self._lock = threading.Lock()
         self.missed = 0
         self.missed_events = 0
         self.t_ms = 0
+
+    @property
+    def room(self) -> int:
+        """Rows that fit before the oldest would be dropped."""
+        return self.max_samples - len(self._samples)
 
     def push(self, samples: list, events: list, t_ms: int) -> None:
         with self._lock:
@@ -74,19 +90,29 @@ class TelemetryQueue:
                     self.missed_events += over
                 q.extend(events)
 
-    def take(self) -> Optional[tuple[list, list, int, int, int]]:
-        """(samples, events, missed, missed_events, t_ms) since the last take, or
-        None when there is nothing new."""
+    def take(self, limit: Optional[int] = None) -> Optional[tuple[list, list, int, int, int]]:
+        """(samples, events, missed, missed_events, t_ms) since the last take (the
+        oldest ``limit`` samples and events at most; ``t_ms`` is then the time of the
+        next sample left), or None when there is nothing new."""
         with self._lock:
             if not self._samples and not self._events and not self.missed \
-                    and not self.missed_events:
+                    and not self.missed_events and self.t_ms == self._taken_t:
                 return None
-            out = (list(self._samples), list(self._events), self.missed, self.missed_events,
-                   self.t_ms)
-            self._samples.clear()
-            self._events.clear()
+            sq, eq = self._samples, self._events
+            if limit is None or (len(sq) <= limit and len(eq) <= limit):
+                samples, events, t = list(sq), list(eq), self.t_ms
+                sq.clear()
+                eq.clear()
+            else:
+                samples = [sq.popleft() for _ in range(min(limit, len(sq)))]
+                events = [eq.popleft() for _ in range(min(limit, len(eq)))]
+                t = sq[0][0] if sq else self.t_ms
+            out = (samples, events, self.missed, self.missed_events, t)
             self.missed = self.missed_events = 0
+            self._taken_t = t
             return out
+
+    _taken_t = -1
 
 
 # ===================================================================== simulation
@@ -108,6 +134,8 @@ class Simulation:
     slice = 0.002
     #: Seconds of backlog after which a paced simulation drops the ticks it could not run.
     max_lag = 1.0
+    #: Seconds a simulation at Max speed waits for a lossless subscriber before dropping.
+    lossless_wait = 1.0
 
     def __init__(self, controller: Controller, mode: str = "realtime", factor: float = 1.0):
         self.controller = controller
@@ -123,7 +151,9 @@ class Simulation:
         self.dropped_ms = 0
         self.error: Optional[str] = None
         self._tick_cost = 2e-6                  # seconds a tick takes, averaged
-        self._base_wall = time.monotonic()
+        self._held_since: Optional[float] = None  # waiting for a lossless subscriber since
+        self.clock: Callable[[], float] = time.monotonic
+        self._base_wall = self.clock()
         self._base_t = controller.t_ms
         self.set_speed(mode, factor)
         self._update_recording()
@@ -196,7 +226,7 @@ class Simulation:
                 else None, "dropped_ms": self.dropped_ms}
 
     def _rebase(self) -> None:
-        self._base_wall = time.monotonic()
+        self._base_wall = self.clock()
         self._base_t = self.controller.t_ms
 
     def rebase(self) -> None:
@@ -205,10 +235,17 @@ class Simulation:
 
     # ---------------------------------------------------------------- subscribers
     def subscribe(self, q: TelemetryQueue) -> None:
+        """Add a subscriber (on the simulation thread); its first change holds
+        the whole sample of the next tick."""
+        self.publish()                          # what happened before is not for it
         with self._qlock:
             if q not in self._queues:
                 self._queues = self._queues + [q]
         self._update_recording()
+        try:
+            self.controller.record_next_sample()
+        except AttributeError:
+            pass
 
     def unsubscribe(self, q: TelemetryQueue) -> None:
         with self._qlock:
@@ -223,19 +260,26 @@ class Simulation:
         want = any(q.want_samples for q in self._queues)
         try:
             self.controller.record_samples = want      # samples cost; record only when wanted
+            self.controller.sample_changes_only = True  # and only the ticks that change
         except AttributeError:
             pass
 
     def publish(self) -> None:
-        """Hand the controller's new events and samples to every subscriber."""
+        """Hand the controller's new events and sample changes to every subscriber."""
         c = self.controller
         events = c.drain_events()
-        samples = c.drain_samples()
+        samples = c.drain_sample_rows()
         queues = self._queues
-        if queues and (events or samples):
+        if queues:
             t = c.t_ms
             for q in queues:
                 q.push(samples, events, t)
+
+    def room(self) -> Optional[int]:
+        """Ticks that may run before a lossless subscriber's queue could overflow
+        (a tick records one change at most); None without one."""
+        rooms = [q.room for q in self._queues if q.lossless and q.want_samples]
+        return min(rooms) if rooms else None
 
     def replace_controller(self, controller: Controller) -> None:
         """Swap the controller (reset); on the simulation thread."""
@@ -288,6 +332,29 @@ class Simulation:
         if c is not None:
             self._exec(c)
 
+    def pace(self) -> Optional[float]:
+        """One real-time pacing decision: run the ticks that are due (at most one
+        chunk) and return None, or return the seconds to wait for the next one.
+
+        When more than :attr:`max_lag` seconds of ticks are due, the backlog is
+        skipped: pacing restarts from now and the skipped ticks are counted in
+        ``dropped_ms``, so the simulation neither races to catch up nor ever runs
+        ahead of the wall clock."""
+        rate = 1000.0 * self.factor                      # ticks per second
+        now = self.clock()
+        t = self.controller.t_ms
+        due = self._base_t + int((now - self._base_wall) * rate) - t
+        if due > 0:
+            if due > max(1, int(self.max_lag * rate)):  # stalled, or cannot keep up: skip it
+                self.dropped_ms += due
+                self._base_wall = now
+                self._base_t = t
+                return self.batch
+            self._run_ticks(min(due, self._chunk()))
+            return None
+        next_due = self._base_wall + (t + 1 - self._base_t) / rate
+        return max(next_due - now, self.batch)
+
     def _shutdown_controller(self) -> None:
         try:
             self.controller.shutdown()
@@ -306,22 +373,28 @@ class Simulation:
                 self._wait(0.5)
                 continue
             if mode == "max":
-                self._run_ticks(self._chunk())
+                n = self._chunk()
+                room = self.room()
+                if room is not None:
+                    # a lossless subscriber: never run more ticks than its queue
+                    # holds; wait (answering requests) while it takes them, but
+                    # not for ever
+                    now = time.monotonic()
+                    if room < min(n, 64):
+                        if self._held_since is None:
+                            self._held_since = now
+                        if now - self._held_since < self.lossless_wait:
+                            self._wait(0.001)
+                            continue
+                    else:
+                        self._held_since = None
+                        n = min(n, room)
+                self._run_ticks(n)
                 time.sleep(0)        # give the network thread the GIL between batches
                 continue
-            rate = 1000.0 * self.factor                  # ticks per second
-            now = time.monotonic()
-            due = self._base_t + int((now - self._base_wall) * rate) - self.controller.t_ms
-            if due > 0:
-                lag = int(self.max_lag * rate)
-                if due > lag:                            # cannot keep up: drop the backlog
-                    self.dropped_ms += due - lag
-                    self._base_t += due - lag
-                    due = lag
-                self._run_ticks(min(due, self._chunk()))
-                continue
-            next_due = self._base_wall + (self.controller.t_ms + 1 - self._base_t) / rate
-            self._wait(max(next_due - now, self.batch))
+            wait = self.pace()
+            if wait is not None:
+                self._wait(wait)
         self._drain_commands()
         if self._shutdown_on_stop:
             self._shutdown_controller()

@@ -2,9 +2,12 @@
 
 Framing
     Every message is one frame: a 4-byte big-endian unsigned length, then that
-    many bytes of UTF-8 JSON holding one object. A frame longer than
-    :data:`MAX_FRAME` is refused before its payload is read. Binary payloads
-    (the image) travel as base64 text.
+    many bytes of UTF-8 JSON holding one object; the one exception is
+    ``telemetry`` (server -> client), whose payload is a MessagePack map (a JSON
+    payload starts with ``{``, a MessagePack map never does). A frame longer
+    than :data:`MAX_FRAME` is refused before its payload is read; before the
+    hello the server accepts one frame of at most 1 KiB. Binary payloads (the
+    image) travel as base64 text.
 
 Messages
     Every message is a JSON object with a string ``type``; a request also has an
@@ -25,15 +28,23 @@ Messages
         welcome {id, version, server, pid, t_ms, speed}   the answer to hello
         result {id, result: {...}}                        a request done
         error {id, code, reason}                          a request refused
-        telemetry {seq, t_ms, sample_fields, samples, events, missed, missed_events}
+        telemetry {t_ms, changes, events, missed, missed_events}   (MessagePack)
         bye {reason}                                      the server is going away
 
     Both ends dispatch a message by its type to a method named ``handle_<type>``
     (server) or ``on_<type>`` (client) after checking the type against the
     catalogue below; nothing is ever evaluated.
 
-This module holds what both ends share: constants, the frame encoder and an
-incremental decoder, the field checks, and the compact sample encoding.
+Telemetry (version 2)
+    Samples travel as changes only: ``changes`` is a list of maps from a field's
+    index in ``sample_fields`` (the subscribe answer) to its value, each with
+    index 0 (``t_ms``) and the fields that differ from the change before it; a
+    sample holds from its ``t_ms`` until the next change, and ``t_ms`` of the
+    frame is the tick the controller runs next. The first change after
+    subscribing, and after ``missed`` > 0, holds every field.
+
+This module holds what both ends share: constants, the frame encoders and an
+incremental decoder, the field checks, and the telemetry change encoding.
 """
 
 from __future__ import annotations
@@ -51,11 +62,18 @@ import struct
 import sys
 from typing import Any, Iterable, Optional
 
+import msgpack
+
 from plcbuilder.controller.events import Sample, from_dict, to_dict
 from plcbuilder._support.strictjson import strict_json_loads
 
 #: Bumped on any incompatible change; hello carries it and the server checks it.
-PROTOCOL_VERSION = 1
+#: 2: telemetry in MessagePack, changes only; a 1 KiB frame limit before the hello.
+PROTOCOL_VERSION = 2
+#: Largest frame accepted before the hello (the hello itself).
+MAX_HELLO_FRAME = 1024
+#: Changes (and events) in one telemetry frame at most.
+TELEMETRY_PER_FRAME = 4000
 #: Largest frame payload accepted, in bytes (an image of MAX_IMAGE bytes fits as base64).
 MAX_FRAME = 4 * 1024 * 1024
 #: Largest image accepted by upload, in bytes (before base64).
@@ -158,12 +176,31 @@ def encode_frame(msg: dict, max_frame: int = MAX_FRAME) -> bytes:
     return HEADER.pack(len(payload)) + payload
 
 
-def decode_payload(payload: bytes, allowed: Optional[frozenset] = None) -> dict:
+def encode_binary_frame(msg: dict, max_frame: int = MAX_FRAME) -> bytes:
+    """Length prefix + a MessagePack payload (telemetry). Raises ProtocolError
+    when the message is too big."""
+    payload = msgpack.packb(msg, use_bin_type=True)
+    if len(payload) > max_frame:
+        raise ProtocolError(f"message of {len(payload)} bytes is larger than the "
+                            f"{max_frame}-byte frame limit")
+    return HEADER.pack(len(payload)) + payload
+
+
+def decode_payload(payload: bytes, allowed: Optional[frozenset] = None,
+                   binary: bool = False) -> dict:
     """Parse and check one frame's payload. Raises ProtocolError.
 
     The result is a dict with a valid ``type`` (one of ``allowed`` when given;
-    otherwise any well-formed name) and, when present, a valid ``id``.
+    otherwise any well-formed name) and, when present, a valid ``id``. With
+    ``binary`` (a client reading the server) a payload that does not start
+    with ``{`` is MessagePack; a server never accepts one.
     """
+    if binary and payload[:1] != b"{":
+        try:
+            msg = msgpack.unpackb(payload, raw=False, strict_map_key=False)
+        except Exception as exc:  # noqa: BLE001 - msgpack raises several kinds
+            raise ProtocolError(f"frame is not valid MessagePack: {exc}") from None
+        return _check_message(msg, allowed)
     try:
         text = bytes(payload).decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -174,6 +211,10 @@ def decode_payload(payload: bytes, allowed: Optional[frozenset] = None) -> dict:
         raise ProtocolError("frame is not valid JSON: nested too deeply") from None
     except ValueError as exc:
         raise ProtocolError(f"frame is not valid JSON: {exc}") from None
+    return _check_message(msg, allowed)
+
+
+def _check_message(msg: Any, allowed: Optional[frozenset]) -> dict:
     if not isinstance(msg, dict):
         raise ProtocolError(f"a message must be a JSON object, got {type(msg).__name__}")
     mtype = msg.get("type")
@@ -198,46 +239,77 @@ def check_id(value: Any) -> None:
 
 
 class FrameDecoder:
-    """Incremental frame reader: feed bytes as they come, get whole payloads.
+    """Incremental frame reader: push bytes as they come, take whole payloads.
 
     Raises ProtocolError as soon as a length prefix announces more than
-    ``max_frame`` bytes, so an oversize frame is never buffered.
+    ``max_frame`` bytes, so an oversize frame is never buffered. ``max_frame``
+    may change between frames (the server allows only a small hello first);
+    :meth:`next_frame` takes one payload at a time, so a caller can stop after
+    a few and leave the rest buffered.
     """
 
     def __init__(self, max_frame: int = MAX_FRAME):
         self.max_frame = max_frame
         self._buf = bytearray()
+        self._pos = 0                       # start of the unread bytes in _buf
         self._need: Optional[int] = None
 
     @property
     def pending(self) -> int:
-        """Bytes of an unfinished frame held (0 between frames)."""
-        return len(self._buf)
+        """Bytes held that are not taken yet (whole frames and an unfinished one)."""
+        return len(self._buf) - self._pos
+
+    def push(self, data: bytes) -> None:
+        if self._pos and self._pos >= len(self._buf) // 2:
+            del self._buf[:self._pos]       # compact now and then, not on every frame
+            self._pos = 0
+        self._buf += data
+
+    def next_frame(self) -> Optional[bytes]:
+        """One whole payload, or None when none is complete yet."""
+        if self._need is None:
+            if len(self._buf) - self._pos < HEADER.size:
+                return None
+            (n,) = HEADER.unpack_from(self._buf, self._pos)
+            if n > self.max_frame:
+                raise ProtocolError(f"frame of {n} bytes announced, more than the "
+                                    f"{self.max_frame}-byte limit")
+            self._need = n
+            self._pos += HEADER.size
+        if len(self._buf) - self._pos < self._need:
+            return None
+        end = self._pos + self._need
+        out = bytes(self._buf[self._pos:end])
+        self._pos = end
+        self._need = None
+        if self._pos == len(self._buf):
+            self._buf.clear()
+            self._pos = 0
+        return out
+
+    @property
+    def ready(self) -> bool:
+        """True when :meth:`next_frame` would return a payload (or raise)."""
+        if self._need is None:
+            if len(self._buf) - self._pos < HEADER.size:
+                return False
+            (n,) = HEADER.unpack_from(self._buf, self._pos)
+            return n > self.max_frame or len(self._buf) - self._pos - HEADER.size >= n
+        return len(self._buf) - self._pos >= self._need
 
     def feed(self, data: bytes) -> list[bytes]:
-        self._buf += data
+        self.push(data)
         out = []
         while True:
-            if self._need is None:
-                if len(self._buf) < HEADER.size:
-                    break
-                (n,) = HEADER.unpack_from(self._buf)
-                if n > self.max_frame:
-                    raise ProtocolError(f"frame of {n} bytes announced, more than the "
-                                        f"{self.max_frame}-byte limit")
-                self._need = n
-                del self._buf[:HEADER.size]
-            if len(self._buf) < self._need:
-                break
-            out.append(bytes(self._buf[:self._need]))
-            del self._buf[:self._need]
-            self._need = None
-        return out
+            p = self.next_frame()
+            if p is None:
+                return out
+            out.append(p)
 
     @property
     def mid_frame(self) -> bool:
         """True when part of a frame (header or payload) has arrived."""
-        return bool(self._buf) or self._need is not None
+        return len(self._buf) > self._pos or self._need is not None
 
 
 # ------------------------------------------------------------------ blocking helpers
@@ -258,12 +330,13 @@ def _recv_exact(sock: socket.socket, n: int) -> bytes:
 
 
 def recv_msg(sock: socket.socket, max_frame: int = MAX_FRAME,
-             allowed: Optional[frozenset] = None) -> dict:
-    """Read one whole message from a blocking socket (ConnectionError at EOF)."""
+             allowed: Optional[frozenset] = None, binary: bool = True) -> dict:
+    """Read one whole message from a blocking socket (ConnectionError at EOF);
+    a client's read, so MessagePack telemetry is understood."""
     (n,) = HEADER.unpack(_recv_exact(sock, HEADER.size))
     if n > max_frame:
         raise ProtocolError(f"frame of {n} bytes announced, more than the {max_frame}-byte limit")
-    return decode_payload(_recv_exact(sock, n), allowed)
+    return decode_payload(_recv_exact(sock, n), allowed, binary)
 
 
 # ------------------------------------------------------------------ fields
@@ -348,6 +421,70 @@ def sample_from_row(row: Iterable, fields: Iterable[str] = SAMPLE_FIELDS) -> Sam
     known = set(SAMPLE_FIELDS)
     d = {k: v for k, v in zip(fields, row) if k in known}
     return from_dict(d)
+
+
+_MACHINE_FIELDS = SAMPLE_FIELDS[4:]      # inputs .. velocities: the machine's sample dict
+_DEFAULTS = {"t_ms": 0, "running": None, "proc": 0, "message": 0}
+
+
+class ChangeEncoder:
+    """One subscriber's telemetry changes: a raw sample row of the controller
+    (``t_ms, running, proc, message, fields``) becomes a map of the fields that
+    differ from the previous change (all of them after :meth:`reset`)."""
+
+    def __init__(self):
+        self._prev: Optional[tuple] = None
+        self._prev_fields: Optional[dict] = None
+
+    def reset(self) -> None:
+        self._prev = self._prev_fields = None
+
+    def encode(self, row: tuple) -> dict:
+        t, running, proc, message, fields = row
+        head = (running, proc, message)
+        prev = self._prev
+        if prev is None:
+            d = {1: running, 2: proc, 3: message}
+            for i, name in enumerate(_MACHINE_FIELDS, 4):
+                d[i] = fields[name]
+        else:
+            d = {i: v for i, (v, p) in enumerate(zip(head, prev), 1) if v != p}
+            pf = self._prev_fields
+            if fields is not pf:
+                for i, name in enumerate(_MACHINE_FIELDS, 4):
+                    v = fields[name]
+                    if v != pf[name]:
+                        d[i] = v
+        d[0] = t
+        self._prev, self._prev_fields = head, fields
+        return d
+
+
+class ChangeDecoder:
+    """The client's side of :class:`ChangeEncoder`: change maps -> Samples.
+    ``fields`` are the server's sample_fields (its indexes); fields this side
+    does not know are dropped, fields the server does not send keep defaults."""
+
+    def __init__(self, fields: Iterable[str] = SAMPLE_FIELDS):
+        self.set_fields(fields)
+
+    def set_fields(self, fields: Iterable[str]) -> None:
+        local = {name: i for i, name in enumerate(SAMPLE_FIELDS)}
+        self._map = [local.get(name) for name in fields]
+        self.reset()
+
+    def reset(self) -> None:
+        self._values = [_DEFAULTS.get(name, ()) for name in SAMPLE_FIELDS]
+
+    def decode(self, change: dict) -> Sample:
+        values, mapping = self._values, self._map
+        n = len(mapping)
+        for k, v in change.items():
+            if type(k) is int and 0 <= k < n:
+                i = mapping[k]
+                if i is not None:
+                    values[i] = tuple(v) if type(v) is list else v
+        return Sample(*values)
 
 
 def event_dict(event) -> dict:

@@ -10,7 +10,7 @@ import os
 import time
 import traceback
 import zlib
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Callable, Optional
 
 from plcbuilder.controller.controller import Controller, ControllerError
@@ -43,6 +43,7 @@ class Session:
     """What the service keeps per client."""
     telemetry: Optional[TelemetryQueue] = None
     peer: str = ""
+    changes: protocol.ChangeEncoder = field(default_factory=protocol.ChangeEncoder)
 
 
 def image_summary(image: Optional[Image]) -> list[dict]:
@@ -68,6 +69,7 @@ class Service:
         self.controller_factory = controller_factory
         self.max_image = max_image
         self.image: Optional[Image] = None
+        self._summary: tuple = ()              # image_summary of the image, made once
         self.image_crc32: Optional[int] = None
         self.image_size = 0
         self.uploads = 0
@@ -131,6 +133,7 @@ class Service:
                 raise ControllerError(f"the controller could not load it "
                                       f"({type(exc).__name__}: {exc})") from None
             self.image = image
+            self._summary = tuple(image_summary(image))
             self.image_crc32 = zlib.crc32(data)
             self.image_size = len(data)
             return self.sim.controller.t_ms
@@ -142,7 +145,7 @@ class Service:
             raise Refused(f"image refused: {exc.reason}") from None
         self.uploads += 1
         return {"accepted": True, "t_ms": t, "size": len(data),
-                "image_crc32": f"{self.image_crc32:08x}", "procedures": image_summary(image),
+                "image_crc32": f"{self.image_crc32:08x}", "procedures": list(self._summary),
                 "hw_total": image.hw_total}
 
     def handle_upload(self, msg: dict, session: Session) -> dict:
@@ -206,7 +209,7 @@ class Service:
     def state(self) -> ControllerStatus:
         st = self._on_sim(self.sim.controller.state)
         return replace(
-            st, image=tuple(image_summary(self.image)),
+            st, image=self._summary,
             image_crc32=None if self.image_crc32 is None else f"{self.image_crc32:08x}",
             speed=self.sim.speed(),
             server={"clients": self.clients, "subscribers": self.sim.subscribers,
@@ -237,21 +240,31 @@ class Service:
         ms = protocol.field_int(msg, "ms", lo=1, hi=600_000)
         budget = self.step_budget
 
-        def go():
-            # In slices, and at most ``step_budget`` seconds of wall time, so that
-            # a runaway procedure cannot hold every client up for minutes.
+        slice_s = 0.02
+
+        def go(left: int):
+            # One slice of at most ``slice_s`` seconds of wall time on the
+            # simulation thread: between slices other requests are answered.
             c = self.sim.controller
             start, done = time.perf_counter(), 0
-            while done < ms:
-                n = min(ms - done, self.sim._chunk())
+            while done < left:
+                n = min(left - done, self.sim._chunk())
                 c.step(n)
                 done += n
                 self.sim.publish()
-                if time.perf_counter() - start > budget:
+                if time.perf_counter() - start > slice_s:
                     break
             self.sim.rebase()
             return c.t_ms, done
-        t, done = self._on_sim(go)
+
+        # At most ``step_budget`` seconds of wall time in all, so that a runaway
+        # procedure cannot hold the client up for minutes.
+        start, done, t = time.perf_counter(), 0, None
+        while done < ms:
+            t, n = self._on_sim(lambda: go(ms - done))
+            done += n
+            if time.perf_counter() - start > budget:
+                break
         return {"t_ms": t, "stepped": done, "complete": done == ms}
 
     def handle_reset(self, msg: dict, session: Session) -> dict:
@@ -271,17 +284,23 @@ class Service:
         return {"pong": True}
 
     # ---------------------------------------------------------------- telemetry
+    #: Sample changes a subscriber's queue may hold at most (memory: ~100 bytes each).
+    max_queue = 20_000
+
     def handle_subscribe(self, msg: dict, session: Session) -> dict:
         samples = protocol.field_bool(msg, "samples", True)
         events = protocol.field_bool(msg, "events", True)
-        size = protocol.field_int(msg, "queue", 1000, lo=16, hi=100_000)
+        lossless = protocol.field_bool(msg, "lossless", False)
+        size = protocol.field_int(msg, "queue", 1000, lo=16, hi=self.max_queue)
         if session.telemetry is not None:
-            self.sim.unsubscribe(session.telemetry)
-        q = TelemetryQueue(max_samples=size, samples=samples, events=events)
+            self.end_session(session)
+        q = TelemetryQueue(max_samples=size, samples=samples, events=events, lossless=lossless)
+        session.changes.reset()
         session.telemetry = q
         self.sim.call(lambda: self.sim.subscribe(q))
         return {"sample_fields": list(SAMPLE_FIELDS), "interval_ms": 20, "samples": samples,
-                "events": events, "queue": size}
+                "events": events, "queue": size, "lossless": lossless,
+                "encoding": "msgpack-changes"}
 
     def handle_unsubscribe(self, msg: dict, session: Session) -> dict:
         self.end_session(session)

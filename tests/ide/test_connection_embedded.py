@@ -231,3 +231,60 @@ def test_reset_starts_time_again(qtbot, conn):
     n = len(rec.samples)
     qtbot.waitUntil(lambda: len(rec.samples) > n + 10, timeout=WAIT)
     assert rec.samples[-1].t_ms < 300
+
+
+TOGGLE = "main(){ do{ if (t) { portclear(6); t = 0; } else { portset(6); t = 1; } }while(1); }"
+
+
+def test_at_max_speed_the_ide_receives_every_edge(qtbot, conn):
+    """Issue 14 point 3: an output that toggles every tick, at Max speed, through
+    the IDE's own connection: every tick arrives and every edge is there."""
+    import numpy as np
+    from plcbuilder.ide.panels.model import RunModel
+    from plcbuilder.link.server import ControllerServer
+    srv = ControllerServer(port=0, speed="pause").start()
+    try:
+        model = RunModel(capacity=3_000_000)
+        conn.sig_samples.connect(model.add_samples)
+        states = []
+        conn.sig_state.connect(lambda st, missed: states.append((st, missed)))
+        conn.connect_to(*srv.address, srv.token)
+        qtbot.waitUntil(lambda: conn.connected, timeout=WAIT)
+        conn.upload(build_image({"TOGGLE": TOGGLE}))
+        conn.start("TOGGLE", 0)
+        conn.set_speed("max")
+        qtbot.wait(1500)
+        conn.set_speed("pause")
+        qtbot.waitUntil(lambda: bool(states) and states[-1][0].speed.get("mode") == "pause",
+                        timeout=WAIT)
+        end = srv.controller.t_ms
+        qtbot.waitUntil(lambda: len(model) and model.t_end * 1000 >= end - 1, timeout=WAIT)
+        assert conn.missed == 0
+        t = np.rint(model.time.view() * 1000).astype(np.int64)
+        bits = model.bit_series("outputs", 6)
+        first = int(np.argmax(bits))
+        t, bits = t[first:], bits[first:]
+        assert len(t) > 5000, len(t)
+        assert np.all(np.diff(t) == 1)          # every tick (each one a change)
+        assert np.all(bits[1:] != bits[:-1])    # no edge lost
+    finally:
+        srv.close()
+
+
+def test_step_samples_hold_each_change_until_the_next():
+    from plcbuilder.ide.panels.model import StepSamples
+    s0 = ev.Sample(10, None, 0, 0, (0,) * 8, (0,) * 8, (0,) * 8, (0,) * 8, (0,) * 8, (0,) * 9,
+                   (0,) * 9)
+    s1 = ev.Sample(15, "M03", 0, 5, (0,) * 8, (8,) + (0,) * 7, (0,) * 8, (0,) * 8, (0,) * 8,
+                   (0,) * 9, (0,) * 9)
+    s2 = ev.Sample(25, "M03", 0, 0, (0,) * 8, (9,) + (0,) * 7, (0,) * 8, (0,) * 8, (0,) * 8,
+                   (0,) * 9, (0,) * 9)
+    steps = StepSamples()
+    out = steps.feed([s0, s1], 20)
+    assert [(s.t_ms, s.outputs[0], s.message) for s in out] == \
+        [(10, 0, 0), (14, 0, 0), (15, 8, 5), (19, 8, 0)]
+    out = steps.feed([s2], 30)                 # the next batch goes on where it left
+    assert [(s.t_ms, s.outputs[0], s.message) for s in out] == \
+        [(24, 8, 0), (25, 9, 0), (29, 9, 0)]
+    assert steps.feed([], 30) == []            # nothing new, no time: nothing
+    assert [s.t_ms for s in steps.feed([], 40)] == [39]

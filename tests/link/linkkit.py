@@ -25,6 +25,10 @@ SOURCES = {
     "__HANDLER_EXIT": (Kind.SOFTWARE, "main(){ gvarset(20002, 2); exit(99); }"),
 }
 
+#: A hardware procedure whose output 6 toggles every tick (a telemetry change every tick).
+TOGGLE = {"TOGGLE": (Kind.HARDWARE, "main(){ do{ if (t) { portclear(6); t = 0; } "
+                                   "else { portset(6); t = 1; } }while(1); }")}
+
 
 def compile_programs(names=None, overrides: Optional[dict] = None, code_limit=None):
     """Compiled Programs (through the real compiler)."""
@@ -79,7 +83,7 @@ def read_until_closed(sock: socket.socket, timeout: float = 5.0) -> tuple[list[d
         if not data:
             return msgs, True
         for p in dec.feed(data):
-            msgs.append(protocol.decode_payload(p))
+            msgs.append(protocol.decode_payload(p, binary=True))
     return msgs, False
 
 

@@ -73,3 +73,90 @@ def test_missing_file(tmp_path):
 def test_pid_alive():
     assert runtime.pid_alive(os.getpid())
     assert not runtime.pid_alive(0)
+
+
+# ------------------------------------------------------------------ issue 17 point 11
+
+@posix_only
+def test_a_folder_other_users_can_write_is_refused(tmp_path):
+    folder = tmp_path / "shared"
+    folder.mkdir()
+    path = folder / "controller.json"
+    ep = Endpoint("127.0.0.1", 4242, runtime.new_token(), os.getpid())
+    runtime.write(ep, path)
+    os.chmod(folder, 0o1777)                 # as /tmp is
+    with pytest.raises(RuntimeFileError, match="other users can write"):
+        runtime.read(path)
+    with pytest.raises(RuntimeFileError, match="other users can write"):
+        runtime.write(ep, path)
+    os.chmod(folder, 0o700)
+    assert runtime.read(path) == ep
+    os.chmod(path, 0o622)
+    with pytest.raises(RuntimeFileError, match="other users can write"):
+        runtime.read(path)
+
+
+@posix_only
+@pytest.mark.skipif(not hasattr(os, "getuid") or os.getuid() != 0, reason="needs chown")
+def test_a_file_or_folder_of_another_user_is_refused(tmp_path):
+    folder = tmp_path / "theirs"
+    path = folder / "controller.json"
+    ep = Endpoint("127.0.0.1", 4242, runtime.new_token(), os.getpid())
+    runtime.write(ep, path)
+    os.chown(path, 12345, -1)
+    with pytest.raises(RuntimeFileError, match="belongs to user 12345"):
+        runtime.read(path)
+    os.chown(path, 0, -1)
+    os.chown(folder, 12345, -1)
+    with pytest.raises(RuntimeFileError, match="belongs to user 12345"):
+        runtime.read(path)
+
+
+@posix_only
+def test_a_client_refuses_a_runtime_file_in_a_shared_folder(tmp_path, monkeypatch):
+    from plcbuilder.link.client import Client, NotRunningError
+    folder = tmp_path / "shared"
+    path = folder / "controller.json"
+    runtime.write(Endpoint("127.0.0.1", 4242, "t" * 43, os.getpid()), path)
+    os.chmod(folder, 0o777)
+    with pytest.raises(NotRunningError, match="other users can write"):
+        Client.connect(runtime_file=path, connect_timeout=1)
+
+
+def _controller(path):
+    import subprocess
+    return subprocess.Popen([sys.executable, "-m", "plcbuilder", "controller", "--port", "0",
+                             "--runtime-file", str(path)], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+
+
+def _wait_pid(path, pid, timeout=30):
+    import time
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            if runtime.read(path).pid == pid:
+                return
+        except RuntimeFileError:
+            pass
+        time.sleep(0.05)
+    raise AssertionError(f"the runtime file never named process {pid}")
+
+
+@posix_only
+def test_stopping_the_newer_of_two_controllers_gives_the_file_back(tmp_path):
+    path = tmp_path / "rt" / "controller.json"
+    older = _controller(path)
+    try:
+        _wait_pid(path, older.pid)
+        newer = _controller(path)
+        try:
+            _wait_pid(path, newer.pid)
+        finally:
+            newer.terminate()
+            newer.wait(30)
+        assert runtime.read(path).pid == older.pid      # the older one is found again
+    finally:
+        older.terminate()
+        older.wait(30)
+    assert not path.exists()

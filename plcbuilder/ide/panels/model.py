@@ -3,11 +3,17 @@
 Samples (:class:`plcbuilder.controller.events.Sample`) are parsed here, in
 batches, into preallocated numpy ring buffers; the plots only read views of
 them when the redraw timer fires. Message events are kept in a bounded list. No Qt.
+
+The controller sends only the ticks where something changed (each sample holds
+until the next); :class:`StepSamples` turns those changes into the points a
+plot draws (the held value just before each change, and up to the newest tick),
+so the model and the plots see the same steps as they would with a sample every
+tick.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Iterable, Optional
 
 import numpy as np
@@ -16,7 +22,7 @@ from plcbuilder.api import abi
 from plcbuilder.api import events as ev
 from plcbuilder.ide.ringbuffer import RingBuffer
 
-__all__ = ["RunModel", "MessageRow", "decode_message", "ANALOG_NAMES", "AXES", "WORDS", "PINS"]
+__all__ = ["RunModel", "StepSamples", "MessageRow", "decode_message", "ANALOG_NAMES", "AXES", "WORDS", "PINS"]
 
 WORDS = 8                  # input / output words in a sample
 PINS = WORDS * 32          # pins a sample can describe
@@ -106,6 +112,37 @@ def _table(samples: list) -> np.ndarray:
 def _fixed(rows: list, width: int) -> list:
     """Rows of exactly ``width`` values, as tuples (short ones padded with 0)."""
     return [tuple(r) if len(r) == width else (tuple(r) + (0,) * width)[:width] for r in rows]
+
+
+class StepSamples:
+    """Telemetry changes -> the samples to plot.
+
+    :meth:`feed` takes one telemetry batch (its changes, oldest first, and its
+    ``t_ms``, the tick the controller runs next) and returns the changes with
+    a copy of the held sample on the tick before each change that follows a
+    gap, and one on the newest tick. A change older than the last point (the
+    controller started over) passes as it is; the model clears on it."""
+
+    def __init__(self):
+        self.reset()
+
+    def reset(self) -> None:
+        self._last: Optional[ev.Sample] = None
+        self._t = -1                 # the time of the last point handed out
+
+    def feed(self, changes: Iterable[ev.Sample], t_end: int) -> list[ev.Sample]:
+        out: list[ev.Sample] = []
+        last, t = self._last, self._t
+        for s in changes:
+            if last is not None and t < s.t_ms - 1:
+                out.append(replace(last, t_ms=s.t_ms - 1, message=0))
+            out.append(s)
+            last, t = s, s.t_ms
+        if last is not None and t < t_end - 1:
+            out.append(replace(last, t_ms=t_end - 1, message=0))
+            t = t_end - 1
+        self._last, self._t = last, t
+        return out
 
 
 class RunModel:
