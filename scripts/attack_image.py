@@ -35,7 +35,7 @@ from plcbuilder.bytecode.program import Kind, Program  # noqa: E402
 from plcbuilder.image import ImageError, read_image, read_romfs, write_romfs  # noqa: E402
 from plcbuilder.image.manifest import (MANIFEST_NAME, MAX_PROCEDURES, Limits,  # noqa: E402
                                        manifest_text, write_image)
-from plcbuilder.lang.compiler import CompileOptions, compile_source  # noqa: E402
+from plcbuilder.lang.pipeline import CompileOptions, compile_source  # noqa: E402
 
 Outcome = dict
 
