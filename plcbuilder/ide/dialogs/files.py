@@ -10,7 +10,7 @@ from PySide6.QtWidgets import (QComboBox, QDialog, QDialogButtonBox, QFormLayout
 
 from plcbuilder.api import Kind
 from plcbuilder.ide.icons import icon
-from plcbuilder.ide.dialogs.common import error_label
+from plcbuilder.ide.dialogs.common import error_label, ok_cancel
 
 NAME_RE = re.compile(r"[A-Za-z0-9_\-]{1,64}")
 HEADER_RE = re.compile(r"[A-Za-z0-9_\-.]{1,64}\.h")
@@ -53,11 +53,7 @@ class ProcedureNameDialog(QDialog):
         lay.addWidget(self.hint)
         self.error = error_label(self)
         lay.addWidget(self.error)
-        self.buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok |
-                                        QDialogButtonBox.StandardButton.Cancel, self)
-        self.buttons.accepted.connect(self.accept)
-        self.buttons.rejected.connect(self.reject)
-        lay.addWidget(self.buttons)
+        self.buttons = ok_cancel(self, lay)
         self.name_edit.textChanged.connect(self._validate)
         self.kind_combo.currentIndexChanged.connect(self._validate)
         self.setMinimumWidth(420)
@@ -113,11 +109,7 @@ class HeaderNameDialog(QDialog):
         lay.addLayout(form)
         self.error = error_label(self)
         lay.addWidget(self.error)
-        self.buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok |
-                                        QDialogButtonBox.StandardButton.Cancel, self)
-        self.buttons.accepted.connect(self.accept)
-        self.buttons.rejected.connect(self.reject)
-        lay.addWidget(self.buttons)
+        self.buttons = ok_cancel(self, lay)
         self.name_edit.textChanged.connect(self._validate)
         self.setMinimumWidth(380)
         self._validate()
@@ -168,11 +160,7 @@ class GoToLineDialog(QDialog):
         lay.addWidget(self.edit)
         self.error = error_label(self)
         lay.addWidget(self.error)
-        self.buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok |
-                                        QDialogButtonBox.StandardButton.Cancel, self)
-        self.buttons.accepted.connect(self.accept)
-        self.buttons.rejected.connect(self.reject)
-        lay.addWidget(self.buttons)
+        self.buttons = ok_cancel(self, lay)
         self.edit.textChanged.connect(self._validate)
         self.setMinimumWidth(300)
 

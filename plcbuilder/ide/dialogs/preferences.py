@@ -5,9 +5,10 @@ from __future__ import annotations
 from typing import Optional
 
 from PySide6.QtGui import QFontDatabase
-from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QDialogButtonBox, QFontComboBox,
+from PySide6.QtWidgets import (QCheckBox, QComboBox, QDialog, QFontComboBox,
                                QFormLayout, QSpinBox, QTabWidget, QVBoxLayout, QWidget)
 
+from plcbuilder.ide.dialogs.common import ok_cancel
 from plcbuilder.ide.settings import Preferences
 
 
@@ -83,11 +84,7 @@ class PreferencesDialog(QDialog):
         g.addRow("", self.build_upload_box)
         g.addRow("", self.reopen_box)
         tabs.addTab(fb, "Files && Build")
-        self.buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok |
-                                        QDialogButtonBox.StandardButton.Cancel, self)
-        self.buttons.accepted.connect(self.accept)
-        self.buttons.rejected.connect(self.reject)
-        lay.addWidget(self.buttons)
+        self.buttons = ok_cancel(self, lay)
         self.setMinimumWidth(460)
 
     def preferences(self) -> Preferences:

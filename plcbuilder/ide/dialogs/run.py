@@ -13,7 +13,7 @@ from PySide6.QtWidgets import (QDialog, QDialogButtonBox, QFormLayout, QHBoxLayo
 
 from plcbuilder.api import Kind
 from plcbuilder.ide.icons import icon
-from plcbuilder.ide.dialogs.common import error_label
+from plcbuilder.ide.dialogs.common import error_label, ok_cancel
 
 INT32_MIN, INT32_MAX = -2 ** 31, 2 ** 31 - 1
 
@@ -154,12 +154,8 @@ class ConnectDialog(QDialog):
         form.addRow("&Port:", self.port_spin)
         form.addRow("&Token:", self.token_edit)
         lay.addLayout(form)
-        self.buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok |
-                                        QDialogButtonBox.StandardButton.Cancel, self)
+        self.buttons = ok_cancel(self, lay)
         self.buttons.button(QDialogButtonBox.StandardButton.Ok).setText("Connect")
-        self.buttons.accepted.connect(self.accept)
-        self.buttons.rejected.connect(self.reject)
-        lay.addWidget(self.buttons)
         self.setMinimumWidth(380)
 
     def value(self) -> tuple[str, int, str]:
