@@ -283,6 +283,7 @@ class Parsed:
     errors: list[_Error] = field(default_factory=list)
     rec_diags: list[Diagnostic] = field(default_factory=list)
     build_diags: list[Diagnostic] = field(default_factory=list)
+    count: int = 0             # syntax errors counted
     reparsed: tuple = (0, 0)   # the tokens parsed this time [start, end) (for tests and benches)
 
 
@@ -414,9 +415,11 @@ class _Run:
 
     def _can_sync(self, new: _Mark, old: _Mark) -> bool:
         """Would the previous parse, from ``old`` on, do what this one does from ``new`` on?"""
-        if new.stack != old.stack or new.count != old.count or new.too_deep != old.too_deep \
+        if new.stack != old.stack or new.too_deep != old.too_deep \
                 or new.quiet_until > new.idx or old.quiet_until > old.idx:
             return False
+        if new.count != old.count and new.count + self.prev.count - old.count > MAX_SYNTAX_ERRORS:
+            return False            # the errors after would be counted past the cap
         for x in self.prev.errors:
             if x.idx > old.idx and (x.lo < self.f_old or x.min_stack < len(old.stack)):
                 return False
@@ -426,7 +429,7 @@ class _Run:
     def _done(self, module: A.Module, usable: bool) -> Parsed:
         rec, builder = self.rec, self.builder
         return Parsed(self.toks, module, rec.diags + builder.diags, list(builder.items),
-                      self.marks if usable else [], rec.errors, rec.diags, builder.diags,
+                      self.marks if usable else [], rec.errors, rec.diags, builder.diags, rec.count,
                       (self.start, len(self.toks)))
 
     def _splice(self, new: _Mark, old: _Mark) -> Parsed:
@@ -449,13 +452,14 @@ class _Run:
             if m.idx > old.idx:
                 marks.append(_Mark(
                     m.idx + shift, m.stack, m.nitems - old.nitems + new.nitems,
-                    m.nrec - old.nrec + new.nrec, m.nbuild - old.nbuild + new.nbuild, m.count,
+                    m.nrec - old.nrec + new.nrec, m.nbuild - old.nbuild + new.nbuild,
+                    m.count - old.count + new.count,
                     m.quiet_until + shift if m.quiet_until > old.idx else new.quiet_until,
                     m.last_error + shift if m.last_error > old.idx else new.last_error,
                     m.too_deep, max(new.hi, m.hi + shift) if m.hi >= 0 else new.hi, items))
         module = A.Module([i for i in items if isinstance(i, A.ProcDef)])
         return Parsed(self.toks, module, rec_diags + build_diags, items, marks, errors, rec_diags,
-                      build_diags, (self.start, new.idx))
+                      build_diags, prev.count - old.count + new.count, (self.start, new.idx))
 
 
 def _moved_diag(d: Diagnostic, file: Optional[str], lines: int) -> Diagnostic:

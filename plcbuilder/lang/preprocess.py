@@ -82,10 +82,61 @@ def builtin_header_names() -> list[str]:
         return []
 
 
+class TokenCache:
+    """The tokens of every file a preprocessor read, by name and text, kept for
+    the next run over the same files (an open file checked at every pause in
+    typing): a header is tokenized once, not at every keystroke. ``read`` reads
+    a file again only when its size or modification time changed. Entries not
+    used since the last :meth:`sweep` are dropped there."""
+
+    def __init__(self):
+        self._lines: dict[tuple[str, str], tuple] = {}
+        self._files: dict[str, tuple] = {}
+        self._used: set = set()
+
+    def lines(self, f: SourceFile) -> tuple:
+        """(the tokenizer's lines of f, its diagnostics, its block comments, and
+        per line how many of each came before it, or None when there are none)."""
+        key = (f.name, f.text)
+        self._used.add(key)
+        entry = self._lines.get(key)
+        if entry is None:
+            diags: list[Diagnostic] = []
+            comments: list[Span] = []
+            lines, counts = [], []
+            for line in Tokenizer(f.text, f.name, diags, comments).lines():
+                lines.append(line)
+                counts.append((len(diags), len(comments)))
+            entry = self._lines[key] = (lines, diags, comments, counts if diags or comments else None)
+        return entry
+
+    def read(self, path: Path, name: str) -> tuple[Optional[str], list[Diagnostic]]:
+        """:func:`read_source`, again only when the file's size or modification time changed."""
+        try:
+            st = path.stat()
+            stamp = (name, st.st_mtime_ns, st.st_ctime_ns, st.st_size, st.st_ino)
+        except OSError:
+            return read_source(path, name)
+        key = str(path)
+        self._used.add(key)
+        got = self._files.get(key)
+        if got is None or got[0] != stamp:
+            got = self._files[key] = (stamp, read_source(path, name))
+        text, diags = got[1]
+        return text, list(diags)
+
+    def sweep(self) -> None:
+        self._lines = {k: v for k, v in self._lines.items() if k in self._used}
+        self._files = {k: v for k, v in self._files.items() if k in self._used}
+        self._used = set()
+
+
 class Preprocessor:
-    def __init__(self, include_dirs: Sequence[Path] = (), read_file=read_source):
+    def __init__(self, include_dirs: Sequence[Path] = (), read_file=read_source,
+                 tokens: Optional[TokenCache] = None):
         self.include_dirs = [Path(p) for p in include_dirs]
-        self.read_file = read_file
+        self.tokens = tokens
+        self.read_file = tokens.read if tokens is not None and read_file is read_source else read_file
         self.diags: list[Diagnostic] = []
         self.sources = SourceSet()
         self.defines: dict[str, Define] = {}
@@ -114,9 +165,8 @@ class Preprocessor:
 
     # ------------------------------------------------------------ files
     def _file(self, f: SourceFile, stack: list[str], folder: Optional[Path]) -> None:
-        lexer = Tokenizer(f.text, f.name, self.diags, self.block_comments)
         cond: list[list] = []   # [active, seen_else, parent_active, span]
-        for is_dir, toks, hash_span, raw in lexer.lines():
+        for is_dir, toks, hash_span, raw in self._lines(f):
             active = all(c[0] for c in cond)
             if is_dir:
                 self._directive(toks, hash_span, raw, f, stack, folder, cond, active)
@@ -125,6 +175,23 @@ class Preprocessor:
                 self._emit(toks)
         for c in cond:
             self.diags.append(error("unterminated-conditional", "#if without #endif", c[3]))
+
+    def _lines(self, f: SourceFile):
+        """The tokenizer's lines of f; its diagnostics and block comments are
+        added as each line comes, from the token cache when there is one."""
+        if self.tokens is None:
+            yield from Tokenizer(f.text, f.name, self.diags, self.block_comments).lines()
+            return
+        lines, diags, comments, counts = self.tokens.lines(f)
+        if counts is None:
+            yield from lines
+            return
+        nd = nc = 0
+        for line, (d, c) in zip(lines, counts):
+            self.diags.extend(diags[nd:d])
+            self.block_comments.extend(comments[nc:c])
+            nd, nc = d, c
+            yield line
 
     def _directive(self, toks, hash_span, raw, f, stack, folder, cond, active) -> None:
         if not toks:
