@@ -150,28 +150,11 @@ def run() -> list[str]:
 
 
 # ------------------------------------------------- diagnostics while typing
-def _keystrokes(text: str):
-    """Edits a person makes in the middle of ``text``, each applied to the
-    text before it: (what, new text). A character typed into a name and
-    deleted again (the lines stay where they are), and Enter pressed and
-    taken back (every line below moves)."""
-    lines = text.split("\n")
-    mid = len(lines) // 2
-    at = next(i for i in range(mid, len(lines)) if lines[i].startswith("    v"))
-    typed = lines[:at] + ["    v1" + lines[at][5:]] + lines[at + 1:]
-    enter = lines[:at] + [lines[at], ""] + lines[at + 1:]
-    while True:
-        yield "type", "\n".join(typed)
-        yield "type", text
-        yield "enter", "\n".join(enter)
-        yield "enter", text
-
-
 def diagnostics_while_typing(app=None, sizes=(300, 1000, 3000), reps: int = 5) -> list[str]:
     """Keystroke to diagnostics through the IDE's worker (real debounce) at
     each size, as (time - debounce) / lark's bare parse of the same file; the
     bare parse is timed between the keystrokes, so both see the same load."""
-    from bench_compile import bare_lark, procedure
+    from bench_compile import bare_lark, keystrokes, procedure
 
     from plcbuilder.ide.diagnostics_worker import DiagnosticsWorker
     if app is None:
@@ -197,7 +180,7 @@ def diagnostics_while_typing(app=None, sizes=(300, 1000, 3000), reps: int = 5) -
                 return (got[0][0] - t) if got else float("inf")
 
             keystroke(text)                       # the file opened: its first check
-            edits = _keystrokes(text)
+            edits = keystrokes(text)
             ratio: dict[str, list[float]] = {"type": [], "enter": []}
             bare_t: list[float] = []
             for _ in range(reps):

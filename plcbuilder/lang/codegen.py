@@ -10,6 +10,7 @@ bytes.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import accumulate
 from typing import Optional
 
 from plcbuilder.bytecode.opcodes import LONG_FORM, Op, Operand, encode, fits, size_of
@@ -301,27 +302,22 @@ class Generator:
     def assemble(self) -> tuple[Optional[Program], int]:
         items = self.items
         long: set[int] = set()   # indexes of jumps that need the long form
-        while True:
-            offsets: dict[int, int] = {}
-            pos = 0
-            ins_pos: list[int] = []
-            for i, it in enumerate(items):
-                if type(it) is tuple:
-                    offsets[it[1]] = pos
-                    ins_pos.append(pos)
-                    continue
-                ins_pos.append(pos)
-                pos += _size(it, i in long)
-            changed = False
-            for i, it in enumerate(items):
-                if type(it) is tuple or it.label is None or i in long:
-                    continue
-                rel = offsets[it.label] - (ins_pos[i] + 2)
-                if not fits(Operand.REL8, rel):
-                    long.add(i)
-                    changed = True
-            if not changed:
+        sizes = [0 if type(it) is tuple else _size(it, False) for it in items]
+        labels = [(i, it[1]) for i, it in enumerate(items) if type(it) is tuple]
+        short = [(i, it.label) for i, it in enumerate(items)
+                 if type(it) is not tuple and it.label is not None]
+        while True:                # relax: lengthen the jumps that do not reach, until none
+            ins_pos = list(accumulate(sizes, initial=0))
+            pos = ins_pos.pop()
+            offsets = {label: ins_pos[i] for i, label in labels}
+            grown = [(i, label) for i, label in short
+                     if not fits(Operand.REL8, offsets[label] - (ins_pos[i] + 2))]
+            if not grown:
                 break
+            for i, _label in grown:
+                long.add(i)
+                sizes[i] = _size(items[i], True)
+            short = [j for j in short if j[0] not in long]
         if pos > ADDRESS_LIMIT or any(
                 not fits(Operand.REL16, offsets[items[i].label] - (ins_pos[i] + 3)) for i in long):
             return None, pos
