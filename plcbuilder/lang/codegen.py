@@ -28,13 +28,49 @@ ADDRESS_LIMIT = 1 << 16
 JUMP_LIMIT = (1 << 15) - 1
 
 
-def generate(res: Resolved, name: str, kind: Kind, file_namer) -> tuple[Optional[Program], int]:
+def generate(res: Resolved, name: str, kind: Kind, file_namer,
+             cache: Optional["CodeCache"] = None) -> tuple[Optional[Program], int]:
     """(the Program of the procedures ``res.reachable``, main first; its code
     size). The Program is None when the code is too large to address (a CALL
     target at or above ADDRESS_LIMIT, a jump further than a 16-bit offset): the
     size says how large it is. ``file_namer`` maps a span's file to the name
-    stored in the file table."""
-    return Generator(res, name, kind, file_namer).run()
+    stored in the file table. ``cache`` (kept for one file from compile to
+    compile) saves walking the procedures that did not change."""
+    return Generator(res, name, kind, file_namer, cache).run()
+
+
+class CodeCache:
+    """The instructions emitted for each procedure, kept from one compile of a
+    file to the next: a procedure whose tree is the same object as last time
+    (the incremental parser reuses the procedures an edit did not reach) and
+    whose names mean the same (the same variable slots and registers) is not
+    walked again. Procedures not emitted in the last compile are dropped."""
+
+    def __init__(self):
+        self._procs: dict[int, tuple] = {}
+
+    def get(self, p: A.ProcDef, res: Resolved) -> Optional[tuple[int, int, list]]:
+        got = self._procs.get(id(p))
+        if got is None or got[0] is not p:
+            return None
+        slots, mapped = res.slots, res.mapped
+        for n, slot, addr in got[4]:
+            if slots.get(n) != slot or mapped.get(n) != addr:
+                return None
+        return got[1], got[2], got[3]
+
+    def put(self, p: A.ProcDef, base: int, count: int, items: list, names: set, res: Resolved,
+            keep: dict) -> None:
+        slots, mapped = res.slots, res.mapped
+        keep[id(p)] = (p, base, count, items, tuple((n, slots.get(n), mapped.get(n)) for n in names))
+
+    def keep(self, p: A.ProcDef, base: int, items: list, keep: dict) -> None:
+        """Keep a procedure that was reused, its labels now from ``base``."""
+        _p, _base, count, _items, names = self._procs[id(p)]
+        keep[id(p)] = (p, base, count, items, names)
+
+    def replace(self, keep: dict) -> None:
+        self._procs = keep
 
 
 @dataclass
@@ -47,7 +83,8 @@ class _Ins:
 
 
 class Generator:
-    def __init__(self, res: Resolved, name: str, kind: Kind, file_namer):
+    def __init__(self, res: Resolved, name: str, kind: Kind, file_namer,
+                 cache: Optional[CodeCache] = None):
         self.res = res
         self.name = name
         self.kind = kind
@@ -55,6 +92,8 @@ class Generator:
         self.items: list = []           # _Ins or ("label", id)
         self.nlabels = 0
         self.loc = ("", 0)
+        self.cache = cache
+        self.names: Optional[set] = None   # the names the procedure being emitted uses
 
     # --------------------------------------------------------------- emit
     def label(self) -> int:
@@ -89,15 +128,32 @@ class Generator:
     def run(self) -> tuple[Optional[Program], int]:
         proc_labels = {n: self.label() for n in self.res.reachable}
         self.proc_labels = proc_labels
+        cache = self.cache
+        keep: dict = {}
         for n in self.res.reachable:
             p = self.res.procs[n]
             self.place(proc_labels[n])
+            hit = cache.get(p, self.res) if cache is not None else None
+            if hit is not None:             # the same procedure, its names meaning the same
+                base, count, items = hit
+                if base != self.nlabels:
+                    items = _relabel(items, self.nlabels - base)
+                self.items += items
+                cache.keep(p, self.nlabels, items, keep)
+                self.nlabels += count
+                continue
+            start, base = len(self.items), self.nlabels
+            self.names = set() if cache is not None else None
             self.at(p.name_span)
             self.stmt(p.body)
             last = p.body.stmts[-1] if p.body.stmts else None
             if not (type(last) is A.CallStmt and last.call.name == "exit"):
                 self.at(p.body.end_span)
                 self.emit(Op.RET)
+            if cache is not None:
+                cache.put(p, base, self.nlabels - base, self.items[start:], self.names, self.res, keep)
+        if cache is not None:
+            cache.replace(keep)
         return self.assemble()
 
     # --------------------------------------------------------------- statements
@@ -112,6 +168,8 @@ class Generator:
         self.at(s.span)
         if t is A.Assign:
             n = s.target.id
+            if self.names is not None:
+                self.names.add(n)
             if n in self.res.mapped:
                 self.push(self.res.mapped[n])
                 self.expr(s.value)
@@ -121,6 +179,8 @@ class Generator:
                 self.emit(Op.STORE, self.res.slots[n])
         elif t is A.IncDec:
             n = s.target.id
+            if self.names is not None:
+                self.names.add(n)
             if n in self.res.mapped:
                 addr = self.res.mapped[n]
                 self.push(addr)
@@ -262,6 +322,8 @@ class Generator:
             self.expr(e.expr)
         elif t is A.Name:
             n = e.id
+            if self.names is not None:
+                self.names.add(n)
             if n in self.res.mapped:
                 self.push(self.res.mapped[n])
                 self.emit(Op.GVARGET)
@@ -353,6 +415,19 @@ class Generator:
                 code += encode(op, it.arg)
         return Program(self.name, self.kind, bytes(code), 0, list(self.res.user_vars), files, lines,
                        procs), len(code)
+
+
+def _relabel(items: list, by: int) -> list:
+    """A procedure's instructions with its labels renumbered (``by`` more)."""
+    out = []
+    for it in items:
+        if type(it) is tuple:
+            out.append((it[0], it[1] + by))
+        elif it.label is not None:
+            out.append(_Ins(it.op, it.arg, it.loc, it.label + by, it.proc))
+        else:
+            out.append(it)
+    return out
 
 
 def _size(it: _Ins, long: bool) -> int:

@@ -196,7 +196,8 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
     program = None
     size = None
     if not any(d.is_error for d in diags):
-        program, size = generate(resolved, name, options.kind, _file_namer(path, file_path))
+        program, size = generate(resolved, name, options.kind, _file_namer(path, file_path),
+                                 incremental.code if incremental is not None else None)
         main = resolved.procs.get("main")
         at = main.name_span if main else Span.point(path, 1, 1)
         if size > options.limit:
