@@ -48,15 +48,28 @@ class CodeCache:
 
     def __init__(self):
         self._procs: dict[int, tuple] = {}
+        #: id(procedure) -> (the procedure it is a copy of, the file, moved by how many lines)
+        self.moved: dict = {}
 
     def get(self, p: A.ProcDef, res: Resolved) -> Optional[tuple[int, int, list]]:
         got = self._procs.get(id(p))
+        shift = None
         if got is None or got[0] is not p:
-            return None
+            was = self.moved.get(id(p))
+            got = self._procs.get(id(was[0])) if was is not None else None
+            if got is None or got[0] is not was[0]:
+                return None
+            shift = was[1:]
         slots, mapped = res.slots, res.mapped
         for n, slot, addr in got[4]:
             if slots.get(n) != slot or mapped.get(n) != addr:
                 return None
+        if shift is not None:           # the same code, its lines moved
+            file, lines = shift
+            items = [_Ins(it.op, it.arg, (file, it.loc[1] + lines) if it.loc[0] == file else it.loc,
+                          it.label, it.proc) if type(it) is not tuple else it for it in got[3]]
+            got = (p, got[1], got[2], items, got[4])
+            self._procs[id(p)] = got
         return got[1], got[2], got[3]
 
     def put(self, p: A.ProcDef, base: int, count: int, items: list, names: set, res: Resolved,

@@ -46,6 +46,7 @@ class Incremental:
 
     def parse(self, toks: list[Tok], main_file: str) -> tuple[A.Module, list[Diagnostic]]:
         self.parsed = parse_incremental(toks, self.parsed, main_file)
+        self.code.moved = self.parsed.moved
         return self.parsed.module, self.parsed.diagnostics
 
     def done(self) -> None:

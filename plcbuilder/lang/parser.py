@@ -285,6 +285,9 @@ class Parsed:
     build_diags: list[Diagnostic] = field(default_factory=list)
     count: int = 0             # syntax errors counted
     reparsed: tuple = (0, 0)   # the tokens parsed this time [start, end) (for tests and benches)
+    #: procedures of the previous parse reused here moved by some lines:
+    #: id(new) -> (the previous one, the file, how many lines)
+    moved: dict = field(default_factory=dict)
 
 
 class _Synced(Exception):
@@ -441,8 +444,12 @@ class _Run:
 
         def move(d: Diagnostic) -> Diagnostic:
             return _moved_diag(d, file, lines)
-        items = (list(vs[0].children) if len(vs) == 2 else []) + \
-            (A.moved(prev.items[old.nitems:], file, lines) if lines else prev.items[old.nitems:])
+        reused = prev.items[old.nitems:]
+        moved: dict = {}
+        if lines:
+            olds, reused = reused, A.moved(reused, file, lines)
+            moved = {id(n): (o, file, lines) for o, n in zip(olds, reused) if n is not None}
+        items = (list(vs[0].children) if len(vs) == 2 else []) + reused
         rec_diags = rec.diags + [move(d) for d in prev.rec_diags[old.nrec:]]
         build_diags = builder.diags + [move(d) for d in prev.build_diags[old.nbuild:]]
         errors = rec.errors + [_Error(x.idx + shift, x.lo + shift, x.hi + shift, x.min_stack)
@@ -459,7 +466,7 @@ class _Run:
                     m.too_deep, max(new.hi, m.hi + shift) if m.hi >= 0 else new.hi, items))
         module = A.Module([i for i in items if isinstance(i, A.ProcDef)])
         return Parsed(self.toks, module, rec_diags + build_diags, items, marks, errors, rec_diags,
-                      build_diags, prev.count - old.count + new.count, (self.start, new.idx))
+                      build_diags, prev.count - old.count + new.count, (self.start, new.idx), moved)
 
 
 def _moved_diag(d: Diagnostic, file: Optional[str], lines: int) -> Diagnostic:
