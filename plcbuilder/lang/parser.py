@@ -344,7 +344,7 @@ class _Run:
         if prev is not None:
             diff = _diff(prev.toks, toks, self.main_file)
             if diff is None:        # the same tokens
-                return replace(prev, toks=toks, reparsed=(0, 0))
+                return replace(prev, toks=toks, reparsed=(0, 0), moved={})
             e, self.f_old, self.f_new, self.lines = diff
             mark = None
             for m in prev.marks:
