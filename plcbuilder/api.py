@@ -17,10 +17,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
-from plcbuilder._support.files import atomic_write
+from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.bytecode import abi, disasm
 from plcbuilder.bytecode.abi import proc_name
-from plcbuilder.bytecode.program import MAGIC, Kind, LoadError, Program
+from plcbuilder.bytecode.program import MAGIC, MAX_FILE_SIZE, Kind, LoadError, Program
 from plcbuilder.controller import events
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import ControllerStatus
@@ -61,7 +61,7 @@ MAX_MS = 7 * 24 * 3600 * 1000          # a week of simulated time
 def load_program(path) -> Program:
     """Read a compiled procedure (.bin); raises LoadError saying why it is refused."""
     try:
-        data = Path(path).read_bytes()
+        data = read_bounded(path, MAX_FILE_SIZE, "compiled procedure")
     except OSError as exc:
         raise LoadError(f"cannot read {path}: {exc.strerror or exc}") from None
     return Program.from_bytes(data)

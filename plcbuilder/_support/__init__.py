@@ -1,6 +1,8 @@
 """Helpers every layer may use: standard library only, nothing of ours.
 
-    files        atomic_write (replace a file all at once)
+    files        read_bounded (a regular file, at most N bytes), atomic_write (replace a
+                 regular file all at once), FileRefused (what both refuse)
+    numbers      parse_int_in (a whole number in a range, never wrapped), INT32, WORD32
     procs        pid_alive (does a process still run)
     strictjson   strict_json_loads (no repeated keys, no NaN)
     toml_errors  where a TOML key or a parse error is (line numbers for messages)

@@ -1,33 +1,145 @@
-"""Writing files so that a reader never sees half of one."""
+"""Reading and writing the product's files safely.
+
+    read_bounded   read a regular file of at most ``limit`` bytes (never a FIFO,
+                   a device or a folder; never more than the limit)
+    atomic_write   replace a regular file all at once (never a device or a FIFO)
+
+Both raise :class:`FileRefused` (an ``OSError``: its ``strerror`` is the reason,
+its ``filename`` the file) for what they will not touch, so a caller that
+already reports ``OSError`` as ``cannot read FILE: strerror`` needs no change.
+"""
 
 from __future__ import annotations
 
+import errno
 import os
+import re
 import secrets
+import stat
 from pathlib import Path
 from typing import Optional, Union
 
+#: What a file that is not a regular file is, for messages.
+_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
+          (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+          (stat.S_ISSOCK, "a socket"))
+
+
+class FileRefused(OSError):
+    """A file that is refused: not a regular file, or over its size limit.
+    ``strerror`` says why (``is a FIFO (named pipe), not a regular file``),
+    ``filename`` is the file; ``str()`` reads ``FILE: why``."""
+
+    def __init__(self, path: Union[str, Path], reason: str, code: int = errno.EINVAL):
+        super().__init__(code, reason, str(path))
+        self.path = str(path)
+        self.reason = reason
+
+    def __str__(self) -> str:
+        return f"{self.path}: {self.reason}"
+
+
+def kind_of_mode(mode: int) -> str:
+    """What a file of this ``st_mode`` is (``a FIFO (named pipe)``, ``a folder``…)."""
+    for test, word in _KINDS:
+        if test(mode):
+            return word
+    return "a regular file" if stat.S_ISREG(mode) else "not a regular file"
+
+
+def size_text(n: int) -> str:
+    """``1 MiB``, ``64 KiB``, ``300 bytes``: a limit as a reader would write it."""
+    for unit, shift in (("GiB", 30), ("MiB", 20), ("KiB", 10)):
+        if n >= 1 << shift and n % (1 << shift) == 0:
+            return f"{n >> shift} {unit}"
+    return f"{n} bytes"
+
+
+def read_bounded(path: Union[str, Path], limit: int, what: str = "file") -> bytes:
+    """The bytes of the regular file at ``path`` (symbolic links followed), at
+    most ``limit`` of them. ``what`` names the kind of file in messages
+    (``"machine description"``).
+
+    Raises :class:`FileRefused` for a folder, a device, a FIFO or a socket
+    (opened without blocking and never read, so a FIFO cannot hang the caller)
+    and for a file over ``limit`` bytes (never read past ``limit + 1``);
+    ``FileNotFoundError`` and the other ``OSError`` as ``open`` does."""
+    path = Path(path)
+    flags = os.O_RDONLY | getattr(os, "O_BINARY", 0) | getattr(os, "O_NONBLOCK", 0)
+    fd = os.open(path, flags)
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise FileRefused(path, f"is {kind_of_mode(st.st_mode)}, not a regular file; "
+                                    f"a {what} must be a regular file",
+                              errno.EISDIR if stat.S_ISDIR(st.st_mode) else errno.EINVAL)
+        if st.st_size > limit:
+            raise FileRefused(path, _too_large(st.st_size, limit, what), errno.EFBIG)
+        chunks, total = [], 0
+        while total <= limit:
+            chunk = os.read(fd, min(1 << 20, limit + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+        if total > limit:               # it grew while we read it
+            raise FileRefused(path, _too_large(total, limit, what, at_least=True), errno.EFBIG)
+        return b"".join(chunks)
+    finally:
+        os.close(fd)
+
+
+def _too_large(size: int, limit: int, what: str, at_least: bool = False) -> str:
+    more = "more than " if at_least else ""
+    return (f"is {more}{size} bytes; a {what} is at most {size_text(limit)} "
+            f"({limit} bytes)")
+
+
+def check_replaceable(path: Union[str, Path]) -> None:
+    """Raise :class:`FileRefused` unless ``path`` is missing or a regular file
+    (a symbolic link is judged by what it points to)."""
+    try:
+        st = os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return
+    except OSError:
+        return                           # let the write itself say why
+    if not stat.S_ISREG(st.st_mode):
+        raise FileRefused(path, f"is {kind_of_mode(st.st_mode)}, not a regular file; "
+                                "refusing to replace it (write to a regular file)",
+                          errno.EISDIR if stat.S_ISDIR(st.st_mode) else errno.EINVAL)
+
+
+#: The name atomic_write gives its temporary file beside ``NAME``: ``.NAME.XXXXXXXX.tmp``.
+TEMP_NAME = re.compile(r"\..+\.[0-9a-f]{8}\.tmp\Z", re.DOTALL)
+
 
 def atomic_write(path: Union[str, Path], data: Union[bytes, str], *,
-                 mode: Optional[int] = None) -> None:
+                 mode: Optional[int] = None, sync: bool = True) -> None:
     """Replace path's contents all at once: write a temporary file in the same
     folder, fsync it, ``os.replace`` it over path, then fsync the folder.
     Readers see the old file or the new one, never a half-written one. str is
     written as UTF-8. The file keeps its permissions when it existed, unless
     ``mode`` is given: then it has exactly that mode, whatever the umask (the
-    temporary file is created with it, so the data is never readable by more)."""
+    temporary file is created with it, so the data is never readable by more).
+    Raises :class:`FileRefused` when path exists and is not a regular file (a
+    device, a FIFO, a folder: ``/dev/full`` stays a device), before writing
+    anything. ``sync=False`` skips both fsyncs: still all-or-nothing for
+    readers, but a power cut may lose the new contents (for files a checksum
+    guards anyway)."""
     path = Path(path)
     if isinstance(data, str):
         data = data.encode("utf-8")
     elif not isinstance(data, (bytes, bytearray, memoryview)):
         raise TypeError(f"atomic_write takes bytes or str, not {type(data).__name__}")
+    check_replaceable(path)
     keep = None
     if mode is None:
         try:
             keep = path.stat().st_mode & 0o7777
         except FileNotFoundError:
             pass
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
+    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")   # TEMP_NAME
     flags = (os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
              | getattr(os, "O_NOFOLLOW", 0))
     fd = os.open(tmp, flags, 0o666 if mode is None else mode)
@@ -37,7 +149,8 @@ def atomic_write(path: Union[str, Path], data: Union[bytes, str], *,
         with os.fdopen(fd, "wb") as f:
             f.write(data)
             f.flush()
-            os.fsync(f.fileno())
+            if sync:
+                os.fsync(f.fileno())
         if keep is not None:
             os.chmod(tmp, keep)
         os.replace(tmp, path)
@@ -47,7 +160,28 @@ def atomic_write(path: Union[str, Path], data: Union[bytes, str], *,
         except OSError:
             pass
         raise
-    _fsync_dir(path.parent)
+    if sync:
+        _fsync_dir(path.parent)
+
+
+def remove_temp_files(folder: Union[str, Path]) -> list[str]:
+    """Remove the temporary files atomic_write left in ``folder`` (its writer was
+    killed between creating one and renaming it): regular files named as
+    :data:`TEMP_NAME` says, nothing else. The caller makes sure no writer is at
+    work in the folder. Returns the names removed."""
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for entry in entries:
+        try:
+            if TEMP_NAME.match(entry.name) and entry.is_file(follow_symlinks=False):
+                os.unlink(entry.path)
+                removed.append(entry.name)
+        except OSError:
+            pass
+    return sorted(removed)
 
 
 def _fsync_dir(folder: Path) -> None:

@@ -1,5 +1,6 @@
-"""Line numbers for messages about TOML files: where a parse error is, and
-where a key is (``tomllib`` gives values, not their places)."""
+"""TOML for messages: parsing that never overflows the stack (``loads``), and
+line numbers for messages: where a parse error is, and where a key is
+(``tomllib`` gives values, not their places)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,16 @@ from typing import Optional
 _AT = re.compile(r"\s*\(at line (\d+), column \d+\)")
 _END = " (at end of document)"
 _HEADER = re.compile(r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+
+
+def loads(text: str) -> dict:
+    """``tomllib.loads``, with nesting too deep for the parser (it recurses:
+    ``a = [[[[…`` 50,000 deep) raised as a ``TOMLDecodeError`` like any other
+    syntax error, never a ``RecursionError``."""
+    try:
+        return tomllib.loads(text)
+    except RecursionError:
+        raise tomllib.TOMLDecodeError("arrays or tables are nested too deeply") from None
 
 
 def decode_error(exc: tomllib.TOMLDecodeError, text: str) -> tuple[str, Optional[int]]:

@@ -14,7 +14,9 @@ from pathlib import Path
 from typing import Callable
 
 from plcbuilder.cli import term
-from plcbuilder.cli.common import DEBUG_ENV, safe_streams
+from plcbuilder.cli.common import DEBUG_ENV, float_in, safe_streams
+
+MAX_TIMEOUT_S = 86_400.0
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 
@@ -29,7 +31,8 @@ def add_link_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--runtime-file", type=Path, metavar="FILE",
                    help="read the address and token from FILE instead of the default "
                         "runtime file")
-    g.add_argument("--timeout", type=float, default=30.0, metavar="S",
+    g.add_argument("--timeout", type=float_in(0.0, MAX_TIMEOUT_S, "s"), default=30.0,
+                   metavar="S",
                    help="seconds to wait for each answer (default 30)")
     term.add_color_argument(p)
 

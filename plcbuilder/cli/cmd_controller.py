@@ -18,6 +18,9 @@ import threading
 from pathlib import Path
 
 from plcbuilder.cli._link_opts import EXIT_FAIL, EXIT_USAGE
+from plcbuilder.cli.common import int_in
+
+MAX_LATENCY_MS = 60_000
 
 
 def parse_speed(text: str) -> tuple[str, float]:
@@ -70,7 +73,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1; other addresses expose "
                         "the controller to the network)")
-    p.add_argument("--port", type=int, default=0, metavar="N",
+    p.add_argument("--port", type=int_in(0, 65535), default=0, metavar="N",
                    help="TCP port (default 0: a free port, printed and written to the "
                         "runtime file)")
     p.add_argument("--machine", type=Path, metavar="FILE",
@@ -88,12 +91,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "(default 512,8192,16384 bytes)")
     p.add_argument("--backend", choices=("fast", "reference"), default="fast",
                    help="the VM implementation (default fast)")
-    p.add_argument("--gvarget-latency", type=int, default=0, metavar="MS",
+    p.add_argument("--gvarget-latency", type=int_in(0, MAX_LATENCY_MS, "ms"), default=0,
+                   metavar="MS",
                    help="host round-trip latency of gvarget on plain registers (default 0)")
     p.add_argument("--runtime-file", type=Path, metavar="FILE",
                    help="where to write the address and token (default: the user's runtime "
                         "folder; see docs/protocol.md)")
-    p.add_argument("--parent", type=int, metavar="PID",
+    p.add_argument("--parent", type=int_in(1, (1 << 31) - 1), metavar="PID",
                    help="stop (as on SIGTERM) when process PID has ended: the IDE passes its "
                         "own id for the controller it starts")
     return p
@@ -126,8 +130,10 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_FAIL
     image = None
     if args.image is not None:
+        from plcbuilder._support.files import read_bounded
+        from plcbuilder.link.protocol import MAX_IMAGE
         try:
-            image = args.image.read_bytes()
+            image = read_bounded(args.image, MAX_IMAGE, "controller image")
         except OSError as exc:
             say(f"plcbuilder controller: cannot read {args.image}: {exc.strerror or exc}", True)
             return EXIT_FAIL

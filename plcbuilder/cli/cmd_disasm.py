@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from plcbuilder import api
+from plcbuilder._support.files import read_bounded
 from plcbuilder.cli import term
 from plcbuilder.cli.common import (add_compile_options, compile_options, guarded,
                                       print_diagnostics, safe_streams)
@@ -39,9 +40,8 @@ def is_binary(path: Path) -> bool:
     """A .bin name, or contents that start with the binary's magic."""
     if path.suffix.lower() == ".bin":
         return True
-    try:
-        with open(path, "rb") as f:
-            return f.read(len(api.MAGIC)) == api.MAGIC
+    try:      # not a regular file, or too large: compiling it says why
+        return read_bounded(path, MAX_SOURCE_FILE).startswith(api.MAGIC)
     except OSError:
         return False
 
@@ -60,11 +60,10 @@ def source_reader(bases: list[Path]) -> Callable[[str, int], Optional[str]]:
         candidates = [p] if p.is_absolute() else [b / p for b in bases]
         for c in candidates:
             try:
-                if c.is_file() and c.stat().st_size <= MAX_SOURCE_FILE:
-                    text = c.read_bytes().decode("utf-8", errors="replace")
-                    return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+                text = read_bounded(c, MAX_SOURCE_FILE).decode("utf-8", errors="replace")
             except OSError:
                 continue
+            return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
         return None
 
     def source_line(name: str, line: int) -> Optional[str]:

@@ -13,6 +13,8 @@ import os
 import sys
 from pathlib import Path
 
+from plcbuilder.cli.common import int_in
+
 
 def _has_display() -> bool:
     return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
@@ -30,7 +32,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="open PROJECT, build it, save a PNG of the main window to FILE, exit")
     p.add_argument("--run", metavar="NAME[:EPARAM]",
                    help="with --screenshot: upload the image and start this procedure first")
-    p.add_argument("--after", type=int, default=1000, metavar="MS",
+    p.add_argument("--after", type=int_in(0, 7 * 24 * 3600 * 1000, "ms"), default=1000,
+                   metavar="MS",
                    help="with --screenshot: simulated milliseconds to run (with --run), or "
                         "milliseconds to wait (default 1000)")
     p.add_argument("--settings", type=Path, metavar="FILE",

@@ -8,7 +8,11 @@ from __future__ import annotations
 
 import argparse
 
+from plcbuilder._support.numbers import INT32, parse_int_in
 from plcbuilder.cli._link_opts import EXIT_USAGE, add_link_options, run_client
+
+PIN_RANGE = (0, 255)          # the most inputs a machine has
+CHANNEL_RANGE = (0, 7)
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -23,17 +27,16 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def _pairs(items: list[str], what: str, values: tuple[int, ...] | None):
+def _pairs(items: list[str], shape: str, what: str, keys: tuple[int, int],
+           values: tuple[int, int]):
+    """``KEY=VALUE`` pairs, each number in its range (ValueError naming the range)."""
     out = []
     for item in items:
         key, sep, value = item.partition("=")
-        try:
-            k, v = int(key.strip(), 0), int(value.strip(), 0)
-        except ValueError:
-            k = v = None
-        if not sep or k is None or k < 0 or (values is not None and v not in values):
-            want = f"{what}=0|1" if values is not None else f"{what}=VALUE"
-            raise ValueError(f"expected {want}, got {item!r}")
+        if not sep:
+            raise ValueError(f"expected {shape}, got {item!r}")
+        k = parse_int_in(key, *keys, f"{shape}: {what}")
+        v = parse_int_in(value, *values, f"{shape}: the value of {what} {k}")
         out.append((k, v))
     return out
 
@@ -41,8 +44,8 @@ def _pairs(items: list[str], what: str, values: tuple[int, ...] | None):
 def run(args: argparse.Namespace) -> int:
     import sys
     try:
-        pins = _pairs(args.inputs, "PIN", (0, 1))
-        adcs = _pairs(args.adc, "CH", None)
+        pins = _pairs(args.inputs, "PIN=0|1", "input pin", PIN_RANGE, (0, 1))
+        adcs = _pairs(args.adc, "--adc CH=VALUE", "ADC channel", CHANNEL_RANGE, INT32)
     except ValueError as exc:
         print(f"plcbuilder input: {exc}", file=sys.stderr)
         return EXIT_USAGE

@@ -15,7 +15,11 @@ import json
 from pathlib import Path
 
 from plcbuilder.cli import term
-from plcbuilder.cli.common import guarded, print_diagnostics, safe_streams
+from plcbuilder._support.numbers import WORD32
+from plcbuilder.cli.common import guarded, int_in, print_diagnostics, safe_streams
+
+#: --gvarget-latency: at most a minute
+MAX_LATENCY_MS = 60_000
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -34,8 +38,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--ms", type=_nonneg, default=None, metavar="N",
                    help="simulated time limit in ms (default 60000); the run also stops when "
                         "no procedure runs and none is due to start")
-    p.add_argument("--eparam", type=_int, default=0, metavar="N",
-                   help="the eparam a single-file TARGET starts with (default 0)")
+    p.add_argument("--eparam", type=int_in(*WORD32), default=0, metavar="N",
+                   help="the eparam a single-file TARGET starts with (default 0; a 32-bit "
+                        "value, -2147483648 to 4294967295, decimal or 0x hex)")
     p.add_argument("--start", action="append", default=[], metavar="NAME[:EPARAM]@MS",
                    help="start a procedure at MS (repeatable)")
     p.add_argument("--input", action="append", default=[], metavar="PIN=0|1@MS",
@@ -59,7 +64,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--backend", choices=("fast", "reference"), default="fast",
                    help=argparse.SUPPRESS)
-    p.add_argument("--gvarget-latency", type=_nonneg, default=0, metavar="MS",
+    p.add_argument("--gvarget-latency", type=int_in(0, MAX_LATENCY_MS, "ms"), default=0,
+                   metavar="MS",
                    help="host round-trip latency of gvarget of plain registers (default 0)")
     term.add_color_argument(p)
     return p

@@ -25,19 +25,15 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
+    import sys
+
+    from plcbuilder._support.files import read_bounded
     from plcbuilder.link.protocol import MAX_IMAGE
     try:
-        with open(args.image, "rb") as f:
-            data = f.read(MAX_IMAGE + 1)
+        data = read_bounded(args.image, MAX_IMAGE, "controller image")
     except OSError as exc:
-        import sys
         print(f"plcbuilder upload: cannot read {args.image}: {exc.strerror or exc}",
               file=sys.stderr)
-        return EXIT_FAIL
-    if len(data) > MAX_IMAGE:
-        import sys
-        print(f"plcbuilder upload: {args.image} is larger than {MAX_IMAGE} bytes: "
-              "not an image the controller accepts", file=sys.stderr)
         return EXIT_FAIL
 
     def body(client, out) -> int:

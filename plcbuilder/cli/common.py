@@ -18,6 +18,41 @@ DEBUG_ENV = "PLCBUILDER_DEBUG"
 
 # ------------------------------------------------------------ shared options
 
+def int_in(lo: int, hi: int, unit: str = ""):
+    """An argparse type: a decimal or 0x-hex whole number from lo to hi; outside
+    it, argparse says ``argument --OPT: must be from LO to HI, not N`` (exit 2)."""
+    from plcbuilder._support.numbers import parse_int_in
+
+    def parse(text: str) -> int:
+        try:
+            return parse_int_in(text, lo, hi, "")
+        except ValueError as exc:
+            msg = str(exc)
+            if unit:
+                msg = msg.replace(f"to {hi},", f"to {hi} {unit},")
+            raise argparse.ArgumentTypeError(msg) from None
+    parse.__name__ = "whole number"
+    return parse
+
+
+def float_in(lo: float, hi: float, unit: str = ""):
+    """An argparse type: a finite number with lo < value <= hi."""
+    import math
+
+    def parse(text: str) -> float:
+        try:
+            v = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a number, not {text[:40]!r}") from None
+        if not (math.isfinite(v) and lo < v <= hi):
+            raise argparse.ArgumentTypeError(
+                f"must be more than {lo:g} and at most {hi:g}{' ' + unit if unit else ''}, "
+                f"not {text[:40]}")
+        return v
+    parse.__name__ = "number"
+    return parse
+
+
 def add_compile_options(p: argparse.ArgumentParser) -> None:
     """--strict, --software, --include DIR (repeatable) and --color."""
     p.add_argument("--strict", action="store_true",

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from typing import Iterable, Optional
 
+from plcbuilder._support.numbers import INT32, WORD32, to_int32
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import DecodeError, validate
 from plcbuilder.bytecode.program import Kind, Program
@@ -134,7 +135,7 @@ class Controller:
         program = self._plc.programs.get(name)
         if program is None:
             raise ControllerError(self._unknown(name))
-        eparam = self._int(eparam, "eparam")
+        eparam = self._eparam(eparam)
         self._stop_presses = 0
         if program.kind is Kind.HARDWARE:
             self._plc.start_hardware(name, eparam)
@@ -180,7 +181,7 @@ class Controller:
         if pin < 0 or (n is not None and pin >= n):
             raise ControllerError(f"no input {pin}" + (f" (the machine has inputs 0..{n - 1})"
                                                        if n else ""))
-        self._plc.bind_input(pin, name, self._int(eparam, "eparam"))
+        self._plc.bind_input(pin, name, self._eparam(eparam))
 
     @property
     def bindings(self) -> dict[int, tuple[str, int]]:
@@ -229,7 +230,7 @@ class Controller:
     def set_adc(self, ch: int, value: int) -> None:
         ch = self._int(ch, "ADC channel")
         try:
-            self.machine.set_adc(ch, self._int(value, "ADC value"))
+            self.machine.set_adc(ch, self._ranged(value, "ADC value", *INT32))
         except ValueError as exc:
             raise ControllerError(str(exc)) from None
 
@@ -309,6 +310,19 @@ class Controller:
             return f"no procedure named {name!r}: nothing is loaded"
         shown = ", ".join(names[:20]) + (" …" if len(names) > 20 else "")
         return f"no procedure named {name!r} is loaded (loaded: {shown})"
+
+    @classmethod
+    def _ranged(cls, v, what: str, lo: int, hi: int) -> int:
+        v = cls._int(v, what)
+        if not lo <= v <= hi:
+            raise ControllerError(f"{what} must be from {lo} to {hi}, not {v}")
+        return v
+
+    @classmethod
+    def _eparam(cls, v) -> int:
+        """An eparam: a 32-bit word (signed or unsigned), held signed; refused
+        outside, never wrapped."""
+        return to_int32(cls._ranged(v, "eparam", *WORD32))
 
     @staticmethod
     def _int(v, what: str) -> int:

@@ -26,10 +26,13 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping, Optional
 
+from plcbuilder._support.files import read_bounded
 from plcbuilder._support.toml_errors import TomlLocator, decode_error
+from plcbuilder._support.toml_errors import loads as toml_loads
 from plcbuilder.bytecode.abi import AXES
 
 MAX_PINS = 256          # 8 words of 32 pins
+MAX_MACHINE_BYTES = 1 << 20   # a machine description file is at most 1 MiB
 ADC_CHANNELS = 8
 
 
@@ -184,7 +187,7 @@ class _Reader:
         return v
 
     def number(self, d: dict, key: str, path: tuple, default=None, lo=None, hi=None,
-               positive=False):
+               positive=False, unit: str = ""):
         if key not in d:
             return default
         v = d[key]
@@ -193,8 +196,9 @@ class _Reader:
         if not math.isfinite(v):
             raise self.error(path + (key,), "expected a finite number")
         if positive and v <= 0:
-            raise self.error(path + (key,), f"must be greater than 0, got {v}")
-        self._range(v, key, path, lo, hi)
+            raise self.error(path + (key,), f"must be greater than 0, got {v}"
+                             + (f" (allowed: {_span(lo, hi, unit)})" if lo is not None else ""))
+        self._range(v, key, path, lo, hi, unit)
         return float(v)
 
     def string(self, d: dict, key: str, path: tuple, default=None, choices=None):
@@ -215,9 +219,22 @@ class _Reader:
             raise self.error(path + (key,), f"expected true or false, got {_kind(v)}")
         return v
 
-    def _range(self, v, key, path, lo, hi):
+    def _range(self, v, key, path, lo, hi, unit: str = ""):
         if lo is not None and v < lo or hi is not None and v > hi:
+            if unit:
+                raise self.error(path + (key,), f"{v} is out of range (allowed: "
+                                                f"{_span(lo, hi, unit)})")
             raise self.error(path + (key,), f"{v} is out of range ({lo}..{hi})")
+
+
+def _span(lo, hi, unit: str) -> str:
+    """``0.01 to 10000000 mm/min`` (a bound left open is not said)."""
+    g = lambda x: f"{x:.12g}"       # noqa: E731
+    if lo is None:
+        return f"at most {g(hi)} {unit}"
+    if hi is None:
+        return f"at least {g(lo)} {unit}"
+    return f"{g(lo)} to {g(hi)} {unit}"
 
 
 def _kind(v: Any) -> str:
@@ -244,13 +261,19 @@ _ADC_KEYS = {"channel", "name", "source", "value", "start", "end", "period_ms", 
              "axis", "scale", "offset", "noise", "seed", "min", "max"}
 _I32 = (-(1 << 31), (1 << 31) - 1)
 _BIG_MM = 1e7       # 10 km: a position beyond this is certainly a typo
+#: Physical bounds of an axis (docs/machine.md): below them a move would take
+#: longer than any run, above them no machine moves; the motion code divides by
+#: speeds and accelerations, so neither may be (or round to) 0.
+RAPID_RANGE = (0.01, 1e7)        # mm/min
+ACCEL_RANGE = (0.01, 1e7)        # mm/s²
+JOG_RANGE = (0.0, 1e7)           # mm/min
 
 
 def parse_machine(text: str, name: str = "<machine>") -> MachineConfig:
     """Parse a machine description from TOML text. ``name`` is the file name
     used in error messages."""
     try:
-        data = tomllib.loads(text)
+        data = toml_loads(text)
     except tomllib.TOMLDecodeError as e:
         msg, line = decode_error(e, text)
         raise ConfigError(f"TOML syntax error: {msg}", name, line) from None
@@ -287,9 +310,10 @@ def parse_machine(text: str, name: str = "<machine>") -> MachineConfig:
             raise r.error(p + ("min",), f"min {lo} is above max {hi}")
         axes[aname] = AxisConfig(
             name=aname,
-            rapid=r.number(a, "rapid", p, 5000.0, hi=1e7, positive=True),
-            accel=r.number(a, "accel", p, 500.0, hi=1e7, positive=True),
-            jog=r.number(a, "jog", p, 1000.0, 0, 1e7),
+            rapid=r.number(a, "rapid", p, 5000.0, *RAPID_RANGE, positive=True,
+                           unit="mm/min"),
+            accel=r.number(a, "accel", p, 500.0, *ACCEL_RANGE, positive=True, unit="mm/s²"),
+            jog=r.number(a, "jog", p, 1000.0, *JOG_RANGE, unit="mm/min"),
             soft_min=lo, soft_max=hi,
             start=r.number(a, "start", p, 0.0, -_BIG_MM, _BIG_MM),
             offset=r.number(a, "offset", p, 0.0, -_BIG_MM, _BIG_MM),
@@ -419,7 +443,7 @@ def load_machine(path) -> MachineConfig:
     """Read and parse a machine description file (TOML)."""
     p = Path(path)
     try:
-        text = p.read_bytes().decode("utf-8")
+        text = read_bounded(p, MAX_MACHINE_BYTES, "machine description").decode("utf-8")
     except OSError as e:
         raise ConfigError(f"cannot read the machine file: {e.strerror or e}", str(p)) from None
     except UnicodeDecodeError as e:

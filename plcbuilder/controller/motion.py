@@ -53,6 +53,16 @@ def fmt_mm(units: float) -> str:
     return f"{round(units) / 100:.2f}"
 
 
+#: The least speed (0.01 mm/ms) and acceleration (0.01 mm/ms²) the profiles use:
+#: the machine description's bounds keep real values far above it, and a
+#: value at or below it (or NaN) can never become a division by zero.
+_TINY = 1e-12
+
+
+def _floor(x: float) -> float:
+    return x if x > _TINY else _TINY
+
+
 class Profile:
     """A 1-D motion profile s(t), piecewise constant acceleration.
 
@@ -70,8 +80,9 @@ class Profile:
 
     @classmethod
     def trapezoid(cls, dist: float, vmax: float, acc: float) -> "Profile":
-        if dist <= 0:
+        if not dist > 0:
             return cls([(0.0, 0.0, 0.0, 0.0)], 1.0, 0.0)
+        vmax, acc = _floor(vmax), _floor(acc)
         t_acc = vmax / acc
         d_acc = 0.5 * vmax * t_acc
         if 2 * d_acc >= dist:
@@ -100,6 +111,7 @@ class Profile:
         s, v = self.at(t)
         if v <= 0:
             return Profile([(t, s, 0.0, 0.0)], t, s)
+        acc = _floor(acc)
         s_stop = s + v * v / (2 * acc)
         if s_stop >= self.s_end - 1e-9:
             return self
@@ -233,7 +245,10 @@ class Motion:
             # goes nowhere: busy for 1 ms all the same
             self.move = Move([], {}, {}, Profile.trapezoid(0.0, 1.0, 1.0), 1.0, None, {})
             return
-        unit = {i: delta[i] / dist for i in axes if delta[i] != 0.0}
+        unit = {i: u for i in axes if (u := delta[i] / dist) != 0.0}
+        if not unit:                    # too small a step to have a direction
+            self.move = Move([], {}, {}, Profile.trapezoid(0.0, 1.0, 1.0), 1.0, None, {})
+            return
         vmax = min(self.vmax[i] / abs(u) for i, u in unit.items())
         acc = min(self.amax[i] / abs(u) for i, u in unit.items())
         length, clip_note = dist, None

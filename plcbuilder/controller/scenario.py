@@ -27,6 +27,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable, Optional
 
+from plcbuilder._support.files import read_bounded
+from plcbuilder._support.numbers import INT32, WORD32, parse_int_in, to_int32
+
 MAX_SCENARIO_BYTES = 4 << 20
 KINDS = ("start", "input", "adc", "stop", "event", "bind")
 
@@ -60,14 +63,28 @@ class Action:
         return f"stop @ {self.t_ms}"
 
 
-_NUM = r"[-+]?(?:0[xX][0-9a-fA-F]+|\d+)"
+#: The ranges numbers are refused outside of (never wrapped): an eparam is a
+#: 32-bit word (written signed or unsigned, held signed), an ADC value a signed
+#: 32-bit register, a time at most a week of simulated time.
+EPARAM_RANGE = WORD32
+ADC_RANGE = INT32
+PIN_RANGE = (0, 255)              # the most inputs a machine has (8 words of 32)
+CHANNEL_RANGE = (0, 7)
+MAX_TIME_MS = 7 * 24 * 3600 * 1000
 
 
-def parse_int(text: str, what: str) -> int:
-    t = text.strip()
-    if not re.fullmatch(_NUM, t):
-        raise ScenarioError(f"{what} must be a whole number (decimal or 0x hex), not {text!r}")
-    return int(t, 0)
+def parse_int(text: str, what: str, lo: int = -(1 << 63), hi: int = (1 << 63) - 1) -> int:
+    """A decimal or 0x-hex whole number in lo..hi (ScenarioError naming ``what``
+    and the range otherwise)."""
+    try:
+        return parse_int_in(text, lo, hi, what)
+    except ValueError as exc:
+        raise ScenarioError(str(exc)) from None
+
+
+def parse_eparam(text: str, what: str) -> int:
+    """An eparam: a 32-bit word, held as the signed value the procedure reads."""
+    return to_int32(parse_int(text, what, *EPARAM_RANGE))
 
 
 def _split_time(text: str, what: str) -> tuple[str, int]:
@@ -77,6 +94,9 @@ def _split_time(text: str, what: str) -> tuple[str, int]:
     t = parse_int(ms, f"the time of {what}")
     if t < 0:
         raise ScenarioError(f"the time of {what} must not be negative ({t})")
+    if t > MAX_TIME_MS:
+        raise ScenarioError(f"the time of {what} must be from 0 to {MAX_TIME_MS} ms "
+                            f"(a week), not {t}")
     return body.strip(), t
 
 
@@ -88,7 +108,7 @@ def parse_start(text: str) -> Action:
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise ScenarioError(f"--start needs NAME[:EPARAM]@MS, and {name!r} is not a "
                             "procedure name")
-    eparam = parse_int(ep, "the eparam of --start") if sep else 0
+    eparam = parse_eparam(ep, "the eparam of --start") if sep else 0
     return Action(t, "start", name, eparam)
 
 
@@ -99,12 +119,14 @@ def _pin_value(text: str, kind: str, lo: Optional[int] = None, hi: Optional[int]
         shape = "PIN=0|1@MS" if kind == "input" else "CH=VALUE@MS"
         raise ScenarioError(f"--{kind} needs {shape}, not {text!r}")
     what = "pin" if kind == "input" else "channel"
-    a = parse_int(left, f"the {what} of --{kind}")
-    if a < 0:
-        raise ScenarioError(f"the {what} of --{kind} must not be negative ({a})")
-    b = parse_int(right, f"the value of --{kind}")
-    if lo is not None and not lo <= b <= hi:
-        raise ScenarioError(f"an input is 0 or 1, not {b}")
+    a = parse_int(left, f"the {what} of --{kind}",
+                  *(PIN_RANGE if kind == "input" else CHANNEL_RANGE))
+    if lo is not None:
+        b = parse_int(right, f"the value of --{kind}")
+        if not lo <= b <= hi:
+            raise ScenarioError(f"an input is 0 or 1, not {b}")
+    else:
+        b = parse_int(right, f"the value of --{kind}", *ADC_RANGE)
     return Action(t, kind, "", a, b)
 
 
@@ -139,7 +161,7 @@ def parse_bind(text: str) -> Action:
     left, sep, right = body.partition("=")
     if not sep:
         raise ScenarioError(f"bind needs PIN=NAME[:EPARAM]@MS, not {text!r}")
-    pin = parse_int(left, "the pin of bind")
+    pin = parse_int(left, "the pin of bind", *PIN_RANGE)
     start = parse_start(right)
     return Action(t, "bind", start.name, pin, start.a)
 
@@ -193,11 +215,9 @@ class Scenario:
     def load(cls, path) -> "Scenario":
         p = Path(path)
         try:
-            data = p.read_bytes()
+            data = read_bounded(p, MAX_SCENARIO_BYTES, "scenario file")
         except OSError as exc:
             raise ScenarioError(f"cannot read the scenario: {exc.strerror or exc}", str(p)) from None
-        if len(data) > MAX_SCENARIO_BYTES:
-            raise ScenarioError(f"the scenario is too large ({len(data)} bytes)", str(p))
         try:
             text = data.decode("utf-8")
         except UnicodeDecodeError as exc:

@@ -23,6 +23,9 @@ from plcbuilder.bytecode.abi import AXES
 from .machine_config import ADC_CHANNELS, AdcConfig, MachineConfig
 
 
+_I32_MIN, _I32_MAX = -(1 << 31), (1 << 31) - 1
+
+
 class PositionInput:
     __slots__ = ("pin", "bit", "axis", "lo", "hi", "active", "name", "hard_limit", "toward")
 
@@ -75,7 +78,7 @@ class AdcSource:
             iv = c.min
         if c.max is not None and iv > c.max:
             iv = c.max
-        return iv
+        return min(max(iv, _I32_MIN), _I32_MAX)     # a register holds 32 bits: saturate
 
 
 class Sensors:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+from plcbuilder._support.files import read_bounded
 from plcbuilder.bytecode.semantics import wrap
 
 from .machine_config import ConfigError
@@ -52,7 +53,7 @@ def load_variables(path) -> list[int]:
     """
     p = Path(path)
     try:
-        data = p.read_bytes()
+        data = read_bounded(p, _VARIABLES_MAX_BYTES, "variables file")
     except OSError as e:
         raise ConfigError(f"cannot read the variables file: {e.strerror or e}", str(p)) from None
     return parse_variables(data, str(p))

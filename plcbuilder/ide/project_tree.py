@@ -566,6 +566,8 @@ def first_comment(path: Path, name: str = "", limit: int = 48) -> str:
     the file's own name in front ("// M03: spindle on, clockwise. ..." ->
     "spindle on, clockwise")."""
     try:
+        if not Path(path).is_file():        # a FIFO or a device: never opened (it could block)
+            return ""
         with open(path, "rb") as f:
             head = f.read(400).decode("utf-8", "replace")
     except OSError:

@@ -30,7 +30,10 @@ from typing import Callable, Optional
 from PySide6.QtCore import QFileSystemWatcher, QObject, QTimer, Signal
 
 from plcbuilder.ide.editor import file_key
-from plcbuilder._support.files import atomic_write
+from plcbuilder._support.files import atomic_write, read_bounded
+
+#: The largest file the editor opens (and the recovery copies it keeps).
+MAX_EDIT_BYTES = 16 << 20
 from plcbuilder._support.procs import pid_alive
 
 INDEX = "index.json"
@@ -55,7 +58,7 @@ def save_text(path, text: str, eol: str = "\n") -> str:
 
 def file_digest(path) -> Optional[str]:
     try:
-        return digest(Path(path).read_bytes())
+        return digest(read_bounded(path, MAX_EDIT_BYTES, "file to edit"))
     except OSError:
         return None
 
@@ -158,7 +161,8 @@ class RecoveryManager(QObject):
                 if not inside:
                     continue
             try:
-                text = (self.folder / entry["copy"]).read_bytes().decode("utf-8", "surrogatepass")
+                text = read_bounded(self.folder / entry["copy"], MAX_EDIT_BYTES).decode(
+                    "utf-8", "surrogatepass")
             except (OSError, KeyError, UnicodeDecodeError):
                 continue
             out.append({"path": entry.get("path", key), "text": text,
@@ -176,9 +180,9 @@ class RecoveryManager(QObject):
     # ------------------------------------------------------------- private
     def _read_index(self) -> dict:
         try:
-            data = json.loads((self.folder / INDEX).read_text(encoding="utf-8"))
+            data = json.loads(read_bounded(self.folder / INDEX, MAX_EDIT_BYTES).decode("utf-8"))
             return data if isinstance(data, dict) else {}
-        except (OSError, ValueError):
+        except (OSError, ValueError, RecursionError):
             return {}
 
     def _write_index(self, index: dict) -> None:

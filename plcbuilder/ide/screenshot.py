@@ -21,6 +21,10 @@ from typing import Callable, Optional
 
 from PySide6.QtCore import QEventLoop, QTimer
 
+from plcbuilder._support.files import read_bounded
+from plcbuilder._support.numbers import WORD32, parse_int_in, to_int32
+from plcbuilder.link.protocol import MAX_IMAGE
+
 WINDOW_SIZE = (1500, 940)
 
 
@@ -33,10 +37,10 @@ def parse_run(spec: Optional[str]) -> Optional[tuple[str, int]]:
     if not name:
         raise ValueError(f"--run needs a procedure name, got {spec!r}")
     try:
-        value = int(eparam, 0) if eparam.strip() else 0
-    except ValueError:
-        raise ValueError(f"--run {spec!r}: the eparam must be a whole number") from None
-    return name, value
+        value = parse_int_in(eparam, *WORD32, "the eparam") if eparam.strip() else 0
+    except ValueError as exc:
+        raise ValueError(f"--run {spec!r}: {exc}") from None
+    return name, to_int32(value)
 
 
 #: simulated ms stepped at a time in screenshot mode (below the telemetry queue)
@@ -142,7 +146,7 @@ def _run_procedure(app, win, target: tuple[str, int], after_ms: int) -> bool:
         c.sig_result.connect(lambda verb, res: results.append(verb))
     c.set_speed("pause")
     win.set_speed("pause")
-    c.upload(win.project.image_path.read_bytes())
+    c.upload(read_bounded(win.project.image_path, MAX_IMAGE, "controller image"))
     name, eparam = target
     win.start_procedure(name, eparam)
     t0 = None

@@ -4,15 +4,19 @@ The image holds, in its root directory, one file per compiled procedure,
 ``NAME.bin`` (the binary of :mod:`plcbuilder.bytecode.program`), and a file
 ``MANIFEST``: UTF-8 JSON, keys sorted, one procedure a line::
 
-    {"format": "plcbuilder-image", "limits": {"hw_proc": 512, "hw_total": 8192, "sw_proc": 16384}, "version": 1,
+    {"format": "plcbuilder-image", "limits": {"hw_proc": 512, "hw_total": 8192, "sw_proc": 16384}, "manifest_crc32": "5b0e3c1d", "version": 2,
      "procedures": [
-     {"code_size": 57, "crc32": "1c291ca3", "file": "M03.bin", "file_size": 312, "kind": "hardware", "name": "M03"},
-     {"code_size": 90, "crc32": "ca7ed3a4", "file": "LUBE.bin", "file_size": 172, "kind": "software", "name": "LUBE"}
+     {"code_size": 90, "crc32": "ca7ed3a4", "file": "LUBE.bin", "file_size": 172, "kind": "software", "name": "LUBE"},
+     {"code_size": 57, "crc32": "1c291ca3", "file": "M03.bin", "file_size": 312, "kind": "hardware", "name": "M03"}
     ]}
 
-Procedures are sorted by name. The reader accepts the manifest only in exactly
-this form (it regenerates the text and compares), so a damaged byte that would
-still parse as the same JSON (a tab for a space) is refused too.
+Procedures are sorted by name (strictly: no name twice). The reader accepts the
+manifest only in exactly this form (it regenerates the text and compares), so a
+damaged byte that would still parse as the same JSON (a tab for a space) is
+refused too. ``manifest_crc32`` makes the manifest check itself: it is the
+CRC-32 of the manifest's own bytes with those 8 digits written as
+``00000000``, so a damaged byte that still reads as valid JSON in the canonical
+form (``"hw_proc": 512`` turned ``532``) is refused as well.
 
 ``crc32`` is the zlib CRC-32 of the whole ``.bin`` file, as 8 lower-case hex
 digits (ROMFS checksums protect the headers only, so these CRCs are what
@@ -39,16 +43,18 @@ from plcbuilder.image.romfs import REGULAR, ImageError, read_romfs, write_romfs
 
 MANIFEST_NAME = "MANIFEST"
 FORMAT = "plcbuilder-image"
-VERSION = 1
+VERSION = 2
 VOLUME = "plcbuilder"
 SUFFIX = ".bin"
-MAX_MANIFEST = 256 * 1024
 MAX_PROCEDURES = 4096
 MAX_LIMIT = 1 << 24
+MAX_NAME = 64
+MAX_FILE_SIZE = 1 << 32
 NAME_RE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_\-]{0,63}\Z")
 _KINDS = {"hardware": Kind.HARDWARE, "software": Kind.SOFTWARE}
 _ENTRY_KEYS = {"name", "kind", "file", "code_size", "file_size", "crc32"}
-_TOP_KEYS = {"format", "version", "limits", "procedures"}
+_TOP_KEYS = {"format", "version", "limits", "manifest_crc32", "procedures"}
+_SELF_CRC = "manifest_crc32"
 
 __all__ = ["ImageError", "Limits", "Image", "ImageProcedure", "write_image", "read_image",
            "valid_name", "MANIFEST_NAME"]
@@ -152,14 +158,42 @@ def _load(name: str, kind: Kind, data: bytes) -> Program:
     return program
 
 
-def manifest_text(entries: Iterable[dict], limits: Limits) -> bytes:
-    """The MANIFEST file: deterministic JSON, one procedure a line."""
-    head = json.dumps({"format": FORMAT, "version": VERSION, "limits": limits.as_dict()},
-                      sort_keys=True)
+def _manifest_bytes(entries: Iterable[dict], limits: Limits, crc: str) -> bytes:
+    head = json.dumps({"format": FORMAT, "version": VERSION, "limits": limits.as_dict(),
+                       _SELF_CRC: crc}, sort_keys=True)
     lines = [json.dumps(e, sort_keys=True) for e in entries]
     body = ",\n ".join(lines)
     text = head[:-1] + ',\n "procedures": [' + ("\n " + body + "\n" if lines else "") + "]}\n"
     return text.encode("utf-8")
+
+
+def manifest_crc(entries: Iterable[dict], limits: Limits) -> str:
+    """``manifest_crc32``: the CRC-32 of the canonical manifest written with
+    ``00000000`` in its place, as 8 lower-case hex digits."""
+    return f"{zlib.crc32(_manifest_bytes(entries, limits, '0' * 8)):08x}"
+
+
+def manifest_text(entries: Sequence[dict], limits: Limits) -> bytes:
+    """The MANIFEST file: deterministic JSON, one procedure a line, checking
+    itself with its own CRC-32 (entries in the order given: write_image sorts)."""
+    return _manifest_bytes(entries, limits, manifest_crc(entries, limits))
+
+
+def _worst_manifest_size() -> int:
+    """Bytes of the largest manifest write_image can give: MAX_PROCEDURES entries,
+    every name MAX_NAME characters, every number as long as it may be."""
+    name = "W" * MAX_NAME
+    entry = {"name": name, "kind": "hardware", "file": name + SUFFIX, "code_size": MAX_LIMIT,
+             "file_size": MAX_FILE_SIZE, "crc32": "f" * 8}
+    big = Limits(MAX_LIMIT, MAX_LIMIT, MAX_LIMIT)
+    one = len(_manifest_bytes([entry], big, "f" * 8))
+    two = len(_manifest_bytes([entry, entry], big, "f" * 8))
+    return one + (two - one) * (MAX_PROCEDURES - 1)
+
+
+#: The largest MANIFEST the reader accepts: exactly what the largest image
+#: write_image can make needs (MAX_PROCEDURES procedures), so the two limits agree.
+MAX_MANIFEST = _worst_manifest_size()
 
 
 ProgramInput = tuple[str, Union[Kind, str], bytes]
@@ -169,8 +203,8 @@ def write_image(programs: Sequence[ProgramInput], limits: Limits | None = None) 
     """The eeprom.rom image of compiled procedures: [(name, kind, bin_bytes)].
 
     Checks everything read_image checks (names, loadable binaries, kinds,
-    limits) and raises ImageError instead of writing an image the controller
-    would refuse. The output depends only on the inputs (sorted by name).
+    limits, the number of procedures) and raises ImageError instead of writing
+    an image the controller would refuse; each binary is decoded once. The output depends only on the inputs (sorted by name).
     """
     limits = limits or Limits()
     limits.check()
@@ -197,17 +231,18 @@ def write_image(programs: Sequence[ProgramInput], limits: Limits | None = None) 
         if not isinstance(data, (bytes, bytearray)):
             raise ImageError(f"procedure {name}: the binary must be bytes")
         data = bytes(data)
-        program = _load(name, kind, data)
-        rows.append((name, kind, data, program))
+        code_size = _load(name, kind, data).code_size    # the decoded program is not kept
+        rows.append((name, kind, data, code_size))
     rows.sort(key=lambda r: r[0])
-    _check_limits([(n, k, p.code_size) for n, k, _d, p in rows], limits)
-    entries = [{"name": n, "kind": _kind_label(k), "file": n + SUFFIX, "code_size": p.code_size,
-                "file_size": len(d), "crc32": f"{zlib.crc32(d):08x}"} for n, k, d, p in rows]
+    _check_limits([(n, k, size) for n, k, _d, size in rows], limits)
+    entries = [{"name": n, "kind": _kind_label(k), "file": n + SUFFIX, "code_size": size,
+                "file_size": len(d), "crc32": f"{zlib.crc32(d):08x}"} for n, k, d, size in rows]
     files: dict[str, bytes] = {n + SUFFIX: d for n, _k, d, _p in rows}
     files[MANIFEST_NAME] = manifest_text(entries, limits)
-    image = write_romfs(files, VOLUME)
-    read_image(image, limits)   # never hand out an image the reader would refuse
-    return image
+    # Each binary was loaded (validated) once above, and the layout is what
+    # read_image reads (the tests write and read back every kind of image), so
+    # the image is not decoded a second time here.
+    return write_romfs(files, VOLUME)
 
 
 # ------------------------------------------------------------------ reading
@@ -232,15 +267,15 @@ def parse_manifest(raw: bytes) -> tuple[Limits, list[dict]]:
         raise ImageError(f"manifest is not valid JSON: {exc}") from None
     if not isinstance(doc, dict):
         raise ImageError("manifest: expected a JSON object")
+    if "format" in doc and doc["format"] != FORMAT:
+        raise ImageError(f"manifest: format is {doc['format']!r}, expected {FORMAT!r}")
+    if "version" in doc and (type(doc["version"]) is not int or doc["version"] != VERSION):
+        raise ImageError(f"manifest: format version {doc['version']!r}, this reader reads "
+                         f"version {VERSION}")
     if set(doc) != _TOP_KEYS:
         extra, missing = sorted(set(doc) - _TOP_KEYS), sorted(_TOP_KEYS - set(doc))
         raise ImageError(f"manifest: unexpected keys {extra}" if extra else
                          f"manifest: missing keys {missing}")
-    if doc["format"] != FORMAT:
-        raise ImageError(f"manifest: format is {doc['format']!r}, expected {FORMAT!r}")
-    if doc["version"] != VERSION or type(doc["version"]) is not int:
-        raise ImageError(f"manifest: format version {doc['version']!r}, this reader reads "
-                         f"version {VERSION}")
     lim = doc["limits"]
     if not isinstance(lim, dict) or set(lim) != {"hw_proc", "hw_total", "sw_proc"}:
         raise ImageError("manifest: limits must hold exactly hw_proc, hw_total and sw_proc")
@@ -250,7 +285,7 @@ def parse_manifest(raw: bytes) -> tuple[Limits, list[dict]]:
         raise ImageError("manifest: procedures must be a list")
     if len(procs) > MAX_PROCEDURES:
         raise ImageError(f"manifest lists {len(procs)} procedures, at most {MAX_PROCEDURES}")
-    seen: set[str] = set()
+    previous = None
     for i, e in enumerate(procs):
         if not isinstance(e, dict):
             raise ImageError(f"manifest: procedure #{i + 1} is not an object")
@@ -262,9 +297,11 @@ def parse_manifest(raw: bytes) -> tuple[Limits, list[dict]]:
                              f"manifest: {label}: missing keys {missing}")
         if not valid_name(name):
             raise ImageError(f"manifest: {label}: invalid procedure name {name!r}")
-        if name in seen:
-            raise ImageError(f"manifest: procedure {name} is listed twice")
-        seen.add(name)
+        if previous is not None and name <= previous:
+            raise ImageError(f"manifest: procedure {name} is listed twice" if name == previous
+                             else f"manifest: procedure {name} comes after {previous}; the "
+                             "procedures must be in name order (the canonical form)")
+        previous = name
         if e["kind"] not in _KINDS:
             raise ImageError(f"manifest: {label}: unknown kind {e['kind']!r}")
         if e["file"] != name + SUFFIX:
@@ -274,11 +311,17 @@ def parse_manifest(raw: bytes) -> tuple[Limits, list[dict]]:
         crc = e["crc32"]
         if not isinstance(crc, str) or not re.fullmatch(r"[0-9a-f]{8}", crc):
             raise ImageError(f"manifest: {label}: crc32 must be 8 lower-case hex digits, is {crc!r}")
-    if manifest_text(procs, limits) != raw:
+    own = doc[_SELF_CRC]
+    if not isinstance(own, str) or not re.fullmatch(r"[0-9a-f]{8}", own):
+        raise ImageError(f"manifest: {_SELF_CRC} must be 8 lower-case hex digits, is {own!r}")
+    if _manifest_bytes(procs, limits, own) != raw:
         # Same meaning, other bytes (a tab for a space, an escaped letter): the
         # manifest was not written by write_image, or a byte of it was damaged.
         raise ImageError("manifest is not in the canonical form write_image gives it "
                          "(damaged or edited)")
+    crc = manifest_crc(procs, limits)
+    if crc != own:
+        raise ImageError(f"manifest: its CRC-32 is {crc}, it says {own} (damaged or edited)")
     return limits, procs
 
 

@@ -70,6 +70,9 @@ class CompileOptions:
     strict: bool = False
     include_dirs: tuple = ()
     code_limit: Optional[int] = None   # None: the kind's default (512 / 16384)
+    #: the folder headers must stay inside (a project's); None: the procedure's
+    #: own folder. Include folders named outside it are allowed too.
+    root: Optional[Path] = None
 
     @property
     def limit(self) -> int:
@@ -124,11 +127,13 @@ def compile_source(text: str, path: str = "<input>", options: CompileOptions = C
         p = Path(path)
         file_path = p if p.parent != Path("") or p.exists() else None
     if incremental is None:
-        return _compile(Preprocessor(options.include_dirs), text, path, file_path, options)
+        return _compile(Preprocessor(options.include_dirs, root=options.root), text, path,
+                        file_path, options)
     with incremental.lock:
         try:
-            return _compile(Preprocessor(options.include_dirs, tokens=incremental.tokens), text,
-                            path, file_path, options, incremental)
+            return _compile(Preprocessor(options.include_dirs, root=options.root,
+                                         tokens=incremental.tokens),
+                            text, path, file_path, options, incremental)
         except BaseException:
             incremental.reset()
             raise
@@ -146,14 +151,16 @@ def compile_bytes(data: bytes, path: str, options: CompileOptions = CompileOptio
     return r
 
 
-def compile_file(path, options: CompileOptions = CompileOptions()) -> CompileResult:
-    """Compile a .plc file. Never raises on bad input: it becomes diagnostics."""
+def compile_file(path, options: CompileOptions = CompileOptions(), *,
+                 data: Optional[bytes] = None) -> CompileResult:
+    """Compile a .plc file. Never raises on bad input: it becomes diagnostics.
+    ``data``: the file's bytes when the caller has read them already."""
     p = Path(path)
     name = str(path)
-    text, diags = read_source(p, name)
+    text, diags = read_source(p, name) if data is None else decode_source(data, name)
     if text is None:
         return _failed(name, options, diags)
-    pp = Preprocessor(options.include_dirs)
+    pp = Preprocessor(options.include_dirs, root=options.root)
     pp.diags.extend(diags)
     return _compile(pp, text, name, p, options)
 

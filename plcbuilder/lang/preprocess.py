@@ -8,6 +8,11 @@ right place. Macro uses carry the span of the use and the name of the define.
 - ``#include pins.h`` / ``"pins.h"`` / ``<pins.h>``: searched in the
   procedure's folder, then each include folder, then the built-in headers.
   A header is read once per compilation, however often it is included.
+  A header must lie (links resolved) inside the project (``root``; outside a
+  project, the procedure's folder) or inside an include folder named outside
+  it (``--include DIR``, the project's ``[build] include``): anything else, such
+  as ``#include "/etc/passwd"`` or a link out of the project, is an error that
+  says where it resolved and how to allow it, and the file is not read.
 - ``#define NAME tokens…`` (object-like), substituted by whole token,
   rescanned, never recursively. ``#undef``, ``#ifdef``, ``#ifndef``, ``#else``
   and ``#endif`` work as in C (header guards).
@@ -18,6 +23,7 @@ right place. Macro uses carry the span of the use and the name of the define.
 from __future__ import annotations
 
 import bisect
+import os
 import re
 from dataclasses import dataclass, field, replace
 from importlib import resources
@@ -238,10 +244,12 @@ def _moved_line(line: tuple, lines: int) -> tuple:
 
 class Preprocessor:
     def __init__(self, include_dirs: Sequence[Path] = (), read_file=read_source,
-                 tokens: Optional[TokenCache] = None):
+                 root: Optional[Path] = None, tokens: Optional[TokenCache] = None):
         self.include_dirs = [Path(p) for p in include_dirs]
         self.tokens = tokens
         self.read_file = tokens.read if tokens is not None and read_file is read_source else read_file
+        self.root = Path(root) if root is not None else None
+        self.allowed: list[Path] = []         # where headers may be (set by run_text)
         self.diags: list[Diagnostic] = []
         self.sources = SourceSet()
         self.defines: dict[str, Define] = {}
@@ -257,6 +265,8 @@ class Preprocessor:
     # ------------------------------------------------------------ entry
     def run_text(self, text: str, name: str, path: Optional[Path]) -> Preprocessed:
         f = SourceFile(name, path, normalise(text))
+        self.allowed = _allowed_folders(self.root or (path.parent if path else None),
+                                        self.include_dirs)
         self.sources.add(f)
         self.seen_files.add(self._key(f))
         self._file(f, [f.name], path.parent if path else None)
@@ -354,7 +364,9 @@ class Preprocessor:
             self.diags.append(error("include-depth", f"includes nest deeper than {MAX_INCLUDE_DEPTH}",
                                     span))
             return
-        found = self._find(target, folder)
+        found = self._find(target, folder, span)
+        if found is False:                 # outside where includes may go: reported
+            return
         if found is None:
             where = [str(folder) if folder else "the procedure's folder"]
             where += [str(d) for d in self.include_dirs] + ["the built-in headers"]
@@ -376,12 +388,14 @@ class Preprocessor:
         self.includes.append(hf.name)
         self._file(hf, stack + [hf.name], hfolder)
 
-    def _find(self, target: str, folder: Optional[Path]):
+    def _find(self, target: str, folder: Optional[Path], span: Span):
         target_path = Path(target)
         candidates = ([folder] if folder else []) + self.include_dirs
         for d in candidates:
             p = d / target_path
             if p.is_file():
+                if not self._allowed(target, p, span):
+                    return False
                 text, diags = self.read_file(p, self._display(p))
                 self.diags.extend(diags)
                 if text is None:
@@ -391,6 +405,24 @@ class Preprocessor:
         if text is not None:
             return SourceFile(BUILTIN_PREFIX + target, None, text), None
         return None
+
+    def _allowed(self, target: str, p: Path, span: Span) -> bool:
+        """Whether header ``p`` lies inside a folder includes may reach; if not,
+        an error saying where it resolved and how to allow it."""
+        try:
+            real = p.resolve()
+        except (OSError, RuntimeError):       # a link loop
+            real = p.absolute()
+        if any(real.is_relative_to(a) for a in self.allowed):
+            return True
+        inside = (f"the project ({self.root})" if self.root is not None else
+                  "the procedure's folder" + (f" ({self.allowed[0]})" if self.allowed else ""))
+        self.diags.append(error(
+            "include-outside", f"'{target}' resolves to {real}, outside {inside}; "
+            "includes stay inside the project, its include folders and the built-in headers",
+            span, f"to allow it, name its folder: --include {real.parent} (or, in a project, "
+                  f"add it to include = [...] under [build] in plcbuilder.toml)"))
+        return False
 
     def _display(self, p: Path) -> str:
         try:
@@ -470,6 +502,26 @@ class Preprocessor:
                         f"rename '{long}' so it does not contain '{short}' "
                         f"(e.g. put the extra word first)",
                         related=[Related(ds.span, f"'{short}' is defined here")]))
+
+
+def _allowed_folders(root: Optional[Path], include_dirs: Sequence[Path]) -> list[Path]:
+    """The folders headers may lie in (links resolved): ``root`` (the project, or
+    the procedure's folder), and each include folder named outside it (one inside
+    it is part of the project: what it holds must be inside the project too)."""
+    def real(p: Path) -> Path:
+        try:
+            return p.resolve()
+        except (OSError, RuntimeError):
+            return p.absolute()
+    out: list[Path] = []
+    base = Path(os.path.abspath(root)) if root is not None else None
+    if base is not None:
+        out.append(real(base))
+    for d in include_dirs:
+        lexical = Path(os.path.abspath(d))
+        if base is None or not lexical.is_relative_to(base):
+            out.append(real(lexical))
+    return out
 
 
 def preprocess_text(text: str, name: str = "<input>", path: Optional[Path] = None,

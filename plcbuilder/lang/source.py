@@ -7,10 +7,12 @@ dropped, so columns are the same for every stage.
 
 from __future__ import annotations
 
+import errno
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
+from plcbuilder._support.files import FileRefused, read_bounded
 from plcbuilder.diagnostics import Diagnostic, Span, error, warning
 
 MAX_SOURCE_BYTES = 1 << 20  # 1 MiB: a procedure is at most 16 KiB of code
@@ -65,22 +67,21 @@ def decode_source(data: bytes, name: str) -> tuple[Optional[str], list[Diagnosti
 
 
 def read_source(path: Path, name: str) -> tuple[Optional[str], list[Diagnostic]]:
-    """Read a source file; (None, [diagnostic]) when it cannot be used."""
+    """Read a source file; (None, [diagnostic]) when it cannot be used: missing,
+    unreadable, over MAX_SOURCE_BYTES, or not a regular file (a folder, a FIFO, a
+    device: never opened for reading, so a FIFO cannot hang the compiler)."""
+    at = Span.point(name, 1, 1)
     try:
-        if path.is_dir():
-            return None, [error("file-unreadable", f"{name} is a folder, not a source file",
-                                Span.point(name, 1, 1))]
-        size = path.stat().st_size
-        if size > MAX_SOURCE_BYTES:
-            return None, [error("file-too-large",
-                                f"{name} is {size} bytes; a PLC source file is at most "
-                                f"{MAX_SOURCE_BYTES} bytes", Span.point(name, 1, 1))]
-        data = path.read_bytes()
+        data = read_bounded(path, MAX_SOURCE_BYTES, "PLC source file")
+    except FileRefused as exc:
+        if exc.errno == errno.EISDIR:
+            return None, [error("file-unreadable", f"{name} is a folder, not a source file", at)]
+        code = "file-too-large" if exc.errno == errno.EFBIG else "file-unreadable"
+        return None, [error(code, f"{name} {exc.reason}", at)]
     except FileNotFoundError:
-        return None, [error("file-not-found", f"{name}: no such file", Span.point(name, 1, 1))]
+        return None, [error("file-not-found", f"{name}: no such file", at)]
     except OSError as exc:
-        return None, [error("file-unreadable", f"cannot read {name}: {exc.strerror or exc}",
-                            Span.point(name, 1, 1))]
+        return None, [error("file-unreadable", f"cannot read {name}: {exc.strerror or exc}", at)]
     return decode_source(data, name)
 
 

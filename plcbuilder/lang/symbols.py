@@ -24,11 +24,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Mapping, Optional, Sequence
 
+from plcbuilder._support.files import read_bounded
 from plcbuilder.diagnostics import Span
 from plcbuilder.lang.builtins import (CONSTANTS, FUNCTIONS, KEYWORDS, PIN_FUNCTIONS, PREDEFINED,
                                       REGISTER_FUNCTIONS, predefined)
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessor, builtin_header
-from plcbuilder.lang.source import normalise
+from plcbuilder.lang.source import MAX_SOURCE_BYTES, normalise
 from plcbuilder.lang.tokens import Tok, Tokenizer, parse_number
 
 # What a completion item is.
@@ -268,7 +269,7 @@ def header_defines(include_dirs: Iterable[Path], read=None) -> dict[str, Symbol]
 def read_header(path: Path) -> dict[str, Symbol]:
     """The defines of a header file ({} when it cannot be read)."""
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
+        text = read_bounded(path, MAX_SOURCE_BYTES).decode("utf-8", errors="replace")
     except OSError:
         return {}
     return file_defines(text, str(path))

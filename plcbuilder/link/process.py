@@ -156,7 +156,9 @@ class ControllerProcess:
 
     def stderr_tail(self, lines: int = 3) -> str:
         try:
-            data = self.log_path.read_bytes()[-4000:].decode("utf-8", "replace")
+            with open(self.log_path, "rb") as f:        # our own log: read its end only
+                f.seek(max(0, f.seek(0, os.SEEK_END) - 4000))
+                data = f.read(4000).decode("utf-8", "replace")
         except OSError:
             return ""
         rows = [r for r in data.strip().splitlines() if r.strip()]

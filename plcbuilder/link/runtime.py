@@ -24,7 +24,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Optional
 
-from plcbuilder._support.files import atomic_write
+from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder._support.procs import pid_alive
 
 __all__ = ["Endpoint", "RuntimeFileError", "default_path", "new_token", "pid_alive", "read",
@@ -85,8 +85,7 @@ def read(path: Optional[Path] = None) -> Endpoint:
     """The endpoint in the runtime file. Raises RuntimeFileError saying why not."""
     path = Path(path) if path is not None else default_path()
     try:
-        with open(path, "rb") as f:
-            raw = f.read(MAX_SIZE + 1)
+        raw = read_bounded(path, MAX_SIZE, "runtime file")
     except FileNotFoundError:
         raise RuntimeFileError(f"no runtime file {path}") from None
     except OSError as exc:
@@ -94,7 +93,7 @@ def read(path: Optional[Path] = None) -> Endpoint:
     try:
         d = json.loads(raw.decode("utf-8"))
         ep = Endpoint(host=d["host"], port=d["port"], token=d["token"], pid=d["pid"])
-    except (ValueError, KeyError, TypeError, UnicodeDecodeError):
+    except (ValueError, KeyError, TypeError, UnicodeDecodeError, RecursionError):
         raise RuntimeFileError(f"{path} is damaged (expected host, port, token and pid)") from None
     if not (isinstance(ep.host, str) and type(ep.port) is int and 0 < ep.port < 65536
             and isinstance(ep.token, str) and type(ep.pid) is int):

@@ -15,42 +15,85 @@
    image with a manifest, see plcbuilder.image); otherwise the previous image
    is kept, and the result says so.
 
-Every file is written atomically, and only when its contents change. The same
+Every file is written atomically, and only when its contents change. The image
+and the cache are flushed to the disk before they replace the old ones; the
+binaries are not (one a power cut loses fails its CRC check at the next build
+and is compiled again). A build holds ``build/.lock`` while it runs, so two
+builds never interleave, and first removes the temporary files a killed build
+left in ``build/`` (only those named as atomic_write names them). The same
 sources give byte-identical outputs.
+
+Compiling uses every core: when at least :data:`PARALLEL_MIN` procedures need
+compiling and the machine has more than one core, worker processes compile
+them (forked from this process when it runs a single thread, from a fork server
+otherwise); fewer are compiled here, one after another. The results are the
+same either way, in the same order. Each result keeps only what the report and
+the IDE need: the diagnostics (with the source lines they point at), the code
+size, the binary and its CRC.
 
 Incremental builds: ``build/.cache.json`` remembers, per procedure, a key (a
 SHA-256 of the source, of every header it may include as the search order
 resolves it, of the compile options and of the compiler itself) with the
-diagnostics and the CRC of the binary. A procedure whose key is unchanged and
-whose binary is still there is not recompiled; its warnings are reported again
-from the cache. The outputs are the same either way.
+diagnostics, the CRC and the stat of the binary; per source and header file,
+its stat (size, modification time, inode), SHA-256 and #include targets; and
+what the image was made from. A file whose stat is unchanged is not read again
+(unless it was modified less than 2 s before the build that recorded it: a
+same-size edit could then hide in the timestamp's resolution). A procedure
+whose key is unchanged and whose binary is still there, unchanged, is not
+recompiled, and its warnings are reported again from the cache; an image made
+from the same binaries and limits that is still there, unchanged, is not made
+again. The outputs are the same either way.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import multiprocessing
 import os
 import re
+import threading
+import time
 import zlib
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
-from typing import Callable, Optional
+from typing import Callable, Iterator, Optional
 
 import plcbuilder
-from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.bytecode.program import MAX_FILE_SIZE, Kind, Program
 from plcbuilder.lang import Diagnostic, Related, Severity, Span, error
+from plcbuilder.image.manifest import VERSION as IMAGE_VERSION
 from plcbuilder.image.manifest import ImageError, Limits, valid_name, write_image
-from plcbuilder.lang import pipeline as _pipeline
-from plcbuilder.lang.pipeline import CompileOptions, compile_file
+from plcbuilder.lang import pipeline as _compiler
+from plcbuilder.lang.pipeline import CompileOptions, compile_file, compile_source
+from plcbuilder.lang.source import MAX_SOURCE_BYTES
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
-from plcbuilder._support.files import atomic_write
+from plcbuilder._support.files import atomic_write, read_bounded, remove_temp_files
 from plcbuilder.project.model import Procedure, Project
 
+try:
+    import fcntl
+except ImportError:          # Windows
+    fcntl = None
+try:
+    import msvcrt
+except ImportError:          # everything but Windows
+    msvcrt = None
+
 CACHE_FILE = ".cache.json"
-CACHE_VERSION = 1
+LOCK_FILE = ".lock"
+MAX_CACHE_BYTES = 64 << 20      # a larger build/.cache.json is not ours: it is ignored
+CACHE_VERSION = 2
 BIN_SUFFIX = ".bin"
+#: Fewer procedures to compile than this: compiled in this process, one after another.
+PARALLEL_MIN = 48
+MAX_WORKERS = 8
+#: A file modified less than this before a build is read again by the next one.
+RACY_NS = 2_000_000_000
 
 #: progress(done, total, name): called after each procedure is compiled (or found
 #: unchanged); first with done=0 before any work.
@@ -65,9 +108,12 @@ class ProcedureBuild:
     diagnostics: list[Diagnostic]
     size: Optional[int]                 # code bytes, None when it did not compile
     limit: int
-    binary: Optional[bytes] = field(default=None, repr=False)
+    crc32: Optional[int] = None         # of the binary, None when it did not compile
     cached: bool = False                # reused from build/.cache.json
-    _source_line: Optional[Callable[[str, int], Optional[str]]] = field(default=None, repr=False)
+    #: (file, line) -> text of the source lines the diagnostics point at
+    lines: dict = field(default_factory=dict, repr=False)
+    _binary: Optional[bytes] = field(default=None, repr=False)
+    _bin_path: Optional[Path] = field(default=None, repr=False)   # a reused binary
 
     @property
     def name(self) -> str:
@@ -83,23 +129,33 @@ class ProcedureBuild:
 
     @property
     def ok(self) -> bool:
-        return self.binary is not None and not any(d.is_error for d in self.diagnostics)
+        return self.crc32 is not None and not any(d.is_error for d in self.diagnostics)
 
     @property
     def bin_name(self) -> str:
         return self.name + BIN_SUFFIX
 
+    @property
+    def binary(self) -> Optional[bytes]:
+        """The compiled procedure's bytes; one reused from the cache is read from
+        build/ (None if it is no longer there as it was built)."""
+        if self._binary is not None or self._bin_path is None:
+            return self._binary
+        try:
+            data = read_bounded(self._bin_path, MAX_FILE_SIZE, "compiled procedure")
+        except OSError:
+            return None
+        return data if zlib.crc32(data) == self.crc32 else None
+
     def program(self) -> Optional[Program]:
         """The compiled procedure, as the controller loads it (None if it did not compile)."""
-        return Program.from_bytes(self.binary) if self.ok else None
+        data = self.binary if self.ok else None
+        return Program.from_bytes(data) if data is not None else None
 
     def source_line(self, file: str, line: int) -> Optional[str]:
         """A source line for diagnostics.render_text."""
-        if self._source_line is not None:
-            text = self._source_line(file, line)
-            if text is not None:
-                return text
-        return _disk_line(file, line)
+        text = self.lines.get((file, line))
+        return text if text is not None else _disk_line(file, line)
 
 
 @dataclass
@@ -141,7 +197,7 @@ class BuildResult:
 
     def source_line(self, file: str, line: int) -> Optional[str]:
         for p in self.procedures:
-            text = p.source_line(file, line) if p._source_line else None
+            text = p.lines.get((file, line))
             if text is not None:
                 return text
         return _disk_line(file, line)
@@ -150,57 +206,50 @@ class BuildResult:
 # -------------------------------------------------------------- build all
 
 def compile_all(project: Project, progress: Optional[Progress] = None, *,
-                strict: Optional[bool] = None,
-                extra_includes: tuple = (), reuse: Optional[tuple[Path, dict, dict]] = None
-                ) -> list[ProcedureBuild]:
+                strict: Optional[bool] = None, extra_includes: tuple = (),
+                jobs: Optional[int] = None) -> list[ProcedureBuild]:
     """Compile every procedure of the project, going on past errors; writes
     nothing. A name that cannot be a procedure's, or that two files share, is an
-    error of that procedure. ``reuse`` is Build All's incremental build: (the
-    build folder, the cache read from it, the cache to fill); a procedure whose
-    key is unchanged and whose binary is still there is taken from it."""
-    procs = project.procedures()
-    total = len(procs)
-    out: list[ProcedureBuild] = []
-    by_name: dict[str, Procedure] = {}
-    if progress:
-        progress(0, total, "")
-    for i, proc in enumerate(procs):
-        options = project.compile_options(proc.path, strict=strict, extra_includes=extra_includes)
-        problem = _name_problem(proc, by_name)
-        by_name.setdefault(proc.name, proc)
-        if problem is not None:
-            pb = ProcedureBuild(proc, [problem], None, options.limit)
-        else:
-            pb = _build_one(proc, options, reuse)
-        out.append(pb)
-        if progress:
-            progress(i + 1, total, proc.name)
-    return out
+    error of that procedure. ``jobs``: worker processes (None: as many as cores
+    when there is enough to compile; 1: none)."""
+    return _procedure_builds(project, progress, strict, extra_includes, jobs, None)
 
 
 def build_project(project: Project, progress: Optional[Progress] = None, *,
-                  strict: Optional[bool] = None, use_cache: bool = True) -> BuildResult:
+                  strict: Optional[bool] = None, use_cache: bool = True,
+                  jobs: Optional[int] = None) -> BuildResult:
     """Build All (see the module docstring); ``strict`` None: as the project's
-    settings say. Never raises for problems in the sources; an unwritable build
-    folder raises OSError."""
+    settings say; ``jobs`` as :func:`compile_all`'s. Never raises for problems in
+    the sources; an unwritable build folder raises OSError."""
+    build_dir = project.build_dir
+    outside = _build_dir_problem(project)
+    if outside is not None:          # write nothing there: compile, report, keep the image
+        result = BuildResult(project, compile_all(project, progress, strict=strict, jobs=jobs),
+                             [outside], project.limits, 0, project.image_path)
+        result.compiled = sum(1 for p in result.procedures if not _is_name_problem(p))
+        result.image_message = (f"{project.image_path} not written: {build_dir} is outside "
+                                "the project")
+        return result
+    build_dir.mkdir(parents=True, exist_ok=True)
+    with _locked(build_dir / LOCK_FILE):
+        remove_temp_files(build_dir)
+        return _build(project, progress, strict, use_cache, jobs)
+
+
+def _build(project: Project, progress: Optional[Progress], strict: Optional[bool],
+           use_cache: bool, jobs: Optional[int]) -> BuildResult:
     limits = project.limits
     build_dir = project.build_dir
-    build_dir.mkdir(parents=True, exist_ok=True)
-    previous = _load_cache(build_dir, any_compiler=True)   # to find stale binaries
-    old_cache = _load_cache(build_dir) if use_cache else {}
-    new_cache: dict[str, dict] = {}
+    cache = _Cache(build_dir, use_cache)
     result = BuildResult(project, [], [], limits, 0, project.image_path)
-    result.procedures = compile_all(project, progress, strict=strict,
-                                    reuse=(build_dir, old_cache, new_cache))
+    result.procedures = _procedure_builds(project, progress, strict, (), jobs, cache)
     result.reused = sum(1 for p in result.procedures if p.cached)
     result.compiled = sum(1 for p in result.procedures
                           if not p.cached and not _is_name_problem(p))
 
-    # binaries: write what compiled, remove what no longer does
-    good = {p.bin_name: p.binary for p in result.procedures if p.ok}
-    for name, data in sorted(good.items()):
-        _write_if_changed(build_dir / name, data)
-    stale = {e.get("bin") for e in previous.values()} | {p.bin_name for p in result.procedures}
+    # binaries: those compiled are written already; remove what no longer compiles
+    good = {p.bin_name for p in result.procedures if p.ok}
+    stale = cache.old_bins | {p.bin_name for p in result.procedures}
     for name in sorted(n for n in stale if n and n not in good and _safe_bin_name(n)):
         try:
             (build_dir / name).unlink()
@@ -218,26 +267,235 @@ def build_project(project: Project, progress: Optional[Progress] = None, *,
             None, "move work into software procedures, or remove procedures you do not use"))
 
     if result.ok:
-        try:
-            image = write_image([(p.name, p.kind, p.binary) for p in result.procedures], limits)
-        except ImageError as exc:
-            result.diagnostics.append(error("image", f"cannot make the image: {exc}", None))
-        else:
-            changed = _write_if_changed(project.image_path, image)
-            result.image_written = True
-            result.image_size = len(image)
-            n = len(result.procedures)
-            result.image_message = (f"{'wrote' if changed else 'up to date:'} {project.image_path} "
-                                    f"({len(image)} bytes, {n} procedure{'s' * (n != 1)})")
+        _write_the_image(result, cache)
     if not result.image_written:
         n = result.error_count
         keep = (f"the previous {project.image_path.name} is kept"
                 if project.image_path.exists() else f"there is no {project.image_path.name} yet")
         result.image_message = (f"{project.image_path} not written: {n} error{'s' * (n != 1)}; "
                                 f"{keep}")
-
-    _save_cache(build_dir, new_cache)
+    cache.save()
     return result
+
+
+def _write_the_image(result: BuildResult, cache: "_Cache") -> None:
+    """Write build/eeprom.rom unless it holds these binaries already."""
+    path, limits = result.image_path, result.limits
+    key = _image_key(result.procedures, limits)
+    changed = False
+    size = cache.unchanged_image(path, key)
+    if size is None:
+        programs = [(p.name, p.kind, p.binary) for p in result.procedures]
+        lost = [name for name, _k, data in programs if data is None]
+        if lost:
+            result.diagnostics.append(error(
+                "image", f"cannot make the image: build/{lost[0]}{BIN_SUFFIX} changed during "
+                "the build", None, "build again"))
+            return
+        try:
+            image = write_image(programs, limits)
+        except ImageError as exc:
+            result.diagnostics.append(error("image", f"cannot make the image: {exc}", None))
+            return
+        changed = _write_if_changed(path, image)
+        size = len(image)
+        cache.image_written(path, key)
+    result.image_written = True
+    result.image_size = size
+    n = len(result.procedures)
+    result.image_message = (f"{'wrote' if changed else 'up to date:'} {path} "
+                            f"({size} bytes, {n} procedure{'s' * (n != 1)})")
+
+
+def _image_key(procs: list[ProcedureBuild], limits: Limits) -> str:
+    rows = sorted((p.name, p.kind.label, p.crc32, p.size) for p in procs)
+    return hashlib.sha256(json.dumps([IMAGE_VERSION, limits.as_dict(), rows]).encode()).hexdigest()
+
+
+def _procedure_builds(project: Project, progress: Optional[Progress], strict: Optional[bool],
+                      extra_includes: tuple, jobs: Optional[int],
+                      cache: Optional["_Cache"]) -> list[ProcedureBuild]:
+    """Every procedure's ProcedureBuild, in the project's order: from the cache
+    when it has it, compiled (in worker processes when there are many) otherwise."""
+    procs = project.procedures()
+    total = len(procs)
+    out: list[Optional[ProcedureBuild]] = [None] * total
+    by_name: dict[str, Procedure] = {}
+    options_for: dict[Path, CompileOptions] = {}
+    pending: list[tuple[int, CompileOptions, Optional[str]]] = []   # (index, options, key)
+    done = 0
+
+    def finished(i: int, pb: ProcedureBuild) -> None:
+        nonlocal done
+        out[i] = pb
+        done += 1
+        if progress:
+            progress(done, total, pb.name)
+
+    if progress:
+        progress(0, total, "")
+    for i, proc in enumerate(procs):
+        folder = proc.path.parent
+        if folder not in options_for:
+            options_for[folder] = project.compile_options(proc.path, strict=strict,
+                                                          extra_includes=extra_includes)
+        options = options_for[folder]
+        problem = _outside_problem(proc, project) or _name_problem(proc, by_name)
+        by_name.setdefault(proc.name, proc)
+        if problem is not None:
+            finished(i, ProcedureBuild(proc, [problem], None, options.limit))
+            continue
+        key = cache.key(proc, options) if cache is not None else None
+        reused = cache.lookup(proc, options, key) if key is not None else None
+        if reused is not None:
+            finished(i, reused)
+        else:
+            pending.append((i, options, key))
+
+    def compiled(k: int, outcome: tuple) -> None:
+        i, options, key = pending[k]
+        diags, size, binary, lines = outcome
+        pb = ProcedureBuild(procs[i], diags, size, options.limit,
+                            zlib.crc32(binary) if binary is not None else None, False, lines,
+                            binary)
+        if cache is not None:
+            cache.compiled(pb, key)
+        finished(i, pb)
+
+    work = [(str(procs[i].path), options, cache.source_bytes(procs[i]) if cache else None)
+            for i, options, _key in pending]
+    _compile_many(work, compiled, jobs)
+    return out   # type: ignore[return-value]  - every slot is filled
+
+
+# ------------------------------------------------------------ compiling
+
+def _compile_job(job: tuple[str, CompileOptions, Optional[bytes]]) -> tuple:
+    """Compile one procedure (in a worker process or here): (diagnostics, size,
+    binary, source lines of the diagnostics), all of it small and picklable."""
+    path, options, data = job
+    try:
+        r = compile_file(path, options, data=data)
+    except Exception as exc:  # noqa: BLE001 - one procedure must not stop Build All
+        diag = error("internal", f"internal compiler error: {type(exc).__name__}: {exc}",
+                     Span.point(path, 1, 1))
+        return [diag], None, None, {}
+    binary = r.program.to_bytes() if r.ok and r.program is not None else None
+    lines = {}
+    for d in r.diagnostics:
+        if d.span is not None:
+            text = r.source_line(d.span.file, d.span.line)
+            if text is not None:
+                lines[(d.span.file, d.span.line)] = text
+    return list(r.diagnostics), (r.size if binary is not None else None), binary, lines
+
+
+def _warm() -> None:
+    """A worker's start: build the parser (a forked worker has it already)."""
+    compile_source("main() { exit(99); };\n")
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def _compile_many(work: list, done: Callable[[int, tuple], None], jobs: Optional[int]) -> None:
+    """Compile every job, calling done(index, outcome) in order. With several
+    workers the first job is compiled here (a forked worker then inherits the
+    parser) and the rest by the pool; if the pool cannot start or breaks, the
+    rest is compiled here."""
+    if jobs is None:
+        jobs = min(_cores(), MAX_WORKERS) if len(work) >= PARALLEL_MIN else 1
+    jobs = max(1, min(jobs, len(work) - 1))
+    k = 0
+    if jobs > 1:
+        done(0, _compile_job(work[0]))
+        k = 1
+        for outcome in _in_workers(work[1:], jobs):
+            done(k, outcome)
+            k += 1
+    for k in range(k, len(work)):
+        done(k, _compile_job(work[k]))
+
+
+def _in_workers(work: list, jobs: int) -> Iterator[tuple]:
+    """The outcomes of work in order, from a pool of worker processes, for as
+    long as the pool works (the caller compiles what is left)."""
+    methods = multiprocessing.get_all_start_methods()
+    if "fork" in methods and threading.active_count() == 1:
+        ctx = multiprocessing.get_context("fork")    # inherits everything loaded here
+    elif "forkserver" in methods:                    # forking a threaded process is unsafe
+        ctx = multiprocessing.get_context("forkserver")
+        ctx.set_forkserver_preload([__name__])
+    else:
+        ctx = multiprocessing.get_context("spawn")
+    chunk = max(1, min(16, len(work) // (jobs * 8)))
+    try:
+        pool = ProcessPoolExecutor(jobs, mp_context=ctx, initializer=_warm)
+    except (OSError, ValueError, NotImplementedError):
+        return
+    try:
+        outcomes = pool.map(_compile_job, work, chunksize=chunk)
+        while True:
+            try:
+                outcome = next(outcomes)
+            except (StopIteration, BrokenProcessPool, OSError):
+                return
+            yield outcome
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+# ------------------------------------------------------------ build folder
+
+@contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    """Hold an exclusive lock on path (created if missing) while the block runs."""
+    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        if fcntl is not None:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        elif msvcrt is not None:
+            msvcrt.locking(fd, msvcrt.LK_LOCK, 1)
+        yield
+    finally:
+        os.close(fd)       # releases the lock
+
+
+def _real(p: Path) -> Path:
+    try:
+        return p.resolve()
+    except (OSError, RuntimeError):     # a link loop
+        return p.absolute()
+
+
+def _outside_problem(proc: Procedure, project: Project) -> Optional[Diagnostic]:
+    """A source file that is a link out of the project: an error, and it is not
+    read (its lines would be echoed in diagnostics)."""
+    real = _real(proc.path)
+    if real.is_relative_to(_real(project.root)):
+        return None
+    return error("source-outside-project",
+                 f"{proc.path} is a link to {real}, outside the project; Build All compiles "
+                 "only files inside the project", None,     # no span: its lines are not shown
+                 "copy the file into the project instead of linking to it")
+
+
+def _build_dir_problem(project: Project) -> Optional[Diagnostic]:
+    """build/ (or something in the way of it) leading out of the project."""
+    build_dir = project.build_dir
+    if not os.path.lexists(build_dir):
+        return None
+    real = _real(build_dir)
+    if real.is_relative_to(_real(project.root)) and real != _real(project.root):
+        return None
+    return error("build-outside-project",
+                 f"{build_dir} leads to {real}, outside the project; Build All writes only "
+                 "inside the project", None,
+                 f"remove the link {build_dir} (Build All makes the folder)")
 
 
 def _name_problem(proc: Procedure, seen: dict[str, Procedure]) -> Optional[Diagnostic]:
@@ -257,69 +515,18 @@ def _name_problem(proc: Procedure, seen: dict[str, Procedure]) -> Optional[Diagn
 
 
 def _is_name_problem(pb: ProcedureBuild) -> bool:
-    return any(d.code in ("procedure-name", "duplicate-procedure") for d in pb.diagnostics)
+    return any(d.code in ("procedure-name", "duplicate-procedure", "source-outside-project")
+               for d in pb.diagnostics)
 
 
-def _build_one(proc: Procedure, options: CompileOptions,
-               reuse: Optional[tuple[Path, dict, dict]]) -> ProcedureBuild:
-    build_dir, old_cache, new_cache = reuse if reuse is not None else (None, {}, None)
-    cache_id = f"{proc.kind.label}/{proc.name}"
-    key = _cache_key(proc, options) if reuse is not None else None
-    entry = old_cache.get(cache_id)
-    if key is not None and entry and entry.get("key") == key:
-        reused = _from_cache(proc, options, entry, build_dir)
-        if reused is not None:
-            new_cache[cache_id] = entry
-            return reused
-    try:
-        r = compile_file(proc.path, options)
-    except Exception as exc:  # noqa: BLE001 - one procedure must not stop Build All
-        diag = error("internal", f"internal compiler error: {type(exc).__name__}: {exc}",
-                     Span.point(str(proc.path), 1, 1))
-        return ProcedureBuild(proc, [diag], None, options.limit)
-    binary = r.program.to_bytes() if r.ok and r.program is not None else None
-    pb = ProcedureBuild(proc, list(r.diagnostics), r.size if binary else None, r.limit,
-                        binary, False, r.source_line)
-    if key is not None:
-        new_cache[cache_id] = {
-            "key": key,
-            "bin": pb.bin_name if binary else None,
-            "crc32": zlib.crc32(binary) if binary else None,
-            "size": pb.size,
-            "diagnostics": [_diag_to_json(d) for d in pb.diagnostics],
-        }
-    return pb
-
-
-def _from_cache(proc: Procedure, options: CompileOptions, entry: dict,
-                build_dir: Path) -> Optional[ProcedureBuild]:
-    try:
-        diags = [_diag_from_json(d) for d in entry["diagnostics"]]
-        binary = None
-        if entry.get("bin"):
-            if entry["bin"] != proc.name + BIN_SUFFIX:
-                return None
-            binary = (build_dir / entry["bin"]).read_bytes()
-            if zlib.crc32(binary) != entry["crc32"]:
-                return None
-        elif not any(d.is_error for d in diags):
-            return None
-        size = entry.get("size")
-        if binary is not None and type(size) is not int:
-            return None
-    except (OSError, KeyError, TypeError, ValueError):
-        return None
-    return ProcedureBuild(proc, diags, size, options.limit, binary, True, None)
-
-
-def _write_if_changed(path: Path, data: bytes) -> bool:
+def _write_if_changed(path: Path, data: bytes, sync: bool = True) -> bool:
     """Write data atomically unless path already holds it; whether it wrote."""
     try:
-        if path.read_bytes() == data:
+        if read_bounded(path, len(data)) == data:
             return False
-    except OSError:
+    except OSError:       # missing, different, or not a regular file (atomic_write says so)
         pass
-    atomic_write(path, data)
+    atomic_write(path, data, sync=sync)
     return True
 
 
@@ -335,7 +542,7 @@ def compiler_fingerprint() -> str:
     """A hash of the compiler (its version and its own source files), so that a
     changed compiler never reuses a cached build."""
     h = hashlib.sha256()
-    h.update(f"plcbuilder {plcbuilder.__version__} compiler {_pipeline.COMPILER_VERSION}".encode())
+    h.update(f"plcbuilder {plcbuilder.__version__} compiler {_compiler.COMPILER_VERSION}".encode())
     pkg = Path(plcbuilder.__file__).parent
     for sub in ("lang", "bytecode"):
         folder = pkg / sub
@@ -367,94 +574,232 @@ def _include_targets(text: str) -> list[str]:
     return out
 
 
-def _cache_key(proc: Procedure, options: CompileOptions) -> Optional[str]:
-    """The SHA-256 that decides whether a cached build is still good, or None
-    when the sources cannot be read (then the compiler reports why)."""
-    h = hashlib.sha256()
-
-    def put(*parts) -> None:
-        for part in parts:
-            b = part if isinstance(part, bytes) else str(part).encode("utf-8", "surrogatepass")
-            h.update(len(b).to_bytes(8, "little") + b)
-
+def _stat(path) -> Optional[list]:
+    """What tells a file changed without reading it: [size, mtime_ns, inode]."""
     try:
-        source = proc.path.read_bytes()
+        st = os.stat(path)
     except OSError:
         return None
-    try:
-        cwd = os.getcwd()      # diagnostics name headers relative to it
-    except OSError:
-        cwd = ""
-    put(CACHE_VERSION, compiler_fingerprint(), proc.kind.label, options.strict,
-        options.limit, str(proc.path), cwd, source)
-    dirs = [Path(d) for d in options.include_dirs]
-    put(len(dirs), *[str(d) for d in dirs])
-    # Resolve includes as the preprocessor does: the including file's folder,
-    # then the include folders, then the built-in headers.
-    todo = [(t, proc.path.parent) for t in _include_targets(_text(source))]
-    seen: set[tuple[str, str]] = set()
-    while todo:
-        target, folder = todo.pop(0)
-        if (target, str(folder)) in seen:
-            continue
-        seen.add((target, str(folder)))
-        if len(seen) > _MAX_DEPS:
+    return [st.st_size, st.st_mtime_ns, st.st_ino]
+
+
+@lru_cache(maxsize=None)
+def _builtin_info(target: str) -> Optional[tuple[str, tuple[str, ...]]]:
+    text = builtin_header(target)
+    if text is None:
+        return None
+    return hashlib.sha256(text.encode("utf-8")).hexdigest(), tuple(_include_targets(text))
+
+
+class _Cache:
+    """build/.cache.json: read once at the start of a build, written at its end
+    only when it changed; meanwhile it reads and hashes each source and header at
+    most once (not at all when its stat is unchanged, see the module docstring)."""
+
+    def __init__(self, build_dir: Path, use: bool):
+        self.build_dir = build_dir
+        self.fingerprint = compiler_fingerprint()
+        self.start_ns = time.time_ns()
+        try:
+            self.cwd = os.getcwd()      # diagnostics name headers relative to it
+        except OSError:
+            self.cwd = ""
+        self.doc = _load_cache(build_dir)
+        procs = self.doc.get("procedures")
+        procs = {k: v for k, v in procs.items() if isinstance(v, dict)} \
+            if isinstance(procs, dict) else {}
+        #: binaries the last build wrote, whatever compiler wrote them (to remove stale ones)
+        self.old_bins = {e.get("bin") for e in procs.values() if isinstance(e.get("bin"), str)}
+        current = use and self.doc.get("version") == CACHE_VERSION \
+            and self.doc.get("compiler") == self.fingerprint
+        self.old = procs if current else {}
+        files, image = self.doc.get("files"), self.doc.get("image")
+        self.old_files = files if current and isinstance(files, dict) else {}
+        self.old_image = image if current and isinstance(image, dict) else {}
+        self.procs: dict[str, dict] = {}
+        self.files: dict[str, list] = {}
+        self.image: dict = {}
+        self.sources: dict[str, bytes] = {}     # procedure sources read (for the compiler)
+        self.found: dict[tuple, Optional[Path]] = {}   # include resolutions, this build
+
+    # ------------------------------------------------------------ files
+    def info(self, path: Path, keep: bool = False) -> Optional[tuple[str, list]]:
+        """(SHA-256, #include targets) of a file; None when it cannot be read.
+        keep: hold the bytes read for the compiler (a procedure's source)."""
+        name = str(path)
+        rec = self.files.get(name)
+        if rec is not None:
+            return rec[3], rec[4]
+        stat = _stat(name)
+        if stat is None:
             return None
-        put("include", target, str(folder))
-        found = None
-        for d in ([folder] if folder is not None else []) + dirs:
-            p = d / target
-            try:
-                if p.is_file():
-                    found = p
-                    break
-            except OSError:
+        old = self.old_files.get(name)
+        if (isinstance(old, list) and len(old) == 6 and old[:3] == stat and old[5] is True
+                and isinstance(old[3], str) and isinstance(old[4], list)):
+            self.files[name] = old
+            return old[3], old[4]
+        try:
+            data = read_bounded(path, MAX_SOURCE_BYTES)
+        except OSError:
+            return None
+        if keep:
+            self.sources[name] = data
+        trusted = stat[1] <= self.start_ns - RACY_NS
+        rec = [stat[0], stat[1], stat[2], hashlib.sha256(data).hexdigest(),
+               _include_targets(_text(data)), trusted]
+        self.files[name] = rec
+        return rec[3], rec[4]
+
+    def source_bytes(self, proc: Procedure) -> Optional[bytes]:
+        """The source read for the key (once), handed over to the compiler."""
+        return self.sources.pop(str(proc.path), None)
+
+    def _resolve(self, target: str, folder: Optional[Path], dirs: list[Path]) -> Optional[Path]:
+        """The header #include target names from folder (None: a built-in one)."""
+        memo = (target, folder, tuple(dirs))
+        if memo not in self.found:
+            self.found[memo] = next((d / target for d in ([folder] if folder else []) + dirs
+                                     if (d / target).is_file()), None)
+        return self.found[memo]
+
+    def key(self, proc: Procedure, options: CompileOptions) -> Optional[str]:
+        """The SHA-256 that decides whether a cached build is still good, or None
+        when the sources cannot be read (then the compiler reports why)."""
+        h = hashlib.sha256()
+
+        def put(*parts) -> None:
+            for part in parts:
+                b = part if isinstance(part, bytes) else str(part).encode("utf-8", "surrogatepass")
+                h.update(len(b).to_bytes(8, "little") + b)
+
+        source = self.info(proc.path, keep=True)
+        if source is None:
+            return None
+        put(CACHE_VERSION, self.fingerprint, proc.kind.label, options.strict,
+            options.limit, str(proc.path), self.cwd, source[0], str(options.root))
+        dirs = [Path(d) for d in options.include_dirs]
+        put(len(dirs), *[str(d) for d in dirs])
+        # Resolve includes as the preprocessor does: the including file's folder,
+        # then the include folders, then the built-in headers.
+        todo = [(t, proc.path.parent) for t in source[1]]
+        seen: set[tuple[str, str]] = set()
+        while todo:
+            target, folder = todo.pop(0)
+            if (target, str(folder)) in seen:
+                continue
+            seen.add((target, str(folder)))
+            if len(seen) > _MAX_DEPS:
                 return None
-        if found is not None:
-            try:
-                data = found.read_bytes()
-            except OSError:
+            put("include", target, str(folder))
+            found = self._resolve(target, folder, dirs)
+            if found is not None:
+                header = self.info(found)
+                if header is None:
+                    return None
+                put("file", str(found), header[0])
+                todo.extend((t, found.parent) for t in header[1])
+                continue
+            builtin = _builtin_info(target)
+            if builtin is not None:
+                put("builtin", builtin[0])
+                todo.extend((t, None) for t in builtin[1])
+            else:
+                put("missing")
+        return h.hexdigest()
+
+    # ------------------------------------------------------- procedures
+    def lookup(self, proc: Procedure, options: CompileOptions,
+               key: str) -> Optional[ProcedureBuild]:
+        """The procedure as the last build left it, if its key and binary still hold."""
+        cache_id = f"{proc.kind.label}/{proc.name}"
+        entry = self.old.get(cache_id)
+        if not entry or entry.get("key") != key:
+            return None
+        try:
+            diags = [_diag_from_json(d) for d in entry["diagnostics"]]
+            size, crc, data = entry.get("size"), entry.get("crc32"), None
+            path = None
+            if entry.get("bin"):
+                if entry["bin"] != proc.name + BIN_SUFFIX or type(size) is not int \
+                        or type(crc) is not int:
+                    return None
+                path = self.build_dir / entry["bin"]
+                stat = _stat(path)
+                if stat is None:
+                    return None
+                if stat != entry.get("bin_stat"):      # touched since: check its bytes
+                    try:
+                        data = read_bounded(path, MAX_FILE_SIZE, "compiled procedure")
+                    except OSError:
+                        return None
+                    if zlib.crc32(data) != crc:
+                        return None
+                    entry = dict(entry, bin_stat=stat)
+            elif any(d.is_error for d in diags):
+                size = crc = None
+            else:
                 return None
-            put("file", str(found), data)
-            todo.extend((t, found.parent) for t in _include_targets(_text(data)))
-            continue
-        text = builtin_header(target)
-        if text is not None:
-            put("builtin", text)
-            todo.extend((t, None) for t in _include_targets(text))
-        else:
-            put("missing")
-    return h.hexdigest()
+        except (OSError, KeyError, TypeError, ValueError):
+            return None
+        self.procs[cache_id] = entry
+        return ProcedureBuild(proc, diags, size, options.limit, crc, True, {}, data, path)
+
+    def compiled(self, pb: ProcedureBuild, key: Optional[str]) -> None:
+        """A procedure compiled now: write its binary (or remove the old one)
+        and remember it."""
+        path = self.build_dir / pb.bin_name
+        binary = pb.binary if pb.ok else None
+        if binary is not None:
+            _write_if_changed(path, binary, sync=False)
+        if key is None:
+            return
+        self.procs[f"{pb.kind.label}/{pb.name}"] = {
+            "key": key,
+            "bin": pb.bin_name if binary is not None else None,
+            "bin_stat": _stat(path) if binary is not None else None,
+            "crc32": pb.crc32 if binary is not None else None,
+            "size": pb.size,
+            "diagnostics": [_diag_to_json(d) for d in pb.diagnostics],
+        }
+
+    # ------------------------------------------------------------ image
+    def unchanged_image(self, path: Path, key: str) -> Optional[int]:
+        """The image's size when it is the one made from these binaries and
+        limits and is still there, unchanged; None otherwise."""
+        stat = _stat(path)
+        if stat is not None and self.old_image.get("key") == key \
+                and self.old_image.get("stat") == stat:
+            self.image = self.old_image
+            return stat[0]
+        return None
+
+    def image_written(self, path: Path, key: str) -> None:
+        stat = _stat(path)
+        self.image = {"key": key, "stat": stat} if stat is not None else {}
+
+    def save(self) -> None:
+        doc = {"version": CACHE_VERSION, "compiler": self.fingerprint,
+               "procedures": dict(sorted(self.procs.items())),
+               "files": dict(sorted(self.files.items())), "image": self.image}
+        if doc == self.doc:
+            return
+        text = json.dumps(doc, sort_keys=True, separators=(",", ":")) + "\n"
+        try:
+            _write_if_changed(self.build_dir / CACHE_FILE, text.encode("utf-8"))
+        except OSError:
+            pass   # a cache that cannot be written only costs time next build
 
 
 def _text(data: bytes) -> str:
     return data.decode("utf-8", "replace")
 
 
-def _load_cache(build_dir: Path, any_compiler: bool = False) -> dict:
+def _load_cache(build_dir: Path) -> dict:
     try:
-        doc = json.loads((build_dir / CACHE_FILE).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        doc = json.loads(read_bounded(build_dir / CACHE_FILE, MAX_CACHE_BYTES).decode("utf-8"))
+    except (OSError, ValueError, RecursionError):
         return {}
-    if not isinstance(doc, dict):
-        return {}
-    if not any_compiler and (doc.get("version") != CACHE_VERSION
-                             or doc.get("compiler") != compiler_fingerprint()):
-        return {}
-    procs = doc.get("procedures")
-    if not isinstance(procs, dict):
-        return {}
-    return {k: v for k, v in procs.items() if isinstance(v, dict)}
-
-
-def _save_cache(build_dir: Path, entries: dict) -> None:
-    doc = {"version": CACHE_VERSION, "compiler": compiler_fingerprint(),
-           "procedures": dict(sorted(entries.items()))}
-    text = json.dumps(doc, indent=1, sort_keys=True) + "\n"
-    try:
-        _write_if_changed(build_dir / CACHE_FILE, text.encode("utf-8"))
-    except OSError:
-        pass   # a cache that cannot be written only costs time next build
+    return doc if isinstance(doc, dict) else {}
 
 
 def _span_to_json(s: Optional[Span]):
@@ -490,10 +835,7 @@ def _disk_line(file: str, line: int) -> Optional[str]:
         if file.startswith(BUILTIN_PREFIX):
             text = builtin_header(file[len(BUILTIN_PREFIX):])
         else:
-            data = Path(file).read_bytes()
-            if len(data) > (1 << 20):
-                return None
-            text = data.decode("utf-8", "replace")
+            text = read_bounded(file, MAX_SOURCE_BYTES).decode("utf-8", "replace")
     except (OSError, ValueError):
         return None
     if text is None:

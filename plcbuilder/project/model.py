@@ -25,6 +25,12 @@ The settings file::
 
     [build]
     strict = false                 # build with --strict (controller compatibility)
+    include = ["../shared"]        # more folders #include searches (relative to the project)
+
+#include finds headers in the procedure's folder, include/, the folders of
+[build] include, then the built-in headers; a header must lie inside the
+project (links resolved) or inside a folder named by [build] include or
+--include: see plcbuilder.lang.preprocess.
 
 Every problem with the settings raises :class:`ProjectError` naming the file,
 the line and the key.
@@ -38,8 +44,9 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Optional, Union
 
-from plcbuilder._support.files import atomic_write
+from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder._support.toml_errors import TomlLocator, decode_error
+from plcbuilder._support.toml_errors import loads as toml_loads
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.lang.pipeline import CompileOptions
 from plcbuilder.image.manifest import MAX_LIMIT, Limits
@@ -80,6 +87,7 @@ class Settings:
     limits: Limits = field(default_factory=Limits)
     controller_address: str = ""
     strict: bool = False
+    include: tuple[str, ...] = ()      # [build] include: more include folders
 
     def to_toml(self) -> str:
         """The settings file's text (every key written, with comments)."""
@@ -98,7 +106,9 @@ class Settings:
                        "HOST:PORT of a running controller; empty: the embedded one")
                 + "\n[build]\n"
                 + line("strict", "true" if self.strict else "false",
-                       "controller compatibility: only what the myCNC manual shows"))
+                       "controller compatibility: only what the myCNC manual shows")
+                + line("include", "[" + ", ".join(_toml_str(d) for d in self.include) + "]",
+                       "more #include folders (may be outside the project)"))
 
 
 def _toml_str(s: str) -> str:
@@ -118,7 +128,7 @@ _SCHEMA: dict[str, dict[str, type]] = {
     "": {"name": str, "machine": str},
     "limits": {"hw_proc": int, "hw_total": int, "sw_proc": int},
     "controller": {"address": str},
-    "build": {"strict": bool},
+    "build": {"strict": bool, "include": list},
 }
 
 
@@ -132,7 +142,7 @@ def parse_settings(text: str, file: Union[str, Path] = SETTINGS_FILE,
                    default_name: str = "") -> Settings:
     """Settings from the text of a plcbuilder.toml; raises ProjectError."""
     try:
-        doc = tomllib.loads(text)
+        doc = toml_loads(text)
     except tomllib.TOMLDecodeError as exc:
         msg, line = decode_error(exc, text)
         raise ProjectError(f"not valid TOML: {msg}", file, line) from None
@@ -159,9 +169,14 @@ def parse_settings(text: str, file: Union[str, Path] = SETTINGS_FILE,
     if address and not re.fullmatch(r"\[?[A-Za-z0-9_.:\-]+\]?:\d{1,5}", address):
         raise ProjectError(f"address must be HOST:PORT, is {address!r}", file,
                            _line_of(text, "controller", "address"), "controller.address")
+    include = values.get("build.include", [])
+    for d in include:
+        if not isinstance(d, str) or not d.strip():
+            raise ProjectError("include must be a list of folder names (strings)", file,
+                               _line_of(text, "build", "include"), "build.include")
     return Settings(name=values.get("name", default_name) or default_name, machine=machine,
                     limits=limits, controller_address=address,
-                    strict=values.get("build.strict", False))
+                    strict=values.get("build.strict", False), include=tuple(include))
 
 
 def _check(text: str, file, table: str, key: str, value) -> None:
@@ -232,11 +247,9 @@ class Project:
         if not sp.exists():
             return cls(p, Settings(name=default_name), settings_found=False)
         try:
-            raw = sp.read_bytes()
+            raw = read_bounded(sp, MAX_SETTINGS_BYTES, "settings file")
         except OSError as exc:
             raise ProjectError(f"cannot read: {exc.strerror or exc}", sp) from None
-        if len(raw) > MAX_SETTINGS_BYTES:
-            raise ProjectError(f"the file is too large ({len(raw)} bytes)", sp)
         try:
             text = raw.decode("utf-8")
         except UnicodeDecodeError as exc:
@@ -269,8 +282,8 @@ class Project:
         dirs = list(extra_includes)
         dirs += [d for d in self.include_dirs() if d not in dirs]
         strict = self.settings.strict if strict is None else strict
-        return CompileOptions(kind=kind, strict=strict,
-                              include_dirs=tuple(dirs), code_limit=self.limits.proc_limit(kind))
+        return CompileOptions(kind=kind, strict=strict, include_dirs=tuple(dirs),
+                              code_limit=self.limits.proc_limit(kind), root=self.root)
 
     # -------------------------------------------------------------- paths
     @property
@@ -317,9 +330,15 @@ class Project:
         return self.hardware_dir if Kind(kind) is Kind.HARDWARE else self.software_dir
 
     def include_dirs(self) -> tuple[Path, ...]:
-        """Folders #include searches after the procedure's own folder (the built-in
-        headers come last, by the compiler)."""
-        return (self.include_dir,) if self.include_dir.is_dir() else ()
+        """Folders #include searches after the procedure's own folder: include/,
+        then the folders of ``[build] include`` (relative to the project); the
+        built-in headers come last, by the compiler."""
+        dirs = [self.include_dir] + [self.root / d for d in self.settings.include]
+        out: list[Path] = []
+        for d in dirs:
+            if d.is_dir() and d not in out:
+                out.append(d)
+        return tuple(out)
 
     # --------------------------------------------------------- procedures
     def procedures(self, kind: Optional[Kind] = None) -> list[Procedure]:

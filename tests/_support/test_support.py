@@ -99,3 +99,63 @@ def test_decode_error_gives_the_message_and_its_line():
             tomllib.loads(text)
         msg, at = decode_error(ei.value, text)
         assert at == line and "(at" not in msg
+
+
+# ------------------------------------------------ special files (issue 17, items 6 and 8)
+
+from plcbuilder._support.files import FileRefused, read_bounded  # noqa: E402
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
+def test_atomic_write_refuses_a_fifo_and_keeps_it(tmp_path):
+    fifo = tmp_path / "out.bin"
+    os.mkfifo(fifo)
+    with pytest.raises(FileRefused) as ei:
+        atomic_write(fifo, b"data")
+    assert isinstance(ei.value, OSError)
+    assert "FIFO" in ei.value.strerror and "refusing to replace" in ei.value.strerror
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    assert sorted(os.listdir(tmp_path)) == ["out.bin"]          # no temporary file left
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/null"), reason="needs /dev/null")
+def test_atomic_write_refuses_a_link_to_a_device_and_a_folder(tmp_path):
+    link = tmp_path / "full"
+    link.symlink_to("/dev/null")                                # never written: refused first
+    with pytest.raises(FileRefused, match="character device"):
+        atomic_write(link, b"x")
+    assert link.is_symlink() and os.readlink(link) == "/dev/null"
+    (tmp_path / "dir").mkdir()
+    with pytest.raises(FileRefused, match="a folder"):
+        atomic_write(tmp_path / "dir", b"x")
+    assert sorted(os.listdir(tmp_path)) == ["dir", "full"]
+
+
+def test_read_bounded(tmp_path):
+    f = tmp_path / "a.toml"
+    f.write_bytes(b"x" * 10)
+    assert read_bounded(f, 10, "machine description") == b"x" * 10
+    with pytest.raises(FileRefused) as ei:
+        read_bounded(f, 9, "machine description")
+    assert "is 10 bytes; a machine description is at most 9 bytes" in str(ei.value)
+    assert str(f) in str(ei.value)
+    with pytest.raises(FileRefused, match="a folder, not a regular file"):
+        read_bounded(tmp_path, 100, "source file")
+    with pytest.raises(FileNotFoundError):
+        read_bounded(tmp_path / "gone", 100)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
+def test_read_bounded_never_blocks_on_a_fifo(tmp_path):
+    fifo = tmp_path / "M03.plc"
+    os.mkfifo(fifo)                     # nobody writes: a plain open() would hang here
+    with pytest.raises(FileRefused, match="FIFO"):
+        read_bounded(fifo, 100, "source file")
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="needs /dev/zero")
+def test_read_bounded_refuses_a_device_through_a_link(tmp_path):
+    link = tmp_path / "plcbuilder.toml"
+    link.symlink_to("/dev/zero")
+    with pytest.raises(FileRefused, match="character device"):
+        read_bounded(link, 1 << 20, "settings file")

@@ -166,3 +166,18 @@ def test_python_m_plcbuilder_compile(work):
     bad = run("M05.plc")
     assert bad.returncode == 1 and "M05.plc:3:8: error:" in bad.stderr
     assert run().returncode == 2
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
+def test_output_that_is_not_a_regular_file_is_refused(work, capsys):
+    # issue 17 item 6: `compile OK.plc -o /dev/full` replaced the device with a file
+    (work / "M03.plc").write_text(GOOD)
+    os.mkfifo(work / "pipe")
+    rc, out, err = compile_(capsys, "M03.plc", "-o", "pipe")
+    assert rc == 1 and out == ""
+    assert "cannot write pipe: is a FIFO (named pipe), not a regular file" in err
+    assert "Traceback" not in err
+    assert os.path.exists(work / "pipe") and not os.path.isfile(work / "pipe")
+    (work / "dev").symlink_to("/dev/null")
+    rc, _out, err = compile_(capsys, "M03.plc", "-o", "dev")
+    assert rc == 1 and "character device" in err and os.path.islink(work / "dev")

@@ -87,8 +87,8 @@ def test_refused_requests_exit_1_with_the_reason(served, image_file, tmp_path, c
     assert code == 1 and "no procedure named 'NOPE'" in err
     code, out, err = cli(capsys, "start", "77")
     assert code == 1 and "M77" in err
-    code, out, err = cli(capsys, "input", "500=1")
-    assert code == 1 and "no input 500" in err
+    code, out, err = cli(capsys, "input", "200=1")     # a pin this machine does not have
+    assert code == 1 and "no input 200" in err
     code, out, err = cli(capsys, "upload", str(tmp_path / "missing.rom"))
     assert code == 1 and "cannot read" in err
     st = json.loads(cli(capsys, "state", "--json")[1])
@@ -106,10 +106,40 @@ def test_input_usage(served, image_file, capsys):
         assert code == 2 and "plcbuilder input:" in err
 
 
+@pytest.mark.parametrize("argv,msg", [
+    # issue 17 item 10: numbers out of range wrapped or went through silently
+    (["start", "M88", "--eparam", "4294967297"],
+     "argument --eparam: must be from -2147483648 to 4294967295, not 4294967297"),
+    (["start", "99999999999"], "an M-code number must be from 0 to 1000000, not 99999999999"),
+    (["input", "--adc", "0=99999999999"],
+     "the value of ADC channel 0 must be from -2147483648 to 2147483647, not 99999999999"),
+    (["input", "--adc", "8=1"], "ADC channel must be from 0 to 7, not 8"),
+    (["input", "500=1"], "input pin must be from 0 to 255, not 500"),
+    (["state", "--timeout", "nan"], "argument --timeout: must be more than 0 and at most 86400"),
+    (["state", "--timeout", "1e400"], "argument --timeout: must be more than 0"),
+])
+def test_numbers_out_of_range_exit_2_naming_the_range(served, image_file, capsys, argv, msg):
+    cli(capsys, "upload", str(image_file))
+    t0 = json.loads(cli(capsys, "state", "--json")[1])
+    try:
+        code, out, err = cli(capsys, *argv)
+    except SystemExit as exc:                       # argparse's own usage errors
+        code, (out, err) = exc.code, capsys.readouterr()
+    assert code == 2 and msg in err and "Traceback" not in err
+    st = json.loads(cli(capsys, "state", "--json")[1])
+    assert st["running"] == t0["running"] and st["adc"] == t0["adc"]   # nothing was sent
+
+
+def test_start_takes_an_unsigned_32_bit_eparam_as_its_signed_value(served, image_file, capsys):
+    cli(capsys, "upload", str(image_file))
+    code, out, _ = cli(capsys, "start", "M88", "--eparam", "0xFFFFFFFF")
+    assert code == 0 and "started M88 (eparam -1)" in out
+
+
 def test_explicit_address_and_token(served, tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("PLCBUILDER_CONTROLLER_FILE", str(tmp_path / "none.json"))
     addr = f"{served.address[0]}:{served.address[1]}"
-    code, out, _ = cli(capsys, "state", "--json", "--controller", addr, "--token", served.token)
+    code, out, _ = cli(capsys, "state", "--json", "--controller", addr, f"--token={served.token}")
     assert code == 0 and "t_ms" in json.loads(out)
     code, _, err = cli(capsys, "state", "--controller", addr, "--token", "nope")
     assert code == 1 and "refused the connection: wrong or missing token" in err

@@ -115,3 +115,55 @@ def test_the_installed_command_runs(tmp_path):
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert json.loads(r.stdout)["ended_at_ms"] == 10
+
+
+@pytest.mark.parametrize("key", ["accel", "rapid"])
+def test_a_machine_value_too_small_to_move_is_refused_not_a_crash(tmp_path, capsys, key):
+    # issue 17 item 7: ZeroDivisionError in motion.trapezoid ("internal error")
+    src = write(tmp_path / "M03.plc", "main(){ g0moveA(0, 4, 1000); exit(99); };\n")
+    mach = write(tmp_path / "m.toml", f"[axes.Z]\n{key} = 5e-324\n")
+    rc, out, err = run_cli(capsys, "run", str(src), "--machine", str(mach), "--json")
+    assert rc == 2 and out == ""
+    assert f"m.toml:2: axes.Z.{key}: 5e-324 is out of range (allowed: 0.01 to" in err
+    assert "internal error" not in err
+
+
+@pytest.mark.parametrize("args,msg", [
+    # issue 17 item 10: `run --eparam 4294967297` ran with eparam 1; --adc took any size
+    (["--eparam", "4294967297"], "argument --eparam: must be from -2147483648 to 4294967295, "
+                                 "not 4294967297"),
+    (["--eparam", "-2147483649"], "must be from -2147483648 to 4294967295"),
+    (["--adc", "0=99999999999"], "the value of --adc must be from -2147483648 to 2147483647, "
+                                 "not 99999999999"),
+    (["--adc", "8=1"], "the channel of --adc must be from 0 to 7, not 8"),
+    (["--input", "256=1"], "the pin of --input must be from 0 to 255, not 256"),
+    (["--start", "M05:4294967296@0"], "the eparam of --start must be from -2147483648 to "
+                                      "4294967295, not 4294967296"),
+    (["--start", "M05@99999999999999"], "the time of --start must be from 0 to 604800000 ms"),
+    (["--gvarget-latency", "99999999999"], "must be from 0 to 60000 ms"),
+    (["--ms", "99999999999999"], "--ms must be from 0 to 604800000"),
+])
+def test_numbers_out_of_range_exit_2_naming_option_and_range(tmp_path, capsys, args, msg):
+    f = write(tmp_path / "M05.plc", DELAY)
+    code, out, err = run_cli(capsys, "run", f, *args)
+    assert code == 2 and out == ""
+    assert msg in err and "Traceback" not in err
+
+
+def test_an_eparam_written_unsigned_is_the_signed_32_bit_value(tmp_path, capsys):
+    f = write(tmp_path / "M05.plc", "main(){ v = eparam; exit(99); };\n")
+    code, out, _ = run_cli(capsys, "run", f, "--eparam", "0xFFFFFFFF", "--json")
+    assert code == 0 and json.loads(out)["vars"]["M05"]["v"] == -1
+    code, out, _ = run_cli(capsys, "run", f, "--eparam", "-2147483648", "--json")
+    assert code == 0 and json.loads(out)["vars"]["M05"]["v"] == -(1 << 31)
+
+
+def test_the_controller_api_refuses_what_does_not_fit(tmp_path):
+    from plcbuilder import api
+    c = api.Controller(api.default_machine())
+    with pytest.raises(api.ControllerError, match="ADC value must be from -2147483648"):
+        c.set_adc(0, 1 << 40)
+    c.load([api.compile_source("main(){ exit(99); };", "M05.plc").program])
+    with pytest.raises(api.ControllerError, match="eparam must be from"):
+        c.start("M05", 1 << 32)
+    c.start("M05", 0xFFFFFFFF)

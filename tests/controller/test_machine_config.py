@@ -259,3 +259,18 @@ def test_docs_examples_parse():
         parse_variables('<plc-variables>\n\n\n<var name="var16" value="1"/>\n</plc-variables>',
                         "plc-variables.xml")
     assert str(ei.value) == "plc-variables.xml:4: var16: unknown variable 'var16' (var00..var15)"
+
+
+@pytest.mark.parametrize("key", ["accel", "rapid"])
+def test_physical_bounds_of_an_axis(key):
+    # issue 17 item 7: 5e-324 passed validation and divided by zero in motion.trapezoid
+    e = _err(f'name = "m"\n[axes.Z]\n{key} = 5e-324\n')
+    unit = "mm/min" if key == "rapid" else "mm/s²"
+    assert (e.file, e.line, e.key) == ("m.toml", 3, f"axes.Z.{key}")
+    assert f"out of range (allowed: 0.01 to 10000000 {unit})" in str(e)
+    assert str(e).startswith(f"m.toml:3: axes.Z.{key}: 5e-324")
+    e = _err(f'[axes.X]\n{key} = 1e9\n')
+    assert "allowed: 0.01 to 10000000" in str(e)
+    parse_machine(f'[axes.X]\n{key} = 0.01\n')                 # the bounds are allowed
+    e = _err('[axes.X]\njog = -1\n')
+    assert "allowed: 0 to 10000000 mm/min" in str(e)

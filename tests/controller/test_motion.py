@@ -629,3 +629,24 @@ def test_incremental_moves_land_exactly_and_never_overshoot(moves):
                 assert lo <= p[i] <= hi
             m.advance()
         assert list(pos(m)) == expect
+
+
+def test_the_motion_code_cannot_divide_by_zero():
+    """Issue 17 item 7: a zero (or subnormal) speed or acceleration that got past
+    validation gives a slow move, never ZeroDivisionError."""
+    for vmax, acc in ((0.0, 1.0), (1.0, 0.0), (5e-324, 5e-324), (float("nan"), 1.0)):
+        prof = Profile.trapezoid(1000.0, vmax, acc)
+        assert prof.t_end > 0 and prof.at(prof.t_end) == (1000.0, 0.0)
+        prof.stop_from(1.0, 0.0)
+    from dataclasses import replace
+    from plcbuilder.controller.machine_config import AxisConfig
+    conf = parse_machine(BIG)
+    axes = dict(conf.axes)
+    axes["Z"] = AxisConfig("Z", rapid=5e-324, accel=5e-324)   # as if validation had let it in
+    m = Machine(replace(conf, axes=axes))
+    m.g0move(0, 0b100, 100)
+    for _ in range(50):
+        m.advance()
+    m.motion.stop()
+    for _ in range(5):
+        m.advance()

@@ -248,3 +248,13 @@ def test_idle_default_machine_gives_no_notes():
     m = Machine()
     for _ in range(2000):
         assert m.advance() == []
+
+
+def test_an_adc_value_saturates_at_32_bits():
+    from plcbuilder.controller.machine_config import AdcConfig
+    from plcbuilder.controller.sensors import AdcSource
+    src = AdcSource(AdcConfig(0, "axis", axis="X", scale=1e9, offset=0.0))
+    assert src.value(0, [10 ** 9] + [0] * 8) == (1 << 31) - 1
+    assert src.value(0, [-10 ** 9] + [0] * 8) == -(1 << 31)
+    noisy = AdcSource(AdcConfig(0, "constant", value=(1 << 31) - 1, noise=1 << 30))
+    assert all(-(1 << 31) <= noisy.value(t, [0] * 9) < 1 << 31 for t in range(50))

@@ -213,7 +213,7 @@ def test_warnings_show_as_warning_squiggles(win, project, qtbot):
     ed.insertText(ed.position_of(6, 1), "  unused = 5;\n")
     qtbot.waitUntil(lambda: ed.indicator_ranges(IND_WARNING) != [], timeout=5000)
     assert win.problems.counts()[1] >= 1
-    assert "warning" in win.problems_button.text()
+    assert "warning" in win.status.problems_button.text()
 
 
 def test_problem_in_a_header_opens_the_header(win, project, qtbot):
@@ -505,7 +505,7 @@ def test_open_project_dialog(win, project, monkeypatch):
     win.action(Act.OPEN_PROJECT).trigger()
     assert win.project.root == project.resolve()
     monkeypatch.setattr(QFileDialog, "getExistingDirectory", lambda *a, **k: "")
-    assert not win._open_project_dialog()
+    assert not win.open_project_dialog()
 
 
 def test_close_project_shows_the_welcome_page(win, project):
@@ -551,11 +551,11 @@ def test_the_run_side_calls_the_connection(runwin, qtbot, monkeypatch, project):
     assert conn.calls[-1] == ("start", "M05", 1234)
     w.action(Act.STOP).trigger()
     assert conn.calls[-1] == ("stop",)
-    w.speed_combo.setCurrentIndex(w.speed_combo.findData("max"))
+    w.run_actions.speed_combo.setCurrentIndex(w.run_actions.speed_combo.findData("max"))
     assert conn.calls[-1] == ("set_speed", "max")
-    w._speed_actions["pause"].trigger()
+    w.run_actions.speed_actions["pause"].trigger()
     assert conn.calls[-1] == ("set_speed", "pause")
-    assert w.speed_combo.currentData() == "pause"
+    assert w.run_actions.speed_combo.currentData() == "pause"
     w.action(Act.RESET_CONTROLLER).trigger()
     assert conn.calls[-1] == ("reset",)
 
@@ -569,21 +569,38 @@ def test_upload_builds_first(runwin, qtbot, project):
     assert data == (project / "build" / "eeprom.rom").read_bytes()
 
 
+def test_a_build_alone_does_not_upload(runwin, qtbot, project):
+    from plcbuilder.ide.run_actions import Step
+    w, conn = runwin
+    with qtbot.waitSignal(w.sig_build_finished, timeout=20000):
+        assert w.build_all()
+        assert w.run_actions.step is Step.BUILD
+    assert w.run_actions.step is Step.IDLE
+    assert not any(c[0] == "upload" for c in conn.calls)
+    from dataclasses import replace
+    w.apply_preferences(replace(w.prefs, build_before_upload=True))
+    with qtbot.waitSignal(w.sig_build_finished, timeout=20000):
+        assert w.upload()
+        assert w.run_actions.step is Step.BUILD_THEN_UPLOAD
+    assert w.run_actions.step is Step.IDLE
+    qtbot.waitUntil(lambda: any(c[0] == "upload" for c in conn.calls), timeout=5000)
+
+
 def test_state_goes_to_the_status_bar(runwin, project):
     w, conn = runwin
     conn.connected = True
     conn.sig_connected.emit("127.0.0.1:5555")
-    assert "127.0.0.1:5555" in w.connection_label.text()
+    assert "127.0.0.1:5555" in w.status.connection_label.text()
     conn.sig_state.emit(ControllerStatus(t_ms=12345, running="M03", proc=70,
                                          proc_name="plc_proc_spindle"), 0)
-    assert w.time_label.text() == "t = 12.345 s"
-    assert w.running_label.text() == "▶ M03"
-    assert w.proc_label.text() == "proc 70 plc_proc_spindle"
+    assert w.status.time_label.text() == "t = 12.345 s"
+    assert w.status.running_label.text() == "▶ M03"
+    assert w.status.proc_label.text() == "proc 70 plc_proc_spindle"
     conn.sig_state.emit(ControllerStatus(t_ms=20000, running=None, proc=33), 0)
-    assert w.running_label.text() == "idle"
-    assert w.proc_label.text() == "proc 33 plc_proc_probing"       # named by abi.proc_name
+    assert w.status.running_label.text() == "idle"
+    assert w.status.proc_label.text() == "proc 33 plc_proc_probing"       # named by abi.proc_name
     conn.sig_disconnected.emit("gone")
-    assert "disconnected" in w.connection_label.text()
+    assert "disconnected" in w.status.connection_label.text()
 
 
 def test_run_panels_are_docked_when_part_b_is_there(runwin):
@@ -607,7 +624,7 @@ def test_no_connection_disables_the_run_actions(win, project):
 
 def test_tree_start_uses_last_eparam(runwin):
     w, conn = runwin
-    w._last_eparam = 7
+    w.run_actions.last_eparam = 7
     w.tree.sig_start_procedure.emit("M05")
     assert conn.calls[-1] == ("start", "M05", 7)
 
@@ -644,7 +661,7 @@ def test_hover_and_completion_in_the_window(win, project, qtbot):
     t = ed.hover_text_at(ed.position_of(7, 14))            # MY_PIN
     assert "#define MY_PIN 3" in t and "mine.h:2" in t
     assert "variable of this file" in ed.hover_text_at(ed.position_of(6, 4))
-    names = {n for n, _k in win._complete(ed, "")}
+    names = {n for n, _k in win.lint.complete(ed, "")}
     assert {"MY_PIN", "code", "OUTPUT_SPINDLE", "gvarget", "eparam"} <= names
     from plcbuilder.ide import highlighter as hl
     ed.highlighter.style_to(ed.length())
@@ -676,7 +693,7 @@ def test_tab_menu_drop_and_status(win, project, qtbot):
     a = win.open_file(project / "hardware" / "M03.plc")
     b = win.open_file(project / "hardware" / "M05.plc")
     c = win.open_file(project / "software" / "LOOP.plc")
-    assert win.eol_label.text() == "UTF-8  LF"
+    assert win.status.eol_label.text() == "UTF-8  LF"
     menu = win.tab_menu(win.tabs.indexOf(b))
     acts = {x.objectName(): x for x in menu.actions()}
     acts["copy_path"].trigger()

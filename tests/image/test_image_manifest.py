@@ -59,7 +59,7 @@ def test_deterministic(sample_programs):
 def test_manifest_is_readable_json(sample_programs):
     raw = read_romfs(write_image(sample_programs)).files()["MANIFEST"]
     doc = json.loads(raw)
-    assert doc["format"] == "plcbuilder-image" and doc["version"] == 1
+    assert doc["format"] == "plcbuilder-image" and doc["version"] == 2
     assert doc["limits"] == {"hw_proc": 512, "hw_total": 8192, "sw_proc": 16384}
     m03 = [e for e in doc["procedures"] if e["name"] == "M03"][0]
     assert m03["kind"] == "hardware" and m03["code_size"] == 120 and m03["file"] == "M03.bin"
@@ -143,7 +143,7 @@ def test_manifest_lies_are_refused(sample_programs, make_program):
          "procedure OFF: the manifest lists OFF.bin, the image has no such file"),
         (forge({**files, "M03.bin": files["M05.bin"]}, good), "procedure M03"),
         (forge({**files, "junk": {"x": b"1"}}, good), "unexpected directory 'junk'"),
-        (forge(files, good + [good[0]]), "listed twice"),
+        (forge(files, good[:1] + good), "listed twice"),
         (forge(files, good, volume="other"), "volume name"),
         (forge(files, good, Limits(hw_proc=100)), r"procedure M03 \(hardware\): code is 120 bytes"),
         (forge(files, good, Limits(hw_total=600)), "together are 700 bytes"),
@@ -161,18 +161,20 @@ def test_manifest_lies_are_refused(sample_programs, make_program):
     (b"\xff\xfe", "not UTF-8"),
     (b"{", "not valid JSON"),
     (b"[]", "expected a JSON object"),
-    (b'{"format": "plcbuilder-image", "version": 1, "limits": {}, "procedures": [], "x": 1}',
+    (b'{"format": "plcbuilder-image", "version": 2, "limits": {}, "procedures": [], "x": 1}',
      "unexpected keys"),
     (b'{"format": "other", "version": 1, "limits": {}, "procedures": []}', "format is 'other'"),
-    (b'{"format": "plcbuilder-image", "version": 2, "limits": {}, "procedures": []}',
-     "format version 2"),
+    (b'{"format": "plcbuilder-image", "version": 3, "limits": {}, "procedures": []}',
+     "format version 3"),
+    (b'{"format": "plcbuilder-image", "version": 1, "limits": {}, "procedures": []}',
+     "format version 1, this reader reads version 2"),
     (b'{"format": "plcbuilder-image", "version": 1, "limits": {"hw_proc": NaN, "hw_total": 1,'
      b' "sw_proc": 1}, "procedures": []}', "not valid JSON"),
-    (b'{"format": "plcbuilder-image", "version": 1, "version": 1, "limits": {}, "procedures": []}',
+    (b'{"format": "plcbuilder-image", "version": 2, "version": 2, "limits": {}, "procedures": []}',
      "appears twice"),
-    (b'{"format": "plcbuilder-image", "version": 1, "limits": {"hw_proc": true, "hw_total": 1,'
+    (b'{"format": "plcbuilder-image", "version": 2, "manifest_crc32": "00000000", "limits": {"hw_proc": true, "hw_total": 1,'
      b' "sw_proc": 1}, "procedures": []}', "limits.hw_proc"),
-    (b'{"format": "plcbuilder-image", "version": 1, "limits": {"hw_proc": 1, "hw_total": 1,'
+    (b'{"format": "plcbuilder-image", "version": 2, "manifest_crc32": "00000000", "limits": {"hw_proc": 1, "hw_total": 1,'
      b' "sw_proc": 1}, "procedures": [{"name": "M03"}]}', "procedure M03: missing keys"),
     (b"[" * 100000 + b"]" * 100000, "not valid JSON|more than"),
 ])
@@ -203,3 +205,68 @@ def test_controller_limits_override_the_manifest(make_program):
 def test_read_image_refuses_non_bytes():
     with pytest.raises(ImageError):
         read_image("not bytes")
+
+
+# ------------------------------------------- issue 17.9: the manifest is checked
+
+def test_one_bit_in_the_manifest_limits_is_refused(sample_programs):
+    """17.9: "hw_proc": 512 -> 532 (one bit) was accepted: the limits were
+    covered by no checksum. The manifest's own CRC-32 refuses it now."""
+    files = read_romfs(write_image(sample_programs)).files()
+    raw = files[MANIFEST_NAME]
+    flipped = raw.replace(b'"hw_proc": 512', b'"hw_proc": 532')
+    assert flipped != raw and bin(int.from_bytes(raw, "big") ^ int.from_bytes(flipped, "big")).count("1") == 1
+    with pytest.raises(ImageError, match=r"manifest: its CRC-32 is [0-9a-f]{8}, it says"):
+        read_image(write_romfs({**files, MANIFEST_NAME: flipped}, "plcbuilder"))
+
+
+def test_every_single_bit_flip_of_the_manifest_is_refused(sample_programs):
+    files = read_romfs(write_image(sample_programs)).files()
+    raw = files[MANIFEST_NAME]
+    for bit in range(len(raw) * 8):
+        buf = bytearray(raw)
+        buf[bit // 8] ^= 1 << (bit % 8)
+        with pytest.raises(ImageError):
+            read_image(write_romfs({**files, MANIFEST_NAME: bytes(buf)}, "plcbuilder"))
+
+
+def test_manifest_crc_is_of_its_own_bytes(sample_programs):
+    raw = read_romfs(write_image(sample_programs)).files()[MANIFEST_NAME]
+    own = json.loads(raw)["manifest_crc32"]
+    assert f"{zlib.crc32(raw.replace(own.encode(), b'00000000', 1)):08x}" == own
+
+
+def test_procedures_out_of_name_order_are_refused(sample_programs):
+    """17.9: a manifest listing procedures out of name order was accepted (its
+    text was regenerated in the order it came); only the canonical form is."""
+    files = files_of(sample_programs)
+    good = entries_of(sample_programs)
+    assert read_image(forge(files, good))
+    swapped = [good[1], good[0]] + good[2:]
+    with pytest.raises(ImageError, match="must be in name order"):
+        read_image(forge(files, swapped))
+    with pytest.raises(ImageError, match="must be in name order"):
+        read_image(forge(files, list(reversed(good))))
+
+
+def test_the_documented_maximum_of_procedures_fits(make_program):
+    """17.9: 4,096 procedures is the documented maximum, but the 256 KiB manifest
+    limit refused an image at ~2,200. Now exactly 4,096 (with the longest names)
+    is written and read back, and 4,097 is refused by the writer and the reader."""
+    from plcbuilder.image.manifest import MAX_MANIFEST, MAX_PROCEDURES
+    assert MAX_PROCEDURES == 4096
+    def named(i):
+        name = f"{i:05d}".ljust(64, "p")
+        return name, Kind.SOFTWARE, make_program(name, Kind.SOFTWARE, 3)
+    progs = [named(i) for i in range(4096)]
+    image = write_image(progs)
+    assert len(read_image(image).procedures) == 4096
+    assert len(read_romfs(image).files()[MANIFEST_NAME]) <= MAX_MANIFEST
+    with pytest.raises(ImageError, match="4097 procedures, at most 4096"):
+        write_image(progs + [named(4096)])
+    files = read_romfs(image).files()
+    extra = named(4096)
+    files[extra[0] + ".bin"] = extra[2]
+    entries = entries_of(progs + [extra])
+    with pytest.raises(ImageError, match="manifest lists 4097 procedures, at most 4096"):
+        read_image(forge(files, entries))

@@ -223,3 +223,143 @@ def test_empty_project_builds_an_empty_image(tmp_path):
     p = small_project(tmp_path / "empty", {})
     r = build_project(p)
     assert r.ok and r.image_written and read_image(p.image_path.read_bytes()).procedures == ()
+
+
+# ------------------------------------- links out of the project (issue 17, item 12)
+
+def _linked_project(tmp_path):
+    other = tmp_path / "elsewhere"
+    other.mkdir()
+    (other / "passwd").write_text("root:x:0:0:secret-line:/root:/bin/bash\n")
+    root = tmp_path / "proj"
+    (root / "hardware").mkdir(parents=True)
+    (root / "hardware" / "M03.plc").write_text("main(){ exit(99); };\n")
+    return root, other
+
+
+def test_a_source_linked_out_of_the_project_is_refused_unread(tmp_path):
+    root, other = _linked_project(tmp_path)
+    (root / "hardware" / "M04.plc").symlink_to(other / "passwd")
+    r = build_project(Project.open(root))
+    assert not r.ok and not r.image_written
+    (d,) = r.get("M04").diagnostics
+    assert d.code == "source-outside-project" and str(other / "passwd") in d.message
+    assert d.span is None              # no span: rendering shows none of the file's lines
+    from plcbuilder.diagnostics import render_text
+    assert "secret-line" not in render_text(d, r.source_line)
+    assert r.get("M03").ok
+
+
+def test_a_build_folder_linked_out_of_the_project_is_refused(tmp_path):
+    root, other = _linked_project(tmp_path)
+    (root / "build").symlink_to(other, target_is_directory=True)
+    r = build_project(Project.open(root))
+    assert not r.ok and not r.image_written
+    (d,) = r.diagnostics
+    assert d.code == "build-outside-project" and str(other) in d.message
+    assert sorted(p.name for p in other.iterdir()) == ["passwd"]        # nothing written there
+    assert "outside the project" in r.image_message
+
+# ------------------------------------- issue 17.11: a killed build's temporary files
+
+KILLED_BUILD = """
+import os, sys
+from plcbuilder.project import Project, build_project
+real = os.replace
+def die(src, dst):           # killed between writing a temporary file and renaming it
+    if os.path.basename(dst) == sys.argv[2]:
+        os._exit(9)
+    real(src, dst)
+os.replace = die
+build_project(Project.open(sys.argv[1]), use_cache=False)
+"""
+
+
+@pytest.mark.parametrize("victim", ["M05.bin", "eeprom.rom", CACHE_FILE])
+def test_a_killed_builds_temporary_files_are_removed_next_time(example, victim):
+    import os
+    import subprocess
+    import sys
+    build_project(example)
+    (example.build_dir / victim).unlink()          # so that the build writes it again
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    rc = subprocess.run([sys.executable, "-c", KILLED_BUILD, str(example.root), victim],
+                        env=env).returncode
+    assert rc == 9
+    left = [p.name for p in example.build_dir.iterdir() if p.name.endswith(".tmp")]
+    assert len(left) == 1 and left[0].startswith(f".{victim}.")    # what the kill left
+    # files that only look alike are not ours: they stay
+    others = [".M03.bin.tmp", "notes.tmp", ".M03.bin.DEADBEEF.tmp", ".M03.bin.0123abcd.tmp.keep"]
+    for name in others:
+        (example.build_dir / name).write_text("mine")
+    (example.build_dir / ".dir.0123abcd.tmp").mkdir()
+    r = build_project(example)
+    assert r.ok
+    names = {p.name for p in example.build_dir.iterdir()}
+    assert not names & set(left)
+    assert set(others) | {".dir.0123abcd.tmp"} <= names
+
+
+# ------------------------------------------- issue 14.2: parallel, incremental, small
+
+def test_worker_processes_give_the_same_build(example, tmp_path):
+    """Compiling in worker processes gives the same files and the same results."""
+    other = tmp_path / "other"
+    shutil.copytree(example.root, other)
+    serial = build_project(example, jobs=1)
+    parallel = build_project(Project.open(other), jobs=2)
+    assert outputs(example) == outputs(Project.open(other))
+    strip = lambda r: [(p.name, p.kind, p.size, p.crc32, p.binary, [(d.code, d.message) for d in
+                        p.diagnostics]) for p in r.procedures]  # noqa: E731
+    assert strip(serial) == strip(parallel) and parallel.compiled == 12
+
+
+def test_unchanged_rebuild_reads_no_source(example, monkeypatch):
+    import os
+    import pathlib
+    old = 1_600_000_000
+    for p in list(example.root.rglob("*.plc")) + list(example.root.rglob("*.h")):
+        os.utime(p, (old, old))
+    build_project(example)
+    real = pathlib.Path.read_bytes
+
+    def guarded(self):
+        assert self.suffix not in (".plc", ".h", ".bin"), f"read {self}"
+        return real(self)
+    monkeypatch.setattr(pathlib.Path, "read_bytes", guarded)
+    from plcbuilder.project import build as build_module
+    real_bounded = build_module.read_bounded
+
+    def guarded_bounded(path, *args, **kw):
+        assert pathlib.Path(path).suffix not in (".plc", ".h", ".bin"), f"read {path}"
+        return real_bounded(path, *args, **kw)
+    monkeypatch.setattr(build_module, "read_bounded", guarded_bounded)
+    r = build_project(example)
+    assert (r.compiled, r.reused) == (0, 12) and r.ok and "up to date" in r.image_message
+
+
+def test_a_same_size_edit_within_the_timestamp_is_seen(example):
+    """A file modified just before a build is read again by the next one, even
+    when its size and modification time did not change (racy timestamps)."""
+    import os
+    build_project(example)
+    m03 = example.hardware_dir / "M03.plc"
+    st = m03.stat()
+    text = m03.read_text()
+    m03.write_text(text.replace("exit(", "exit( ", 1).replace("  ", " ", 1))
+    assert m03.stat().st_size == st.st_size
+    os.utime(m03, ns=(st.st_atime_ns, st.st_mtime_ns))
+    r = build_project(example)
+    assert r.compiled == 1 and not r.get("M03").cached
+
+
+def test_results_keep_only_what_the_report_needs(example):
+    import pickle
+    m05 = example.hardware_dir / "M05.plc"
+    m05.write_text(m05.read_text().replace("pwm01=0;", "pwm01=0; unused=3;"))
+    r = build_project(example)
+    pb = r.get("M05")
+    assert pb.diagnostics and all((d.span.file, d.span.line) in pb.lines for d in pb.diagnostics)
+    assert "unused=3" in r.source_line(pb.diagnostics[0].span.file, pb.diagnostics[0].span.line)
+    assert not hasattr(pb, "_source_line")             # no CompileResult held
+    assert len(pickle.dumps(r.procedures)) < 1500 * len(r.procedures)

@@ -120,3 +120,22 @@ def test_procedures_are_listed_by_kind_and_name(tmp_path):
     assert p.procedure("M99") is None
     assert p.include_dirs() == (tmp_path / "include",)
     assert p.new_procedure_path("M04", Kind.HARDWARE) == tmp_path / "hardware" / "M04.plc"
+
+
+def test_build_include_setting(tmp_path):
+    from plcbuilder.project.model import ProjectError, Settings, parse_settings
+    s = parse_settings('[build]\ninclude = ["../shared", "/opt/h"]\n')
+    assert s.include == ("../shared", "/opt/h")
+    assert parse_settings(s.to_toml()) == s
+    assert parse_settings(Settings().to_toml()).include == ()
+    for bad in ('[build]\ninclude = "x"\n', '[build]\ninclude = [1]\n',
+                '[build]\ninclude = [""]\n'):
+        with pytest.raises(ProjectError) as ei:
+            parse_settings(bad)
+        assert ei.value.key == "build.include" and ei.value.line == 2
+    (tmp_path / "include").mkdir()
+    (tmp_path / "shared").mkdir()
+    (tmp_path / "plcbuilder.toml").write_text('[build]\ninclude = ["shared", "missing"]\n')
+    p = Project.open(tmp_path)
+    assert p.include_dirs() == (tmp_path / "include", tmp_path / "shared")
+    assert p.compile_options(tmp_path / "hardware" / "M03.plc").root == tmp_path

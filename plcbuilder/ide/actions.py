@@ -1,0 +1,293 @@
+"""The main window's actions, menus and toolbar.
+
+Actions are named by :class:`Act` (``window.action(Act.BUILD_ALL)``); the
+functions here make them for a :class:`~plcbuilder.ide.main_window.MainWindow`,
+put them in the menus and the toolbar, and enable them for the window's state.
+"""
+
+from __future__ import annotations
+
+from PySide6.QtCore import QSize, Qt
+from PySide6.QtGui import QAction, QKeySequence
+from PySide6.QtWidgets import QDockWidget, QLabel, QToolBar
+
+from plcbuilder.api import Kind
+from plcbuilder.ide.icons import icon
+
+
+class Act:
+    """Names of the window's actions (``window.action(Act.BUILD_ALL)``)."""
+    NEW_PROCEDURE = "new_procedure"
+    NEW_HEADER = "new_header"
+    OPEN_PROJECT = "open_project"
+    OPEN_EXAMPLE = "open_example"
+    CLOSE_PROJECT = "close_project"
+    SAVE = "save"
+    SAVE_ALL = "save_all"
+    REVERT = "revert"
+    CLOSE_EDITOR = "close_editor"
+    CLOSE_ALL = "close_all"
+    PREFERENCES = "preferences"
+    QUIT = "quit"
+    UNDO = "undo"
+    REDO = "redo"
+    CUT = "cut"
+    COPY = "copy"
+    PASTE = "paste"
+    SELECT_ALL = "select_all"
+    TOGGLE_COMMENT = "toggle_comment"
+    FIND = "find"
+    REPLACE = "replace"
+    FIND_NEXT = "find_next"
+    FIND_PREVIOUS = "find_previous"
+    GOTO_LINE = "goto_line"
+    GOTO_DEFINITION = "goto_definition"
+    COMPLETE = "complete"
+    ZOOM_IN = "zoom_in"
+    ZOOM_OUT = "zoom_out"
+    ZOOM_RESET = "zoom_reset"
+    NEXT_TAB = "next_tab"
+    PREVIOUS_TAB = "previous_tab"
+    RESET_LAYOUT = "reset_layout"
+    BUILD_ALL = "build_all"
+    UPLOAD = "upload"
+    START = "start"
+    START_CURRENT = "start_current"
+    STOP = "stop"
+    RESET_CONTROLLER = "reset_controller"
+    CONNECT = "connect"
+    EMBEDDED = "embedded"
+    ABOUT = "about"
+
+
+def add_action(win, actions: dict, name, text, slot=None, shortcut=None, ic=None, tip=None,
+                editor_scope=False, checkable=False) -> QAction:
+    act = QAction(text, win)
+    act.setObjectName(name)
+    if ic:
+        act.setIcon(icon(ic))
+    if shortcut:
+        act.setShortcuts(shortcut if isinstance(shortcut, list) else [QKeySequence(shortcut)])
+    if tip:
+        act.setStatusTip(tip)
+        act.setToolTip(f"{tip} ({act.shortcut().toString(QKeySequence.SequenceFormat.NativeText)})"
+                       if shortcut else tip)
+    act.setCheckable(checkable)
+    if slot is not None:
+        act.triggered.connect(lambda _checked=False: slot())
+    if editor_scope:
+        act.setShortcutContext(Qt.ShortcutContext.WidgetWithChildrenShortcut)
+        win.stack.addAction(act)
+    else:
+        win.addAction(act)
+    actions[name] = act
+    return act
+
+
+def build_actions(win) -> dict[str, QAction]:
+    """The window's actions, by name (:class:`Act`)."""
+    actions: dict[str, QAction] = {}
+    K = QKeySequence.StandardKey
+
+    def A(*args, **kw):
+        return add_action(win, actions, *args, **kw)
+
+    def ed(fn):
+        return with_editor(win, fn)
+
+    A(Act.NEW_PROCEDURE, "&New Procedure…", lambda: win.tree.new_procedure(Kind.HARDWARE),
+      "Ctrl+N", "new", "Create a procedure")
+    A(Act.NEW_HEADER, "New &Header…", win.tree.new_header, None, "file-header",
+      "Create a header in include/")
+    A(Act.OPEN_PROJECT, "&Open Project…", win.open_project_dialog, "Ctrl+Shift+O", "open",
+      "Open a project folder")
+    A(Act.OPEN_EXAMPLE, "Open &Example Project…", win.open_example_project, None, "example",
+      "Make a copy of the example project and open it")
+    A(Act.CLOSE_PROJECT, "Close Project", win.close_project)
+    A(Act.SAVE, "&Save", win.save_editor, "Ctrl+S", "save", "Save the file")
+    A(Act.SAVE_ALL, "Save A&ll", win.save_all, "Ctrl+Shift+S", "save-all", "Save every file")
+    A(Act.REVERT, "&Revert to Saved", win.revert_editor)
+    A(Act.CLOSE_EDITOR, "&Close Editor", win.close_editor, "Ctrl+W")
+    A(Act.CLOSE_ALL, "Close All Editors", lambda: win.editor_stack.close_all(), "Ctrl+Shift+W")
+    A(Act.PREFERENCES, "&Preferences…", win.edit_preferences, "Ctrl+,")
+    A(Act.QUIT, "&Quit", win.close, "Ctrl+Q")
+    A(Act.UNDO, "&Undo", ed(lambda e: e.undo()), K.Undo, editor_scope=True)
+    A(Act.REDO, "&Redo", ed(lambda e: e.redo()), [QKeySequence("Ctrl+Y"),
+                                                 QKeySequence("Ctrl+Shift+Z")], editor_scope=True)
+    A(Act.CUT, "Cu&t", ed(lambda e: e.cut()), K.Cut, editor_scope=True)
+    A(Act.COPY, "&Copy", ed(lambda e: e.copy()), K.Copy, editor_scope=True)
+    A(Act.PASTE, "&Paste", ed(lambda e: e.paste()), K.Paste, editor_scope=True)
+    A(Act.SELECT_ALL, "Select &All", ed(lambda e: e.selectAll()), K.SelectAll,
+      editor_scope=True)
+    A(Act.TOGGLE_COMMENT, "Toggle &Comment", ed(lambda e: e.toggle_comment()), "Ctrl+/",
+      "comment", "Comment or uncomment the selected lines", editor_scope=True)
+    A(Act.FIND, "&Find…", lambda: win.show_find(False), "Ctrl+F", "find", "Find in the file")
+    A(Act.REPLACE, "R&eplace…", lambda: win.show_find(True), "Ctrl+H", None,
+      "Find and replace in the file")
+    A(Act.FIND_NEXT, "Find &Next", win.find_bar.find_next, "F3")
+    A(Act.FIND_PREVIOUS, "Find Pre&vious", win.find_bar.find_previous, "Shift+F3")
+    A(Act.GOTO_LINE, "&Go to Line…", win.goto_line_dialog, "Ctrl+G", "goto",
+      "Go to a line of the file")
+    A(Act.GOTO_DEFINITION, "Go to &Definition", ed(lambda e: win.goto_definition(
+        e.word_under_caret())), "F12", None, "Go to where the name under the caret is defined",
+      editor_scope=True)
+    A(Act.COMPLETE, "Complete", ed(lambda e: e.show_completions(explicit=True)), "Ctrl+Space",
+      editor_scope=True)
+    A(Act.ZOOM_IN, "Zoom &In", ed(lambda e: e.zoomIn()), [QKeySequence("Ctrl++"),
+                                                       QKeySequence("Ctrl+=")])
+    A(Act.ZOOM_OUT, "Zoom &Out", ed(lambda e: e.zoomOut()), "Ctrl+-")
+    A(Act.ZOOM_RESET, "Reset Zoom", ed(lambda e: e.setZoom(0)), "Ctrl+0")
+    A(Act.NEXT_TAB, "Next Editor", lambda: win.editor_stack.cycle_tab(1), "Ctrl+PgDown")
+    A(Act.PREVIOUS_TAB, "Previous Editor", lambda: win.editor_stack.cycle_tab(-1), "Ctrl+PgUp")
+    A(Act.RESET_LAYOUT, "Reset Layout", win.reset_layout)
+    A(Act.BUILD_ALL, "&Build All", win.build_all, "Ctrl+B", "build",
+      "Compile every procedure and write build/eeprom.rom")
+    A(Act.UPLOAD, "&Upload", win.upload, "Ctrl+U", "upload",
+      "Upload build/eeprom.rom to the controller")
+    A(Act.START, "&Start…", win.start_procedure, "F5", "start",
+      "Start a procedure on the controller (by name or M-code, with eparam)")
+    A(Act.START_CURRENT, "Start &This Procedure", win.run_actions.start_current, "Ctrl+F5", None,
+      "Start the procedure of the current editor with the last eparam")
+    A(Act.STOP, "S&top", win.stop, "Shift+F5", "stop",
+      "Stop: the first press starts M02, the second OFF")
+    A(Act.RESET_CONTROLLER, "&Reset Controller", win.run_actions.reset_controller, None, "reset",
+      "A fresh controller with the same image (time starts again at 0)")
+    A(Act.CONNECT, "&Connect to Controller…", win.connect_dialog, None, "connect",
+      "Connect to a running plcbuilder controller")
+    A(Act.EMBEDDED, "Use the &Embedded Controller", win.run_actions.use_embedded, None, "controller",
+      "Run the simulated controller as a child process of the IDE")
+    A(Act.ABOUT, "&About PLC Builder", win.about)
+    context = [actions[a] for a in (Act.TOGGLE_COMMENT, Act.GOTO_DEFINITION)] + \
+        [None] + [actions[a] for a in (Act.FIND, Act.GOTO_LINE)]
+    win.editor_stack.context_actions = context
+    return actions
+
+
+def build_menus(win) -> None:
+    mb = win.menuBar()
+    a = win.action
+    m = mb.addMenu("&File")
+    for name in (Act.NEW_PROCEDURE, Act.NEW_HEADER, None, Act.OPEN_PROJECT, Act.OPEN_EXAMPLE):
+        m.addAction(a(name)) if name else m.addSeparator()
+    win.recent_menu = m.addMenu("Recent &Projects")
+    m.addAction(a(Act.CLOSE_PROJECT))
+    m.addSeparator()
+    for name in (Act.SAVE, Act.SAVE_ALL, Act.REVERT, None, Act.CLOSE_EDITOR, Act.CLOSE_ALL,
+                 None, Act.PREFERENCES, None, Act.QUIT):
+        m.addAction(a(name)) if name else m.addSeparator()
+    m = mb.addMenu("&Edit")
+    for name in (Act.UNDO, Act.REDO, None, Act.CUT, Act.COPY, Act.PASTE, Act.SELECT_ALL, None,
+                 Act.TOGGLE_COMMENT, Act.COMPLETE, None, Act.FIND, Act.REPLACE, Act.FIND_NEXT,
+                 Act.FIND_PREVIOUS, None, Act.GOTO_LINE, Act.GOTO_DEFINITION):
+        m.addAction(a(name)) if name else m.addSeparator()
+    win.view_menu = mb.addMenu("&View")
+    m = mb.addMenu("&Build")
+    for name in (Act.BUILD_ALL, Act.UPLOAD):
+        m.addAction(a(name))
+    m = mb.addMenu("&Run")
+    for name in (Act.START, Act.START_CURRENT, Act.STOP):
+        m.addAction(a(name))
+    m.addSeparator()
+    speed = m.addMenu(icon("speed"), "Simulation &Speed")
+    for act in win.run_actions.speed_actions.values():
+        speed.addAction(act)
+    m.addAction(a(Act.RESET_CONTROLLER))
+    m.addSeparator()
+    m.addAction(a(Act.CONNECT))
+    m.addAction(a(Act.EMBEDDED))
+    m = mb.addMenu("&Help")
+    m.addAction(a(Act.ABOUT))
+    fill_recent_menu(win)
+
+
+def fill_view_menu(win) -> None:
+    m = win.view_menu
+    m.clear()
+    for dock in win.findChildren(QDockWidget):
+        if dock.parent() is win:
+            m.addAction(dock.toggleViewAction())
+    m.addSeparator()
+    m.addAction(win.toolbar.toggleViewAction())
+    m.addSeparator()
+    for name in (Act.ZOOM_IN, Act.ZOOM_OUT, Act.ZOOM_RESET, None, Act.NEXT_TAB,
+                 Act.PREVIOUS_TAB, None, Act.RESET_LAYOUT):
+        m.addAction(win.action(name)) if name else m.addSeparator()
+
+
+def fill_recent_menu(win) -> None:
+    m = win.recent_menu
+    m.clear()
+    recent = win.settings.recent_projects()
+    for path in recent:
+        act = m.addAction(icon("project"), path)
+        act.triggered.connect(lambda _c=False, p=path: win.open_project(p))
+    if recent:
+        m.addSeparator()
+        m.addAction("Clear List", lambda: clear_recent(win))
+    else:
+        act = m.addAction("(none yet)")
+        act.setEnabled(False)
+    win.welcome.set_recent(recent)
+
+
+def clear_recent(win) -> None:
+    win.settings.clear_recent_projects()
+    fill_recent_menu(win)
+
+
+def build_toolbar(win) -> None:
+    tb = QToolBar("Main Toolbar", win)
+    tb.setObjectName("mainToolbar")
+    tb.setIconSize(QSize(20, 20))
+    tb.setMovable(False)
+    tb.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextBesideIcon)
+    for name in (Act.NEW_PROCEDURE, Act.SAVE, Act.SAVE_ALL):
+        tb.addAction(win.action(name))
+        tb.widgetForAction(win.action(name)).setToolButtonStyle(
+            Qt.ToolButtonStyle.ToolButtonIconOnly)
+    tb.addSeparator()
+    tb.addAction(win.action(Act.BUILD_ALL))
+    tb.addAction(win.action(Act.UPLOAD))
+    tb.addSeparator()
+    tb.addAction(win.action(Act.START))
+    tb.addAction(win.action(Act.STOP))
+    tb.addSeparator()
+    lab = QLabel(" Speed ", tb)
+    lab.setPixmap(icon("speed").pixmap(16, 16))
+    tb.addWidget(lab)
+    tb.addWidget(win.run_actions.make_speed_combo(tb))
+    win.toolbar = tb
+    win.addToolBar(Qt.ToolBarArea.TopToolBarArea, tb)
+
+
+def with_editor(win, fn):
+    def run():
+        ed = win.current_editor()
+        if ed is not None:
+            fn(ed)
+    return run
+
+
+def update_actions(win) -> None:
+    has_project = win.project is not None
+    ed = win.current_editor()
+    has_editor = ed is not None
+    for name in (Act.NEW_PROCEDURE, Act.NEW_HEADER, Act.CLOSE_PROJECT):
+        win.action(name).setEnabled(has_project)
+    win.action(Act.BUILD_ALL).setEnabled(has_project and not win.run_actions.building())
+    for name in (Act.SAVE, Act.REVERT, Act.CLOSE_EDITOR, Act.CLOSE_ALL, Act.FIND,
+                 Act.REPLACE, Act.GOTO_LINE, Act.TOGGLE_COMMENT, Act.GOTO_DEFINITION):
+        win.action(name).setEnabled(has_editor)
+    if has_editor and ed.builtin:
+        win.action(Act.SAVE).setEnabled(False)
+        win.action(Act.TOGGLE_COMMENT).setEnabled(False)
+    run = win.connection is not None and has_project
+    for name in (Act.UPLOAD, Act.START, Act.START_CURRENT, Act.STOP, Act.RESET_CONTROLLER):
+        win.action(name).setEnabled(run)
+    for name in (Act.CONNECT, Act.EMBEDDED):
+        win.action(name).setEnabled(win.connection is not None)
+    win.run_actions.speed_combo.setEnabled(win.connection is not None)
+    if win.connection is None:
+        tip = "The run side (controller connection) is not available"
+        for name in (Act.UPLOAD, Act.START, Act.STOP):
+            win.action(name).setToolTip(tip)

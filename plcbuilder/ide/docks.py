@@ -1,0 +1,97 @@
+"""The main window's docks: where they go, their default sizes, the saved layout.
+
+Left: the project; bottom: Problems, Build Output and the run log (tabbed);
+right: the plots (tabbed) over inputs and watch (tabbed).
+"""
+
+from __future__ import annotations
+
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import QDockWidget
+
+
+def build_docks(win) -> None:
+    """The project (left), Problems and Build Output (bottom, tabbed)."""
+    win.project_dock = make_dock(win, "Project", "projectDock", win.tree,
+                                 Qt.DockWidgetArea.LeftDockWidgetArea)
+    win.problems_dock = make_dock(win, "Problems", "problemsDock", win.problems,
+                                  Qt.DockWidgetArea.BottomDockWidgetArea)
+    win.build_dock = make_dock(win, "Build Output", "buildDock", win.build_panel,
+                               Qt.DockWidgetArea.BottomDockWidgetArea)
+    win.tabifyDockWidget(win.problems_dock, win.build_dock)
+    win.problems_dock.raise_()
+    win.resizeDocks([win.project_dock], [250], Qt.Orientation.Horizontal)
+    win.resizeDocks([win.problems_dock], [200], Qt.Orientation.Vertical)
+
+
+def make_dock(win, title, name, widget, area) -> QDockWidget:
+    dock = QDockWidget(title, win)
+    dock.setObjectName(name)
+    dock.setWidget(widget)
+    dock.setFeatures(QDockWidget.DockWidgetFeature.DockWidgetClosable |
+                     QDockWidget.DockWidgetFeature.DockWidgetMovable |
+                     QDockWidget.DockWidgetFeature.DockWidgetFloatable)
+    win.addDockWidget(area, dock)
+    return dock
+
+
+def place_run_docks(win, docks: list) -> None:
+    """Right: the plots (tabbed) over inputs and watch (tabbed); the run log
+    beside Problems and Build Output at the bottom."""
+    by_name = {d.objectName(): d for d in docks}
+    right = [by_name[n] for n in ("runOutputsDock", "runProcDock", "runAnalogDock",
+                                  "runAxesDock") if n in by_name]
+    lower = [by_name[n] for n in ("runInputsDock", "runWatchDock") if n in by_name]
+    log = by_name.get("runLogDock")
+    placed = set(right) | set(lower) | ({log} if log else set())
+    area = Qt.DockWidgetArea.RightDockWidgetArea
+    if right:
+        win.addDockWidget(area, right[0])
+    if lower:
+        if right:
+            win.splitDockWidget(right[0], lower[0], Qt.Orientation.Vertical)
+        else:
+            win.addDockWidget(area, lower[0])
+    for d in right[1:]:
+        win.tabifyDockWidget(right[0], d)
+    for d in lower[1:]:
+        win.tabifyDockWidget(lower[0], d)
+    if log is not None:
+        win.tabifyDockWidget(win.build_dock, log)
+    for d in docks:
+        if d not in placed:
+            win.addDockWidget(area, d)
+    for d in (right[:1] + lower[:1]):
+        d.raise_()
+    win.problems_dock.raise_()
+    win.right_docks = right[:1] + lower[:1]
+
+
+def restore_layout(win) -> None:
+    geom, state = win.settings.window_state()
+    if geom is not None:
+        win.restoreGeometry(geom)
+    win.layout_restored = state is not None and win.restoreState(state)
+
+
+def default_dock_sizes(win) -> None:
+    """Sizes for the default layout (they only apply once the window is shown)."""
+    w = max(win.width(), 800)
+    win.resizeDocks([win.project_dock], [230], Qt.Orientation.Horizontal)
+    if win.right_docks:
+        win.resizeDocks(win.right_docks[:1], [int(w * 0.32)], Qt.Orientation.Horizontal)
+        if len(win.right_docks) > 1:
+            h = max(win.height() - 200, 400)
+            win.resizeDocks(win.right_docks, [int(h * 0.62), int(h * 0.38)],
+                             Qt.Orientation.Vertical)
+    win.resizeDocks([win.problems_dock], [max(190, int(win.height() * 0.24))],
+                     Qt.Orientation.Vertical)
+
+
+def reset_layout(win) -> None:
+    win.restoreState(win.default_state)
+    for dock in win.findChildren(QDockWidget):
+        if dock.parent() is win:
+            dock.show()
+    win.problems_dock.raise_()
+    default_dock_sizes(win)

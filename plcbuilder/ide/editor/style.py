@@ -1,0 +1,127 @@
+"""The editor's marks and looks: indicators, markers, margins, the images of
+margin markers and completion kinds, and the preferences every editor follows."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from PySide6.QtCore import Qt
+from PySide6.QtGui import QColor, QFont, QFontDatabase, QImage, QPainter
+from pyside6_scintilla import Scintilla
+
+M = Scintilla.Message
+
+# indicators (0..7 belong to lexers; containers use 8 and up)
+IND_ERROR = 8
+IND_WARNING = 9
+IND_FIND = 10
+IND_OCCURRENCE = 11
+# markers
+MK_ERROR = 0
+MK_WARNING = 1
+MK_CURRENT = 2          # a line being jumped to (briefly)
+# margins
+MARGIN_NUMBERS = 0
+MARGIN_SYMBOLS = 1
+MARGIN_FOLD = 2
+
+SC_MOD_INSERTTEXT = 0x1
+SC_MOD_DELETETEXT = 0x2
+SC_UPDATE_CONTENT = 0x1
+SC_UPDATE_SELECTION = 0x2
+SC_MASK_FOLDERS = 0xFE000000
+
+FIND_MATCHCASE = 0x4
+FIND_WHOLEWORD = 0x2
+FIND_REGEXP = 0x00200000
+FIND_CXX11REGEX = 0x00800000
+
+COMMENT_PREFIX = "//"
+BRACES = "(){}"
+BRACE_BYTES = frozenset(BRACES.encode())
+WORD_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+#: completion item kinds, shown with an image in the list
+KIND_FUNCTION = 1
+KIND_VARIABLE = 2
+KIND_PREDEFINED = 3
+KIND_CONSTANT = 4
+KIND_DEFINE = 5
+KIND_KEYWORD = 6
+KIND_PROCEDURE = 7
+KIND_LOOK = {  # letter, colour
+    KIND_FUNCTION: ("f", "#7a3e9d"), KIND_VARIABLE: ("v", "#1f6feb"),
+    KIND_PREDEFINED: ("v", "#00838f"), KIND_CONSTANT: ("c", "#b35900"),
+    KIND_DEFINE: ("#", "#2e7d32"), KIND_KEYWORD: ("k", "#5c5c5c"),
+    KIND_PROCEDURE: ("p", "#00627a"),
+}
+
+
+@dataclass(frozen=True)
+class EditorPrefs:
+    """What the Preferences dialog changes in every editor."""
+    font_family: str = ""
+    font_size: int = 11
+    tab_width: int = 4
+    theme: str = "light"
+    show_whitespace: bool = False
+    indent_guides: bool = True
+    autocomplete: bool = True
+    autocomplete_threshold: int = 2
+    hover: bool = True
+
+
+def default_font_family() -> str:
+    family = QFontDatabase.systemFont(QFontDatabase.SystemFont.FixedFont).family()
+    return family or "DejaVu Sans Mono"
+
+
+def rgba_image(letter: str, colour: str, size: int = 14) -> bytes:
+    img = QImage(size, size, QImage.Format.Format_RGBA8888)
+    img.fill(Qt.GlobalColor.transparent)
+    p = QPainter(img)
+    p.setRenderHint(QPainter.RenderHint.Antialiasing)
+    p.setPen(Qt.PenStyle.NoPen)
+    p.setBrush(QColor(colour))
+    p.drawRoundedRect(1, 1, size - 2, size - 2, 3, 3)
+    f = QFont(default_font_family())
+    f.setPixelSize(size - 4)
+    f.setBold(True)
+    p.setFont(f)
+    p.setPen(QColor("#ffffff"))
+    p.drawText(img.rect(), Qt.AlignmentFlag.AlignCenter, letter)
+    p.end()
+    return bytes(img.constBits())
+
+
+def marker_image(kind: str, size: int = 14) -> bytes:
+    """An error (red disc with a cross) or warning (amber triangle with !) icon."""
+    img = QImage(size, size, QImage.Format.Format_RGBA8888)
+    img.fill(Qt.GlobalColor.transparent)
+    p = QPainter(img)
+    p.setRenderHint(QPainter.RenderHint.Antialiasing)
+    p.setPen(Qt.PenStyle.NoPen)
+    if kind == "error":
+        p.setBrush(QColor("#e51400"))
+        p.drawEllipse(1, 1, size - 2, size - 2)
+        pen = p.pen()
+        p.setPen(QColor("#ffffff"))
+        m = size * 0.32
+        p.drawLine(int(m), int(m), int(size - m), int(size - m))
+        p.drawLine(int(size - m), int(m), int(m), int(size - m))
+        p.setPen(pen)
+    else:
+        from PySide6.QtCore import QPointF
+        from PySide6.QtGui import QPolygonF
+        p.setBrush(QColor("#e0a000"))
+        p.drawPolygon(QPolygonF([QPointF(size / 2, 1), QPointF(size - 1, size - 1.5),
+                                 QPointF(1, size - 1.5)]))
+        p.setPen(QColor("#000000"))
+        f = QFont(default_font_family())
+        f.setPixelSize(size - 5)
+        f.setBold(True)
+        p.setFont(f)
+        p.drawText(img.rect().adjusted(0, 2, 0, 0), Qt.AlignmentFlag.AlignCenter, "!")
+    p.end()
+    return bytes(img.constBits())

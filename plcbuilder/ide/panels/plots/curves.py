@@ -1,0 +1,86 @@
+"""The analog curves: PWM and DAC outputs, ADC inputs over time."""
+
+from __future__ import annotations
+
+from PySide6 import QtWidgets  # before pyqtgraph (it takes the loaded binding)
+import pyqtgraph as pg  # noqa: E402,I001
+
+from plcbuilder.ide.panels import style
+from plcbuilder.ide.panels.model import ANALOG_NAMES, RunModel
+from plcbuilder.ide.panels.plots.timebase import TimeBase, TimePanel, YFit, center_item, empty_text
+
+
+
+class AnalogPanel(TimePanel):
+    """PWM and DAC outputs, and the ADC inputs, over time: every channel that
+    has been non-zero gets a curve."""
+
+    def __init__(self, model: RunModel, timebase: TimeBase, on_clear=None, parent=None):
+        super().__init__(model, timebase, on_clear, parent)
+        self.widget = style.layout_widget()
+        self.out_plot = self.widget.addPlot(row=0, col=0, axisItems=style.time_axis())
+        style.style_plot(self.out_plot, title="PWM and DAC outputs", left="value",
+                         bottom=None, bottom_units=None)
+        self.in_plot = self.widget.addPlot(row=1, col=0, axisItems=style.time_axis())
+        style.style_plot(self.in_plot, title="ADC inputs", left="counts", bottom="time (s)",
+                         bottom_units=None)
+        for p in (self.out_plot, self.in_plot):
+            self.add_time_plot(p)
+            p.setMouseEnabled(x=True, y=False)
+            p.getAxis("left").setWidth(56)
+        self._fit = (YFit(self.out_plot), YFit(self.in_plot))
+        self.widget.ci.layout.setRowStretchFactor(0, 3)
+        self.widget.ci.layout.setRowStretchFactor(1, 2)
+        self.out_legend = style.legend(self.out_plot, columns=2)
+        self.in_legend = style.legend(self.in_plot, columns=2)
+        self._curves: dict[int, pg.PlotDataItem] = {}
+        self._empty_out = empty_text(self.out_plot, "No PWM or DAC output yet")
+        self._empty_in = empty_text(self.in_plot, "All ADC channels read 0")
+        lay = QtWidgets.QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.setSpacing(0)
+        lay.addWidget(self.toolbar)
+        lay.addWidget(self.widget, 1)
+
+    def channels(self) -> list[int]:
+        return self.model.active_analog()
+
+    def draw(self, a: int, b: int, t0: float, t1: float) -> None:
+        m = self.model
+        for col in self.channels():
+            if col not in self._curves:
+                plot = self.in_plot if col >= 16 else self.out_plot
+                label = ANALOG_NAMES[col]
+                if col < 4:
+                    label += f" (pwm0{col + 1})"
+                elif 8 <= col < 10:
+                    label += f" (dac0{col - 7})"
+                elif 16 <= col < 18:
+                    label += f" (adc0{col - 15})"
+                # PWM and DAC: 16 distinct colours; ADC (its own plot) starts over
+                c = style.colour(col if col < 16 else col - 16)
+                self._curves[col] = style.new_curve(plot, c, label)
+        t = self.x(a, b)
+        outs, ins = [], []
+        for col, item in self._curves.items():
+            y = m.analog.view(col)[a:b]
+            item.setData(t, y)
+            (ins if col >= 16 else outs).append(y)
+        self._fit[0].fit(outs)
+        self._fit[1].fit(ins)
+        has_out = any(c < 16 for c in self._curves)
+        has_in = any(c >= 16 for c in self._curves)
+        self._empty_out.setVisible(not has_out)
+        self._empty_in.setVisible(not has_in)
+        if not has_out:
+            center_item(self._empty_out, self.out_plot)
+        if not has_in:
+            center_item(self._empty_in, self.in_plot)
+
+    def model_cleared(self) -> None:
+        for col, item in self._curves.items():
+            plot = self.in_plot if col >= 16 else self.out_plot
+            plot.removeItem(item)
+        self._curves.clear()
+        for f in self._fit:
+            f.reset()

@@ -1,0 +1,191 @@
+"""The proc plot: the running procedure's state code over time, with its messages."""
+
+from __future__ import annotations
+
+import bisect
+
+import numpy as np
+from PySide6 import QtCore, QtGui, QtWidgets  # before pyqtgraph (it takes the loaded binding)
+import pyqtgraph as pg  # noqa: E402,I001
+
+from plcbuilder.api import abi
+from plcbuilder.ide.panels import style
+from plcbuilder.ide.panels.model import RunModel
+from plcbuilder.ide.panels.tables import RowsModel
+from plcbuilder.ide.panels.plots.timebase import TimeBase, TimePanel, center_item, empty_text
+
+Qt = QtCore.Qt
+
+
+class ProcPanel(TimePanel):
+    """``proc`` as a step plot with its states named on the y axis, message
+    markers with their names, and a decoded message log."""
+
+    MAX_LABELS = 16
+
+    def __init__(self, model: RunModel, timebase: TimeBase, on_clear=None, parent=None):
+        super().__init__(model, timebase, on_clear, parent)
+        self.status = QtWidgets.QLabel("No controller")
+        self.status.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        self.toolbar.extra.addSpacing(12)
+        self.toolbar.extra.addWidget(self.status)
+
+        self.widget = style.plot_widget(style.time_axis())
+        self.plot = self.widget.getPlotItem()
+        style.style_plot(self.plot, left="proc state", bottom="time (s)", bottom_units=None)
+        self.add_time_plot(self.plot)
+        self.plot.setMouseEnabled(x=True, y=False)
+        self.curve = style.new_curve(self.plot, style.PROC_COLOUR, "proc", width=2.0,
+                                     stepMode="right")   # proc holds its value
+        self.markers = pg.ScatterPlotItem(symbol="t", size=10, pen=pg.mkPen("#ffffff", width=1),
+                                          brush=pg.mkBrush(style.MESSAGE_COLOUR))
+        self.markers.setZValue(10)
+        self.plot.addItem(self.markers)
+        self._labels: list[pg.TextItem] = []
+        font = QtGui.QFont()
+        font.setPointSizeF(8)
+        for _ in range(self.MAX_LABELS):
+            t = pg.TextItem("", color=style.MESSAGE_COLOUR, anchor=(0.5, 1.05),
+                            fill=pg.mkBrush(255, 255, 255, 200))
+            t.setFont(font)
+            t.setZValue(11)
+            t.hide()
+            self.plot.addItem(t, ignoreBounds=True)
+            self._labels.append(t)
+        self._ticks: tuple = ()
+        self._tick_labels: list[tuple[int, str]] = []
+        self._empty = empty_text(self.plot, "No samples yet: start a procedure")
+
+        self.messages = RowsModel(["Time (s)", "From", "Message", "Code", "command",
+                                   "parameter", "Meaning"], limit=5000,
+                                  colour=lambda r: style.FAULT_COLOUR if r[3] < 0 else None,
+                                  align_right=(0, 3, 4, 5))
+        self.table = QtWidgets.QTableView()
+        self.table.setModel(self.messages)
+        _setup_log_view(self.table)
+        self.table.setToolTip("Messages the procedures sent (the message variable), by name, "
+                              "with command (var00) and parameter (var01) at the time")
+        for col, width in enumerate((70, 90, 250, 55, 75, 75)):
+            self.table.setColumnWidth(col, width)
+
+        split = QtWidgets.QSplitter(Qt.Orientation.Vertical)
+        split.addWidget(self.widget)
+        split.addWidget(self.table)
+        split.setStretchFactor(0, 3)
+        split.setStretchFactor(1, 1)
+        split.setSizes([300, 130])
+        lay = QtWidgets.QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.setSpacing(0)
+        lay.addWidget(self.toolbar)
+        lay.addWidget(split, 1)
+
+    def add_messages(self, rows) -> None:
+        for m in rows:
+            self.messages.queue((f"{m.t_ms / 1000:.3f}", m.source, m.label, m.code, m.command,
+                                 m.parameter, m.meaning))
+
+    def flush(self) -> None:
+        if self.messages.flush():
+            self.table.scrollToBottom()
+
+    def model_cleared(self) -> None:
+        self.messages.clear()
+
+    def set_status(self, text: str) -> None:
+        self.status.setText(text)
+
+    def y_labels(self) -> list[str]:
+        """The state names on the y axis, lowest value first."""
+        return [label for _, label in self._tick_labels]
+
+    def _update_ticks(self) -> None:
+        values = tuple(sorted(self.model.proc_values))
+        if values == self._ticks:
+            return
+        self._ticks = values
+        labels = []
+        for v in values:
+            name = abi.proc_name(v)
+            labels.append((v, f"{name} ({v})" if name else str(v)))
+        self._tick_labels = labels
+        self.plot.getAxis("left").setTicks([labels, []])
+        lo, hi = min(values), max(values)
+        pad = max(1.0, (hi - lo) * 0.12)
+        # room above the highest state for two rows of message names
+        self.plot.setYRange(lo - pad * 0.4, hi + pad * 2.6, padding=0)
+
+    def draw(self, a: int, b: int, t0: float, t1: float) -> None:
+        m = self.model
+        self._update_ticks()
+        t = self.x(a, b)
+        proc = m.scalars.view(0)[a:b]
+        self.curve.setData(t, proc)
+        self._empty.setVisible(len(m) == 0)
+        if len(m) == 0:
+            center_item(self._empty, self.plot)
+        # messages in view: a marker each, names for the newest that fit
+        i0 = bisect.bisect_left(m.message_times, t0)
+        i1 = bisect.bisect_right(m.message_times, t1)
+        rows = m.messages[i0:i1] if len(t) else []
+        if rows:
+            mt = np.fromiter((r.t_ms * 1e-3 for r in rows), dtype=float, count=len(rows)) \
+                - self.offset
+            idx = np.clip(np.searchsorted(t, mt, side="right") - 1, 0, len(t) - 1)
+            my = proc[idx]
+            self.markers.setData(mt, my)
+        else:
+            mt = my = ()
+            self.markers.setData([], [])
+        vb = self.plot.getViewBox()
+        width_px = max(1.0, vb.width())
+        height_px = max(1.0, vb.height())
+        px_per_s = width_px / max(t1 - t0, 1e-9)
+        (_, _), (y_lo, y_hi) = vb.viewRange()
+        px_per_y = height_px / max(y_hi - y_lo, 1e-9)
+        left_edge = t0 - self.offset
+        line_h = 16.0
+        placed_rects: list[tuple[float, float, float, float]] = []
+        placed = 0
+        for k in range(len(rows) - 1, -1, -1):      # newest first
+            if placed >= self.MAX_LABELS:
+                break
+            text = rows[k].short
+            w = 7 * len(text) + 12
+            x = (mt[k] - left_edge) * px_per_s      # pixels from the left edge
+            y = (y_hi - my[k]) * px_per_y           # pixels from the top
+            # centred on the marker, unless that would cut it at an edge
+            ax = 0.0 if x < w / 2 else (1.0 if width_px - x < w / 2 else 0.5)
+            x0, x1 = x - ax * w, x + (1 - ax) * w
+            for row in (0, 1):
+                anchor_y = 1.7 + 1.05 * row
+                y1 = y - (anchor_y - 1.0) * line_h
+                y0 = y1 - line_h
+                if y0 < 0:
+                    continue
+                if all(x1 <= a or x0 >= b or y1 <= c or y0 >= d
+                       for a, b, c, d in placed_rects):
+                    break
+            else:
+                continue
+            placed_rects.append((x0, x1, y0, y1))
+            lab = self._labels[placed]
+            if lab.toPlainText() != text:
+                lab.setText(text)
+            lab.setAnchor((ax, anchor_y))
+            lab.setPos(mt[k], my[k])
+            lab.show()
+            placed += 1
+        for lab in self._labels[placed:]:
+            lab.hide()
+
+
+def _setup_log_view(view: QtWidgets.QTableView) -> None:
+    view.setAlternatingRowColors(True)
+    view.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectionBehavior.SelectRows)
+    view.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
+    view.verticalHeader().setVisible(False)
+    view.verticalHeader().setDefaultSectionSize(20)
+    view.horizontalHeader().setStretchLastSection(True)
+    view.horizontalHeader().setHighlightSections(False)
+    view.setWordWrap(False)

@@ -1,0 +1,249 @@
+"""What every time plot shares: the time window (:class:`TimeBase`), its toolbar,
+the y-range fit and :class:`TimePanel`, the base of the plots."""
+
+from __future__ import annotations
+
+from typing import Callable, Optional
+
+import numpy as np
+from PySide6 import QtCore, QtWidgets  # before pyqtgraph (it takes the loaded binding)
+import pyqtgraph as pg  # noqa: E402,I001
+
+from plcbuilder.ide.panels import style
+from plcbuilder.ide.panels.model import RunModel
+
+Signal = QtCore.Signal
+
+
+class TimeBase(QtCore.QObject):
+    """The shared time window of every time plot: follow the newest sample
+    over ``window`` seconds (0 = all that is kept), or stay where the user
+    panned to."""
+
+    sig_changed = Signal()
+    """Follow or the window length changed."""
+
+    WINDOWS = (("1 s", 1.0), ("2 s", 2.0), ("5 s", 5.0), ("10 s", 10.0), ("30 s", 30.0),
+               ("60 s", 60.0), ("All", 0.0))
+
+    def __init__(self, window: float = 10.0, parent=None):
+        super().__init__(parent)
+        self.follow = True
+        self.window = float(window)
+
+    def set_follow(self, on: bool) -> None:
+        if bool(on) != self.follow:
+            self.follow = bool(on)
+            self.sig_changed.emit()
+
+    def set_window(self, seconds: float) -> None:
+        self.window = float(seconds)
+        self.follow = True
+        self.sig_changed.emit()
+
+    def span(self, model: RunModel) -> tuple[float, float]:
+        """The followed time range [t0, t1] in seconds."""
+        t = model.time.view()
+        first = float(t[0]) if len(t) else 0.0
+        t1 = model.t_end
+        if self.window > 0:
+            # fill the window from the left, then scroll
+            t0 = max(t1 - self.window, first)
+            t1 = max(t1, t0 + self.window)
+        else:
+            t0 = first
+        if t1 - t0 < 1e-3:
+            t1 = t0 + 1.0
+        return t0, t1
+
+
+class TimeToolbar(QtWidgets.QWidget):
+    """Follow, window length and clear, shared by every time plot."""
+
+    def __init__(self, timebase: TimeBase, on_clear: Optional[Callable[[], None]] = None,
+                 parent=None):
+        super().__init__(parent)
+        self.timebase = timebase
+        lay = QtWidgets.QHBoxLayout(self)
+        lay.setContentsMargins(4, 2, 4, 2)
+        lay.setSpacing(4)
+        self.follow = style.small_button("Follow", "Scroll with the newest sample "
+                                         "(panning or zooming a plot stops following)", True)
+        self.follow.toggled.connect(timebase.set_follow)
+        lay.addWidget(self.follow)
+        self.window = QtWidgets.QComboBox()
+        self.window.setToolTip("How much time the plots show while following")
+        for text, secs in TimeBase.WINDOWS:
+            self.window.addItem(text, secs)
+        self.window.activated.connect(lambda i: timebase.set_window(self.window.itemData(i)))
+        lay.addWidget(QtWidgets.QLabel("Window"))
+        lay.addWidget(self.window)
+        self.extra = QtWidgets.QHBoxLayout()
+        self.extra.setSpacing(4)
+        lay.addLayout(self.extra)
+        lay.addStretch(1)
+        if on_clear is not None:
+            clear = style.small_button("Clear", "Forget the recorded samples and messages")
+            clear.clicked.connect(on_clear)
+            lay.addWidget(clear)
+        timebase.sig_changed.connect(self._sync)
+        self._sync()
+
+    def _sync(self) -> None:
+        self.follow.blockSignals(True)
+        self.follow.setChecked(self.timebase.follow)
+        self.follow.blockSignals(False)
+        for i in range(self.window.count()):
+            if self.window.itemData(i) == self.timebase.window:
+                self.window.setCurrentIndex(i)
+
+
+def _time_axis(plot: pg.PlotItem) -> None:
+    plot.hideButtons()
+    plot.setMenuEnabled(False)
+
+
+class YFit:
+    """Keeps a plot's y range around its data, with hysteresis: the range
+    changes only when data leaves it or fills less than half of it (a range
+    change costs a second paint)."""
+
+    def __init__(self, plot: pg.PlotItem, pad: float = 0.08, minimum: float = 1.0):
+        self.plot = plot
+        self.pad = pad
+        self.minimum = minimum
+        self.range: Optional[tuple[float, float]] = None
+
+    def fit(self, arrays) -> None:
+        lo, hi = np.inf, -np.inf
+        for a in arrays:
+            if len(a):
+                lo = min(lo, float(a.min()))
+                hi = max(hi, float(a.max()))
+        if not np.isfinite(lo):
+            return
+        if hi - lo < self.minimum:
+            mid = (hi + lo) / 2
+            lo, hi = mid - self.minimum / 2, mid + self.minimum / 2
+        cur = self.range
+        if cur is not None and cur[0] <= lo and hi <= cur[1] and \
+                (hi - lo) >= 0.5 * (cur[1] - cur[0]) / (1 + 2 * self.pad):
+            return
+        pad = (hi - lo) * self.pad
+        self.range = (lo - pad, hi + pad)
+        self.plot.setYRange(*self.range, padding=0)
+
+    def reset(self) -> None:
+        self.range = None
+
+
+class TimePanel(QtWidgets.QWidget):
+    """A panel of plots over time, redrawn by :meth:`refresh` from the model.
+
+    The plots' x coordinate is time relative to ``offset`` (the right edge
+    while following), so that following moves the data, not the view; the
+    :class:`~plcbuilder.ide.panels.style.TimeAxis` labels absolute time.
+    """
+
+    def __init__(self, model: RunModel, timebase: TimeBase,
+                 on_clear: Optional[Callable[[], None]] = None, parent=None):
+        super().__init__(parent)
+        self.model = model
+        self.timebase = timebase
+        self.toolbar = TimeToolbar(timebase, on_clear)
+        self._time_plots: list[pg.PlotItem] = []
+        self._time_axes: list[style.TimeAxis] = []
+        self._drawn_version = -1
+        self._epoch = model.epoch
+        self._view_dirty = True
+        self._setting_range = False
+        self._xrange: Optional[tuple[float, float]] = None
+        self.offset = 0.0
+        self.frames = 0
+        timebase.sig_changed.connect(self._mark_dirty)
+
+    # ------------------------------------------------------------- plumbing
+    def add_time_plot(self, plot: pg.PlotItem) -> None:
+        """Make ``plot`` (created with ``style.time_axis()``) follow the time base."""
+        _time_axis(plot)
+        vb = plot.getViewBox()
+        vb.disableAutoRange(axis=pg.ViewBox.XAxis)
+        vb.sigRangeChangedManually.connect(self._user_moved)
+        vb.sigXRangeChanged.connect(self._mark_dirty)
+        if self._time_plots:
+            plot.setXLink(self._time_plots[0])
+        self._time_plots.append(plot)
+        ax = plot.getAxis("bottom")
+        if isinstance(ax, style.TimeAxis):
+            self._time_axes.append(ax)
+
+    def _user_moved(self, mask) -> None:
+        if mask is None or (isinstance(mask, (list, tuple)) and mask and mask[0]):
+            self._xrange = None
+            self.timebase.set_follow(False)
+
+    def _mark_dirty(self, *args) -> None:
+        if not self._setting_range:
+            self._view_dirty = True
+
+    def visible_span(self) -> tuple[float, float]:
+        """The absolute time range [t0, t1] (seconds) the plots show."""
+        if self.timebase.follow or not self._time_plots:
+            return self.timebase.span(self.model)
+        (r0, r1), _ = self._time_plots[0].getViewBox().viewRange()
+        return r0 + self.offset, r1 + self.offset
+
+    def x(self, a: int, b: int) -> np.ndarray:
+        """Sample times [a, b) in the plots' x coordinate."""
+        return self.model.time.view()[a:b] - self.offset
+
+    def refresh(self, force: bool = False) -> bool:
+        """Redraw from the model if anything changed; returns whether it drew."""
+        if not force and self.model.version == self._drawn_version and not self._view_dirty:
+            return False
+        if self.model.epoch != self._epoch:
+            self._epoch = self.model.epoch
+            self.model_cleared()
+        t0, t1 = self.visible_span()
+        if self.timebase.follow and self._time_plots:
+            self.offset = t1
+            rng = (t0 - t1, 0.0)
+            if rng != self._xrange:
+                self._setting_range = True
+                try:
+                    self._time_plots[0].setXRange(*rng, padding=0)
+                finally:
+                    self._setting_range = False
+                self._xrange = rng
+        for ax in self._time_axes:
+            ax.set_offset(self.offset)
+        a, b = self.model.window(t0, t1)
+        self.draw(a, b, t0, t1)
+        self._drawn_version = self.model.version
+        self._view_dirty = False
+        self.frames += 1
+        return True
+
+    def draw(self, a: int, b: int, t0: float, t1: float) -> None:  # pragma: no cover
+        raise NotImplementedError
+
+    def flush(self) -> None:
+        """Move queued table rows into their views (called by the redraw timer)."""
+
+    def model_cleared(self) -> None:
+        """The model forgot its samples (cleared, or the controller started over)."""
+
+    def set_pin_names(self, inputs: dict[int, str], outputs: dict[int, str]) -> None:
+        pass
+
+
+def empty_text(plot: pg.PlotItem, text: str) -> pg.TextItem:
+    item = pg.TextItem(text, color="#8a8a8a", anchor=(0.5, 0.5))
+    item.setZValue(-5)
+    plot.addItem(item, ignoreBounds=True)
+    return item
+
+
+def center_item(item: pg.TextItem, plot: pg.PlotItem) -> None:
+    (x0, x1), (y0, y1) = plot.getViewBox().viewRange()
+    item.setPos((x0 + x1) / 2, (y0 + y1) / 2)

@@ -1,0 +1,297 @@
+"""The run side's actions: Build All, Upload, Start, Stop, the speed, Reset,
+and the controller connection the IDE talks to.
+
+Upload may need a build first; that sequence is a small state machine
+(:class:`Step`): Upload starts a build in the step ``BUILD_THEN_UPLOAD`` and the
+finished build uploads the image only from that step, and only when it succeeded.
+"""
+
+from __future__ import annotations
+
+import enum
+from pathlib import Path
+from typing import Optional
+
+from PySide6.QtCore import QObject, Signal
+from PySide6.QtGui import QAction, QActionGroup
+from PySide6.QtWidgets import QComboBox, QMessageBox
+
+from plcbuilder._support.files import read_bounded
+from plcbuilder.api import Kind
+from plcbuilder.ide import dialogs
+from plcbuilder.ide.build_panel import BuildPanel, BuildRunner
+from plcbuilder.link.protocol import MAX_IMAGE
+
+#: simulation speeds: (label, connection mode)
+SPEEDS = (("1×", "realtime"), ("10×", "10"), ("Max", "max"), ("Pause", "pause"))
+
+
+class Step(enum.Enum):
+    """Where the build → upload sequence is."""
+    IDLE = "idle"                            # no build running
+    BUILD = "build"                          # Build All alone
+    BUILD_THEN_UPLOAD = "build then upload"  # Upload asked for a build first
+
+
+class RunActions(QObject):
+    """Build All, Upload, Start, Stop, the speed and the controller connection."""
+
+    sig_message = Signal(str, int)
+    """A message for the status bar (text, milliseconds to show it; 0: until the next)."""
+
+    sig_build_started = Signal()
+    """Build All started (the Build Output panel shows)."""
+
+    sig_build_ended = Signal()
+    """Build All ended, whatever its result (before sig_build_result and sig_build_finished)."""
+
+    sig_build_result = Signal(object)
+    """Build All gave a BuildResult (not an exception): the problems follow it."""
+
+    sig_build_finished = Signal(object)
+    """Build All finished (the BuildResult, or the exception it raised)."""
+
+    def __init__(self, parent, editors, build_panel: BuildPanel, prefs, *, connection=None,
+                 start_controller: bool = True):
+        super().__init__(parent)
+        self.editors = editors                  # the EditorStack
+        self.build_panel = build_panel
+        self.prefs = prefs
+        self.project = None
+        self.connection = connection
+        self.start_controller = start_controller
+        self.step = Step.IDLE
+        self.last_eparam = 0
+        self.last_start = ""
+        self.build_runner = BuildRunner(self)
+        self.build_runner.sig_progress.connect(self._on_build_progress)
+        self.build_runner.sig_finished.connect(self._on_build_finished)
+        self.speed_group = QActionGroup(self)
+        self.speed_actions: dict[str, QAction] = {}
+        for label, mode in SPEEDS:
+            act = QAction(f"Speed {label}", self)
+            act.setCheckable(True)
+            act.setActionGroup(self.speed_group)
+            act.triggered.connect(lambda _c=False, m=mode: self.set_speed(m))
+            self.speed_actions[mode] = act
+        self.speed_actions["realtime"].setChecked(True)
+        self.speed_combo: Optional[QComboBox] = None
+
+    def make_speed_combo(self, parent) -> QComboBox:
+        """The speed box of the toolbar."""
+        self.speed_combo = QComboBox(parent)
+        self.speed_combo.setToolTip("Simulation speed: real time, 10× real time, as fast as "
+                                    "possible, or paused")
+        for label, mode in SPEEDS:
+            self.speed_combo.addItem(label, mode)
+        self.speed_combo.currentIndexChanged.connect(
+            lambda i: self.set_speed(self.speed_combo.itemData(i)))
+        return self.speed_combo
+
+    # ================================================================ build
+    def build_all(self) -> bool:
+        """Build All (saving first when the preference says so)."""
+        return self._build(Step.BUILD)
+
+    def upload(self) -> bool:
+        """Upload build/eeprom.rom (building first when the preference says so)."""
+        if self.project is None:
+            return False
+        if self.connection is None:
+            self.sig_message.emit("No controller to upload to", 4000)
+            return False
+        stale = self.editors.modified_editors() or not self.project.image_path.exists()
+        if self.prefs.build_before_upload or stale:
+            return self._build(Step.BUILD_THEN_UPLOAD)
+        return self.upload_image()
+
+    def upload_image(self) -> bool:
+        """Upload the image Build All wrote."""
+        if self.project is None or self.connection is None:
+            return False
+        try:
+            data = read_bounded(self.project.image_path, MAX_IMAGE, "controller image")
+        except OSError as exc:
+            QMessageBox.warning(self.parent(), "Upload",
+                                f"Cannot read {self.project.image_path}:\n\n"
+                                f"{exc.strerror or exc}\n\nBuild the project first.")
+            return False
+        self.connection.upload(data)
+        self.sig_message.emit(f"Uploading {self.project.image_path.name} "
+                              f"({len(data)} bytes)…", 5000)
+        return True
+
+    def building(self) -> bool:
+        return self.build_runner.running()
+
+    # ================================================================== run
+    def start_procedure(self, name: Optional[str] = None, eparam: Optional[int] = None) -> bool:
+        """Start a procedure on the controller (asking which, when not given)."""
+        if self.connection is None or self.project is None:
+            self.sig_message.emit("No controller to start a procedure on", 4000)
+            return False
+        if name is None:
+            procs = [(p.name, p.kind) for p in self.project.procedures()
+                     if p.kind is Kind.HARDWARE or p.system]
+            initial = self.last_start
+            ed = self.editors.current_editor()
+            if ed is not None and ed.kind is Kind.HARDWARE:
+                initial = Path(ed.path).stem
+            res = dialogs.StartDialog.get_start(self.parent(), procs, initial, self.last_eparam)
+            if res is None:
+                return False
+            name, eparam = res
+        eparam = self.last_eparam if eparam is None else int(eparam)
+        self.last_start, self.last_eparam = name, eparam
+        self.connection.start(name, eparam)
+        self.sig_message.emit(f"Start {name} (eparam {eparam})", 4000)
+        return True
+
+    def start_current(self) -> None:
+        """Start the current editor's procedure with the last eparam."""
+        ed = self.editors.current_editor()
+        if ed is not None and ed.kind is not None:
+            self.start_procedure(Path(ed.path).stem, self.last_eparam)
+        else:
+            self.start_procedure()
+
+    def stop(self) -> None:
+        """Stop: the first press starts M02, the second OFF (the controller decides)."""
+        if self.connection is not None:
+            self.connection.stop()
+            self.sig_message.emit("Stop", 3000)
+
+    def set_speed(self, mode: str) -> None:
+        for label, m in SPEEDS:
+            if m == mode:
+                i = self.speed_combo.findData(m)
+                if i >= 0 and self.speed_combo.currentIndex() != i:
+                    self.speed_combo.blockSignals(True)
+                    self.speed_combo.setCurrentIndex(i)
+                    self.speed_combo.blockSignals(False)
+                act = self.speed_actions.get(m)
+                if act is not None:
+                    act.setChecked(True)
+        if self.connection is not None:
+            self.connection.set_speed(mode)
+
+    def reset_controller(self) -> None:
+        if self.connection is not None:
+            self.connection.reset()
+
+    # =========================================================== controller
+    def start_controller_for_project(self) -> None:
+        c = self.connection
+        if c is None or not self.start_controller or not hasattr(c, "start_embedded"):
+            return
+        p = self.project
+        address = p.settings.controller_address if p is not None else ""
+        if address:
+            self._connect_to_address(address)
+            return
+        c.start_embedded(self.controller_args())
+
+    def controller_args(self) -> list[str]:
+        p = self.project
+        args: list[str] = []
+        if p is None:
+            return args
+        if p.machine_path.is_file():
+            args += ["--machine", str(p.machine_path)]
+        if p.variables_path.is_file():
+            args += ["--variables", str(p.variables_path)]
+        lim = p.limits
+        args += ["--limits", f"{lim.hw_proc},{lim.hw_total},{lim.sw_proc}"]
+        return args
+
+    def connect_dialog(self) -> bool:
+        if self.connection is None:
+            return False
+        host, port, token = "127.0.0.1", 5700, ""
+        try:
+            from plcbuilder.link import runtime
+            ep = runtime.read()
+            host, port, token = ep.host, ep.port, ep.token
+        except Exception:  # noqa: BLE001
+            pass
+        res = dialogs.ConnectDialog.get_address(self.parent(), host, port, token)
+        if res is None:
+            return False
+        host, port, token = res
+        if not token:
+            try:
+                from plcbuilder.link import runtime
+                token = runtime.read().token
+            except Exception:  # noqa: BLE001
+                pass
+        self.connection.connect_to(host, port, token)
+        self.sig_message.emit(f"Connecting to {host}:{port}…", 4000)
+        return True
+
+    def use_embedded(self) -> None:
+        if self.connection is not None and hasattr(self.connection, "start_embedded"):
+            self.connection.start_embedded(self.controller_args())
+
+    def connected(self) -> bool:
+        return bool(getattr(self.connection, "connected", False))
+
+    # ============================================================== private
+    def _build(self, then: Step) -> bool:
+        if self.project is None:
+            self.sig_message.emit("Open a project to build it", 4000)
+            return False
+        if self.build_runner.running():
+            return False
+        if self.prefs.save_before_build and not self.editors.save_all():
+            return False
+        self.build_panel.begin(self.project)
+        self.sig_build_started.emit()
+        self.sig_message.emit("Building…", 0)
+        self.step = then
+        if not self.build_runner.start(self.project):
+            self.step = Step.IDLE
+            return False
+        return True
+
+    def _on_build_progress(self, done: int, total: int, name: str) -> None:
+        self.build_panel.on_progress(done, total, name)
+        if name:
+            self.sig_message.emit(f"Building {done}/{total}: {name}", 0)
+
+    def _on_build_finished(self, result) -> None:
+        self.build_panel.show_result(result, self.build_runner.elapsed)
+        self.sig_build_ended.emit()
+        upload = self.step is Step.BUILD_THEN_UPLOAD
+        self.step = Step.IDLE
+        if isinstance(result, BaseException):
+            self.sig_message.emit(f"Build failed: {result}", 8000)
+            self.sig_build_finished.emit(result)
+            return
+        self.sig_build_result.emit(result)
+        e, w = result.error_count, result.warning_count
+        if result.ok:
+            self.sig_message.emit(f"Build succeeded: {result.image_message}", 8000)
+        else:
+            self.sig_message.emit(f"Build failed: {e} error{'s' * (e != 1)}, "
+                                  f"{w} warning{'s' * (w != 1)}", 8000)
+        self.sig_build_finished.emit(result)
+        if upload and result.ok:
+            self.upload_image()
+
+    def _connect_to_address(self, address: str) -> None:
+        host, _, port = address.rpartition(":")
+        token = ""
+        try:
+            from plcbuilder.link import runtime
+            ep = runtime.read()
+            if str(ep.port) == port:
+                token = ep.token
+        except Exception:  # noqa: BLE001 - no runtime file: ask
+            pass
+        if not token:
+            res = dialogs.ConnectDialog.get_address(self.parent(), host.strip("[]"),
+                                                    int(port or 5700))
+            if res is None:
+                return
+            host, port, token = res
+        self.connection.connect_to(host.strip("[]"), int(port), token)

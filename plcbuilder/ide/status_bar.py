@@ -1,0 +1,109 @@
+"""The window's status bar: problems · connection · sim time · running · proc ·
+size · Ln/Col · encoding."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import QLabel, QStatusBar, QToolButton
+
+from plcbuilder import api
+from plcbuilder.ide.icons import icon
+from plcbuilder.link.client import ControllerStatus
+
+
+class StatusBar(QStatusBar):
+    """Messages on the left, the permanent labels on the right."""
+
+    sig_show_problems = Signal()
+    """The problem counts were clicked (show the Problems panel)."""
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        sb = self
+        sb.setSizeGripEnabled(True)
+
+        def lab(name, tip, min_width=0):
+            w = QLabel(self)
+            w.setObjectName(name)
+            w.setToolTip(tip)
+            w.setContentsMargins(6, 0, 6, 0)
+            if min_width:
+                w.setMinimumWidth(min_width)
+            sb.addPermanentWidget(w)
+            return w
+
+        self.problems_button = QToolButton(self)
+        self.problems_button.setAutoRaise(True)
+        self.problems_button.setToolTip("Errors and warnings (show the Problems panel)")
+        self.problems_button.clicked.connect(self.sig_show_problems)
+        sb.addPermanentWidget(self.problems_button)
+        self.connection_label = lab("connectionLabel", "The controller the IDE talks to")
+        self.time_label = lab("timeLabel", "Simulated time on the controller", 90)
+        self.running_label = lab("runningLabel", "The hardware procedure running", 80)
+        self.proc_label = lab("procLabel", "proc: the running procedure's state code", 100)
+        self.size_label = lab("sizeLabel", "Code size of this procedure against its limit "
+                                           "(from the last compile)", 120)
+        self.cursor_label = lab("cursorLabel", "Line and column of the caret", 110)
+        self.eol_label = lab("eolLabel", "Encoding and line ends of the file (kept on save)")
+        self.show_problem_counts(0, 0)
+        self.set_connection_text("no controller", False)
+
+    def show_problem_counts(self, e: int, w: int) -> None:
+        self.problems_button.setIcon(icon("error" if e else "warning" if w else "ok"))
+        self.problems_button.setText(f" {e} error{'s' * (e != 1)}, {w} warning{'s' * (w != 1)}")
+        self.problems_button.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextBesideIcon)
+
+    def set_connection_text(self, text: str, connected: bool) -> None:
+        self.connection_label.setText(("● " if connected else "○ ") + text)
+        self.connection_label.setStyleSheet("color: #1a7f37;" if connected else "color: #6e7781;")
+
+    def show_connected(self, address: str, embedded: bool) -> None:
+        self.set_connection_text(f"{'embedded ' if embedded else ''}controller {address}", True)
+
+    def show_disconnected(self, reason: str) -> None:
+        self.set_connection_text("disconnected", False)
+        self.connection_label.setToolTip(reason)
+
+    def show_state(self, st: ControllerStatus) -> None:
+        self.time_label.setText(f"t = {st.t_ms / 1000:.3f} s")
+        running = st.running
+        self.running_label.setText(f"▶ {running}" if running else "idle")
+        self.running_label.setStyleSheet("color: #1a7f37; font-weight: 600;" if running else "")
+        name = st.proc_name or api.proc_name(st.proc)
+        self.proc_label.setText(f"proc {st.proc}" + (f" {name}" if name else ""))
+
+    def show_editor(self, ed) -> None:
+        """The caret and the line ends of the current editor (or None)."""
+        if ed is not None:
+            line, col = ed.cursor_line_col()
+            self.show_cursor(line, col)
+            self.eol_label.setText("UTF-8  " + ("CRLF" if ed.eol == "\r\n" else "LF") +
+                                   ("  read-only" if ed.readOnly() else ""))
+        else:
+            self.cursor_label.setText("")
+            self.eol_label.setText("")
+
+    def show_cursor(self, line: int, col: int) -> None:
+        self.cursor_label.setText(f"Ln {line}, Col {col}")
+
+    def show_size(self, path: Optional[str], size: Optional[int] = None,
+                  limit: Optional[int] = None) -> None:
+        """A procedure's code size against its limit (no path: nothing)."""
+        if path is None:
+            self.size_label.setText("")
+            self.size_label.setStyleSheet("")
+            return
+        used = "-" if size is None else str(size)
+        self.size_label.setText(f"{Path(path).stem}: {used}/{limit} bytes")
+        if size is None:
+            style = "color: #9a6700;"
+        elif size > limit:
+            style = "color: #d1242f; font-weight: 600;"
+        elif size > 0.9 * limit:
+            style = "color: #9a6700;"
+        else:
+            style = ""
+        self.size_label.setStyleSheet(style)
