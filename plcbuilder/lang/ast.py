@@ -128,3 +128,45 @@ class ProcDef:
 @dataclass(slots=True, eq=False)
 class Module:
     procs: list[ProcDef] = field(default_factory=list)
+
+
+# -------------------------------------------------------------- moving lines
+_PARTS: dict[type, tuple] = {}
+
+
+def _parts(t: type) -> tuple:
+    """(field name, what it holds) of a node type: 's' a span, 'n' a node or
+    None, 'l' a list of nodes, '' anything else."""
+    parts = _PARTS.get(t)
+    if parts is None:
+        import dataclasses
+        import typing
+        hints = typing.get_type_hints(t)
+        parts = []
+        for f in dataclasses.fields(t):
+            h = hints[f.name]
+            kind = ("" if h in (int, str, bool) else "s" if "Span" in str(h) else
+                    "l" if str(h).startswith("list") else "n")
+            parts.append((f.name, kind))
+        parts = _PARTS[t] = tuple(parts)
+    return parts
+
+
+def moved(node, file: str, lines: int):
+    """A copy of ``node`` (a node, a list of nodes or None) with every span in
+    ``file`` moved ``lines`` lines down: what an unchanged procedure looks like
+    after lines were added (or removed) above it."""
+    if node is None:
+        return None
+    if type(node) is list:
+        return [moved(x, file, lines) for x in node]
+    args = []
+    for name, kind in _parts(type(node)):
+        v = getattr(node, name)
+        if kind == "s":
+            if v is not None and v[0] == file:
+                v = Span(file, v[1] + lines, v[2], v[3] + lines, v[4])
+        elif kind == "n" or kind == "l":
+            v = moved(v, file, lines)
+        args.append(v)
+    return type(node)(*args)

@@ -10,6 +10,7 @@ bytes.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import accumulate
 from typing import Optional
 
 from plcbuilder.bytecode.opcodes import LONG_FORM, Op, Operand, encode, fits, size_of
@@ -27,13 +28,62 @@ ADDRESS_LIMIT = 1 << 16
 JUMP_LIMIT = (1 << 15) - 1
 
 
-def generate(res: Resolved, name: str, kind: Kind, file_namer) -> tuple[Optional[Program], int]:
+def generate(res: Resolved, name: str, kind: Kind, file_namer,
+             cache: Optional["CodeCache"] = None) -> tuple[Optional[Program], int]:
     """(the Program of the procedures ``res.reachable``, main first; its code
     size). The Program is None when the code is too large to address (a CALL
     target at or above ADDRESS_LIMIT, a jump further than a 16-bit offset): the
     size says how large it is. ``file_namer`` maps a span's file to the name
-    stored in the file table."""
-    return Generator(res, name, kind, file_namer).run()
+    stored in the file table. ``cache`` (kept for one file from compile to
+    compile) saves walking the procedures that did not change."""
+    return Generator(res, name, kind, file_namer, cache).run()
+
+
+class CodeCache:
+    """The instructions emitted for each procedure, kept from one compile of a
+    file to the next: a procedure whose tree is the same object as last time
+    (the incremental parser reuses the procedures an edit did not reach) and
+    whose names mean the same (the same variable slots and registers) is not
+    walked again. Procedures not emitted in the last compile are dropped."""
+
+    def __init__(self):
+        self._procs: dict[int, tuple] = {}
+        #: id(procedure) -> (the procedure it is a copy of, the file, moved by how many lines)
+        self.moved: dict = {}
+
+    def get(self, p: A.ProcDef, res: Resolved) -> Optional[tuple[int, int, list]]:
+        got = self._procs.get(id(p))
+        shift = None
+        if got is None or got[0] is not p:
+            was = self.moved.get(id(p))
+            got = self._procs.get(id(was[0])) if was is not None else None
+            if got is None or got[0] is not was[0]:
+                return None
+            shift = was[1:]
+        slots, mapped = res.slots, res.mapped
+        for n, slot, addr in got[4]:
+            if slots.get(n) != slot or mapped.get(n) != addr:
+                return None
+        if shift is not None:           # the same code, its lines moved
+            file, lines = shift
+            items = [_Ins(it.op, it.arg, (file, it.loc[1] + lines) if it.loc[0] == file else it.loc,
+                          it.label, it.proc) if type(it) is not tuple else it for it in got[3]]
+            got = (p, got[1], got[2], items, got[4])
+            self._procs[id(p)] = got
+        return got[1], got[2], got[3]
+
+    def put(self, p: A.ProcDef, base: int, count: int, items: list, names: set, res: Resolved,
+            keep: dict) -> None:
+        slots, mapped = res.slots, res.mapped
+        keep[id(p)] = (p, base, count, items, tuple((n, slots.get(n), mapped.get(n)) for n in names))
+
+    def keep(self, p: A.ProcDef, base: int, items: list, keep: dict) -> None:
+        """Keep a procedure that was reused, its labels now from ``base``."""
+        _p, _base, count, _items, names = self._procs[id(p)]
+        keep[id(p)] = (p, base, count, items, names)
+
+    def replace(self, keep: dict) -> None:
+        self._procs = keep
 
 
 @dataclass
@@ -46,7 +96,8 @@ class _Ins:
 
 
 class Generator:
-    def __init__(self, res: Resolved, name: str, kind: Kind, file_namer):
+    def __init__(self, res: Resolved, name: str, kind: Kind, file_namer,
+                 cache: Optional[CodeCache] = None):
         self.res = res
         self.name = name
         self.kind = kind
@@ -54,6 +105,8 @@ class Generator:
         self.items: list = []           # _Ins or ("label", id)
         self.nlabels = 0
         self.loc = ("", 0)
+        self.cache = cache
+        self.names: Optional[set] = None   # the names the procedure being emitted uses
 
     # --------------------------------------------------------------- emit
     def label(self) -> int:
@@ -88,15 +141,32 @@ class Generator:
     def run(self) -> tuple[Optional[Program], int]:
         proc_labels = {n: self.label() for n in self.res.reachable}
         self.proc_labels = proc_labels
+        cache = self.cache
+        keep: dict = {}
         for n in self.res.reachable:
             p = self.res.procs[n]
             self.place(proc_labels[n])
+            hit = cache.get(p, self.res) if cache is not None else None
+            if hit is not None:             # the same procedure, its names meaning the same
+                base, count, items = hit
+                if base != self.nlabels:
+                    items = _relabel(items, self.nlabels - base)
+                self.items += items
+                cache.keep(p, self.nlabels, items, keep)
+                self.nlabels += count
+                continue
+            start, base = len(self.items), self.nlabels
+            self.names = set() if cache is not None else None
             self.at(p.name_span)
             self.stmt(p.body)
             last = p.body.stmts[-1] if p.body.stmts else None
             if not (type(last) is A.CallStmt and last.call.name == "exit"):
                 self.at(p.body.end_span)
                 self.emit(Op.RET)
+            if cache is not None:
+                cache.put(p, base, self.nlabels - base, self.items[start:], self.names, self.res, keep)
+        if cache is not None:
+            cache.replace(keep)
         return self.assemble()
 
     # --------------------------------------------------------------- statements
@@ -111,6 +181,8 @@ class Generator:
         self.at(s.span)
         if t is A.Assign:
             n = s.target.id
+            if self.names is not None:
+                self.names.add(n)
             if n in self.res.mapped:
                 self.push(self.res.mapped[n])
                 self.expr(s.value)
@@ -120,6 +192,8 @@ class Generator:
                 self.emit(Op.STORE, self.res.slots[n])
         elif t is A.IncDec:
             n = s.target.id
+            if self.names is not None:
+                self.names.add(n)
             if n in self.res.mapped:
                 addr = self.res.mapped[n]
                 self.push(addr)
@@ -261,6 +335,8 @@ class Generator:
             self.expr(e.expr)
         elif t is A.Name:
             n = e.id
+            if self.names is not None:
+                self.names.add(n)
             if n in self.res.mapped:
                 self.push(self.res.mapped[n])
                 self.emit(Op.GVARGET)
@@ -301,27 +377,22 @@ class Generator:
     def assemble(self) -> tuple[Optional[Program], int]:
         items = self.items
         long: set[int] = set()   # indexes of jumps that need the long form
-        while True:
-            offsets: dict[int, int] = {}
-            pos = 0
-            ins_pos: list[int] = []
-            for i, it in enumerate(items):
-                if type(it) is tuple:
-                    offsets[it[1]] = pos
-                    ins_pos.append(pos)
-                    continue
-                ins_pos.append(pos)
-                pos += _size(it, i in long)
-            changed = False
-            for i, it in enumerate(items):
-                if type(it) is tuple or it.label is None or i in long:
-                    continue
-                rel = offsets[it.label] - (ins_pos[i] + 2)
-                if not fits(Operand.REL8, rel):
-                    long.add(i)
-                    changed = True
-            if not changed:
+        sizes = [0 if type(it) is tuple else _size(it, False) for it in items]
+        labels = [(i, it[1]) for i, it in enumerate(items) if type(it) is tuple]
+        short = [(i, it.label) for i, it in enumerate(items)
+                 if type(it) is not tuple and it.label is not None]
+        while True:                # relax: lengthen the jumps that do not reach, until none
+            ins_pos = list(accumulate(sizes, initial=0))
+            pos = ins_pos.pop()
+            offsets = {label: ins_pos[i] for i, label in labels}
+            grown = [(i, label) for i, label in short
+                     if not fits(Operand.REL8, offsets[label] - (ins_pos[i] + 2))]
+            if not grown:
                 break
+            for i, _label in grown:
+                long.add(i)
+                sizes[i] = _size(items[i], True)
+            short = [j for j in short if j[0] not in long]
         if pos > ADDRESS_LIMIT or any(
                 not fits(Operand.REL16, offsets[items[i].label] - (ins_pos[i] + 3)) for i in long):
             return None, pos
@@ -357,6 +428,19 @@ class Generator:
                 code += encode(op, it.arg)
         return Program(self.name, self.kind, bytes(code), 0, list(self.res.user_vars), files, lines,
                        procs), len(code)
+
+
+def _relabel(items: list, by: int) -> list:
+    """A procedure's instructions with its labels renumbered (``by`` more)."""
+    out = []
+    for it in items:
+        if type(it) is tuple:
+            out.append((it[0], it[1] + by))
+        elif it.label is not None:
+            out.append(_Ins(it.op, it.arg, it.loc, it.label + by, it.proc))
+        else:
+            out.append(it)
+    return out
 
 
 def _size(it: _Ins, long: bool) -> int:

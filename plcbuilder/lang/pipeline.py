@@ -22,6 +22,7 @@ from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
 from plcbuilder.lang.checker import Checker, Symbols
 from plcbuilder.lang.codegen import ADDRESS_LIMIT, JUMP_LIMIT, generate
+from plcbuilder.lang.incremental import Incremental
 from plcbuilder.lang.parser import parse_tokens
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocessor
 from plcbuilder.lang.source import SourceSet, decode_source, read_source
@@ -115,14 +116,29 @@ def procedure_name(path: str) -> str:
 
 
 def compile_source(text: str, path: str = "<input>", options: CompileOptions = CompileOptions(),
-                   *, file_path: Optional[Path] = None) -> CompileResult:
+                   *, file_path: Optional[Path] = None,
+                   incremental: Optional[Incremental] = None) -> CompileResult:
     """Compile source text. ``path`` is the name diagnostics use; ``file_path``
-    (when the text is a file's) locates the procedure's folder for #include."""
+    (when the text is a file's) locates the procedure's folder for #include.
+    ``incremental``, kept by the caller for one file from compile to compile,
+    makes the compile of an edited text redo only what the edit changed
+    (:mod:`plcbuilder.lang.incremental`); the result is the same."""
     if file_path is None and not path.startswith("<"):
         p = Path(path)
         file_path = p if p.parent != Path("") or p.exists() else None
-    return _compile(Preprocessor(options.include_dirs, root=options.root), text, path, file_path,
-                    options)
+    if incremental is None:
+        return _compile(Preprocessor(options.include_dirs, root=options.root), text, path,
+                        file_path, options)
+    with incremental.lock:
+        try:
+            return _compile(Preprocessor(options.include_dirs, root=options.root,
+                                         tokens=incremental.tokens),
+                            text, path, file_path, options, incremental)
+        except BaseException:
+            incremental.reset()
+            raise
+        finally:
+            incremental.done()
 
 
 def compile_bytes(data: bytes, path: str, options: CompileOptions = CompileOptions(),
@@ -155,13 +171,15 @@ def _failed(path: str, options: CompileOptions, diags: list[Diagnostic]) -> Comp
 
 
 def _compile(pp: Preprocessor, text: str, path: str, file_path: Optional[Path],
-             options: CompileOptions) -> CompileResult:
+             options: CompileOptions, incremental: Optional[Incremental] = None) -> CompileResult:
     with _recursion_limit():
-        return _compile_preprocessed(pp.run_text(text, path, file_path), path, file_path, options)
+        return _compile_preprocessed(pp.run_text(text, path, file_path), path, file_path, options,
+                                     incremental)
 
 
 def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path],
-                          options: CompileOptions) -> CompileResult:
+                          options: CompileOptions,
+                          incremental: Optional[Incremental] = None) -> CompileResult:
     name = procedure_name(path)
     diags = list(pre.diagnostics)
     if options.strict:
@@ -172,7 +190,10 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
             if word not in ("include", "define"):
                 diags.append(error("strict", f"#{word} is not accepted by the controller's "
                                              "compiler (--strict)", span))
-    module, parse_diags = parse_tokens(pre.tokens)
+    if incremental is None:
+        module, parse_diags = parse_tokens(pre.tokens)
+    else:
+        module, parse_diags = incremental.parse(pre.tokens, path)
     diags += parse_diags
     checker = Checker(module, options.kind, options.strict, path, pre.sources.line,
                       syntax_errors=any(d.is_error for d in diags))
@@ -182,7 +203,8 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
     program = None
     size = None
     if not any(d.is_error for d in diags):
-        program, size = generate(resolved, name, options.kind, _file_namer(path, file_path))
+        program, size = generate(resolved, name, options.kind, _file_namer(path, file_path),
+                                 incremental.code if incremental is not None else None)
         main = resolved.procs.get("main")
         at = main.name_span if main else Span.point(path, 1, 1)
         if size > options.limit:

@@ -22,9 +22,10 @@ right place. Macro uses carry the span of the use and the name of the define.
 
 from __future__ import annotations
 
+import bisect
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from typing import Optional, Sequence
@@ -88,11 +89,165 @@ def builtin_header_names() -> list[str]:
         return []
 
 
+class TokenCache:
+    """The tokens of every file a preprocessor read, kept for the next run over
+    the same files (an open file checked at every pause in typing): a header
+    is tokenized once, not at every keystroke, and a file whose text changed
+    is tokenized again only from the line where the change starts to the first
+    line after it where the old tokens go on unchanged (moved by the lines the
+    edit added or removed). ``read`` reads a file again only when its size or
+    time stamps changed. Files not used since the last :meth:`sweep` are
+    dropped there."""
+
+    def __init__(self):
+        self._tokenized: dict[str, _Tokenized] = {}
+        self._files: dict[str, tuple] = {}
+        self._used: set = set()
+
+    def lines(self, f: SourceFile) -> tuple:
+        """(the tokenizer's lines of f, its diagnostics, its block comments, and
+        per line how many of each came up to it, or None when there are none)."""
+        self._used.add(f.name)
+        old = self._tokenized.get(f.name)
+        if old is None or old.text != f.text:
+            old = self._tokenized[f.name] = _Tokenized.of(f) if old is None else old.edited(f)
+        return old.lines, old.diags, old.comments, old.counts if old.diags or old.comments else None
+
+    def read(self, path: Path, name: str) -> tuple[Optional[str], list[Diagnostic]]:
+        """:func:`read_source`, again only when the file's size or modification time changed."""
+        try:
+            st = path.stat()
+            stamp = (name, st.st_mtime_ns, st.st_ctime_ns, st.st_size, st.st_ino)
+        except OSError:
+            return read_source(path, name)
+        key = str(path)
+        self._used.add(key)
+        got = self._files.get(key)
+        if got is None or got[0] != stamp:
+            got = self._files[key] = (stamp, read_source(path, name))
+        text, diags = got[1]
+        return text, list(diags)
+
+    def sweep(self) -> None:
+        self._tokenized = {k: v for k, v in self._tokenized.items() if k in self._used}
+        self._files = {k: v for k, v in self._files.items() if k in self._used}
+        self._used = set()
+
+
+@dataclass
+class _Tokenized:
+    """One file's text and its tokenizer lines, with where each line starts."""
+    name: str
+    text: str
+    lines: list          # Tokenizer.lines() items
+    starts: list[int]    # the offset each line starts at
+    numbers: list[int]   # the line number each starts on
+    counts: list[tuple[int, int]]   # (diagnostics, block comments) up to and with each line
+    diags: list[Diagnostic]
+    comments: list[Span]
+
+    @classmethod
+    def of(cls, f: SourceFile) -> "_Tokenized":
+        t = cls(f.name, f.text, [], [], [], [], [], [])
+        t._tokenize(f.text, 0, 1, None)
+        return t
+
+    def _tokenize(self, text: str, start: int, number: int, stop) -> Optional[tuple[int, int]]:
+        """Tokenize from a line start until ``stop(offset, number)`` says the
+        line starting there is where to stop; returns that (offset, number)."""
+        tk = Tokenizer(text, self.name, self.diags, self.comments)
+        lines, starts, numbers, counts = self.lines, self.starts, self.numbers, self.counts
+        diags, comments = self.diags, self.comments
+        at = (start, number)
+        for line in tk.lines(start, number):
+            lines.append(line)
+            starts.append(at[0])
+            numbers.append(at[1])
+            counts.append((len(diags), len(comments)))
+            at = tk.next_line
+            if at is not None and stop is not None and stop(*at):
+                return at
+        return None
+
+    def edited(self, f: SourceFile) -> "_Tokenized":
+        """The tokenization of f's text, an edit of this one's."""
+        old, new = self.text, f.text
+        p = _common_prefix(old, new)
+        s = _common_suffix(old, new, min(len(old), len(new)) - p)
+        k = max(bisect.bisect_right(self.starts, p) - 1, 0)       # the line the edit starts in
+        t = _Tokenized(self.name, new, self.lines[:k], self.starts[:k], self.numbers[:k],
+                       self.counts[:k], [], [])
+        nd, nc = self.counts[k - 1] if k else (0, 0)
+        t.diags, t.comments = self.diags[:nd], self.comments[:nc]
+        grow = len(new) - len(old)
+        old_starts = self.starts
+
+        def stop(offset: int, number: int) -> bool:
+            if offset < len(new) - s:
+                return False
+            j = bisect.bisect_left(old_starts, offset - grow)
+            return j < len(old_starts) and old_starts[j] == offset - grow
+        at = t._tokenize(new, self.starts[k] if self.starts else 0, self.numbers[k] if self.numbers else 1,
+                         stop)
+        if at is None:
+            return t
+        j = bisect.bisect_left(old_starts, at[0] - grow)
+        moved = at[1] - self.numbers[j]
+        nd0, nc0 = self.counts[j - 1] if j else (0, 0)
+        dd, dc = len(t.diags) - nd0, len(t.comments) - nc0
+        t.lines += self.lines[j:] if not moved else [_moved_line(x, moved) for x in self.lines[j:]]
+        t.starts += [x + grow for x in self.starts[j:]]
+        t.numbers += [x + moved for x in self.numbers[j:]]
+        t.counts += [(a + dd, b + dc) for a, b in self.counts[j:]]
+        t.diags += [_moved_diag(d, moved) for d in self.diags[nd0:]]
+        t.comments += [_moved_span(c, moved) for c in self.comments[nc0:]]
+        return t
+
+
+def _common_prefix(a: str, b: str) -> int:
+    lo, hi = 0, min(len(a), len(b))
+    while lo < hi:                       # a[:lo] == b[:lo]; find the longest
+        mid = (lo + hi + 1) // 2
+        if a[lo:mid] == b[lo:mid]:
+            lo = mid
+        else:
+            hi = mid - 1
+    return lo
+
+
+def _common_suffix(a: str, b: str, limit: int) -> int:
+    lo, hi = 0, limit
+    la, lb = len(a), len(b)
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if a[la - mid:la - lo] == b[lb - mid:lb - lo]:
+            lo = mid
+        else:
+            hi = mid - 1
+    return lo
+
+
+def _moved_span(s: Optional[Span], lines: int) -> Optional[Span]:
+    return s if s is None or not lines else Span(s[0], s[1] + lines, s[2], s[3] + lines, s[4])
+
+
+def _moved_diag(d: Diagnostic, lines: int) -> Diagnostic:
+    return d if not lines else replace(d, span=_moved_span(d.span, lines))
+
+
+def _moved_line(line: tuple, lines: int) -> tuple:
+    is_dir, toks, hash_span, raw = line
+    return (is_dir, [Tok(t.kind, t.value, Span(t.span[0], t.span[1] + lines, t.span[2],
+                                              t.span[3] + lines, t.span[4]), t.number)
+                     for t in toks], _moved_span(hash_span, lines), raw)
+
+
 class Preprocessor:
     def __init__(self, include_dirs: Sequence[Path] = (), read_file=read_source,
-                 root: Optional[Path] = None):
+                 root: Optional[Path] = None, tokens: Optional[TokenCache] = None):
         self.include_dirs = [Path(p) for p in include_dirs]
-        self.read_file = read_file
+        self.tokens = tokens
+        self.read_file = tokens.read if tokens is not None and read_file is read_source else read_file
         self.root = Path(root) if root is not None else None
         self.allowed: list[Path] = []         # where headers may be (set by run_text)
         self.diags: list[Diagnostic] = []
@@ -125,9 +280,8 @@ class Preprocessor:
 
     # ------------------------------------------------------------ files
     def _file(self, f: SourceFile, stack: list[str], folder: Optional[Path]) -> None:
-        lexer = Tokenizer(f.text, f.name, self.diags, self.block_comments)
         cond: list[list] = []   # [active, seen_else, parent_active, span]
-        for is_dir, toks, hash_span, raw in lexer.lines():
+        for is_dir, toks, hash_span, raw in self._lines(f):
             active = all(c[0] for c in cond)
             if is_dir:
                 self._directive(toks, hash_span, raw, f, stack, folder, cond, active)
@@ -136,6 +290,23 @@ class Preprocessor:
                 self._emit(toks)
         for c in cond:
             self.diags.append(error("unterminated-conditional", "#if without #endif", c[3]))
+
+    def _lines(self, f: SourceFile):
+        """The tokenizer's lines of f; its diagnostics and block comments are
+        added as each line comes, from the token cache when there is one."""
+        if self.tokens is None:
+            yield from Tokenizer(f.text, f.name, self.diags, self.block_comments).lines()
+            return
+        lines, diags, comments, counts = self.tokens.lines(f)
+        if counts is None:
+            yield from lines
+            return
+        nd = nc = 0
+        for line, (d, c) in zip(lines, counts):
+            self.diags.extend(diags[nd:d])
+            self.block_comments.extend(comments[nc:c])
+            nd, nc = d, c
+            yield line
 
     def _directive(self, toks, hash_span, raw, f, stack, folder, cond, active) -> None:
         if not toks:

@@ -73,15 +73,19 @@ class Tokenizer:
     def __init__(self, text: str, name: str, diags: list[Diagnostic], block_comments: list[Span]):
         self.text, self.name, self.diags = text, name, diags
         self.block_comments = block_comments
+        self.next_line: Optional[tuple[int, int]] = None
 
-    def lines(self):
-        """Yield (is_directive, tokens, hash_span, raw_rest) per logical line."""
+    def lines(self, start: int = 0, first_line: int = 1):
+        """Yield (is_directive, tokens, hash_span, raw_rest) per logical line,
+        from offset ``start`` (the start of a logical line, numbered
+        ``first_line``). While a line is yielded, ``next_line`` is (offset,
+        number) of the line after it (None after the last)."""
         text, name = self.text, self.name
-        pos, line, line_start = 0, 1, 0
+        pos, line, line_start = start, first_line, start
         current: list[Tok] = []
         directive = False
         hash_span = None
-        raw_start = 0
+        raw_start = start
         first_on_line = True
         n = len(text)
         bad_run_end = -1
@@ -96,6 +100,7 @@ class Tokenizer:
             if kind == "eof":
                 break
             if kind == "nl":
+                self.next_line = (e, line + 1)
                 yield directive, current, hash_span, text[raw_start:s] if directive else ""
                 current, directive, hash_span = [], False, None
                 pos, line, line_start, first_on_line = e, line + 1, e, True
@@ -153,4 +158,5 @@ class Tokenizer:
                 else:
                     current.append(Tok("BAD", m.group(kind), span))
             pos = e
+        self.next_line = None
         yield directive, current, hash_span, text[raw_start:] if directive else ""

@@ -88,3 +88,17 @@ def test_compile_from_disk_and_internal_errors(worker, qtbot, tmp_path, monkeypa
     qtbot.waitUntil(lambda: len(results) == 2, timeout=5000)
     d, = results[1].diagnostics
     assert d.code == "internal" and "kaput" in d.message
+
+
+def test_edits_of_an_open_file_compile_incrementally_to_the_same_result(worker, qtbot):
+    results = []
+    worker.sig_result.connect(lambda key, r: results.append(r))
+    text = "main() { a = 1; exit(99); }\nfoo() { b = 2; }\n"
+    for t in (text, text.replace("b = 2", "b = "), text, "\n" + text):
+        results.clear()
+        worker.submit("k", "/x/M01.plc", t, api.CompileOptions())
+        qtbot.waitUntil(lambda: bool(results), timeout=5000)
+        assert results[0].diagnostics == api.compile_source(t, "/x/M01.plc").diagnostics
+    assert worker._incremental["k"].parsed is not None
+    worker.cancel("k")
+    assert "k" not in worker._incremental

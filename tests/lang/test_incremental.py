@@ -1,0 +1,177 @@
+"""Compiling an edited file incrementally (diagnostics while typing) gives
+exactly what a compile from scratch gives: many random edits — tokens and
+lines inserted and deleted, syntax broken and fixed again, headers edited —
+applied to the golden programs, each compared with compile_source."""
+
+from __future__ import annotations
+
+import dataclasses
+import random
+import time
+from pathlib import Path
+
+import pytest
+
+from plcbuilder.api import CompileOptions, Kind, compile_source
+from plcbuilder.lang import ast as A
+from plcbuilder.lang.incremental import Incremental
+from plcbuilder.lang.parser import parse_incremental, parse_tokens
+from plcbuilder.lang.preprocess import preprocess_text
+
+from .golden_util import GOLDEN
+
+#: pieces typed at random places: tokens, half constructs, directives, comments
+PIECES = [";", ";", "}", "{", "(", ")", "x", "v1", "7", "0x1f", "99999999999", "if", "else", "do",
+          "while", "=", "==", "+", "<<", "-", "!", ",", "\n", "\n", "/*", "*/", "// note", "@", "#",
+          "for", "return", "int", "+=", "main()", "exit(99);", "foo();", "foo() { x = 1; }\n",
+          "};\n", "if (x) { portset(1); };", "#define Q 3\n", "#define QQ Q+1\n", "#undef Q\n",
+          "#ifdef Q\n", "#endif\n", "#include pins.h\n", "#include \"extra.h\"\n", "Q", "QQ",
+          "OUTPUT_SPINDLE", "gvarget(6060)", "portset()", "((((", "))))"]
+
+
+def _edit(rng: random.Random, text: str) -> str:
+    """One random edit a person might make (or a slip of the keyboard)."""
+    n = len(text)
+    pos = rng.randrange(n + 1)
+    k = rng.random()
+    if k < 0.35:
+        piece = rng.choice(PIECES)
+        if rng.random() < 0.5:
+            piece = " " + piece + " "
+        return text[:pos] + piece + text[pos:]
+    if k < 0.55 and n:
+        end = min(n, pos + rng.randint(1, 12))
+        return text[:pos] + text[end:]
+    lines = text.split("\n")
+    i = rng.randrange(len(lines))
+    if k < 0.7:
+        del lines[i]
+    elif k < 0.8:
+        lines.insert(i, lines[rng.randrange(len(lines))])
+    elif k < 0.9:
+        lines.insert(i, "")
+    else:
+        lines[i] = rng.choice(PIECES).strip("\n")
+    return "\n".join(lines)
+
+
+def _tree(x):
+    """A comparable picture of a tree: every field, spans included."""
+    if isinstance(x, list):
+        return [_tree(y) for y in x]
+    if dataclasses.is_dataclass(x):
+        return (type(x).__name__,) + tuple(_tree(getattr(x, f.name)) for f in dataclasses.fields(x))
+    return x
+
+
+def _assert_same(inc, full, what: str) -> None:
+    assert inc.diagnostics == full.diagnostics, what
+    assert _tree(inc.module) == _tree(full.module), what
+    assert inc.size == full.size and inc.program == full.program, what
+    assert inc.symbols == full.symbols and inc.includes == full.includes, what
+
+
+def _programs() -> list[Path]:
+    return sorted(GOLDEN.rglob("*.plc"))
+
+
+def _run_edits(rng, text: str, path: str, options: CompileOptions, edits: int, seconds: float,
+               on_edit=None) -> int:
+    inc = Incremental()
+    history = [text]
+    end = time.monotonic() + seconds
+    done = 0
+    for step in range(edits):
+        if time.monotonic() > end:
+            break
+        if len(history) > 2 and rng.random() < 0.25:
+            text = history[-2]             # undo: syntax broken, then fixed again
+        else:
+            text = _edit(rng, text)
+        if on_edit is not None:
+            on_edit(rng, step)
+        history.append(text)
+        full = compile_source(text, path, options)
+        got = compile_source(text, path, options, incremental=inc)
+        _assert_same(got, full, f"{path}, edit {step}:\n{text}")
+        done += 1
+    return done
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_random_edits_of_the_golden_programs(seed):
+    rng = random.Random(seed)
+    programs = _programs()
+    rng.shuffle(programs)
+    total = 0
+    end = time.monotonic() + 4.0
+    for p in programs:
+        if time.monotonic() > end:
+            break
+        text = p.read_text(encoding="utf-8")
+        options = CompileOptions(kind=Kind.SOFTWARE if "--software" in text else Kind.HARDWARE,
+                                 strict="--strict" in text)
+        total += _run_edits(rng, text, p.name, options, 15, 1.5)
+    assert total >= 10
+
+
+def _long_program(procs: int) -> str:
+    out = []
+    for i in range(procs):
+        out.append(f"step{i}()\n{{\n    a{i % 5} = gvarget(6060) + {i};\n"
+                   f"    if (a{i % 5} > 3) {{ portset(OUTPUT_SPINDLE); }} else {{ a{i % 5}--; }};\n}};\n")
+    out.append("main()\n{\n" + "".join(f"    step{i}();\n" for i in range(procs)) + "    exit(99);\n};\n")
+    return "#include pins.h\n" + "".join(out)
+
+
+def test_random_edits_of_a_long_program():
+    rng = random.Random(7)
+    assert _run_edits(rng, _long_program(40), "P.plc", CompileOptions(), 40, 4.0) >= 5
+
+
+def test_random_edits_of_a_header_and_the_file(tmp_path):
+    """Headers edited between compiles (on disk) are read again; the file that
+    includes them is edited too."""
+    rng = random.Random(11)
+    header = tmp_path / "extra.h"
+    header.write_text("#define LIMIT 10\n#define BIT 3\n")
+    main = tmp_path / "M10.plc"
+    text = "#include \"extra.h\"\n" + _long_program(12).replace("> 3", "> LIMIT")
+
+    def edit_header(rng, step):
+        if rng.random() < 0.3:
+            h = header.read_text()
+            header.write_text(_edit(rng, h) if rng.random() < 0.7 else
+                              h + rng.choice(["#define EXTRA 1\n", "#define LIMIT 11\n", "x()\n{\n};\n",
+                                              "/* open\n", "#ifdef BIT\n"]))
+    assert _run_edits(rng, text, str(main), CompileOptions(), 40, 4.0, edit_header) >= 5
+
+
+def test_parse_reuses_the_items_the_edit_did_not_reach():
+    text = _long_program(30)
+    toks = preprocess_text(text, "P.plc").tokens
+    first = parse_incremental(toks, None, "P.plc")
+    edited = text.replace("a3 = gvarget(6060) + 13;", "a3 = gvarget(6060) + 14;")
+    toks2 = preprocess_text(edited, "P.plc").tokens
+    second = parse_incremental(toks2, first, "P.plc")
+    start, end = second.reparsed
+    assert 0 < start and end < len(toks2) and end - start < len(toks2) // 10
+    assert _tree(second.module) == _tree(parse_tokens(toks2)[0])
+    moved = edited.replace("step13()\n", "\n\nstep13()\n")          # lines below move down
+    toks3 = preprocess_text(moved, "P.plc").tokens
+    third = parse_incremental(toks3, second, "P.plc")
+    assert third.reparsed[1] - third.reparsed[0] < len(toks3) // 10
+    assert _tree(third.module) == _tree(parse_tokens(toks3)[0])
+    assert third.module.procs[-1].name_span.line == second.module.procs[-1].name_span.line + 2
+
+
+def test_a_syntax_error_is_reparsed_only_around_itself():
+    text = _long_program(30)
+    inc = Incremental()
+    compile_source(text, "P.plc", incremental=inc)
+    broken = text.replace("a3 = gvarget(6060) + 13;", "a3 = gvarget(6060) + ;")
+    r = compile_source(broken, "P.plc", incremental=inc)
+    assert [d.code for d in r.errors] == ["syntax"]
+    start, end = inc.parsed.reparsed
+    assert end - start < len(inc.parsed.toks) // 10
+    assert r.diagnostics == compile_source(broken, "P.plc").diagnostics
