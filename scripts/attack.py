@@ -13,7 +13,8 @@ callable]]`` whose callables return ``{"tried", "refused", "accepted",
 times the target died or stopped answering (an attack that raises counts as
 one crash): both are 0 when the defences hold (exit status 1 if not). In a
 fuzz row (its name says "fuzz"), ``accepted`` counts the random requests that
-happened to be well-formed and were answered, which is not a defect.
+happened to be well-formed and were answered, which is not a defect; in a row
+whose name says "must be accepted" (a documented limit), refusing is the defect.
 """
 
 from __future__ import annotations
@@ -65,7 +66,13 @@ def main(argv=None) -> int:
     for name, c, secs in rows:
         print(f"{name:<{width}} | {c['tried']:>7} | {c['refused']:>7} | {c['accepted']:>8} | "
               f"{c['crashed']:>7} | {secs:7.1f}")
-    bad = any(c["crashed"] or (c["accepted"] and "fuzz" not in name) for name, c, _ in rows)
+    def failed(name: str, c: dict) -> bool:
+        if c["crashed"]:
+            return True
+        if "must be accepted" in name:      # a limit that must hold: refusing it is the defect
+            return c["refused"] > 0
+        return c["accepted"] > 0 and "fuzz" not in name
+    bad = any(failed(name, c) for name, c, _ in rows)
     return 1 if bad else 0
 
 
