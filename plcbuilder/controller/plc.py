@@ -99,6 +99,8 @@ class PLC:
         self.var_init = [wrap(int(v)) for v in vals] + [0] * (16 - len(vals))
         self.latency = max(0, int(gvarget_latency_ms))
         self.record_samples = record_samples
+        #: a CodeCoverage recording the instructions that run (reference backend only)
+        self.coverage = None
         self.events: deque = deque(maxlen=EVENT_BUFFER)
         self.samples: deque = deque(maxlen=SAMPLE_BUFFER)
         self.programs: dict[str, Program] = {}
@@ -192,7 +194,7 @@ class PLC:
             if fastvm.answers_sync(program, host):
                 p.syncing = gen
         else:
-            gen = vm.run_reference(program, slots, host)
+            gen = vm.run_reference(program, slots, host, cover=self.coverage)
         p.resume = gen.__next__
         self.last[program.name] = p
         self.events.append(Started(self.t, program.name, program.kind.label, eparam))
