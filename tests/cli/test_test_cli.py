@@ -9,31 +9,7 @@ from junitparser import Error, Failure, JUnitXml
 
 from plcbuilder.cli.main import main
 
-from tests.testing._proj import make_project
-
-PASSING = """\
-[[test]]
-name = "pulse on in ticks 5..7"
-ms = 40
-scenario = "start PULSE @ 0"
-[[test.expect]]
-during_ms = [5, 7]
-outputs_on = [3]
-[[test.expect]]
-at_end = true
-exit = { PULSE = 99 }
-"""
-
-FAILING = """\
-[[test]]
-name = "branch two"
-ms = 40
-scenario = "start BRANCH:2 @ 0"
-[[test.expect]]
-at_ms = 1
-pwm = { 0 = 10 }
-"""
-
+from tests.testing._proj import FAILING, PASSING, make_project
 
 def run_cli(capsys, *argv):
     try:
@@ -57,7 +33,7 @@ def test_a_failure_exits_1_with_condition_expected_actual_and_tick(tmp_path, cap
     assert code == 1
     lines = out.splitlines()
     assert lines[0] == "PASS  pulse on in ticks 5..7"
-    assert lines[1] == (f"FAIL  branch two: {root / 'tests' / 'b.toml'}:7: at_ms = 1: "
+    assert lines[1] == (f"FAIL  branch two: {root / 'tests' / 'b.toml'}:10: at_ms = 1: "
                         "pwm = { 0 = 10 }: expected pwm 0 = 10, actual pwm 0 = 20 at tick 1")
     assert lines[-1] == "1 passed, 1 failed"
 
@@ -72,7 +48,7 @@ def test_a_bad_test_file_exits_2_with_file_and_line(tmp_path, capsys):
     root = make_project(tmp_path / "p", {"a": PASSING, "b": FAILING.replace("at_ms", "at_mss")})
     code, out, err = run_cli(capsys, "test", root)
     assert code == 2 and out == ""
-    assert f"{root / 'tests' / 'b.toml'}:6: unknown key 'at_mss'" in err
+    assert f"{root / 'tests' / 'b.toml'}:9: unknown key 'at_mss'" in err
     assert "Traceback" not in err
 
 
@@ -96,7 +72,7 @@ def test_json_is_one_object(tmp_path, capsys):
     assert (doc["passed"], doc["failed"]) == (1, 1)
     t = {x["name"]: x for x in doc["tests"]}
     (f,) = t["branch two"]["failures"]
-    assert (f["expected"], f["actual"], f["tick"], f["line"]) == ("pwm 0 = 10", "pwm 0 = 20", 1, 7)
+    assert (f["expected"], f["actual"], f["tick"], f["line"]) == ("pwm 0 = 10", "pwm 0 = 20", 1, 10)
     assert t["pulse on in ticks 5..7"]["expectations"][0] == {
         "when": "during_ms = [5, 7]", "line": 5, "passed": True, "tick": 7}
     assert doc["coverage"] is None and doc["errors"] == []

@@ -14,31 +14,7 @@ from plcbuilder.ide.main_window import Act, MainWindow
 from plcbuilder.ide.panels.tests import STATUS, TestsPanel
 from plcbuilder.ide.settings import Settings
 
-from tests.testing._proj import make_project
-
-PASSING = """\
-[[test]]
-name = "pulse"
-ms = 40
-scenario = "start PULSE @ 0"
-[[test.expect]]
-during_ms = [5, 7]
-outputs_on = [3]
-"""
-
-FAILING = """\
-[[test]]
-name = "branch two"
-ms = 40
-scenario = "start BRANCH:2 @ 0"
-[[test.expect]]
-at_end = true
-exit = { BRANCH = 2 }
-[[test.expect]]
-at_ms = 1
-pwm = { 0 = 10 }
-"""
-
+from tests.testing._proj import FAILING, PASSING, make_project
 
 @pytest.fixture
 def proj(tmp_path):
@@ -61,8 +37,8 @@ def run_and_wait(qtbot, panel, names=None):
 
 
 def test_lists_tests_and_files_with_mistakes(panel, proj):
-    assert panel.test_names() == ["pulse", "branch two"]
-    assert panel.status_of("pulse") == "not run"
+    assert panel.test_names() == ["pulse on in ticks 5..7", "branch two"]
+    assert panel.status_of("pulse on in ticks 5..7") == "not run"
     assert panel.status_of("c.toml").startswith("name must be a non-empty string")
     assert panel.tree.topLevelItem(0).text(2) == "tests/c.toml:2"
 
@@ -70,7 +46,7 @@ def test_lists_tests_and_files_with_mistakes(panel, proj):
 def test_run_all_shows_pass_and_the_failing_condition(qtbot, panel):
     summary = run_and_wait(qtbot, panel)
     assert summary.startswith("1 passed, 1 failed")
-    assert panel.status_of("pulse") == "pass"
+    assert panel.status_of("pulse on in ticks 5..7") == "pass"
     assert panel.status_of("branch two") == ("FAIL: pwm = { 0 = 10 }: expected pwm 0 = 10, "
                                              "actual pwm 0 = 20 at tick 1")
     assert panel.summary.text().startswith("1 passed, 1 failed")
@@ -90,7 +66,7 @@ def test_selecting_a_failure_shows_it_and_double_click_opens_the_expectation(qtb
 
 def test_run_selected_runs_only_that_test(qtbot, panel):
     item = next(panel.tree.topLevelItem(i) for i in range(panel.tree.topLevelItemCount())
-                if panel.tree.topLevelItem(i).text(0) == "pulse")
+                if panel.tree.topLevelItem(i).text(0) == "pulse on in ticks 5..7")
     panel.tree.setCurrentItem(item)
     with qtbot.waitSignal(panel.sig_finished, timeout=30000) as blocker:
         assert panel.run_selected()
@@ -136,7 +112,7 @@ def test_ctrl_t_runs_the_tests_and_coverage_marks_the_editors(qtbot, win, proj):
     with qtbot.waitSignal(win.tests_panel.sig_finished, timeout=30000):
         win.action(Act.RUN_TESTS).trigger()
     assert win.tests_dock.isVisible()
-    assert win.tests_panel.status_of("pulse") == "pass"
+    assert win.tests_panel.status_of("pulse on in ticks 5..7") == "pass"
     # BRANCH ran with eparam 2: the eparam-1 branch (lines 6-7) did not run
     assert marks(before, MK_UNCOVERED) == [6, 7]
     assert marks(before, MK_COVERED) == [3, 4, 9, 11, 12, 14, 15, 16]

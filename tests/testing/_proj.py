@@ -46,6 +46,35 @@ DIVIDE = """main()
 """
 
 
+#: a test that passes: PULSE's output 3 is on in ticks 5..7, and it ends with 99
+PASSING = """\
+[[test]]
+name = "pulse on in ticks 5..7"
+ms = 40
+scenario = "start PULSE @ 0"
+[[test.expect]]
+during_ms = [5, 7]
+outputs_on = [3]
+[[test.expect]]
+at_end = true
+exit = { PULSE = 99 }
+"""
+
+#: a test that fails at line 10: BRANCH with eparam 2 sets PWM 0 to 20, not 10
+FAILING = """\
+[[test]]
+name = "branch two"
+ms = 40
+scenario = "start BRANCH:2 @ 0"
+[[test.expect]]
+at_end = true
+exit = { BRANCH = 2 }
+[[test.expect]]
+at_ms = 1
+pwm = { 0 = 10 }
+"""
+
+
 def make_project(root: Path, tests: dict[str, str] | None = None,
                  procs: dict[str, str] | None = None) -> Path:
     """A project folder: hardware procedures (PULSE, BRANCH, DIVIDE by default),
