@@ -53,8 +53,11 @@ from plcbuilder.testing.coverage import ProcedureCoverage, summarize
 __all__ = ["Failure", "Suite", "SuiteRun", "TestResult", "prepare", "run_suite", "run_test"]
 
 CHUNK_MS = 1000
-#: Below this much simulated time in all, a pool costs more than it saves.
-PARALLEL_MIN_MS = 200_000
+#: Below this much simulated time in all, a pool costs more than it saves:
+#: starting the workers takes about a second, and a test simulates 10 s in
+#: 10-20 ms (scripts/bench.py tests: 100 tests of 10 s run in 1.8 s serially,
+#: 3 s in two processes).
+PARALLEL_MIN_MS = 2_000_000
 PARALLEL_MIN_TESTS = 4
 
 
