@@ -243,6 +243,7 @@ class TestOptions:
     coverage: bool = False               # record the lines that ran (reference interpreter)
     jobs: Optional[int] = None           # processes (None: as many cores as pay off)
     strict: Optional[bool] = None
+    trace_dir: Optional[Path] = None     # write each failing run's CSV trace there
 
 
 @dataclass
@@ -310,7 +311,7 @@ def test(project, options: Optional[TestOptions] = None, progress=None) -> TestR
     if not suite.built or suite.errors:
         return TestRun(suite)
     return TestRun(suite, run_suite(suite, coverage=opts.coverage, jobs=opts.jobs,
-                                    progress=progress))
+                                    progress=progress, trace_dir=opts.trace_dir))
 
 
 test.__test__ = False

@@ -36,6 +36,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--coverage", action="store_true",
                    help="report per procedure which source lines ran (runs on the "
                         "reference interpreter)")
+    p.add_argument("--trace-failed", type=Path, metavar="DIR",
+                   help="write each failing test's run as a CSV trace in DIR (one row a "
+                        "tick, as 'plcbuilder run --trace')")
     p.add_argument("-j", "--jobs", type=int_in(1, 256), default=None, metavar="N",
                    help="processes to run tests in (default: the cores, when the tests "
                         "are many)")
@@ -49,7 +52,8 @@ def run(args: argparse.Namespace) -> int:
 
     def body() -> int:
         from plcbuilder import api
-        opts = api.TestOptions(select=args.select, coverage=args.coverage, jobs=args.jobs)
+        opts = api.TestOptions(select=args.select, coverage=args.coverage, jobs=args.jobs,
+                               trace_dir=args.trace_failed)
         try:
             tr = api.test(args.project, opts)
         except api.UsageError as exc:
@@ -103,6 +107,8 @@ def result_line(r, out: term.Out) -> str:
         return head + f"{r.file}:{r.line}: could not run: {r.error}"
     lines = [head + r.failures[0].text()]
     lines += ["      " + f.text() for f in r.failures[1:]]
+    if r.trace:
+        lines.append(f"      trace: {r.trace}")
     return "\n".join(lines)
 
 

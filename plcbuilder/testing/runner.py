@@ -41,8 +41,8 @@ from plcbuilder.controller.coverage import CodeCoverage
 from plcbuilder.controller.events import Ended, Fault, Message, Print, Started
 from plcbuilder.controller.machine import Machine
 from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
-from plcbuilder.controller.scenario import STARTING, apply
-from plcbuilder.controller.session import UsageError, check_scenario
+from plcbuilder.controller.scenario import STARTING, apply, drive
+from plcbuilder.controller.session import TraceWriter, UsageError, check_scenario
 from plcbuilder.controller.variables_xml import load_variables
 from plcbuilder.project.build import ProcedureBuild, compile_all
 from plcbuilder.project.model import DEFAULT_MACHINE, Project, ProjectError
@@ -102,6 +102,7 @@ class TestResult:
     error: Optional[str] = None   # the run could not go (a refused start…)
     ended_at_ms: Optional[int] = None
     expectations: list[dict] = field(default_factory=list)   # {when, line, passed, tick}
+    trace: Optional[str] = None   # the CSV trace of a failing run, when asked for
     seconds: float = 0.0          # wall time (not part of equality: see same_as)
 
     @property
@@ -117,7 +118,7 @@ class TestResult:
         return {"name": self.name, "file": self.file, "line": self.line,
                 "passed": self.passed, "failures": [f.to_dict() for f in self.failures],
                 "error": self.error, "ended_at_ms": self.ended_at_ms,
-                "expectations": self.expectations, "seconds": round(self.seconds, 6)}
+                "expectations": self.expectations, "trace": self.trace, "seconds": round(self.seconds, 6)}
 
 
 @dataclass
@@ -253,12 +254,15 @@ def _pins(project: Project) -> dict[str, int]:
 
 def run_suite(suite: Suite, *, coverage: bool = False, jobs: Optional[int] = None,
               tests: Optional[list[TestCase]] = None,
-              progress: Optional[Callable[[TestResult], None]] = None) -> SuiteRun:
+              progress: Optional[Callable[[TestResult], None]] = None,
+              trace_dir: Optional[Path] = None) -> SuiteRun:
     """Run the suite's tests (or ``tests``), in order. ``jobs``: processes (None:
     as many as there are cores when the tests are many and long enough to pay
     for a pool; 1: in this process). ``coverage`` runs on the reference
     interpreter, which records the lines that ran. ``progress`` is called with
-    each result as it comes (serial runs) or in order at the end (parallel)."""
+    each result as it comes (serial runs) or in order at the end (parallel).
+    ``trace_dir``: each failing test's run is run again and written there as a
+    CSV trace (one row a tick, as ``plcbuilder run --trace``), to its failing tick."""
     t0 = time.perf_counter()
     todo = list(suite.tests if tests is None else tests)
     env = suite.env
@@ -290,6 +294,10 @@ def run_suite(suite: Suite, *, coverage: bool = False, jobs: Optional[int] = Non
                     hits.setdefault(name, set()).update(pcs)
                 if progress:
                     progress(r)
+    if trace_dir is not None:
+        for (t, machine), r in zip(work, results):
+            if r.failures:
+                r.trace = str(write_trace(t, env, machine, Path(trace_dir), r))
     report = None
     if coverage:
         report = summarize(env.programs, hits, suite.project)
@@ -564,6 +572,38 @@ def run_test(tc: TestCase, env: Env, machine: Optional[str] = None,
         result.expectations.append(w.judged())
     result.seconds = time.perf_counter() - t0
     return result
+
+
+def trace_name(name: str) -> str:
+    """A file name for a test's trace: its name, letters, digits, ``-`` and ``_`` kept."""
+    safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in name).strip("_")
+    return (safe or "test")[:80] + ".csv"
+
+
+def write_trace(tc: TestCase, env: Env, machine: Optional[str], folder: Path,
+                result: TestResult) -> Path:
+    """Run ``tc`` again with a CSV trace to ``folder``: from tick 0 through the
+    last failing tick (or the end of its run). Raises UsageError when the file
+    cannot be written."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"{folder}: cannot make the trace folder: {exc.strerror or exc}") \
+            from None
+    path = folder / trace_name(tc.name)
+    ticks = [f.tick for f in result.failures if f.tick is not None]
+    last = max(ticks) if ticks else (result.ended_at_ms or 0)
+    c = Controller(_machine(machine if machine is not None else env.machine),
+                   backend="fast", variables=env.variables, record_samples=True)
+    c.load(env.programs)
+    writer = TraceWriter(path, c.machine)
+    try:
+        drive(c, tc.scenario, min(last + 1, tc.ms), until_idle=False,
+              on_chunk=lambda: (writer.write(c.drain_sample_rows()), c.drain_events()))
+        writer.write(c.drain_sample_rows())
+    finally:
+        writer.close()
+    return path
 
 
 def _drive(c: Controller, tc: TestCase, stop_early: bool):

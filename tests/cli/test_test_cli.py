@@ -121,3 +121,18 @@ def test_coverage_prints_percentages_and_uncovered_lines(tmp_path, capsys):
     assert "BRANCH" in cov and "PULSE" in cov
     assert "0.0%  0/" in cov["PULSE"]
     assert "not run: BRANCH.plc:6-7" in cov["BRANCH"]
+
+
+def test_trace_failed_writes_the_failing_runs_trace(tmp_path, capsys):
+    root = make_project(tmp_path / "p", {"a": PASSING, "b": FAILING})
+    code, out, _ = run_cli(capsys, "test", root, "--trace-failed", tmp_path / "traces", "--json")
+    assert code == 1
+    t = {x["name"]: x for x in json.loads(out)["tests"]}
+    assert t["pulse on in ticks 5..7"]["trace"] is None
+    path = tmp_path / "traces" / "branch_two.csv"
+    assert t["branch two"]["trace"] == str(path)
+    rows = path.read_text().splitlines()
+    assert rows[0].startswith("t_ms,proc,message,running,")
+    assert [r.split(",")[0] for r in rows[1:]] == ["0", "1"]   # through the failing tick 1
+    pwm0 = rows[0].split(",").index("pwm0")
+    assert rows[2].split(",")[pwm0] == "20"
