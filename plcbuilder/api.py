@@ -4,6 +4,7 @@
     binaries            load_program, disassemble (text), instructions (records)
     projects            Project, create_project, build_project, compile_all
     run                 run(target, RunOptions) -> RunResult: compile, load, simulate
+    test                test(project, TestOptions) -> TestRun: scenario tests (tests/*.toml)
     rendering           render_text, summary (diagnostics as text)
 
 and the names a caller needs with them (``Kind``, ``Diagnostic``, the ABI tables
@@ -39,6 +40,9 @@ from plcbuilder.project import (BuildResult, ProcedureBuild, Project, ProjectErr
                                 create_project)
 from plcbuilder.project.build import compile_all
 from plcbuilder.project.model import DEFAULT_MACHINE, kind_of
+from plcbuilder.testing.junit import junit_xml, write_junit
+from plcbuilder.testing.runner import Suite, SuiteError, SuiteRun, prepare, run_suite
+from plcbuilder.testing.spec import TestFileError
 
 __all__ = [
     "Action", "BUILTIN_PREFIX", "BuildResult", "CompileOptions", "CompileResult", "ConfigError",
@@ -49,7 +53,7 @@ __all__ = [
     "compile_bytes", "compile_file", "compile_source", "create_project", "default_machine",
     "disassemble", "error", "events", "image_of", "instructions", "kind_of", "load_machine", "load_program",
     "load_variables", "options_for", "proc_name", "read_image", "render_text", "run", "summary",
-    "write_image",
+    "write_image", "TestFileError", "TestOptions", "TestRun", "junit_xml", "test", "write_junit",
 ]
 
 DEFAULT_MS = 60_000
@@ -228,3 +232,86 @@ def _compile_project(root: Path, opts: RunOptions) -> _Target:
         raise UsageError(f"{project.settings_path}: machine: no such file "
                          f"{project.machine_path}")
     return _Target(programs, compiled, machine, variables, None)
+
+
+# ------------------------------------------------------------------- test
+
+@dataclass
+class TestOptions:
+    __test__ = False
+    select: Optional[str] = None         # -k TEXT: tests whose name or file contains it
+    coverage: bool = False               # record the lines that ran (reference interpreter)
+    jobs: Optional[int] = None           # processes (None: as many cores as pay off)
+    strict: Optional[bool] = None
+    trace_dir: Optional[Path] = None     # write each failing run's CSV trace there
+
+
+@dataclass
+class TestRun:
+    """What ``plcbuilder test`` reports. ``run`` is None when the project did
+    not build (``compiled`` has the diagnostics) or a test file has a mistake
+    (``errors``): then nothing ran."""
+    __test__ = False
+    suite: Suite
+    run: Optional[SuiteRun] = None
+
+    @property
+    def compiled(self) -> list:
+        return self.suite.compiled
+
+    @property
+    def built(self) -> bool:
+        return self.suite.built
+
+    @property
+    def errors(self) -> list:
+        return self.suite.errors
+
+    @property
+    def results(self) -> list:
+        return self.run.results if self.run is not None else []
+
+    @property
+    def exit_status(self) -> int:
+        """SPEC §8: 0 when all pass, 1 when any fails (or the project does not
+        build), 2 when a test file cannot be read."""
+        if self.errors:
+            return 2
+        if not self.built or any(not r.passed for r in self.results):
+            return 1
+        return 0
+
+    def to_dict(self) -> dict:
+        run = self.run
+        return {
+            "project": str(self.suite.project.root),
+            "passed": run.passed if run else 0,
+            "failed": run.failed if run else 0,
+            "tests": [r.to_dict() for r in self.results],
+            "errors": [e.to_dict() for e in self.errors],
+            "compile_errors": [f"{pb.name}: {d}" for pb in self.compiled for d in pb.diagnostics
+                               if d.is_error],
+            "coverage": ([c.to_dict() for c in run.coverage]
+                         if run is not None and run.coverage is not None else None),
+            "backend": run.backend if run else None,
+            "jobs": run.jobs if run else 0,
+            "seconds": round(run.seconds, 6) if run else 0.0,
+        }
+
+
+def test(project, options: Optional[TestOptions] = None, progress=None) -> TestRun:
+    """``plcbuilder test``: build the project once (writing nothing), read
+    ``tests/*.toml``, run every test (or those ``select`` picks), judge them.
+    A project that cannot be opened raises :class:`UsageError`."""
+    opts = options or TestOptions()
+    try:
+        suite = prepare(project, opts.select, strict=opts.strict)
+    except SuiteError as exc:
+        raise UsageError(str(exc)) from None
+    if not suite.built or suite.errors:
+        return TestRun(suite)
+    return TestRun(suite, run_suite(suite, coverage=opts.coverage, jobs=opts.jobs,
+                                    progress=progress, trace_dir=opts.trace_dir))
+
+
+test.__test__ = False

@@ -8,7 +8,7 @@ import importlib
 import sys
 
 #: Subcommand modules, in the order ``--help`` lists them.
-COMMANDS = ("gui", "check", "compile", "disasm", "run", "new", "build",
+COMMANDS = ("gui", "check", "compile", "disasm", "run", "test", "new", "build",
             "controller", "upload", "start", "stop", "input", "state")
 
 

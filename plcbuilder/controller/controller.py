@@ -40,9 +40,11 @@ class Controller:
 
     def __init__(self, machine_config=None, *, backend: str = "fast",
                  variables: Optional[Iterable[int]] = None, gvarget_latency_ms: int = 0,
-                 record_samples: bool = True, machine=None):
+                 record_samples: bool = True, machine=None, coverage=None):
         if backend not in BACKENDS:
             raise ControllerError(f"unknown backend {backend!r} (use {' or '.join(BACKENDS)})")
+        if coverage is not None and backend != "reference":
+            raise ControllerError("coverage is recorded by the reference backend only")
         if machine is None:
             from plcbuilder.controller.machine import Machine
             machine = Machine(machine_config)
@@ -52,6 +54,7 @@ class Controller:
                             gvarget_latency_ms=gvarget_latency_ms, record_samples=record_samples)
         except (TypeError, ValueError) as exc:
             raise ControllerError(str(exc)) from None
+        self._plc.coverage = coverage            # a CodeCoverage (controller/coverage.py)
         self._loaded_once = False
         self._stop_presses = 0
         self._crc: dict[str, int] = {}

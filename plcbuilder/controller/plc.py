@@ -106,6 +106,8 @@ class PLC:
         #: a sample then holds until the next (the link's telemetry sets this)
         self.sample_changes_only = False
         self._last_row: tuple = _NO_ROW
+        #: a CodeCoverage recording the instructions that run (reference backend only)
+        self.coverage = None
         self.events: deque = deque(maxlen=EVENT_BUFFER)
         self.samples: deque = deque(maxlen=SAMPLE_BUFFER)
         self.programs: dict[str, Program] = {}
@@ -199,7 +201,7 @@ class PLC:
             if fastvm.answers_sync(program, host):
                 p.syncing = gen
         else:
-            gen = vm.run_reference(program, slots, host)
+            gen = vm.run_reference(program, slots, host, cover=self.coverage)
         p.resume = gen.__next__
         self.last[program.name] = p
         self.events.append(Started(self.t, program.name, program.kind.label, eparam))

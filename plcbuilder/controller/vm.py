@@ -125,7 +125,8 @@ class Host:
 
 (K_CONST, K_LOAD, K_STORE, K_INC, K_DEC, K_POP, K_NOP, K_BIN, K_DIV, K_MOD, K_UN,
  K_JMP, K_JZ, K_JNZ, K_LOOP, K_YIELD, K_CALL, K_RET, K_EXIT,
- K_PORTSET, K_PORTCLR, K_PORTGET, K_GVARGET, K_GVARSET, K_G0MOVE, K_END) = range(26)
+ K_PORTSET, K_PORTCLR, K_PORTGET, K_GVARGET, K_GVARSET, K_G0MOVE, K_END, K_COVER) = range(27)
+# K_COVER: an instruction not yet run while coverage is recorded (controller/coverage.py)
 
 _KIND_OF: dict[Op, int] = {
     Op.LOAD: K_LOAD, Op.STORE: K_STORE, Op.INC: K_INC, Op.DEC: K_DEC, Op.POP: K_POP,
@@ -183,13 +184,19 @@ def decoded(program: Program) -> tuple[list, list, list]:
 
 def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[int] = None,
                   stack: Optional[list[int]] = None, rets: tuple[int, ...] | list[int] = (),
-                  count: int = 0) -> Iterator[None]:
+                  count: int = 0, cover=None) -> Iterator[None]:
     """Run ``program`` over the variable slots ``s``; one ``next()`` per tick.
 
     The keyword arguments resume a procedure mid-tick from the state the fast
-    backend hands over (see :class:`Handoff`).
+    backend hands over (see :class:`Handoff`). ``cover``, a
+    :class:`~plcbuilder.controller.coverage.CodeCoverage`, records which
+    instructions run: its table marks each one K_COVER until it first runs
+    (then the mark is replaced by the instruction's own kind), so recording
+    costs one extra step per instruction once, and nothing when off.
     """
     kinds, args, nexts = decoded(program)
+    if cover is not None:
+        kinds, cover_hit = cover.table(program, kinds)
     if pc is None:
         pc = program.entry
     stack = [] if stack is None else list(stack)
@@ -295,6 +302,10 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                 g0move(pop(), m, d)
             elif k == K_END:
                 raise VMFault(pc, FAULT_END)
+            elif k == K_COVER:            # first run of this instruction: record it, then run it
+                kinds[pc] = cover_hit(pc)
+                count -= 1
+                continue
             # K_NOP: nothing
             pc = nexts[pc]
     except IndexError:

@@ -54,6 +54,7 @@ class Act:
     START = "start"
     START_CURRENT = "start_current"
     STOP = "stop"
+    RUN_TESTS = "run_tests"
     RESET_CONTROLLER = "reset_controller"
     CONNECT = "connect"
     EMBEDDED = "embedded"
@@ -150,6 +151,9 @@ def build_actions(win) -> dict[str, QAction]:
       "Start the procedure of the current editor with the last eparam")
     A(Act.STOP, "S&top", win.stop, "Shift+F5", "stop",
       "Stop: the first press starts M02, the second OFF")
+    A(Act.RUN_TESTS, "Run &Tests", lambda: (win.tests_dock.show(), win.tests_dock.raise_(),
+                                            win.tests_panel.run_tests()), "Ctrl+T", None,
+      "Build the project and run its scenario tests (tests/*.toml)")
     A(Act.RESET_CONTROLLER, "&Reset Controller", win.run_actions.reset_controller, None, "reset",
       "A fresh controller with the same image (time starts again at 0)")
     A(Act.CONNECT, "&Connect to Controller…", win.connect_dialog, None, "connect",
@@ -185,8 +189,8 @@ def build_menus(win) -> None:
     for name in (Act.BUILD_ALL, Act.UPLOAD):
         m.addAction(a(name))
     m = mb.addMenu("&Run")
-    for name in (Act.START, Act.START_CURRENT, Act.STOP):
-        m.addAction(a(name))
+    for name in (Act.START, Act.START_CURRENT, Act.STOP, None, Act.RUN_TESTS):
+        m.addAction(a(name)) if name else m.addSeparator()
     m.addSeparator()
     speed = m.addMenu(icon("speed"), "Simulation &Speed")
     for act in win.run_actions.speed_actions.values():
@@ -272,7 +276,7 @@ def update_actions(win) -> None:
     has_project = win.project is not None
     ed = win.current_editor()
     has_editor = ed is not None
-    for name in (Act.NEW_PROCEDURE, Act.NEW_HEADER, Act.CLOSE_PROJECT):
+    for name in (Act.NEW_PROCEDURE, Act.NEW_HEADER, Act.CLOSE_PROJECT, Act.RUN_TESTS):
         win.action(name).setEnabled(has_project)
     win.action(Act.BUILD_ALL).setEnabled(has_project and not win.run_actions.building())
     for name in (Act.SAVE, Act.REVERT, Act.CLOSE_EDITOR, Act.CLOSE_ALL, Act.FIND,

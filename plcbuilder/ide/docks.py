@@ -11,7 +11,7 @@ from PySide6.QtWidgets import QDockWidget
 
 
 def build_docks(win) -> None:
-    """The project (left), Problems and Build Output (bottom, tabbed)."""
+    """The project (left), Problems, Build Output and Tests (bottom, tabbed)."""
     win.project_dock = make_dock(win, "Project", "projectDock", win.tree,
                                  Qt.DockWidgetArea.LeftDockWidgetArea)
     win.problems_dock = make_dock(win, "Problems", "problemsDock", win.problems,
@@ -19,6 +19,9 @@ def build_docks(win) -> None:
     win.build_dock = make_dock(win, "Build Output", "buildDock", win.build_panel,
                                Qt.DockWidgetArea.BottomDockWidgetArea)
     win.tabifyDockWidget(win.problems_dock, win.build_dock)
+    win.tests_dock = make_dock(win, "Tests", "testsDock", win.tests_panel,
+                               Qt.DockWidgetArea.BottomDockWidgetArea)
+    win.tabifyDockWidget(win.build_dock, win.tests_dock)
     win.problems_dock.raise_()
     win.resizeDocks([win.project_dock], [250], Qt.Orientation.Horizontal)
     win.resizeDocks([win.problems_dock], [200], Qt.Orientation.Vertical)

@@ -39,6 +39,7 @@ from plcbuilder.ide.editor import CodeEditor, file_key
 from plcbuilder.ide.editor_stack import EditorStack
 from plcbuilder.ide.icons import icon
 from plcbuilder.ide.lint import Lint
+from plcbuilder.ide.panels.tests import TestsPanel, wire as wire_tests
 from plcbuilder.ide.problems import ProblemsPanel
 from plcbuilder.ide.project_tree import ProjectTree
 from plcbuilder.ide.run_actions import SPEEDS, RunActions
@@ -93,6 +94,7 @@ class MainWindow(QMainWindow):
         self.tree = ProjectTree(self)
         self.problems = ProblemsPanel(self)
         self.build_panel = BuildPanel(self)
+        self.tests_panel = TestsPanel(self)
         self.lint = Lint(self, self.editor_stack, self.problems, debounce_ms)
         self.run_actions = RunActions(self, self.editor_stack, self.build_panel, self.prefs,
                                       connection=connection, start_controller=start_controller)
@@ -129,6 +131,7 @@ class MainWindow(QMainWindow):
     def project(self, project: Optional[Project]) -> None:
         self._project = project
         self.editor_stack.project = self.lint.project = self.run_actions.project = project
+        self.tests_panel.set_project(project.root if project is not None else None)
 
     @property
     def connection(self):
@@ -402,6 +405,7 @@ class MainWindow(QMainWindow):
         # problems and diagnostics
         self.problems.sig_open_location.connect(self.open_location)
         self.build_panel.sig_open_location.connect(self.open_location)
+        wire_tests(self)
         lint.sig_problem_files.connect(tree.set_problem_files)
         lint.sig_problem_counts.connect(self._show_problem_counts)
         lint.sig_header_defines.connect(self._set_pin_names)

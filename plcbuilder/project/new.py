@@ -2,7 +2,8 @@
 
 The example (package data, ``resources/example_project``) holds working
 hardware procedures (M02, M03, M05, M07, M08, M09, M71, M80, M81, OFF),
-software procedures (LUBE, __HANDLER_INIT) and a plc-variables.xml. The new
+software procedures (LUBE, __HANDLER_INIT), scenario tests of them
+(``tests/*.toml``, run by ``plcbuilder test``) and a plc-variables.xml. The new
 project also gets ``include/pins.h`` (the built-in default pin map), the
 default machine as ``machine.toml`` and a ``plcbuilder.toml``.
 

@@ -20,11 +20,12 @@ from plcbuilder.ide.editor.files import file_key, normalise_newlines, same_file
 from plcbuilder.ide.editor.style import (IND_ERROR, IND_FIND, IND_OCCURRENCE, IND_WARNING,
                                          KIND_CONSTANT, KIND_DEFINE, KIND_FUNCTION, KIND_KEYWORD,
                                          KIND_PREDEFINED, KIND_PROCEDURE, KIND_VARIABLE,
-                                         MK_CURRENT, MK_ERROR, MK_WARNING, EditorPrefs,
+                                         MK_COVERED, MK_CURRENT, MK_ERROR, MK_UNCOVERED,
+                                         MK_WARNING, EditorPrefs,
                                          default_font_family)
 from plcbuilder.ide.editor.widget import CodeEditor
 
 __all__ = ["CodeEditor", "EditorPrefs", "default_font_family", "file_key", "normalise_newlines",
            "same_file", "IND_ERROR", "IND_FIND", "IND_OCCURRENCE", "IND_WARNING", "KIND_CONSTANT",
            "KIND_DEFINE", "KIND_FUNCTION", "KIND_KEYWORD", "KIND_PREDEFINED", "KIND_PROCEDURE",
-           "KIND_VARIABLE", "MK_CURRENT", "MK_ERROR", "MK_WARNING"]
+           "KIND_VARIABLE", "MK_COVERED", "MK_CURRENT", "MK_ERROR", "MK_UNCOVERED", "MK_WARNING"]

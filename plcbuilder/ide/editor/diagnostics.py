@@ -5,7 +5,8 @@ from __future__ import annotations
 from typing import Iterable, Optional
 
 from plcbuilder.api import Diagnostic, Severity
-from plcbuilder.ide.editor.style import IND_ERROR, IND_WARNING, MK_ERROR, MK_WARNING
+from plcbuilder.ide.editor.style import (IND_ERROR, IND_WARNING, MARGIN_SYMBOLS, MK_COVERED,
+                                         MK_ERROR, MK_UNCOVERED, MK_WARNING)
 
 
 class DiagnosticsMixin:
@@ -39,6 +40,22 @@ class DiagnosticsMixin:
                 self.markerAdd(line0, mk)
                 marked[line0] = mk
         self._diag_ranges = ranges
+
+    def set_coverage(self, covered: Iterable[int], uncovered: Iterable[int]) -> None:
+        """Mark test coverage in the margin: a green bar beside the lines that
+        ran, a red one beside the lines with code that did not (1-based lines;
+        both empty: no marks)."""
+        from pyside6_scintilla import Scintilla
+        for mk, colour in ((MK_COVERED, 0x3A9E3A), (MK_UNCOVERED, 0x2626D9)):   # BGR
+            self.markerDefine(mk, int(Scintilla.MarkerSymbol.LeftRect))
+            self.markerSetBack(mk, colour)
+            self.markerDeleteAll(mk)
+        self.setMarginMaskN(MARGIN_SYMBOLS, self.marginMaskN(MARGIN_SYMBOLS)
+                            | (1 << MK_COVERED) | (1 << MK_UNCOVERED))
+        for mk, lines in ((MK_COVERED, covered), (MK_UNCOVERED, uncovered)):
+            for line in lines:
+                if 1 <= line <= self.lineCount():
+                    self.markerAdd(line - 1, mk)
 
     def diagnostic_range(self, d: Diagnostic) -> tuple[int, int]:
         """The byte range a diagnostic's span covers in this document (at least

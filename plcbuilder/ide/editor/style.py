@@ -21,6 +21,8 @@ IND_OCCURRENCE = 11
 MK_ERROR = 0
 MK_WARNING = 1
 MK_CURRENT = 2          # a line being jumped to (briefly)
+MK_COVERED = 3          # test coverage: a line that ran
+MK_UNCOVERED = 4        # ... a line with code that did not
 # margins
 MARGIN_NUMBERS = 0
 MARGIN_SYMBOLS = 1

@@ -1,0 +1,310 @@
+"""The Tests dock: the project's scenario tests (``tests/*.toml``) with their
+results.
+
+Run All or the selected test (Run › Run Tests, Ctrl+T, runs them all); each
+row shows pass, fail or "not run", a failing test's first failing condition,
+and its file and line. Selecting a row shows every failing condition below;
+a double-click opens the test file at the failing expectation (or at the
+test). With "Coverage" checked, the run records which lines ran, and the
+editors mark them in the margin (``CodeEditor.set_coverage``).
+
+The tests run in a worker thread (building the project and running the tests
+is what ``plcbuilder test`` does; the example project's take about a second),
+so the window keeps painting; results arrive by signal.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+from PySide6 import QtCore, QtWidgets
+
+from plcbuilder.testing.runner import SuiteError, prepare, run_suite
+from plcbuilder.testing.spec import TESTS_DIR, load_dir
+
+Qt = QtCore.Qt
+Signal = QtCore.Signal
+
+NAME, STATUS, WHERE = range(3)
+ROLE_FILE = Qt.ItemDataRole.UserRole
+ROLE_LINE = Qt.ItemDataRole.UserRole + 1
+ROLE_DETAIL = Qt.ItemDataRole.UserRole + 2
+ROLE_KIND = Qt.ItemDataRole.UserRole + 3       # "test", or "error" for a file with a mistake
+PASS_COLOUR, FAIL_COLOUR, ERROR_COLOUR = "#1e7a1e", "#b3261e", "#b35c00"
+
+
+class _Worker(QtCore.QObject):
+    """Builds the project and runs tests in a thread; one run per object."""
+
+    sig_done = Signal(object)
+    """(results, coverage, errors, message): the run's outcome."""
+
+    def __init__(self, root: Path, names: Optional[set], coverage: bool):
+        super().__init__()
+        self.root, self.names, self.coverage = root, names, coverage
+
+    def run(self) -> None:
+        try:
+            suite = prepare(self.root)
+            if not suite.built:
+                bad = ", ".join(pb.name for pb in suite.compiled if not pb.ok)
+                self.sig_done.emit(([], None, suite.errors, f"not run: {bad} did not compile"))
+                return
+            tests = [t for t in suite.tests if self.names is None or t.name in self.names]
+            run = run_suite(suite, tests=tests, coverage=self.coverage, jobs=1)
+            self.sig_done.emit((run.results, run.coverage, suite.errors,
+                                f"{run.passed} passed, {run.failed} failed "
+                                f"in {run.seconds:.2f} s"))
+        except SuiteError as exc:
+            self.sig_done.emit(([], None, [], f"not run: {exc}"))
+        except Exception as exc:  # noqa: BLE001 - shown in the panel, never a crash
+            self.sig_done.emit(([], None, [], f"not run: internal error: "
+                                              f"{type(exc).__name__}: {exc}"))
+
+
+class TestsPanel(QtWidgets.QWidget):
+    """The list of tests and their results."""
+
+    __test__ = False
+
+    sig_open_location = Signal(str, int)
+    """Open a file at a line (a double-click on a test or a failure)."""
+
+    sig_coverage = Signal(object)
+    """A run with coverage finished: the list of ProcedureCoverage."""
+
+    sig_finished = Signal(str)
+    """A run finished (its summary line)."""
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.root: Optional[Path] = None
+        self._thread: Optional[QtCore.QThread] = None
+        self._worker: Optional[_Worker] = None
+        self.results: dict[str, object] = {}
+        self.coverage = None
+
+        self.run_all_button = QtWidgets.QPushButton("Run All")
+        self.run_all_button.setToolTip("Build the project and run every test (Ctrl+T)")
+        self.run_one_button = QtWidgets.QPushButton("Run Selected")
+        self.coverage_box = QtWidgets.QCheckBox("Coverage")
+        self.coverage_box.setToolTip("Record which lines ran and mark them in the editors "
+                                     "(runs on the reference interpreter)")
+        self.summary = QtWidgets.QLabel("")
+        bar = QtWidgets.QHBoxLayout()
+        for w in (self.run_all_button, self.run_one_button, self.coverage_box):
+            bar.addWidget(w)
+        bar.addWidget(self.summary, 1)
+
+        self.tree = QtWidgets.QTreeWidget()
+        self.tree.setColumnCount(3)
+        self.tree.setHeaderLabels(["Test", "Result", "File"])
+        self.tree.setRootIsDecorated(False)
+        self.tree.setUniformRowHeights(True)
+        self.tree.setAlternatingRowColors(True)
+        self.tree.header().setStretchLastSection(True)
+        self.tree.setColumnWidth(NAME, 320)
+        self.tree.setColumnWidth(STATUS, 320)
+        self.detail = QtWidgets.QPlainTextEdit()
+        self.detail.setReadOnly(True)
+        self.detail.setPlaceholderText("Select a failing test to see its failing conditions")
+        self.detail.setMaximumBlockCount(2000)
+        split = QtWidgets.QSplitter(Qt.Orientation.Vertical)
+        split.addWidget(self.tree)
+        split.addWidget(self.detail)
+        split.setStretchFactor(0, 3)
+        split.setStretchFactor(1, 1)
+
+        lay = QtWidgets.QVBoxLayout(self)
+        lay.setContentsMargins(2, 2, 2, 2)
+        lay.addLayout(bar)
+        lay.addWidget(split, 1)
+
+        self.run_all_button.clicked.connect(lambda: self.run_tests())
+        self.run_one_button.clicked.connect(self.run_selected)
+        self.tree.itemDoubleClicked.connect(self._open_item)
+        self.tree.currentItemChanged.connect(lambda cur, _prev: self._show_detail(cur))
+        self._update_buttons()
+
+    # ============================================================== public
+    def set_project(self, root) -> None:
+        """Show the tests of the project at ``root`` (None: no project)."""
+        self.root = Path(root) if root is not None else None
+        self.results.clear()
+        self.coverage = None
+        self.reload()
+
+    def reload(self) -> None:
+        """Read tests/*.toml again and list the tests (results are kept by name)."""
+        self.tree.clear()
+        self.detail.clear()
+        if self.root is None:
+            self.summary.setText("")
+            self._update_buttons()
+            return
+        tests, errors = load_dir(self.root / TESTS_DIR)
+        for e in errors:
+            item = QtWidgets.QTreeWidgetItem([Path(e.file).name, e.message,
+                                              self._where(e.file, e.line)])
+            self._mark(item, "error", e.file, e.line, str(e))
+            self.tree.addTopLevelItem(item)
+        for t in tests:
+            item = QtWidgets.QTreeWidgetItem([t.name, "not run", self._where(t.file, t.line)])
+            item.setData(NAME, ROLE_FILE, t.file)
+            item.setData(NAME, ROLE_LINE, t.line or 1)
+            item.setData(NAME, ROLE_KIND, "test")
+            self.tree.addTopLevelItem(item)
+            r = self.results.get(t.name)
+            if r is not None:
+                self._show_result(item, r)
+        if not tests and not errors:
+            self.summary.setText(f"no tests in {TESTS_DIR}/ (add a .toml file: see the "
+                                 f"manual, Scenario tests)")
+        self._update_buttons()
+
+    def test_names(self) -> list[str]:
+        """The tests listed, in order."""
+        items = (self.tree.topLevelItem(i) for i in range(self.tree.topLevelItemCount()))
+        return [it.text(NAME) for it in items if it.data(NAME, ROLE_KIND) == "test"]
+
+    def status_of(self, name: str) -> Optional[str]:
+        """The Result column of the test ``name`` (None: no such row)."""
+        item = self._item(name)
+        return item.text(STATUS) if item is not None else None
+
+    def running(self) -> bool:
+        return self._thread is not None
+
+    def run_tests(self, names: Optional[list] = None) -> bool:
+        """Build the project and run the tests ``names`` (None: all) in the
+        background. False when nothing can run (no project, a run going on)."""
+        if self.root is None or self.running():
+            return False
+        self.reload()
+        self.summary.setText("building and running…")
+        for i in range(self.tree.topLevelItemCount()):
+            item = self.tree.topLevelItem(i)
+            if item.data(NAME, ROLE_KIND) == "test" and (names is None or item.text(NAME) in names):
+                item.setText(STATUS, "running…")
+        thread = QtCore.QThread(self)
+        worker = _Worker(self.root, set(names) if names is not None else None,
+                         self.coverage_box.isChecked())
+        worker.moveToThread(thread)
+        thread.started.connect(worker.run)
+        worker.sig_done.connect(self._on_done)
+        self._thread, self._worker = thread, worker
+        self._update_buttons()
+        thread.start()
+        return True
+
+    def run_selected(self) -> bool:
+        item = self.tree.currentItem()
+        if item is None or item.data(NAME, ROLE_KIND) != "test":
+            return False
+        return self.run_tests([item.text(NAME)])
+
+    # ============================================================= private
+    def _on_done(self, outcome) -> None:
+        results, coverage, errors, message = outcome
+        thread, self._thread, self._worker = self._thread, None, None
+        if thread is not None:
+            thread.quit()
+            thread.wait()
+            thread.deleteLater()
+        for r in results:
+            self.results[r.name] = r
+        self.reload()
+        if errors:
+            message = f"{message}; {len(errors)} test file(s) with mistakes"
+        self.summary.setText(message)
+        self._update_buttons()
+        if coverage is not None:
+            self.coverage = coverage
+            self.sig_coverage.emit(coverage)
+        self.sig_finished.emit(message)
+
+    def _show_result(self, item, r) -> None:
+        if r.passed:
+            item.setText(STATUS, "pass")
+            item.setForeground(STATUS, _brush(PASS_COLOUR))
+            item.setData(NAME, ROLE_LINE, r.line or 1)
+            item.setToolTip(STATUS, f"passed in {r.seconds * 1000:.0f} ms")
+            return
+        if r.error is not None:
+            item.setText(STATUS, f"error: {r.error}")
+            item.setForeground(STATUS, _brush(ERROR_COLOUR))
+            item.setData(NAME, ROLE_DETAIL, f"could not run: {r.error}")
+            return
+        first = r.failures[0]
+        item.setText(STATUS, f"FAIL: {first.condition}: expected {first.expected}, "
+                             f"actual {first.actual} at tick {first.tick}")
+        item.setForeground(STATUS, _brush(FAIL_COLOUR))
+        item.setData(NAME, ROLE_LINE, first.line or r.line or 1)
+        item.setData(NAME, ROLE_DETAIL, "\n".join(f.text() for f in r.failures))
+        item.setToolTip(STATUS, item.data(NAME, ROLE_DETAIL))
+        item.setText(WHERE, self._where(first.file, first.line))
+
+    def _mark(self, item, kind: str, file: str, line: Optional[int], detail: str) -> None:
+        item.setForeground(STATUS, _brush(ERROR_COLOUR))
+        item.setData(NAME, ROLE_KIND, kind)
+        item.setData(NAME, ROLE_FILE, file)
+        item.setData(NAME, ROLE_LINE, line or 1)
+        item.setData(NAME, ROLE_DETAIL, detail)
+
+    def _where(self, file: str, line: Optional[int]) -> str:
+        p = Path(file)
+        try:
+            p = p.relative_to(self.root) if self.root is not None else p
+        except ValueError:
+            pass
+        return f"{p.as_posix()}:{line}" if line else p.as_posix()
+
+    def _item(self, name: str):
+        for i in range(self.tree.topLevelItemCount()):
+            item = self.tree.topLevelItem(i)
+            if item.text(NAME) == name:
+                return item
+        return None
+
+    def _show_detail(self, item) -> None:
+        self.detail.setPlainText((item.data(NAME, ROLE_DETAIL) or "") if item is not None else "")
+
+    def _open_item(self, item, _column: int = 0) -> None:
+        file = item.data(NAME, ROLE_FILE)
+        if file:
+            self.sig_open_location.emit(str(file), int(item.data(NAME, ROLE_LINE) or 1))
+
+    def _update_buttons(self) -> None:
+        idle = self.root is not None and not self.running()
+        self.run_all_button.setEnabled(idle)
+        self.run_one_button.setEnabled(idle)
+
+
+def wire(win) -> None:
+    """Connect the window's Tests panel: opening locations, the project, and
+    coverage in the editors (those open now and those opened later)."""
+    panel, es = win.tests_panel, win.editor_stack
+    panel.sig_open_location.connect(lambda f, line: win.open_location(f, line))
+    panel.sig_coverage.connect(lambda cov: show_coverage(es, cov))
+    es.sig_editor_created.connect(lambda *_a: show_coverage(es, panel.coverage))
+
+
+def _brush(colour: str):
+    from PySide6.QtGui import QBrush, QColor
+    return QBrush(QColor(colour))
+
+
+def show_coverage(editor_stack, coverage) -> int:
+    """Mark covered and uncovered lines in the open editors of the files the
+    coverage names; returns how many editors were marked."""
+    marked = 0
+    for proc in coverage or ():
+        for f in proc.files:
+            if not f.path:
+                continue
+            ed = editor_stack.editor_for(f.path)
+            if ed is not None:
+                ed.set_coverage(f.covered, f.uncovered)
+                marked += 1
+    return marked
