@@ -6,7 +6,20 @@
   the real debounce (goal: at most 300 ms);
 - typing: the cost of one keystroke in the editor (styling, brace matching,
   the debounce timer), per key;
-- opening the example project in a new main window, and Build All from it.
+- opening the example project in a new main window, and Build All from it;
+- idle CPU (issue 14 point 4): the IDE process's CPU time over 10 s with the
+  example project open and nothing running, with a software procedure (LUBE)
+  running at 1x and the run docks shown, and with them hidden; floors: a bare
+  Qt main window idling the same 10 s, and the link alone (the connection and
+  the run model receiving the same telemetry, no window);
+- start-up (point 5): a new process to an interactive window with the example
+  project open, with and without the embedded controller; floor: a bare Qt
+  main window;
+- many lanes (point 7): one frame of the outputs plot with 8/32/64 lanes and
+  the analog plot with 10 curves, 10k points each; floor: the same points as
+  one plain pyqtgraph curve per panel.
+
+    python scripts/bench_gui.py cpu|startup|lanes   # one figure only
 """
 
 from __future__ import annotations
@@ -139,6 +152,7 @@ def run() -> list[str]:
         win.shutdown()
         win.hide()
     out.append(_startup())
+    out.extend(cpu_figures())
     fps = measure_fps(5.0)
     out.append(f"run panels, 16 signals x 10k points, controller in real time: {fps:.0f} fps "
                f"(goal >= 30 fps)")
@@ -307,6 +321,139 @@ def _startup() -> str:
             f"{statistics.median(times) * 1000:.0f} ms (goal <= 1500 ms)")
 
 
+# --------------------------------------------------------- idle CPU (point 4)
+
+_CPU_PROBE = r"""
+import os, sys, time
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
+mode, project, ini, seconds = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
+from PySide6.QtCore import QTimer
+from PySide6.QtWidgets import QApplication, QMainWindow
+
+def pump(app, cond, timeout):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end and not cond():
+        app.processEvents()
+        time.sleep(0.01)
+    return cond()
+
+def measure(app, settle, secs):
+    # one event loop: settle, then the CPU time (every thread) over secs
+    got = {}
+    def begin():
+        got["c0"] = time.process_time()
+        QTimer.singleShot(int(secs * 1000), end)
+    def end():
+        got["cpu"] = time.process_time() - got["c0"]
+        app.quit()
+    QTimer.singleShot(int(settle * 1000), begin)
+    app.exec()
+    return got["cpu"]
+
+if mode == "bare":
+    app = QApplication([])
+    win = QMainWindow()
+    win.resize(1360, 860)
+    win.show()
+    print("cpu", measure(app, 1.0, seconds), flush=True)
+    raise SystemExit(0)
+if mode == "link":
+    from plcbuilder.ide.connection import ControllerConnection
+    from plcbuilder.ide.panels.model import RunModel
+    app = QApplication([])
+    conn = ControllerConnection()
+    model = RunModel(30000)
+    conn.sig_samples.connect(model.add_samples)
+    conn.start_embedded()
+    if not pump(app, lambda: conn.connected, 60):
+        raise SystemExit("no controller")
+    with open(os.path.join(project, "build", "eeprom.rom"), "rb") as f:
+        conn.upload(f.read())
+    pump(app, lambda: len(model) > 100, 30)
+    print("cpu", measure(app, 1.0, seconds), flush=True)
+    conn.shutdown()
+    raise SystemExit(0)
+
+from plcbuilder.ide.app import create_application
+from plcbuilder.ide.main_window import MainWindow
+from plcbuilder.ide.settings import Settings
+app = create_application()
+win = MainWindow(Settings(ini), start_controller=True)
+win.show()
+win.open_project(project)
+if not pump(app, lambda: win.connected() and not win.busy() and win.run_panels is not None, 60):
+    raise SystemExit("no controller")
+if mode in ("run", "hidden"):
+    done = []
+    win.sig_build_finished.connect(done.append)
+    win.build_all()
+    pump(app, lambda: bool(done), 60)
+    win.upload()                  # LUBE, a software procedure, starts with the image
+    pump(app, lambda: len(win.run_panels.model) > 100, 30)
+    for d in win.run_panels.docks():
+        if mode == "hidden":
+            d.hide()
+        elif d.objectName() in ("runOutputsDock", "runInputsDock"):
+            d.show()
+            d.raise_()
+print("cpu", measure(app, 1.0, seconds), flush=True)
+win.shutdown()
+"""
+
+CPU_MODES = (("bare", "floor: a bare Qt main window"),
+             ("link", "floor: the link alone (connection + run model, LUBE's telemetry)"),
+             ("idle", "IDE, example project open, nothing running (goal <= 1 % of a core)"),
+             ("run", "IDE, LUBE running at 1x, run docks shown (goal <= 5 %)"),
+             ("hidden", "IDE, LUBE running at 1x, run docks hidden"))
+
+
+def cpu_figures(seconds: float = 10.0, runs: int = 3) -> list[str]:
+    """CPU time of a process over ``seconds`` (every thread; the controller is
+    a child and is not counted), each mode a new process, interleaved, median
+    of ``runs``."""
+    import subprocess
+    import sys
+    from plcbuilder.project.build import build_project
+    from plcbuilder.project.model import Project
+    from plcbuilder.project.new import create_project
+    got: dict[str, list[float]] = {m: [] for m, _ in CPU_MODES}
+    with tempfile.TemporaryDirectory() as d:
+        project = Path(d) / "example"
+        create_project(project)
+        build_project(Project.open(project))
+        for i in range(runs):
+            for mode, _ in CPU_MODES:
+                p = subprocess.run([sys.executable, "-c", _CPU_PROBE, mode, str(project),
+                                    str(Path(d) / f"{mode}{i}.ini"), str(seconds)],
+                                   capture_output=True, text=True, timeout=seconds + 180)
+                for line in p.stdout.splitlines():
+                    if line.startswith("cpu "):
+                        got[mode].append(float(line.split()[1]))
+    out = []
+    for mode, what in CPU_MODES:
+        if not got[mode]:
+            out.append(f"CPU over {seconds:g} s, {what}: the probe failed")
+            continue
+        med = statistics.median(got[mode])
+        out.append(f"CPU over {seconds:g} s, {what}: {med * 1000:.0f} ms = "
+                   f"{100 * med / seconds:.2f} % of a core (median of {len(got[mode])}: "
+                   + ", ".join(f"{v * 1000:.0f}" for v in got[mode]) + " ms)")
+    return out
+
+
 if __name__ == "__main__":
-    for line in run():
+    import sys
+    which = sys.argv[1:] or ["all"]
+    lines = []
+    for w in which:
+        if w == "cpu":
+            lines += cpu_figures()
+        elif w == "startup":
+            lines += startup_figures()
+        elif w == "lanes":
+            lines += lane_figures()
+        else:
+            lines += run()
+    for line in lines:
         print(line)

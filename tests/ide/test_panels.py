@@ -376,3 +376,87 @@ def test_watch_panel_orders_and_follows(qtbot, panels, fake):
     w.procedure.activated.emit(w.procedure.currentIndex())
     assert w.current == "M05" and not w.follow.isChecked()
     assert w.value("x") == 1
+
+
+# ------------------------------------------------------------- redraw cost
+def _count_set_data(monkeypatch):
+    import pyqtgraph as pg
+    calls = []
+    orig = pg.PlotDataItem.setData
+
+    def counting(self, *a, **k):
+        calls.append(self)
+        return orig(self, *a, **k)
+    monkeypatch.setattr(pg.PlotDataItem, "setData", counting)
+    return calls
+
+
+def test_the_redraw_timer_stops_when_nothing_changes(qtbot, panels, fake):
+    fake.sig_samples.emit([sample(t, outputs=t & 1, running=None) for t in range(100)])
+    assert panels.timer.isActive()                    # samples woke it
+    panels.tick()
+    f0 = panels.lanes.frames
+    assert f0 >= 1
+    panels.tick()                                     # nothing new: it stops
+    assert not panels.timer.isActive()
+    # nothing runs and the new samples only advance time: nothing redraws
+    fake.sig_samples.emit([sample(t, outputs=1, running=None) for t in range(100, 200)])
+    assert panels.timer.isActive()
+    frames = [p.frames for p in panels.time_panels]
+    panels.tick()
+    assert [p.frames for p in panels.time_panels] == frames
+    assert panels.lanes.moves == 0 and not panels.timer.isActive()
+    # and the timer stays stopped while the event loop idles
+    ticks = panels.ticks
+    qtbot.wait(200)
+    assert panels.ticks == ticks
+    # a value that changes redraws, even while nothing runs
+    fake.sig_samples.emit([sample(200, outputs=0, running=None)])
+    panels.tick()
+    assert panels.lanes.frames == f0 + 1
+
+
+def test_only_time_advancing_moves_the_curves_without_set_data(qtbot, panels, fake,
+                                                             monkeypatch):
+    panels.timebase.set_window(1.0)
+    fake.sig_samples.emit([sample(t, outputs=t & 1, pwm=(t,)) for t in range(0, 2000, 10)])
+    fake.sig_samples.emit([sample(2000, outputs=1, pwm=(99,))])
+    panels.tick()
+    calls = _count_set_data(monkeypatch)
+    frames = panels.lanes.frames
+    fake.sig_samples.emit([sample(t, outputs=1, pwm=(99,)) for t in range(2001, 2100)])
+    panels.lanes._last_move = panels.analog._last_move = 0.0
+    panels.tick()
+    assert panels.lanes.frames == frames and panels.lanes.moves == 1
+    assert panels.lanes.offset == pytest.approx(panels.lanes.visible_span()[1])
+    assert calls == []                                 # no setData: the curves moved
+    # past the horizon the curves are drawn again
+    fake.sig_samples.emit([sample(t, outputs=1, pwm=(99,)) for t in range(2100, 3000, 10)])
+    panels.lanes._last_move = 0.0
+    panels.tick()
+    assert panels.lanes.frames == frames + 1 and calls
+
+
+def test_hidden_docks_do_not_redraw(qtbot, panels, fake, monkeypatch):
+    fake.sig_samples.emit([sample(t, outputs=t & 1, pwm=(t,), axes=(t,)) for t in range(100)])
+    panels.tick()
+    for d in panels.docks():
+        d.hide()
+    calls = _count_set_data(monkeypatch)
+    before = [(p.frames, p.moves) for p in panels.time_panels]
+    for k in range(5):
+        fake.sig_samples.emit([sample(t, outputs=t & 1, pwm=(t,), axes=(t,))
+                               for t in range(100 + 50 * k, 150 + 50 * k)])
+        panels.tick()
+    assert [(p.frames, p.moves) for p in panels.time_panels] == before and calls == []
+    assert not panels.timer.isActive()
+    fake.connected = True
+    fake.sig_state.emit(ControllerStatus(t_ms=10, running="M03", software=(), proc=70), 0)
+    panels._poll_variables()
+    assert ("variables",) not in fake.calls              # the watch is hidden
+    panels.dock("outputs").show()                      # shown: it catches up
+    assert panels.timer.isActive()
+    panels.tick()
+    assert panels.lanes.frames == before[1][0] + 1
+    panels.dock("watch").show()
+    assert fake.calls[-1] == ("variables",)

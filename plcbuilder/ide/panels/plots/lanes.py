@@ -45,6 +45,7 @@ class LanesPanel(TimePanel):
         self.hidden: set[tuple[str, int]] = set()
         self._items: dict[tuple[str, int], pg.PlotDataItem] = {}
         self._lanes: list[tuple[str, int]] = []
+        self._lane_y: dict[tuple[str, int], float] = {}
         self._bands: list[pg.LinearRegionItem] = []
         self.pin_count = 64
 
@@ -58,7 +59,7 @@ class LanesPanel(TimePanel):
     def set_pin_names(self, inputs: dict[int, str], outputs: dict[int, str]) -> None:
         self.names = {"inputs": dict(inputs), "outputs": dict(outputs)}
         self._lanes = []                 # relabel on the next draw
-        self._view_dirty = True
+        self._mark_dirty()
 
     def lane_label(self, kind: str, pin: int) -> str:
         name = self.names[kind].get(pin)
@@ -71,7 +72,7 @@ class LanesPanel(TimePanel):
         self.hidden.discard(key)
         if key not in self.pinned:
             self.pinned.append(key)
-        self._view_dirty = True
+        self._mark_dirty()
 
     def remove_lane(self, kind: str, pin: int) -> None:
         """Hide this pin's lane (until it is pinned again)."""
@@ -79,12 +80,12 @@ class LanesPanel(TimePanel):
         if key in self.pinned:
             self.pinned.remove(key)
         self.hidden.add(key)
-        self._view_dirty = True
+        self._mark_dirty()
 
     def reset_lanes(self) -> None:
         self.pinned.clear()
         self.hidden.clear()
-        self._view_dirty = True
+        self._mark_dirty()
 
     def y_labels(self) -> list[str]:
         """The lane names, top to bottom (as last drawn)."""
@@ -130,6 +131,7 @@ class LanesPanel(TimePanel):
                 item = style.new_curve(self.plot, c, stepMode="right")   # sample and hold
                 self._items[key] = item
             item.setPos(0, y)
+            self._lane_y[key] = y
             ticks.append((y + 0.5, self.lane_label(*key)))
         self.plot.getAxis("left").setTicks([ticks, []])
         top = max(n, 1) * self.LANE
@@ -143,10 +145,17 @@ class LanesPanel(TimePanel):
         m = self.model
         t = self.x(a, b)
         for key, item in self._items.items():
-            item.setData(t, m.bit_series(key[0], key[1], a, b))
+            item.setData(t, self.hold(m.bit_series(key[0], key[1], a, b)))
         self._empty.setVisible(not lanes)
         if not lanes:
             center_item(self._empty, self.plot)
+
+    def watched(self) -> list:
+        return [self.model.inputs, self.model.outputs]
+
+    def shift(self, dx: float) -> None:
+        for key, item in self._items.items():
+            item.setPos(dx, self._lane_y.get(key, 0.0))
 
     # --------------------------------------------------------- context menu
     def _lane_at(self, pos: QtCore.QPoint) -> Optional[tuple[str, int]]:
