@@ -321,6 +321,217 @@ def _startup() -> str:
             f"{statistics.median(times) * 1000:.0f} ms (goal <= 1500 ms)")
 
 
+# ---------------------------------------------------------- start-up (point 5)
+
+_STARTUP_PROBE = r"""
+import os, sys, time
+T0 = time.perf_counter()
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
+mode = sys.argv[1]
+from PySide6.QtCore import QEvent, QObject, QTimer
+from PySide6.QtWidgets import QApplication, QMainWindow
+
+class FirstPaint(QObject):
+    # interactive = the window painted once, then the event loop answered
+    def __init__(self, then):
+        super().__init__()
+        self.then, self.done = then, False
+    def eventFilter(self, obj, ev):
+        if ev.type() == QEvent.Type.Paint and not self.done:
+            self.done = True
+            QTimer.singleShot(0, self.then)
+        return False
+
+def ready():
+    print("ready", time.perf_counter() - T0, flush=True)
+    if mode == "with":
+        def panels():
+            if getattr(win, "run_panels", None) is not None:
+                print("panels", time.perf_counter() - T0, flush=True)
+                finish()
+            else:
+                QTimer.singleShot(5, panels)
+        panels()
+    else:
+        finish()
+
+def finish():
+    if hasattr(win, "shutdown"):
+        win.shutdown()
+    app.quit()
+
+if mode == "bare":
+    app = QApplication([])
+    win = QMainWindow()
+    win.resize(1360, 860)
+else:
+    from plcbuilder.ide.app import create_application
+    from plcbuilder.ide.main_window import MainWindow
+    from plcbuilder.ide.settings import Settings
+    app = create_application()
+    win = MainWindow(Settings(sys.argv[3]), start_controller=(mode == "with"))
+f = FirstPaint(ready)
+win.installEventFilter(f)
+win.show()
+if mode != "bare":
+    win.open_project(sys.argv[2])
+app.exec()
+"""
+
+
+def startup_figures(runs: int = 5) -> list[str]:
+    """A new process to an interactive window (painted once, and the event
+    loop answered), the example project open: with the embedded controller,
+    without it, and a bare Qt main window (the floor); interleaved, median of
+    ``runs``."""
+    import subprocess
+    import sys
+    from plcbuilder.project.new import create_project
+    got: dict[str, list[float]] = {"bare": [], "without": [], "with": [], "panels": []}
+    with tempfile.TemporaryDirectory() as d:
+        project = Path(d) / "example"
+        create_project(project)
+        for i in range(runs):
+            for mode in ("bare", "without", "with"):
+                p = subprocess.run([sys.executable, "-c", _STARTUP_PROBE, mode, str(project),
+                                    str(Path(d) / f"{mode}{i}.ini")],
+                                   capture_output=True, text=True, timeout=120)
+                for line in p.stdout.splitlines():
+                    word, _, value = line.partition(" ")
+                    if word == "ready":
+                        got[mode].append(float(value))
+                    elif word == "panels":
+                        got["panels"].append(float(value))
+    if not all(got[m] for m in ("bare", "without", "with")):
+        return ["start-up: a probe failed"]
+    med = {k: statistics.median(v) for k, v in got.items() if v}
+    out = [f"start-up to an interactive window (new process, painted, loop answering), median of "
+           f"{runs}: bare Qt window {med['bare'] * 1000:.0f} ms (floor); IDE without the "
+           f"controller {med['without'] * 1000:.0f} ms = {med['without'] / med['bare']:.2f}x the "
+           f"floor (goal <= 2.5x); with the embedded controller {med['with'] * 1000:.0f} ms = "
+           f"{med['with'] / med['without']:.2f}x without (goal <= 1.15x)"]
+    if "panels" in med:
+        out.append(f"start-up with the controller, until the run docks are built (after the "
+                   f"first paint): median {med['panels'] * 1000:.0f} ms")
+    return out
+
+
+# ------------------------------------------------------- many lanes (point 7)
+
+def lane_figures(lane_counts=(8, 32, 64), points: int = 10000, curves: int = 10,
+                 frames: int = 15) -> list[str]:
+    """One frame = redraw the outputs plot (``lanes`` output lanes) and the
+    analog plot (``curves`` curves), ``points`` samples each, and paint both
+    (synchronously). The floor, in the same run and interleaved: the same
+    points as one plain pyqtgraph curve per panel (lanes broken by
+    ``connect``), set and painted in a twin window of the same size."""
+    os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
+    import numpy as np
+    from PySide6 import QtCore, QtWidgets
+    import pyqtgraph as pg
+
+    from plcbuilder.controller import events as ev
+    from plcbuilder.ide.panels.runpanels import RunPanels
+
+    class Conn(QtCore.QObject):
+        sig_connected = QtCore.Signal(str)
+        sig_disconnected = QtCore.Signal(str)
+        sig_state = QtCore.Signal(object, int)
+        sig_events = QtCore.Signal(list)
+        sig_samples = QtCore.Signal(list)
+        sig_error = QtCore.Signal(str)
+        connected = False
+
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([])
+    out = []
+    for lanes in lane_counts:
+        win = QtWidgets.QMainWindow()
+        panels = RunPanels(win, Conn(), capacity=points)
+        panels.timer.stop()
+        panels.timebase.set_window(points / 1000.0)
+        for key in ("outputs", "analog"):
+            win.addDockWidget(QtCore.Qt.DockWidgetArea.TopDockWidgetArea, panels.dock(key))
+        for key in ("proc", "axes", "inputs", "watch", "log"):
+            panels.dock(key).hide()
+        win.resize(1600, 900)
+        win.show()
+        n = np.arange(points)
+        samples = []
+        for i in n.tolist():
+            words = [0] * 8
+            for pin in range(lanes):
+                words[pin // 32] |= ((i >> (pin % 12)) & 1) << (pin % 32)
+            analog = [((i * (c + 3)) % 1000) for c in range(curves)] + [0] * (24 - curves)
+            samples.append(ev.Sample(t_ms=i, running="BENCH", proc=70, message=0,
+                                     inputs=(0,) * 8, outputs=tuple(words),
+                                     pwm=tuple(analog[0:8]), dac=tuple(analog[8:16]),
+                                     adc=tuple(analog[16:24]), axes=(0,) * 9,
+                                     velocities=(0,) * 9))
+        panels.model.add_samples(samples)
+        for pin in range(lanes):
+            panels.lanes.pin_lane("outputs", pin)
+        lw, aw = panels.lanes.widget, panels.analog.widget
+        panels.lanes.refresh(force=True)
+        panels.analog.refresh(force=True)
+        app.processEvents()
+        # the floor: the same points as one curve per panel
+        twin = QtWidgets.QWidget()
+        lay = QtWidgets.QHBoxLayout(twin)
+        fl, fa = pg.PlotWidget(), pg.PlotWidget()
+        lay.addWidget(fl)
+        lay.addWidget(fa)
+        twin.resize(lw.width() + aw.width(), max(lw.height(), aw.height()))
+        fl.setFixedSize(lw.size())
+        fa.setFixedSize(aw.size())
+        twin.show()
+        cl, ca = fl.plot(), fa.plot()
+        t = n / 1000.0
+        bits = np.array([(n >> (p % 12)) & 1 for p in range(lanes)], dtype=float)
+        lx = np.tile(t, lanes)
+        ly = (bits + 1.5 * np.arange(lanes)[::-1, None]).ravel()
+        lc = np.ones(len(lx), dtype=bool)
+        lc[points - 1::points] = False
+        ay = np.array([(n * (c + 3)) % 1000 for c in range(curves)], dtype=float).ravel()
+        ax = np.tile(t, curves)
+        ac = np.ones(len(ax), dtype=bool)
+        ac[points - 1::points] = False
+        app.processEvents()
+
+        def ours():
+            t0 = time.perf_counter()
+            panels.lanes.refresh(force=True)
+            panels.analog.refresh(force=True)
+            lw.viewport().repaint()
+            aw.viewport().repaint()
+            return time.perf_counter() - t0
+
+        def floor():
+            t0 = time.perf_counter()
+            cl.setData(lx, ly, connect=lc)
+            ca.setData(ax, ay, connect=ac)
+            fl.viewport().repaint()
+            fa.viewport().repaint()
+            return time.perf_counter() - t0
+
+        a, b = [], []
+        for _ in range(frames):
+            a.append(ours())
+            b.append(floor())
+        ma, mb = statistics.median(a), statistics.median(b)
+        out.append(f"{lanes} output lanes + {curves} curves x {points} points: "
+                   f"{ma * 1000:.1f} ms a frame ({1 / ma:.0f} fps); floor (one curve per panel, "
+                   f"same points) {mb * 1000:.1f} ms; ratio {ma / mb:.2f} "
+                   f"(goal at 64 lanes <= 1.3)")
+        panels.shutdown()
+        twin.close()
+        win.close()
+        win.deleteLater()
+        twin.deleteLater()
+        app.processEvents()
+    return out
+
+
 # --------------------------------------------------------- idle CPU (point 4)
 
 _CPU_PROBE = r"""

@@ -22,6 +22,7 @@ from PySide6 import QtCore, QtWidgets
 from plcbuilder.api import abi
 from plcbuilder.link.client import ControllerStatus
 from plcbuilder.api import events as ev
+from plcbuilder.ide.docks import RUN_DOCKS
 from plcbuilder.ide.panels.inputs import InputsPanel
 from plcbuilder.ide.panels.log import LogPanel
 from plcbuilder.ide.panels.model import RunModel
@@ -60,16 +61,13 @@ class RunPanels(QtCore.QObject):
     """A fault was clicked in the log: its source file and line (1-based). The
     file is the one the compiler recorded, or ``NAME.plc`` of the procedure."""
 
-    DOCKS = (("proc", "Proc / messages", "runProcDock"),
-             ("outputs", "Outputs", "runOutputsDock"),
-             ("analog", "PWM / DAC / ADC", "runAnalogDock"),
-             ("axes", "Axes", "runAxesDock"),
-             ("inputs", "Inputs", "runInputsDock"),
-             ("watch", "Watch", "runWatchDock"),
-             ("log", "Run log", "runLogDock"))
+    DOCKS = RUN_DOCKS
 
     def __init__(self, main_window: Optional[QtWidgets.QWidget], connection,
-                 capacity: int = 30000, fps: int = FPS):
+                 capacity: int = 30000, fps: int = FPS,
+                 docks: Optional[Mapping[str, QtWidgets.QDockWidget]] = None):
+        """``docks``: empty docks to fill (by key), made before the window
+        showed; by default the panels make their own."""
         super().__init__(main_window)
         self.connection = connection
         self.model = RunModel(capacity)
@@ -88,8 +86,10 @@ class RunPanels(QtCore.QObject):
                    "log": self.log}
         self._docks: dict[str, QtWidgets.QDockWidget] = {}
         for key, title, object_name in self.DOCKS:
-            dock = QtWidgets.QDockWidget(title, main_window)
-            dock.setObjectName(object_name)
+            dock = docks.get(key) if docks else None
+            if dock is None:
+                dock = QtWidgets.QDockWidget(title, main_window)
+                dock.setObjectName(object_name)
             dock.setWidget(widgets[key])
             dock.setAllowedAreas(Qt.DockWidgetArea.AllDockWidgetAreas)
             dock.visibilityChanged.connect(self._on_visibility)
