@@ -460,3 +460,42 @@ def test_hidden_docks_do_not_redraw(qtbot, panels, fake, monkeypatch):
     assert panels.lanes.frames == before[1][0] + 1
     panels.dock("watch").show()
     assert fake.calls[-1] == ("variables",)
+
+
+def test_lanes_are_one_curve_that_keeps_every_edge(qtbot, panels, fake):
+    panels.timebase.set_window(0.3)
+    dock = panels.dock("outputs")
+    dock.setFloating(True)
+    dock.resize(1500, 400)
+    qtbot.waitUntil(lambda: panels.lanes.plot.getViewBox().width() > 1000)
+    fake.sig_samples.emit([sample(t, outputs=(t & 1) | ((t >> 1) & 1) << 1 | 1 << 5)
+                           for t in range(300)])
+    panels.tick()
+    lanes = panels.lanes
+    assert lanes.lanes() == [("outputs", 0), ("outputs", 1), ("outputs", 5)]
+    x, y = lanes.merged_data("outputs")
+    items = [i for i in lanes.plot.listDataItems() if isinstance(i, type(lanes._items["outputs"]))]
+    assert len(items) == 2                             # outputs and inputs: one curve each
+    t = np.arange(300) / 1000.0 - lanes.offset
+    for pin, period in ((0, 1), (1, 2)):
+        base = lanes._lane_y[("outputs", pin)]
+        mine = (y >= base - 0.01) & (y <= base + 1.01)
+        lx, ly = x[mine], y[mine] - base
+        edges = np.arange(period, 300, period)        # every change of the output
+        assert len(lx) == 2 + 2 * len(edges)
+        assert np.allclose(lx[1:-1:2], t[edges]) and np.allclose(lx[2:-1:2], t[edges])
+        want = (edges // period) & 1
+        assert np.array_equal(ly[2:-1:2], want) and np.array_equal(ly[1:-1:2], 1 - want)
+    steady = lanes._lane_y[("outputs", 5)]
+    assert np.count_nonzero(np.isclose(y, steady + 1)) == 2   # held high, start to end
+    # a lane with more edges than pixels keeps the first and last of each pixel column
+    from plcbuilder.ide.panels.plots.lanes import lane_path
+    n = 20000
+    words = np.zeros((8, n), dtype=np.uint32)
+    words[0] = np.arange(n) & 1
+    tt = np.arange(n) / 1000.0
+    x, y, connect = lane_path(words, [0], [0.0], tt, tt[-1], 0.0, 20.0 / 500)
+    assert len(x) <= 2 + 4 * 501 and not connect[-1] and connect[:-1].all()
+    cols = np.floor(x[1:-1] / (20.0 / 500)).astype(int)
+    for c in np.unique(cols)[:-1]:                     # each column shows both levels
+        assert set(y[1:-1][cols == c]) == {0.0, 1.0}

@@ -43,10 +43,15 @@ class LanesPanel(TimePanel):
         self.names = {"inputs": {}, "outputs": {}}
         self.pinned: list[tuple[str, int]] = []
         self.hidden: set[tuple[str, int]] = set()
-        self._items: dict[tuple[str, int], pg.PlotDataItem] = {}
+        # every lane of a kind is one curve (a path broken between lanes):
+        # a curve per lane costs pyqtgraph a paint and a setData each
+        self._items: dict[str, pg.PlotDataItem] = {
+            kind: _merged_curve(self.plot, colour)
+            for kind, colour in (("outputs", style.OUTPUT_COLOUR),
+                                 ("inputs", style.INPUT_COLOUR))}
         self._lanes: list[tuple[str, int]] = []
         self._lane_y: dict[tuple[str, int], float] = {}
-        self._bands: list[pg.LinearRegionItem] = []
+        self._bands: Optional[pg.BarGraphItem] = None
         self.pin_count = 64
 
         lay = QtWidgets.QVBoxLayout(self)
@@ -105,34 +110,20 @@ class LanesPanel(TimePanel):
 
     # ---------------------------------------------------------------- draw
     def _relayout(self, lanes: list[tuple[str, int]]) -> None:
-        for key in list(self._items):
-            if key not in lanes:
-                self.plot.removeItem(self._items.pop(key))
-        for band in self._bands:
-            self.plot.removeItem(band)
-        self._bands = []
         n = len(lanes)
-        ticks = []
-        for i, key in enumerate(lanes):
-            y = (n - 1 - i) * self.LANE
-            # a static band behind every lane: where its 0 and 1 levels are
-            band = pg.LinearRegionItem((y - 0.2, y + 1.2), orientation="horizontal",
-                                       movable=False, brush=pg.mkBrush(style.LANE_BANDS[i % 2]),
-                                       pen=pg.mkPen(None))
-            band.setZValue(-50)
-            for line in band.lines:
-                line.setPen(pg.mkPen(None))
-                line.setHoverPen(pg.mkPen(None))
-            self.plot.addItem(band, ignoreBounds=True)
-            self._bands.append(band)
-            item = self._items.get(key)
-            if item is None:
-                c = style.OUTPUT_COLOUR if key[0] == "outputs" else style.INPUT_COLOUR
-                item = style.new_curve(self.plot, c, stepMode="right")   # sample and hold
-                self._items[key] = item
-            item.setPos(0, y)
-            self._lane_y[key] = y
-            ticks.append((y + 0.5, self.lane_label(*key)))
+        ys = np.array([(n - 1 - i) * self.LANE for i in range(n)], dtype=float)
+        # one item paints every lane's band (where its 0 and 1 levels are)
+        if self._bands is not None:
+            self.plot.removeItem(self._bands)
+            self._bands = None
+        if n:
+            self._bands = pg.BarGraphItem(
+                x0=-1e9, width=2e9, y0=ys - 0.2, height=1.4, pen=pg.mkPen(None),
+                brushes=[pg.mkBrush(style.LANE_BANDS[i % 2]) for i in range(n)])
+            self._bands.setZValue(-50)
+            self.plot.addItem(self._bands, ignoreBounds=True)
+        self._lane_y = {key: float(y) for key, y in zip(lanes, ys)}
+        ticks = [(y + 0.5, self.lane_label(*key)) for key, y in zip(lanes, ys)]
         self.plot.getAxis("left").setTicks([ticks, []])
         top = max(n, 1) * self.LANE
         self.plot.setYRange(-0.35, top - 0.15, padding=0)
@@ -143,19 +134,36 @@ class LanesPanel(TimePanel):
         if lanes != self._lanes:
             self._relayout(lanes)
         m = self.model
-        t = self.x(a, b)
-        for key, item in self._items.items():
-            item.setData(t, self.hold(m.bit_series(key[0], key[1], a, b)))
+        t = m.time.view()[a:b] - self.offset
+        end = self._extend if (self._extend and len(t)) else (t[-1] if len(t) else 0.0)
+        px = max(16, int(self.plot.getViewBox().width()))
+        per_px = max((t1 - t0) / px, 1e-12)
+        left = t0 - self.offset
+        for kind, item in self._items.items():
+            keys = [k for k in lanes if k[0] == kind]
+            if not keys or not len(t):
+                item.setData([], [])
+                continue
+            rb = m.outputs if kind == "outputs" else m.inputs
+            x, y, connect = lane_path(rb.views()[:, a:b], [p for _, p in keys],
+                                      [self._lane_y[k] for k in keys], t, end, left, per_px)
+            item.setData(x, y, connect=connect)
         self._empty.setVisible(not lanes)
         if not lanes:
             center_item(self._empty, self.plot)
+
+    def merged_data(self, kind: str = "outputs") -> tuple[np.ndarray, np.ndarray]:
+        """The merged curve's points of every ``kind`` lane (as last drawn)."""
+        x, y = self._items[kind].getOriginalDataset()
+        return (np.asarray(x) if x is not None else np.empty(0),
+                np.asarray(y) if y is not None else np.empty(0))
 
     def watched(self) -> list:
         return [self.model.inputs, self.model.outputs]
 
     def shift(self, dx: float) -> None:
-        for key, item in self._items.items():
-            item.setPos(dx, self._lane_y.get(key, 0.0))
+        for item in self._items.values():
+            item.setPos(dx, 0)
 
     # --------------------------------------------------------- context menu
     def _lane_at(self, pos: QtCore.QPoint) -> Optional[tuple[str, int]]:
@@ -203,3 +211,68 @@ class LanesPanel(TimePanel):
                                                 0, 0, PINS - 1)
         if ok:
             self.pin_lane(kind, pin)
+
+
+def _merged_curve(plot: pg.PlotItem, colour: str) -> pg.PlotDataItem:
+    """A curve for many lanes: no clipping or downsampling by pyqtgraph (its
+    x goes back to the left edge at every lane; :func:`lane_path` already
+    keeps only the edges)."""
+    item = pg.PlotDataItem(pen=style.pen(colour))
+    item.setSkipFiniteCheck(True)
+    plot.addItem(item)
+    item.setClipToView(False)
+    item.setDownsampling(auto=False)
+    return item
+
+
+def lane_path(words: np.ndarray, pins, ys, t: np.ndarray, end: float, left: float,
+              per_px: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The points of a logic-analyser path for many lanes at once.
+
+    ``words``: the (8, n) input or output words of the samples at times
+    ``t``; ``pins`` the lanes' pins, ``ys`` their baselines. Each lane is held
+    from its first sample to ``end``, with two points at every edge (the
+    level before and after), so a lane costs 2 + 2 x its edges points however
+    many samples it holds. Where edges are denser than a pixel column
+    (``per_px`` seconds from ``left``), only the first and the last edge of
+    each column are kept: the column still shows both levels. Returns x, y
+    and pyqtgraph's ``connect`` array (False at the last point of a lane)."""
+    pins = np.asarray(pins, dtype=np.int64)
+    lanes = len(pins)
+    bits = ((words[pins // 32] >> (pins % 32).astype(np.uint32)[:, None]) & 1).astype(np.int8)
+    li, ii = np.nonzero(bits[:, 1:] != bits[:, :-1])       # edges, lane by lane, in time
+    ii = ii + 1                                              # the sample the new level starts at
+    te = t[ii]
+    if len(li) > 2 * max(1, int((t[-1] - t[0]) / per_px)):
+        col = np.floor((te - left) / per_px).astype(np.int64)
+        col -= col.min()
+        key = li * (col.max() + 1) + col
+        first = np.ones(len(key), dtype=bool)
+        first[1:] = key[1:] != key[:-1]
+        last = np.ones(len(key), dtype=bool)
+        last[:-1] = key[1:] != key[:-1]
+        keep = first | last
+        li, ii, te = li[keep], ii[keep], te[keep]
+    edges = np.bincount(li, minlength=lanes)
+    counts = 2 + 2 * edges
+    starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    total = int(counts.sum())
+    x = np.empty(total)
+    y = np.empty(total)
+    x[starts] = t[0]
+    y[starts] = bits[:, 0]
+    ends = starts + counts - 1
+    x[ends] = end
+    y[ends] = bits[:, -1]
+    if len(li):
+        first_edge = np.concatenate(([0], np.cumsum(edges)[:-1]))
+        rank = np.arange(len(li)) - first_edge[li]
+        pos = starts[li] + 1 + 2 * rank
+        x[pos] = te
+        x[pos + 1] = te
+        y[pos] = bits[li, ii - 1]
+        y[pos + 1] = bits[li, ii]
+    y += np.repeat(np.asarray(ys, dtype=float), counts)
+    connect = np.ones(total, dtype=bool)
+    connect[ends] = False
+    return x, y, connect
