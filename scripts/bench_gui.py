@@ -218,8 +218,7 @@ def measure_fps(seconds: float = 5.0, points: int = 10000, show: bool = True) ->
     win = QtWidgets.QMainWindow()
     conn = ControllerConnection()
     panels = RunPanels(win, conn, capacity=points)
-    panels.timer.stop()                 # frames are driven here, as fast as they go
-    panels.var_timer.stop()
+    panels.shutdown()                   # no timers: frames are driven here, as fast as they go
     panels.timebase.set_window(points / 1000.0)   # the whole buffer in view
     for key in ("outputs", "analog"):
         win.addDockWidget(QtCore.Qt.DockWidgetArea.TopDockWidgetArea, panels.dock(key))
@@ -456,7 +455,7 @@ def lane_figures(lane_counts=(8, 32, 64), points: int = 10000, curves: int = 10,
     for lanes in lane_counts:
         win = QtWidgets.QMainWindow()
         panels = RunPanels(win, Conn(), capacity=points)
-        panels.timer.stop()
+        panels.shutdown()                   # no timers: frames are driven here
         panels.timebase.set_window(points / 1000.0)
         for key in ("outputs", "analog"):
             win.addDockWidget(QtCore.Qt.DockWidgetArea.TopDockWidgetArea, panels.dock(key))

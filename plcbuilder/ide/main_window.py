@@ -79,6 +79,7 @@ class MainWindow(QMainWindow):
         self.run_docks: dict = {}            # the run docks by key (empty until then)
         self._pin_defines: Optional[dict] = None
         self._painted = False
+        self._controller_due = False         # started after the first paint
         self.right_docks: list = []          # the docks the default sizes apply to
         self._shown_once = False
         self.layout_restored = False
@@ -268,7 +269,7 @@ class MainWindow(QMainWindow):
         self._update_actions()
         self._show_welcome()
         self.lint.refresh_problems()
-        self.run_actions.start_controller_for_project()
+        self._start_controller()
         self.statusBar().showMessage(f"Opened {project.name} ({project.root})", 5000)
         self.sig_project_opened.emit(str(project.root))
         return True
@@ -469,17 +470,35 @@ class MainWindow(QMainWindow):
             self._shown_once = True
             if not self.layout_restored:
                 QTimer.singleShot(0, lambda: docks.default_dock_sizes(self))
-            if self.run_docks:
-                # the run panels come after the first paint; this is in case
-                # no paint comes (a minimised window)
-                QTimer.singleShot(500, self.ensure_run_panels)
+            # the controller and the run panels come after the first paint;
+            # this is in case no paint comes (a minimised window)
+            QTimer.singleShot(500, self._after_first_paint)
 
     def paintEvent(self, event) -> None:  # noqa: N802 - Qt override
         super().paintEvent(event)
         if not self._painted:
             self._painted = True
-            if self.run_docks and self.run_panels is None:
-                QTimer.singleShot(0, self.ensure_run_panels)
+            QTimer.singleShot(0, self._after_first_paint)
+
+    def _after_first_paint(self) -> None:
+        """The window is up: start the embedded controller (a child process,
+        spawned by the connection's thread) and, while it starts, build the
+        run panels."""
+        self._painted = True
+        if self._controller_due and not self._closing:
+            self._controller_due = False
+            self.run_actions.start_controller_for_project()
+        if self.run_docks and self.run_panels is None:
+            QTimer.singleShot(0, self.ensure_run_panels)
+
+    def _start_controller(self) -> None:
+        """Start (or restart) the project's controller; before the window's
+        first paint, only note that it is due (it would compete with the
+        window for the processor)."""
+        if self.isVisible() and not self._painted:
+            self._controller_due = True
+        else:
+            self.run_actions.start_controller_for_project()
 
     def _save_session(self) -> None:
         if self.project is not None:

@@ -528,6 +528,7 @@ def runwin(make_window, project):
 
 def test_the_run_side_calls_the_connection(runwin, qtbot, monkeypatch, project):
     w, conn = runwin
+    qtbot.waitUntil(lambda: bool(conn.calls))          # after the window's first paint
     assert conn.calls[0][0] == "start_embedded"
     args = conn.calls[0][1]
     assert "--limits" in args

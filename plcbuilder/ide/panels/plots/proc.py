@@ -53,6 +53,8 @@ class ProcPanel(TimePanel):
             self.plot.addItem(t, ignoreBounds=True)
             self._labels.append(t)
         self._ticks: tuple = ()
+        self._drawn_messages = -1                   # the model's message_version drawn
+        self._label_pos: list[tuple[float, float]] = []   # where the shown labels are
         self._tick_labels: list[tuple[int, str]] = []
         self._empty = empty_text(self.plot, "No samples yet: start a procedure")
 
@@ -84,13 +86,13 @@ class ProcPanel(TimePanel):
         return [self.model.scalars]
 
     def data_changed(self) -> bool:
-        return (self.model.message_version != getattr(self, "_drawn_messages", None)
+        return (self.model.message_version != self._drawn_messages
                 or super().data_changed())
 
     def shift(self, dx: float) -> None:
         self.curve.setPos(dx, 0)
         self.markers.setPos(dx, 0)
-        for lab, (x, y) in zip(self._labels, getattr(self, "_label_pos", ())):
+        for lab, (x, y) in zip(self._labels, self._label_pos):
             lab.setPos(x + dx, y)
 
     def add_messages(self, rows) -> None:

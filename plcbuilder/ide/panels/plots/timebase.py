@@ -182,6 +182,7 @@ class TimePanel(QtWidgets.QWidget):
         self._base: list = []       # the newest row of each watched buffer at the last draw
         self._checked = 0           # model rows compared with _base so far
         self._last_move = 0.0
+        self._pending_move = False  # a time-only move put off (SCROLL_FPS)
         timebase.sig_changed.connect(self._mark_dirty)
 
     # ------------------------------------------------------------- plumbing
@@ -294,7 +295,7 @@ class TimePanel(QtWidgets.QWidget):
 
     def move_pending(self) -> bool:
         """A time-only move was put off (the redraw timer comes back for it)."""
-        return getattr(self, "_pending_move", False)
+        return self._pending_move
 
     def _redraw(self) -> bool:
         m = self.model
