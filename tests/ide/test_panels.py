@@ -494,8 +494,15 @@ def test_lanes_are_one_curve_that_keeps_every_edge(qtbot, panels, fake):
     words = np.zeros((8, n), dtype=np.uint32)
     words[0] = np.arange(n) & 1
     tt = np.arange(n) / 1000.0
-    x, y, connect = lane_path(words, [0], [0.0], tt, tt[-1], 0.0, 20.0 / 500)
-    assert len(x) <= 2 + 4 * 501 and not connect[-1] and connect[:-1].all()
-    cols = np.floor(x[1:-1] / (20.0 / 500)).astype(int)
-    for c in np.unique(cols)[:-1]:                     # each column shows both levels
-        assert set(y[1:-1][cols == c]) == {0.0, 1.0}
+    x, y, connect, (x0, x1, y0) = lane_path(words, [0], [0.0], tt, tt[-1], 0.0, 20.0 / 500)
+    assert len(x) == 6 and not connect[-1] and connect[:-1].all()
+    # every column shows both levels: one filled block from the first edge to the last
+    assert np.allclose(x0, [tt[1]]) and np.allclose(x1, [tt[-1]]) and np.allclose(y0, [0.0])
+    # a lane dense in places: blocks there, every edge elsewhere
+    words[0] = np.where((np.arange(n) // 5000) % 2 == 0, np.arange(n) & 1, (np.arange(n) >> 9) & 1)
+    x, y, connect, (x0, x1, y0) = lane_path(words, [0], [0.0], tt, tt[-1], 0.0, 20.0 / 500)
+    assert len(x0) == 2                                # the two dense stretches
+    sparse = (tt > x1[0]) & (tt < x0[1])
+    edges = np.nonzero(np.diff(words[0]))[0] + 1
+    for e in edges[sparse[edges]]:                     # every edge between them is in the path
+        assert np.count_nonzero(np.isclose(x, tt[e])) == 2

@@ -49,6 +49,7 @@ class LanesPanel(TimePanel):
             kind: _merged_curve(self.plot, colour)
             for kind, colour in (("outputs", style.OUTPUT_COLOUR),
                                  ("inputs", style.INPUT_COLOUR))}
+        self._blocks: dict[str, pg.BarGraphItem] = {}     # dense runs, filled
         self._lanes: list[tuple[str, int]] = []
         self._lane_y: dict[tuple[str, int], float] = {}
         self._bands: Optional[pg.BarGraphItem] = None
@@ -143,14 +144,35 @@ class LanesPanel(TimePanel):
             keys = [k for k in lanes if k[0] == kind]
             if not keys or not len(t):
                 item.setData([], [])
+                self._set_blocks(kind, (), (), ())
                 continue
             rb = m.outputs if kind == "outputs" else m.inputs
-            x, y, connect = lane_path(rb.views()[:, a:b], [p for _, p in keys],
-                                      [self._lane_y[k] for k in keys], t, end, left, per_px)
+            x, y, connect, blocks = lane_path(rb.views()[:, a:b], [p for _, p in keys],
+                                              [self._lane_y[k] for k in keys], t, end, left,
+                                              per_px)
             item.setData(x, y, connect=connect)
+            self._set_blocks(kind, *blocks)
         self._empty.setVisible(not lanes)
         if not lanes:
             center_item(self._empty, self.plot)
+
+    def _set_blocks(self, kind: str, x0, x1, y0) -> None:
+        """Runs of pixel columns that each show both levels, filled (one item a kind)."""
+        item = self._blocks.get(kind)
+        if not len(x0):
+            if item is not None:
+                item.hide()
+            return
+        if item is None:
+            colour = style.OUTPUT_COLOUR if kind == "outputs" else style.INPUT_COLOUR
+            item = pg.BarGraphItem(x0=x0, x1=x1, y0=y0, height=1.0, pen=pg.mkPen(None),
+                                   brush=pg.mkBrush(colour))
+            self.plot.addItem(item)
+            self._blocks[kind] = item
+        else:
+            item.setOpts(x0=x0, x1=x1, y0=y0, height=1.0)
+        item.setPos(0, 0)
+        item.show()
 
     def merged_data(self, kind: str = "outputs") -> tuple[np.ndarray, np.ndarray]:
         """The merged curve's points of every ``kind`` lane (as last drawn)."""
@@ -162,7 +184,7 @@ class LanesPanel(TimePanel):
         return [self.model.inputs, self.model.outputs]
 
     def shift(self, dx: float) -> None:
-        for item in self._items.values():
+        for item in (*self._items.values(), *self._blocks.values()):
             item.setPos(dx, 0)
 
     # --------------------------------------------------------- context menu
@@ -226,7 +248,7 @@ def _merged_curve(plot: pg.PlotItem, colour: str) -> pg.PlotDataItem:
 
 
 def lane_path(words: np.ndarray, pins, ys, t: np.ndarray, end: float, left: float,
-              per_px: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+              per_px: float):
     """The points of a logic-analyser path for many lanes at once.
 
     ``words``: the (8, n) input or output words of the samples at times
@@ -235,23 +257,22 @@ def lane_path(words: np.ndarray, pins, ys, t: np.ndarray, end: float, left: floa
     level before and after), so a lane costs 2 + 2 x its edges points however
     many samples it holds. Where edges are denser than a pixel column
     (``per_px`` seconds from ``left``), only the first and the last edge of
-    each column are kept: the column still shows both levels. Returns x, y
-    and pyqtgraph's ``connect`` array (False at the last point of a lane)."""
+    each column are kept: the column still shows both levels; and where
+    several columns in a row each hold both levels, the path keeps only the
+    first and last edge of that run, which becomes a block (drawn filled).
+    Returns x, y, pyqtgraph's ``connect`` array (False at the last point of a
+    lane) and the blocks (x0, x1, baseline y)."""
     pins = np.asarray(pins, dtype=np.int64)
     lanes = len(pins)
+    ys = np.asarray(ys, dtype=float)
     bits = ((words[pins // 32] >> (pins % 32).astype(np.uint32)[:, None]) & 1).astype(np.int8)
     li, ii = np.nonzero(bits[:, 1:] != bits[:, :-1])       # edges, lane by lane, in time
     ii = ii + 1                                              # the sample the new level starts at
     te = t[ii]
-    if len(li) > 2 * max(1, int((t[-1] - t[0]) / per_px)):
-        col = np.floor((te - left) / per_px).astype(np.int64)
-        col -= col.min()
-        key = li * (col.max() + 1) + col
-        first = np.ones(len(key), dtype=bool)
-        first[1:] = key[1:] != key[:-1]
-        last = np.ones(len(key), dtype=bool)
-        last[:-1] = key[1:] != key[:-1]
-        keep = first | last
+    blocks = (np.empty(0), np.empty(0), np.empty(0))
+    if len(li) > 1:
+        keep, blocks = _thin(li, te, left, per_px)
+        blocks = (blocks[0], blocks[1], ys[blocks[2]])
         li, ii, te = li[keep], ii[keep], te[keep]
     edges = np.bincount(li, minlength=lanes)
     counts = 2 + 2 * edges
@@ -272,7 +293,41 @@ def lane_path(words: np.ndarray, pins, ys, t: np.ndarray, end: float, left: floa
         x[pos + 1] = te
         y[pos] = bits[li, ii - 1]
         y[pos + 1] = bits[li, ii]
-    y += np.repeat(np.asarray(ys, dtype=float), counts)
+    y += np.repeat(ys, counts)
     connect = np.ones(total, dtype=bool)
     connect[ends] = False
-    return x, y, connect
+    return x, y, connect, blocks
+
+
+def _thin(li: np.ndarray, te: np.ndarray, left: float, per_px: float):
+    """Which edges (lane ``li``, time ``te``, sorted by lane then time) to
+    keep, and the blocks (x0, x1, lane index) of runs of pixel columns that
+    each hold two or more edges."""
+    col = np.floor((te - left) / per_px).astype(np.int64)
+    col -= col.min()
+    key = li * (int(col.max()) + 2) + col        # + 2: a lane's columns never touch the next
+    new = np.ones(len(key), dtype=bool)
+    new[1:] = key[1:] != key[:-1]
+    gf = np.nonzero(new)[0]                      # each column's first edge
+    gl = np.append(gf[1:] - 1, len(key) - 1)     # and last
+    gkey = key[gf]
+    dense = (gl - gf) >= 1                       # both levels in the column
+    # runs of dense columns next to each other (in one lane)
+    joined = np.zeros(len(gf), dtype=bool)
+    joined[1:] = dense[1:] & dense[:-1] & (gkey[1:] == gkey[:-1] + 1)
+    run_start = ~joined
+    run_id = np.cumsum(run_start) - 1
+    run_len = np.bincount(run_id)
+    in_block = run_len[run_id] >= 2
+    keep = np.zeros(len(key), dtype=bool)
+    alone = ~in_block
+    keep[gf[alone]] = True
+    keep[gl[alone]] = True
+    rs = np.nonzero(run_start & in_block)[0]     # the first column of each block
+    if len(rs):
+        re = rs + run_len[run_id[rs]] - 1          # and its last
+        first, last = gf[rs], gl[re]
+        keep[first] = True
+        keep[last] = True
+        return keep, (te[first], te[last], li[first])
+    return keep, (np.empty(0), np.empty(0), np.empty(0, dtype=np.int64))
