@@ -8,7 +8,20 @@
   measured side by side (goal at 3,000 lines: <= 0.7x);
 - typing: the cost of one keystroke in the editor (styling, brace matching,
   the debounce timer), per key;
-- opening the example project in a new main window, and Build All from it.
+- opening the example project in a new main window, and Build All from it;
+- idle CPU (issue 14 point 4): the IDE process's CPU time over 10 s with the
+  example project open and nothing running, with a software procedure (LUBE)
+  running at 1x and the run docks shown, and with them hidden; floors: a bare
+  Qt main window idling the same 10 s, and the link alone (the connection and
+  the run model receiving the same telemetry, no window);
+- start-up (point 5): a new process to an interactive window with the example
+  project open, with and without the embedded controller; floor: a bare Qt
+  main window;
+- many lanes (point 7): one frame of the outputs plot with 8/32/64 lanes and
+  the analog plot with 10 curves, 10k points each; floor: the same points as
+  one plain pyqtgraph curve per panel.
+
+    python scripts/bench_gui.py cpu|startup|lanes   # one figure only
 """
 
 from __future__ import annotations
@@ -143,6 +156,9 @@ def run() -> list[str]:
         win.shutdown()
         win.hide()
     out.append(_startup())
+    out.extend(startup_figures())
+    out.extend(cpu_figures())
+    out.extend(lane_figures())
     fps = measure_fps(5.0)
     out.append(f"run panels, 16 signals x 10k points, controller in real time: {fps:.0f} fps "
                f"(goal >= 30 fps)")
@@ -260,8 +276,7 @@ def measure_fps(seconds: float = 5.0, points: int = 10000, show: bool = True) ->
     win = QtWidgets.QMainWindow()
     conn = ControllerConnection()
     panels = RunPanels(win, conn, capacity=points)
-    panels.timer.stop()                 # frames are driven here, as fast as they go
-    panels.var_timer.stop()
+    panels.shutdown()                   # no timers: frames are driven here, as fast as they go
     panels.timebase.set_window(points / 1000.0)   # the whole buffer in view
     for key in ("outputs", "analog"):
         win.addDockWidget(QtCore.Qt.DockWidgetArea.TopDockWidgetArea, panels.dock(key))
@@ -365,7 +380,353 @@ def _startup() -> str:
             f"{statistics.median(times) * 1000:.0f} ms (goal <= 1500 ms)")
 
 
+# ---------------------------------------------------------- start-up (point 5)
+
+_STARTUP_PROBE = r"""
+import os, sys, time
+T0 = time.perf_counter()
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
+mode = sys.argv[1]
+from PySide6.QtCore import QEvent, QObject, QTimer
+from PySide6.QtWidgets import QApplication, QMainWindow
+
+class FirstPaint(QObject):
+    # interactive = the window painted once, then the event loop answered
+    def __init__(self, then):
+        super().__init__()
+        self.then, self.done = then, False
+    def eventFilter(self, obj, ev):
+        if ev.type() == QEvent.Type.Paint and not self.done:
+            self.done = True
+            QTimer.singleShot(0, self.then)
+        return False
+
+def ready():
+    print("ready", time.perf_counter() - T0, flush=True)
+    if mode == "with":
+        def panels():
+            if getattr(win, "run_panels", None) is not None:
+                print("panels", time.perf_counter() - T0, flush=True)
+                finish()
+            else:
+                QTimer.singleShot(5, panels)
+        panels()
+    else:
+        finish()
+
+def finish():
+    if hasattr(win, "shutdown"):
+        win.shutdown()
+    app.quit()
+
+if mode == "bare":
+    app = QApplication([])
+    win = QMainWindow()
+    win.resize(1360, 860)
+else:
+    from plcbuilder.ide.app import create_application
+    from plcbuilder.ide.main_window import MainWindow
+    from plcbuilder.ide.settings import Settings
+    app = create_application()
+    win = MainWindow(Settings(sys.argv[3]), start_controller=(mode == "with"))
+f = FirstPaint(ready)
+win.installEventFilter(f)
+win.show()
+if mode != "bare":
+    win.open_project(sys.argv[2])
+app.exec()
+"""
+
+
+def startup_figures(runs: int = 5) -> list[str]:
+    """A new process to an interactive window (painted once, and the event
+    loop answered), the example project open: with the embedded controller,
+    without it, and a bare Qt main window (the floor); interleaved, median of
+    ``runs``."""
+    import subprocess
+    import sys
+    from plcbuilder.project.new import create_project
+    got: dict[str, list[float]] = {"bare": [], "without": [], "with": [], "panels": []}
+    with tempfile.TemporaryDirectory() as d:
+        project = Path(d) / "example"
+        create_project(project)
+        # compiled modules cached, as an installed package has them (where
+        # PYTHONDONTWRITEBYTECODE is set, every start would compile every module)
+        env = dict(os.environ, PYTHONPYCACHEPREFIX=str(Path(d) / "pycache"))
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        for i in range(-1, runs):                   # run -1 warms the caches, not counted
+            for mode in ("bare", "without", "with"):
+                p = subprocess.run([sys.executable, "-c", _STARTUP_PROBE, mode, str(project),
+                                    str(Path(d) / f"{mode}{i}.ini")],
+                                   capture_output=True, text=True, timeout=120, env=env)
+                if i < 0:
+                    continue
+                for line in p.stdout.splitlines():
+                    word, _, value = line.partition(" ")
+                    if word == "ready":
+                        got[mode].append(float(value))
+                    elif word == "panels":
+                        got["panels"].append(float(value))
+    if not all(got[m] for m in ("bare", "without", "with")):
+        return ["start-up: a probe failed"]
+    med = {k: statistics.median(v) for k, v in got.items() if v}
+    out = [f"start-up to an interactive window (new process, painted, loop answering), median of "
+           f"{runs}: bare Qt window {med['bare'] * 1000:.0f} ms (floor); IDE without the "
+           f"controller {med['without'] * 1000:.0f} ms = {med['without'] / med['bare']:.2f}x the "
+           f"floor (goal <= 2.5x); with the embedded controller {med['with'] * 1000:.0f} ms = "
+           f"{med['with'] / med['without']:.2f}x without (goal <= 1.15x)"]
+    if "panels" in med:
+        out.append(f"start-up with the controller, until the run docks are built (after the "
+                   f"first paint): median {med['panels'] * 1000:.0f} ms")
+    return out
+
+
+# ------------------------------------------------------- many lanes (point 7)
+
+def lane_figures(lane_counts=(8, 32, 64), points: int = 10000, curves: int = 10,
+                 frames: int = 15) -> list[str]:
+    """One frame = redraw the outputs plot (``lanes`` output lanes) and the
+    analog plot (``curves`` curves), ``points`` samples each, and paint both
+    (synchronously). The floor, in the same run and interleaved: the same
+    number of points as one pyqtgraph curve per panel (one long series,
+    clipped to the view and peak-downsampled, the way pyqtgraph draws fastest),
+    set and painted in a twin window of the same size."""
+    os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
+    import numpy as np
+    from PySide6 import QtCore, QtWidgets
+    import pyqtgraph as pg
+
+    from plcbuilder.controller import events as ev
+    from plcbuilder.ide.connection import ControllerConnection
+    from plcbuilder.ide.panels.runpanels import RunPanels
+
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([])
+    out = []
+    for lanes in lane_counts:
+        win = QtWidgets.QMainWindow()
+        panels = RunPanels(win, ControllerConnection(), capacity=points)   # never started
+        panels.shutdown()                   # no timers: frames are driven here
+        panels.timebase.set_window(points / 1000.0)
+        for key in ("outputs", "analog"):
+            win.addDockWidget(QtCore.Qt.DockWidgetArea.TopDockWidgetArea, panels.dock(key))
+        for key in ("proc", "axes", "inputs", "watch", "log"):
+            panels.dock(key).hide()
+        win.resize(1600, 900)
+        win.show()
+        n = np.arange(points)
+        samples = []
+        for i in n.tolist():
+            words = [0] * 8
+            for pin in range(lanes):
+                words[pin // 32] |= ((i >> (pin % 12)) & 1) << (pin % 32)
+            analog = [((i * (c + 3)) % 1000) for c in range(curves)] + [0] * (24 - curves)
+            samples.append(ev.Sample(t_ms=i, running="BENCH", proc=70, message=0,
+                                     inputs=(0,) * 8, outputs=tuple(words),
+                                     pwm=tuple(analog[0:8]), dac=tuple(analog[8:16]),
+                                     adc=tuple(analog[16:24]), axes=(0,) * 9,
+                                     velocities=(0,) * 9))
+        panels.model.add_samples(samples)
+        for pin in range(lanes):
+            panels.lanes.pin_lane("outputs", pin)
+        lw, aw = panels.lanes.widget, panels.analog.widget
+        panels.lanes.refresh(force=True)
+        panels.analog.refresh(force=True)
+        app.processEvents()
+        # the floor: the same points as one curve per panel
+        twin = QtWidgets.QWidget()
+        lay = QtWidgets.QHBoxLayout(twin)
+        fl, fa = pg.PlotWidget(), pg.PlotWidget()
+        lay.addWidget(fl)
+        lay.addWidget(fa)
+        twin.resize(lw.width() + aw.width(), max(lw.height(), aw.height()))
+        fl.setFixedSize(lw.size())
+        fa.setFixedSize(aw.size())
+        twin.show()
+        # one long series per panel, as pyqtgraph draws best: monotonic x,
+        # clipped to the view and peak-downsampled to the pixels
+        cl, ca = fl.plot(), fa.plot()
+        for c in (cl, ca):
+            c.setClipToView(True)
+            c.setDownsampling(auto=True, method="peak")
+        bits = np.array([(n >> (p % 12)) & 1 for p in range(lanes)], dtype=float)
+        ly = (bits + 1.5 * np.arange(lanes)[::-1, None]).ravel()
+        lx = np.arange(len(ly)) / (1000.0 * lanes)
+        ay = np.array([(n * (c + 3)) % 1000 for c in range(curves)], dtype=float).ravel()
+        ax = np.arange(len(ay)) / (1000.0 * curves)
+        fl.setXRange(0, points / 1000.0, padding=0)
+        fa.setXRange(0, points / 1000.0, padding=0)
+        app.processEvents()
+
+        def ours():
+            t0 = time.perf_counter()
+            panels.lanes.refresh(force=True)
+            panels.analog.refresh(force=True)
+            lw.viewport().repaint()
+            aw.viewport().repaint()
+            return time.perf_counter() - t0
+
+        def floor():
+            t0 = time.perf_counter()
+            cl.setData(lx, ly)
+            ca.setData(ax, ay)
+            fl.viewport().repaint()
+            fa.viewport().repaint()
+            return time.perf_counter() - t0
+
+        a, b = [], []
+        for _ in range(frames):
+            a.append(ours())
+            b.append(floor())
+        ma, mb = statistics.median(a), statistics.median(b)
+        out.append(f"{lanes} output lanes + {curves} curves x {points} points: "
+                   f"{ma * 1000:.1f} ms a frame ({1 / ma:.0f} fps); floor (the same points as one "
+                   f"curve per panel) {mb * 1000:.1f} ms; ratio {ma / mb:.2f} "
+                   f"(goal at 64 lanes <= 1.3)")
+        panels.shutdown()
+        twin.close()
+        win.close()
+        win.deleteLater()
+        twin.deleteLater()
+        app.processEvents()
+    return out
+
+
+# --------------------------------------------------------- idle CPU (point 4)
+
+_CPU_PROBE = r"""
+import os, sys, time
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
+mode, project, ini, seconds = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
+from PySide6.QtCore import QTimer
+from PySide6.QtWidgets import QApplication, QMainWindow
+
+def pump(app, cond, timeout):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end and not cond():
+        app.processEvents()
+        time.sleep(0.01)
+    return cond()
+
+def measure(app, settle, secs):
+    # one event loop: settle, then the CPU time (every thread) over secs
+    got = {}
+    def begin():
+        got["c0"] = time.process_time()
+        QTimer.singleShot(int(secs * 1000), end)
+    def end():
+        got["cpu"] = time.process_time() - got["c0"]
+        app.quit()
+    QTimer.singleShot(int(settle * 1000), begin)
+    app.exec()
+    return got["cpu"]
+
+if mode == "bare":
+    app = QApplication([])
+    win = QMainWindow()
+    win.resize(1360, 860)
+    win.show()
+    print("cpu", measure(app, 1.0, seconds), flush=True)
+    raise SystemExit(0)
+if mode == "link":
+    from plcbuilder.ide.connection import ControllerConnection
+    from plcbuilder.ide.panels.model import RunModel
+    app = QApplication([])
+    conn = ControllerConnection()
+    model = RunModel(30000)
+    conn.sig_samples.connect(model.add_samples)
+    conn.start_embedded()
+    if not pump(app, lambda: conn.connected, 60):
+        raise SystemExit("no controller")
+    with open(os.path.join(project, "build", "eeprom.rom"), "rb") as f:
+        conn.upload(f.read())
+    pump(app, lambda: len(model) > 100, 30)
+    print("cpu", measure(app, 1.0, seconds), flush=True)
+    conn.shutdown()
+    raise SystemExit(0)
+
+from plcbuilder.ide.app import create_application
+from plcbuilder.ide.main_window import MainWindow
+from plcbuilder.ide.settings import Settings
+app = create_application()
+win = MainWindow(Settings(ini), start_controller=True)
+win.show()
+win.open_project(project)
+if not pump(app, lambda: win.connected() and not win.busy() and win.run_panels is not None, 60):
+    raise SystemExit("no controller")
+if mode in ("run", "hidden"):
+    done = []
+    win.sig_build_finished.connect(done.append)
+    win.build_all()
+    pump(app, lambda: bool(done), 60)
+    win.upload()                  # LUBE, a software procedure, starts with the image
+    pump(app, lambda: len(win.run_panels.model) > 100, 30)
+    for d in win.run_panels.docks():
+        if mode == "hidden":
+            d.hide()
+        elif d.objectName() in ("runOutputsDock", "runInputsDock"):
+            d.show()
+            d.raise_()
+print("cpu", measure(app, 1.0, seconds), flush=True)
+win.shutdown()
+"""
+
+CPU_MODES = (("bare", "floor: a bare Qt main window"),
+             ("link", "floor: the link alone (connection + run model, LUBE's telemetry)"),
+             ("idle", "IDE, example project open, nothing running (goal <= 1 % of a core)"),
+             ("run", "IDE, LUBE running at 1x, run docks shown (goal <= 5 %)"),
+             ("hidden", "IDE, LUBE running at 1x, run docks hidden"))
+
+
+def cpu_figures(seconds: float = 10.0, runs: int = 3) -> list[str]:
+    """CPU time of a process over ``seconds`` (every thread; the controller is
+    a child and is not counted), each mode a new process, interleaved, median
+    of ``runs``."""
+    import subprocess
+    import sys
+    from plcbuilder.project.build import build_project
+    from plcbuilder.project.model import Project
+    from plcbuilder.project.new import create_project
+    got: dict[str, list[float]] = {m: [] for m, _ in CPU_MODES}
+    with tempfile.TemporaryDirectory() as d:
+        project = Path(d) / "example"
+        create_project(project)
+        build_project(Project.open(project))
+        for i in range(runs):
+            for mode, _ in CPU_MODES:
+                p = subprocess.run([sys.executable, "-c", _CPU_PROBE, mode, str(project),
+                                    str(Path(d) / f"{mode}{i}.ini"), str(seconds)],
+                                   capture_output=True, text=True, timeout=seconds + 180)
+                for line in p.stdout.splitlines():
+                    if line.startswith("cpu "):
+                        got[mode].append(float(line.split()[1]))
+    out = []
+    for mode, what in CPU_MODES:
+        if not got[mode]:
+            out.append(f"CPU over {seconds:g} s, {what}: the probe failed")
+            continue
+        med = statistics.median(got[mode])
+        out.append(f"CPU over {seconds:g} s, {what}: {med * 1000:.0f} ms = "
+                   f"{100 * med / seconds:.2f} % of a core (median of {len(got[mode])}: "
+                   + ", ".join(f"{v * 1000:.0f}" for v in got[mode]) + " ms)")
+    return out
+
+
 if __name__ == "__main__":
     import sys
-    for line in (diagnostics_while_typing() if sys.argv[1:] == ["diagnostics"] else run()):
-        print(line, flush=True)
+    which = sys.argv[1:] or ["all"]
+    lines = []
+    for w in which:
+        if w == "cpu":
+            lines += cpu_figures()
+        elif w == "startup":
+            lines += startup_figures()
+        elif w == "lanes":
+            lines += lane_figures()
+        elif w == "diagnostics":
+            lines += diagnostics_while_typing()
+        else:
+            lines += run()
+    for line in lines:
+        print(line)

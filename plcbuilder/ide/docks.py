@@ -38,6 +38,29 @@ def make_dock(win, title, name, widget, area) -> QDockWidget:
     return dock
 
 
+#: The run docks (key, title, objectName): made empty before the window shows,
+#: filled with the run panels after its first paint (pyqtgraph is not loaded
+#: until then).
+RUN_DOCKS = (("proc", "Proc / messages", "runProcDock"),
+             ("outputs", "Outputs", "runOutputsDock"),
+             ("analog", "PWM / DAC / ADC", "runAnalogDock"),
+             ("axes", "Axes", "runAxesDock"),
+             ("inputs", "Inputs", "runInputsDock"),
+             ("watch", "Watch", "runWatchDock"),
+             ("log", "Run log", "runLogDock"))
+
+
+def empty_run_docks(win) -> dict:
+    """The run docks, empty, by key (the run panels fill them later)."""
+    out = {}
+    for key, title, name in RUN_DOCKS:
+        dock = QDockWidget(title, win)
+        dock.setObjectName(name)
+        dock.setAllowedAreas(Qt.DockWidgetArea.AllDockWidgetAreas)
+        out[key] = dock
+    return out
+
+
 def place_run_docks(win, docks: list) -> None:
     """Right: the plots (tabbed) over inputs and watch (tabbed); the run log
     beside Problems and Build Output at the bottom."""

@@ -76,7 +76,11 @@ class MainWindow(QMainWindow):
         self._project: Optional[Project] = None
         self._closing = False
         self._last_state = ControllerStatus()
-        self.run_panels = None
+        self.run_panels = None               # made after the first paint (see ensure_run_panels)
+        self.run_docks: dict = {}            # the run docks by key (empty until then)
+        self._pin_defines: Optional[dict] = None
+        self._painted = False
+        self._controller_due = False         # started after the first paint
         self.right_docks: list = []          # the docks the default sizes apply to
         self._shown_once = False
         self.layout_restored = False
@@ -268,7 +272,7 @@ class MainWindow(QMainWindow):
         self._update_actions()
         self._show_welcome()
         self.lint.refresh_problems()
-        self.run_actions.start_controller_for_project()
+        self._start_controller()
         self.statusBar().showMessage(f"Opened {project.name} ({project.root})", 5000)
         self.sig_project_opened.emit(str(project.root))
         return True
@@ -423,7 +427,9 @@ class MainWindow(QMainWindow):
         run.sig_build_finished.connect(self.sig_build_finished)
 
     def _setup_run_side(self) -> None:
-        """The controller connection and the run docks."""
+        """The controller connection and the run docks, empty: the run panels
+        (pyqtgraph) fill them after the window's first paint, so that the
+        window shows as fast as it does without a controller."""
         run = self.run_actions
         if run.connection is None and run.start_controller:
             from plcbuilder.ide.connection import ControllerConnection
@@ -434,19 +440,29 @@ class MainWindow(QMainWindow):
             c.sig_disconnected.connect(self._on_disconnected)
             c.sig_state.connect(self._on_state)
             c.sig_error.connect(lambda t: self.statusBar().showMessage(t, 6000))
-            from plcbuilder.ide.panels import RunPanels
-            try:
-                self.run_panels = RunPanels(self, c)
-            except Exception as exc:  # noqa: BLE001 - the editor side works without them
-                import traceback
-                traceback.print_exc()
-                self.run_panels = None
-                self.statusBar().showMessage(f"The run panels are not available: {exc}")
-            if self.run_panels is not None:
-                self.run_panels.sig_open_location.connect(
-                    lambda f, ln: self.open_location(f, ln))
-                docks.place_run_docks(self, self.run_panels.docks())
+            self.run_docks = docks.empty_run_docks(self)
+            docks.place_run_docks(self, list(self.run_docks.values()))
         actions.fill_view_menu(self)
+
+    def ensure_run_panels(self):
+        """Make the run panels now, if they are due and not made yet (the
+        window makes them after its first paint); returns them (or None)."""
+        if self.run_panels is not None or not self.run_docks or self._closing:
+            return self.run_panels
+        try:
+            from plcbuilder.ide.panels import RunPanels
+            self.run_panels = RunPanels(self, self.connection, docks=self.run_docks)
+        except Exception as exc:  # noqa: BLE001 - the editor side works without them
+            import traceback
+            traceback.print_exc()
+            self.run_panels = None
+            self.run_docks = {}
+            self.statusBar().showMessage(f"The run panels are not available: {exc}")
+            return None
+        self.run_panels.sig_open_location.connect(lambda f, ln: self.open_location(f, ln))
+        if self._pin_defines is not None:
+            self._set_pin_names(self._pin_defines)
+        return self.run_panels
 
     # ============================================================ settings
     def reset_layout(self) -> None:
@@ -458,6 +474,35 @@ class MainWindow(QMainWindow):
             self._shown_once = True
             if not self.layout_restored:
                 QTimer.singleShot(0, lambda: docks.default_dock_sizes(self))
+            # the controller and the run panels come after the first paint;
+            # this is in case no paint comes (a minimised window)
+            QTimer.singleShot(500, self._after_first_paint)
+
+    def paintEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().paintEvent(event)
+        if not self._painted:
+            self._painted = True
+            QTimer.singleShot(0, self._after_first_paint)
+
+    def _after_first_paint(self) -> None:
+        """The window is up: start the embedded controller (a child process,
+        spawned by the connection's thread) and, while it starts, build the
+        run panels."""
+        self._painted = True
+        if self._controller_due and not self._closing:
+            self._controller_due = False
+            self.run_actions.start_controller_for_project()
+        if self.run_docks and self.run_panels is None:
+            QTimer.singleShot(0, self.ensure_run_panels)
+
+    def _start_controller(self) -> None:
+        """Start (or restart) the project's controller; before the window's
+        first paint, only note that it is due (it would compete with the
+        window for the processor)."""
+        if self.isVisible() and not self._painted:
+            self._controller_due = True
+        else:
+            self.run_actions.start_controller_for_project()
 
     def _save_session(self) -> None:
         if self.project is not None:
@@ -509,6 +554,7 @@ class MainWindow(QMainWindow):
         self.problems_dock.setWindowTitle(f"Problems ({e + w})" if e + w else "Problems")
 
     def _set_pin_names(self, header_defines: dict) -> None:
+        self._pin_defines = header_defines
         if self.run_panels is not None:
             try:
                 from plcbuilder.ide.panels import pin_names_from_defines

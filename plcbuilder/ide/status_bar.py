@@ -48,6 +48,11 @@ class StatusBar(QStatusBar):
                                            "(from the last compile)", 120)
         self.cursor_label = lab("cursorLabel", "Line and column of the caret", 110)
         self.eol_label = lab("eolLabel", "Encoding and line ends of the file (kept on save)")
+        # the time changes five times a second: a label that keeps its width
+        # does not lay the status bar (and the window) out again each time
+        self.time_label.setFixedWidth(self.time_label.fontMetrics().horizontalAdvance(
+            "t = 000000.000 s") + 12)
+        self.time_label.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
         self.show_problem_counts(0, 0)
         self.set_connection_text("no controller", False)
 
@@ -68,10 +73,14 @@ class StatusBar(QStatusBar):
         self.connection_label.setToolTip(reason)
 
     def show_state(self, st: ControllerStatus) -> None:
-        self.time_label.setText(f"t = {st.t_ms / 1000:.3f} s")
+        # while nothing runs, whole seconds: the label repaints once a second, not five times
+        busy = bool(st.running or st.software)
+        self.time_label.setText(f"t = {st.t_ms / 1000:.3f} s" if busy else f"t = {st.t_ms // 1000} s")
         running = st.running
         self.running_label.setText(f"▶ {running}" if running else "idle")
-        self.running_label.setStyleSheet("color: #1a7f37; font-weight: 600;" if running else "")
+        sheet = "color: #1a7f37; font-weight: 600;" if running else ""
+        if self.running_label.styleSheet() != sheet:      # a style sheet re-polishes: 5 Hz adds up
+            self.running_label.setStyleSheet(sheet)
         name = st.proc_name or api.proc_name(st.proc)
         self.proc_label.setText(f"proc {st.proc}" + (f" {name}" if name else ""))
 

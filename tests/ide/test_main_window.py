@@ -528,6 +528,7 @@ def runwin(make_window, project):
 
 def test_the_run_side_calls_the_connection(runwin, qtbot, monkeypatch, project):
     w, conn = runwin
+    qtbot.waitUntil(lambda: bool(conn.calls))          # after the window's first paint
     assert conn.calls[0][0] == "start_embedded"
     args = conn.calls[0][1]
     assert "--limits" in args
@@ -603,11 +604,10 @@ def test_state_goes_to_the_status_bar(runwin, project):
     assert "disconnected" in w.status.connection_label.text()
 
 
-def test_run_panels_are_docked_when_part_b_is_there(runwin):
+def test_run_panels_are_docked_when_part_b_is_there(runwin, qtbot):
     w, conn = runwin
     pytest.importorskip("plcbuilder.ide.panels")
-    if w.run_panels is None:
-        pytest.skip("the run panels did not start")
+    qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
     names = {d.objectName() for d in w.run_panels.docks()}
     assert names and all(w.dockWidgetArea(d) != Qt.DockWidgetArea.NoDockWidgetArea
                          for d in w.run_panels.docks())
@@ -711,3 +711,44 @@ def test_tab_menu_drop_and_status(win, project, qtbot):
     win.open_paths([str(other)])
     assert win.project.root == other.resolve()
     del a, c
+
+
+def test_run_panels_come_after_the_first_paint_and_work(make_window, project, qtbot, settings):
+    from plcbuilder.controller import events as ev
+    conn = FakeConnection()
+    w = MainWindow(settings, connection=conn, start_controller=True, debounce_ms=20)
+    qtbot.addWidget(w)
+    try:
+        # before the window shows: empty docks in their places, no pyqtgraph panels
+        assert w.run_panels is None
+        names = {d.objectName() for d in w.run_docks.values()}
+        assert {"runOutputsDock", "runProcDock", "runLogDock"} <= names
+        assert all(w.dockWidgetArea(d) != Qt.DockWidgetArea.NoDockWidgetArea
+                   for d in w.run_docks.values())
+        assert all(d.widget() is None for d in w.run_docks.values())
+        view = {a.text() for a in w.view_menu.actions()}
+        assert {"Outputs", "Run log"} <= view
+        w.open_project(project)
+        settle(qtbot, w)                       # the lint passes pin names before the panels
+        w.resize(1200, 800)
+        w.show()
+        qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
+        assert w._painted
+        p = w.run_panels
+        assert [p.dock(k) for k, *_ in p.DOCKS] == [w.run_docks[k] for k, *_ in p.DOCKS]
+        assert w.run_docks["outputs"].widget() is p.lanes
+        assert "OUTPUT_SPINDLE" in p.lanes.names["outputs"].values()   # the project's pins.h
+        # the connection reaches the panels
+        conn.sig_samples.emit([ev.Sample(t_ms=t, running="M03", proc=70, message=0,
+                                         inputs=(0,) * 8, outputs=(1,) + (0,) * 7,
+                                         pwm=(0,) * 8, dac=(0,) * 8, adc=(0,) * 8,
+                                         axes=(0,) * 9, velocities=(0,) * 9)
+                               for t in range(50)])
+        assert len(p.model) == 50
+        w.run_docks["outputs"].show()
+        w.run_docks["outputs"].raise_()
+        qtbot.waitUntil(lambda: p.lanes.lanes() == [("outputs", 0)] and p.lanes.frames > 0,
+                        timeout=5000)
+        assert w.ensure_run_panels() is p          # made once
+    finally:
+        w.shutdown()

@@ -376,3 +376,133 @@ def test_watch_panel_orders_and_follows(qtbot, panels, fake):
     w.procedure.activated.emit(w.procedure.currentIndex())
     assert w.current == "M05" and not w.follow.isChecked()
     assert w.value("x") == 1
+
+
+# ------------------------------------------------------------- redraw cost
+def _count_set_data(monkeypatch):
+    import pyqtgraph as pg
+    calls = []
+    orig = pg.PlotDataItem.setData
+
+    def counting(self, *a, **k):
+        calls.append(self)
+        return orig(self, *a, **k)
+    monkeypatch.setattr(pg.PlotDataItem, "setData", counting)
+    return calls
+
+
+def test_the_redraw_timer_stops_when_nothing_changes(qtbot, panels, fake):
+    fake.sig_samples.emit([sample(t, outputs=t & 1, running=None) for t in range(100)])
+    assert panels.timer.isActive()                    # samples woke it
+    panels.tick()
+    f0 = panels.lanes.frames
+    assert f0 >= 1
+    panels.tick()                                     # nothing new: it stops
+    assert not panels.timer.isActive()
+    # nothing runs and the new samples only advance time: nothing redraws
+    fake.sig_samples.emit([sample(t, outputs=1, running=None) for t in range(100, 200)])
+    assert panels.timer.isActive()
+    frames = [p.frames for p in panels.time_panels]
+    panels.tick()
+    assert [p.frames for p in panels.time_panels] == frames
+    assert panels.lanes.moves == 0 and not panels.timer.isActive()
+    # and the timer stays stopped while the event loop idles
+    ticks = panels.ticks
+    qtbot.wait(200)
+    assert panels.ticks == ticks
+    # a value that changes redraws, even while nothing runs
+    fake.sig_samples.emit([sample(200, outputs=0, running=None)])
+    panels.tick()
+    assert panels.lanes.frames == f0 + 1
+
+
+def test_only_time_advancing_moves_the_curves_without_set_data(qtbot, panels, fake,
+                                                             monkeypatch):
+    panels.timebase.set_window(1.0)
+    fake.sig_samples.emit([sample(t, outputs=t & 1, pwm=(t,)) for t in range(0, 2000, 10)])
+    fake.sig_samples.emit([sample(2000, outputs=1, pwm=(99,))])
+    panels.tick()
+    calls = _count_set_data(monkeypatch)
+    frames = panels.lanes.frames
+    fake.sig_samples.emit([sample(t, outputs=1, pwm=(99,)) for t in range(2001, 2100)])
+    panels.lanes._last_move = panels.analog._last_move = 0.0
+    panels.tick()
+    assert panels.lanes.frames == frames and panels.lanes.moves == 1
+    assert panels.lanes.offset == pytest.approx(panels.lanes.visible_span()[1])
+    assert calls == []                                 # no setData: the curves moved
+    # past the horizon the curves are drawn again
+    fake.sig_samples.emit([sample(t, outputs=1, pwm=(99,)) for t in range(2100, 3000, 10)])
+    panels.lanes._last_move = 0.0
+    panels.tick()
+    assert panels.lanes.frames == frames + 1 and calls
+
+
+def test_hidden_docks_do_not_redraw(qtbot, panels, fake, monkeypatch):
+    fake.sig_samples.emit([sample(t, outputs=t & 1, pwm=(t,), axes=(t,)) for t in range(100)])
+    panels.tick()
+    for d in panels.docks():
+        d.hide()
+    calls = _count_set_data(monkeypatch)
+    before = [(p.frames, p.moves) for p in panels.time_panels]
+    for k in range(5):
+        fake.sig_samples.emit([sample(t, outputs=t & 1, pwm=(t,), axes=(t,))
+                               for t in range(100 + 50 * k, 150 + 50 * k)])
+        panels.tick()
+    assert [(p.frames, p.moves) for p in panels.time_panels] == before and calls == []
+    assert not panels.timer.isActive()
+    fake.connected = True
+    fake.sig_state.emit(ControllerStatus(t_ms=10, running="M03", software=(), proc=70), 0)
+    panels._poll_variables()
+    assert ("variables",) not in fake.calls              # the watch is hidden
+    panels.dock("outputs").show()                      # shown: it catches up
+    assert panels.timer.isActive()
+    panels.tick()
+    assert panels.lanes.frames == before[1][0] + 1
+    panels.dock("watch").show()
+    assert fake.calls[-1] == ("variables",)
+
+
+def test_lanes_are_one_curve_that_keeps_every_edge(qtbot, panels, fake):
+    panels.timebase.set_window(0.3)
+    dock = panels.dock("outputs")
+    dock.setFloating(True)
+    dock.resize(1500, 400)
+    qtbot.waitUntil(lambda: panels.lanes.plot.getViewBox().width() > 1000)
+    fake.sig_samples.emit([sample(t, outputs=(t & 1) | ((t >> 1) & 1) << 1 | 1 << 5)
+                           for t in range(300)])
+    panels.tick()
+    lanes = panels.lanes
+    assert lanes.lanes() == [("outputs", 0), ("outputs", 1), ("outputs", 5)]
+    x, y = lanes.merged_data("outputs")
+    items = [i for i in lanes.plot.listDataItems() if isinstance(i, type(lanes._items["outputs"]))]
+    assert len(items) == 2                             # outputs and inputs: one curve each
+    t = np.arange(300) / 1000.0 - lanes.offset
+    for pin, period in ((0, 1), (1, 2)):
+        base = lanes._lane_y[("outputs", pin)]
+        mine = (y >= base - 0.01) & (y <= base + 1.01)
+        lx, ly = x[mine], y[mine] - base
+        edges = np.arange(period, 300, period)        # every change of the output
+        assert len(lx) == 2 + 2 * len(edges)
+        assert np.allclose(lx[1:-1:2], t[edges]) and np.allclose(lx[2:-1:2], t[edges])
+        want = (edges // period) & 1
+        assert np.array_equal(ly[2:-1:2], want) and np.array_equal(ly[1:-1:2], 1 - want)
+    steady = lanes._lane_y[("outputs", 5)]
+    assert np.count_nonzero(np.isclose(y, steady + 1)) == 2   # held high, start to end
+    # a lane with more edges than pixels keeps the first and last of each pixel column
+    from plcbuilder.ide.panels.plots.lanes import lane_path
+    n = 20000
+    words = np.zeros((8, n), dtype=np.uint32)
+    words[0] = np.arange(n) & 1
+    tt = np.arange(n) / 1000.0
+    x, y, connect, (x0, x1, y0) = lane_path(words, [0], [0.0], tt, tt[-1], 0.0, 20.0 / 500)
+    assert len(x) == 6 and not connect[-1] and connect[:-1].all()
+    # every column shows both levels: one filled block from the first edge to the last
+    assert np.allclose(x0, [tt[1]]) and np.allclose(x1, [tt[-1]]) and np.allclose(y0, [0.0])
+    # a lane dense in places: blocks there, every edge elsewhere
+    words[0] = np.where((np.arange(n) // 5000) % 2 == 0, np.arange(n) & 1, (np.arange(n) >> 9) & 1)
+    x, y, connect, (x0, x1, y0) = lane_path(words, [0], [0.0], tt, tt[-1], 0.0, 20.0 / 500)
+    assert len(x0) == 2                                # the two dense stretches
+    sparse = (tt > x1[0]) & (tt < x0[1])
+    edges = np.nonzero(np.diff(words[0]))[0] + 1
+    for e in edges[sparse[edges]]:                     # every edge between them is in the path
+        assert np.count_nonzero(np.isclose(x, tt[e])) == 2

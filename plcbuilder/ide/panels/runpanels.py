@@ -1,12 +1,20 @@
 """RunPanels: the docks that show a running controller, and their one redraw timer.
 
 Data path: ``connection.sig_samples`` -> :class:`RunModel` (numpy ring buffers,
-no widgets) -> one QTimer (40 Hz) -> ``refresh()`` of the visible panels only,
-which hand pyqtgraph views of the buffers cut to the visible time window.
+no widgets) -> one QTimer (at most 40 Hz) -> ``refresh()`` of the visible panels
+only, which hand pyqtgraph views of the buffers cut to the visible time window.
+
+The timer runs only while there is something to redraw: samples, events, a
+view change or a dock shown start it, and it stops after a tick that found
+nothing to do. A hidden dock does not redraw (it catches up when shown); when
+only time advanced, the plots move instead of redrawing, and only while
+something runs. The watch polls the controller's variables only while
+something runs and the watch is shown.
 """
 
 from __future__ import annotations
 
+import time
 from typing import Mapping, Optional
 
 from PySide6 import QtCore, QtWidgets
@@ -14,6 +22,7 @@ from PySide6 import QtCore, QtWidgets
 from plcbuilder.api import abi
 from plcbuilder.link.client import ControllerStatus
 from plcbuilder.api import events as ev
+from plcbuilder.ide.docks import RUN_DOCKS
 from plcbuilder.ide.panels.inputs import InputsPanel
 from plcbuilder.ide.panels.log import LogPanel
 from plcbuilder.ide.panels.model import RunModel
@@ -28,6 +37,7 @@ __all__ = ["RunPanels", "pin_names_from_defines", "default_pin_names"]
 
 FPS = 40                       # redraws a second (at most)
 VARIABLES_INTERVAL_MS = 250    # watch polls while something runs
+BUSY_GRACE = 0.5               # seconds the plots keep moving after the last run ended
 
 
 #: Pin names from defines (INPUT_* / OUTPUT_*): a name -> value text, (text, span) or int.
@@ -51,16 +61,13 @@ class RunPanels(QtCore.QObject):
     """A fault was clicked in the log: its source file and line (1-based). The
     file is the one the compiler recorded, or ``NAME.plc`` of the procedure."""
 
-    DOCKS = (("proc", "Proc / messages", "runProcDock"),
-             ("outputs", "Outputs", "runOutputsDock"),
-             ("analog", "PWM / DAC / ADC", "runAnalogDock"),
-             ("axes", "Axes", "runAxesDock"),
-             ("inputs", "Inputs", "runInputsDock"),
-             ("watch", "Watch", "runWatchDock"),
-             ("log", "Run log", "runLogDock"))
+    DOCKS = RUN_DOCKS
 
     def __init__(self, main_window: Optional[QtWidgets.QWidget], connection,
-                 capacity: int = 30000, fps: int = FPS):
+                 capacity: int = 30000, fps: int = FPS,
+                 docks: Optional[Mapping[str, QtWidgets.QDockWidget]] = None):
+        """``docks``: empty docks to fill (by key), made before the window
+        showed; by default the panels make their own."""
         super().__init__(main_window)
         self.connection = connection
         self.model = RunModel(capacity)
@@ -79,19 +86,29 @@ class RunPanels(QtCore.QObject):
                    "log": self.log}
         self._docks: dict[str, QtWidgets.QDockWidget] = {}
         for key, title, object_name in self.DOCKS:
-            dock = QtWidgets.QDockWidget(title, main_window)
-            dock.setObjectName(object_name)
+            dock = docks.get(key) if docks else None
+            if dock is None:
+                dock = QtWidgets.QDockWidget(title, main_window)
+                dock.setObjectName(object_name)
             dock.setWidget(widgets[key])
             dock.setAllowedAreas(Qt.DockWidgetArea.AllDockWidgetAreas)
+            dock.visibilityChanged.connect(self._on_visibility)
             self._docks[key] = dock
+        self._stopped = True          # until the timers exist
         self._state = ControllerStatus()
         self._missed = 0
         self._running: Optional[str] = None
         self._final_poll = 0          # polls still due after something ended
+        self._busy_until = 0.0        # monotonic time the plots may move until
+        self.ticks = 0                # redraw timer ticks (tests count them)
+        self._inputs_shown = None     # the inputs and ADC values the inputs panel shows
         self.inputs.set_enabled(False)
+        for panel in self.time_panels:
+            panel.sig_dirty.connect(self.wake)
 
         self.log.sig_open_location.connect(self.sig_open_location)
         self.inputs.sig_set_input.connect(lambda pin, v: self.connection.set_input(pin, v))
+        self.inputs.sig_set_input.connect(self.wake)
         self.inputs.sig_set_adc.connect(lambda ch, v: self.connection.set_adc(ch, v))
         c = connection
         c.sig_samples.connect(self._on_samples)
@@ -107,16 +124,16 @@ class RunPanels(QtCore.QObject):
         if getattr(c, "connected", False):
             self._on_connected(getattr(c, "address", ""))
 
-        self.set_pin_names(*default_pin_names())
         self.timer = QtCore.QTimer(self)
         self.timer.setTimerType(Qt.TimerType.PreciseTimer)
         self.timer.setInterval(max(1, 1000 // max(1, fps)))
         self.timer.timeout.connect(self.tick)
-        self.timer.start()
         self.var_timer = QtCore.QTimer(self)
         self.var_timer.setInterval(VARIABLES_INTERVAL_MS)
         self.var_timer.timeout.connect(self._poll_variables)
-        self.var_timer.start()
+        self._stopped = False
+        self.set_pin_names(*default_pin_names())
+        self.wake()
 
     # ------------------------------------------------------------------- API
     def docks(self) -> list[QtWidgets.QDockWidget]:
@@ -138,17 +155,43 @@ class RunPanels(QtCore.QObject):
         self.model.clear()
         self._cleared()
 
+    def wake(self, *args) -> None:
+        """Something may need a redraw: run the redraw timer (it stops itself)."""
+        if not self._stopped and not self.timer.isActive():
+            self.timer.start()
+
+    def busy(self) -> bool:
+        """Something runs on the controller (or ended a moment ago)."""
+        if self._running or self._state.software or self.model.running:
+            self._busy_until = time.monotonic() + BUSY_GRACE
+            return True
+        return time.monotonic() < self._busy_until
+
     def tick(self) -> None:
-        """One redraw: flush queued rows, refresh the visible panels."""
+        """One redraw: flush queued rows, refresh the visible panels; stop the
+        timer when nothing was left to do."""
+        self.ticks += 1
+        moving = self.busy()
+        work = False
         for panel in self.time_panels:
             if self._shown(panel):
-                panel.refresh()
+                work |= panel.refresh(moving=moving)
+                work |= panel.move_pending()
         self.proc.flush()
         self.log.flush()
         if self._shown(self.inputs):
-            self.inputs.refresh()
+            s = self.model.last_sample
+            key = (s.inputs, s.adc) if s is not None else None
+            pending = bool(getattr(self.inputs, "_pending", None))
+            if key != self._inputs_shown or pending:
+                self._inputs_shown = key
+                self.inputs.refresh()
+            work |= pending
+        if not work:
+            self.timer.stop()
 
     def shutdown(self) -> None:
+        self._stopped = True
         self.timer.stop()
         self.var_timer.stop()
 
@@ -162,12 +205,22 @@ class RunPanels(QtCore.QObject):
             p._epoch = self.model.epoch
             p.model_cleared()
             p._view_dirty = True
+        self.wake()
+
+    def _on_visibility(self, visible: bool) -> None:
+        if visible:
+            self.wake()
+            if self._shown(self.watch) and not self._stopped:
+                self._poll_variables()
+                if self._final_poll > 0 or self.busy():
+                    self.var_timer.start()
 
     def _on_samples(self, samples: list) -> None:
         epoch = self.model.epoch
         self.model.add_samples(samples)
         if self.model.epoch != epoch:
             self._cleared()
+        self.wake()
 
     def _on_events(self, events: list) -> None:
         rows = self.model.add_events(events)
@@ -177,10 +230,14 @@ class RunPanels(QtCore.QObject):
         if any(isinstance(e, (ev.Ended, ev.Fault)) for e in events):
             self._final_poll = 2
             self._poll_variables()
+            self.var_timer.start()
+        self.wake()
 
     def _on_state(self, st: ControllerStatus, missed: int = 0) -> None:
         self._state = st
         self._running = st.running
+        if (st.running or st.software) and not self.var_timer.isActive() and not self._stopped:
+            self.var_timer.start()
         t = st.t_ms
         parts = []
         if self._running:
@@ -221,14 +278,20 @@ class RunPanels(QtCore.QObject):
         self.log.add_note(f"controller disconnected: {reason}", "error")
 
     def _poll_variables(self) -> None:
+        busy = bool(self._running) or bool(self._state.software)
+        if not busy and self._final_poll <= 0:
+            self.var_timer.stop()           # nothing runs: nothing to poll
+            return
         if not getattr(self.connection, "connected", False):
             return
-        busy = bool(self._running) or bool(self._state.software)
-        if busy or self._final_poll > 0:
+        if not self._shown(self.watch):
             if not busy:
-                self._final_poll -= 1
-            if hasattr(self.connection, "request_variables"):
-                self.connection.request_variables()
+                self.var_timer.stop()       # the final polls wait for the watch to show
+            return
+        if not busy:
+            self._final_poll -= 1
+        if hasattr(self.connection, "request_variables"):
+            self.connection.request_variables()
 
     def _on_variables(self, variables: dict) -> None:
         self.watch.set_variables(variables, self._running)

@@ -2,9 +2,11 @@
 
 Every plot reads views of the :class:`~plcbuilder.ide.panels.model.RunModel`
 ring buffers when :meth:`TimePanel.refresh` is called by the panels' single
-redraw timer, and only when the model changed or the user moved the view. The
-slice handed to pyqtgraph is already cut to the visible time window, and each
-curve peak-downsamples it to the pixels it has.
+redraw timer, and only when a value it shows changed or the user moved the
+view; when only time advanced, the drawn curves move instead. The slice handed
+to pyqtgraph is already cut to the visible time window, and each curve
+peak-downsamples it to the pixels it has; the lanes are one curve per kind
+that keeps only the edges.
 """
 
 from plcbuilder.ide.panels.plots.axes import AxesPanel

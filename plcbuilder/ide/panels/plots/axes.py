@@ -76,8 +76,8 @@ class AxesPanel(TimePanel):
         for ax, item in self._pos.items():
             pos.append(m.axes.view(ax)[a:b])
             vel.append(m.axes.view(na + ax)[a:b])
-            item.setData(t, pos[-1])
-            self._vel[ax].setData(t, vel[-1])
+            item.setData(t, self.hold(pos[-1]))
+            self._vel[ax].setData(t, self.hold(vel[-1]))
         self._fit[0].fit(pos)
         self._fit[1].fit(vel)
         if m.version != self._path_version:
@@ -94,6 +94,14 @@ class AxesPanel(TimePanel):
             else:
                 self.xy_path.setData([], [])
                 self.xy_here.setData([], [])
+
+    def watched(self) -> list:
+        return [self.model.axes]
+
+    def shift(self, dx: float) -> None:
+        for d in (self._pos, self._vel):
+            for item in d.values():
+                item.setPos(dx, 0)
 
     def model_cleared(self) -> None:
         self._path_version = -1

@@ -64,7 +64,7 @@ class AnalogPanel(TimePanel):
         outs, ins = [], []
         for col, item in self._curves.items():
             y = m.analog.view(col)[a:b]
-            item.setData(t, y)
+            item.setData(t, self.hold(y))
             (ins if col >= 16 else outs).append(y)
         self._fit[0].fit(outs)
         self._fit[1].fit(ins)
@@ -76,6 +76,13 @@ class AnalogPanel(TimePanel):
             center_item(self._empty_out, self.out_plot)
         if not has_in:
             center_item(self._empty_in, self.in_plot)
+
+    def watched(self) -> list:
+        return [self.model.analog]
+
+    def shift(self, dx: float) -> None:
+        for item in self._curves.values():
+            item.setPos(dx, 0)
 
     def model_cleared(self) -> None:
         for col, item in self._curves.items():

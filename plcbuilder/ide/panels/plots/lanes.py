@@ -43,9 +43,16 @@ class LanesPanel(TimePanel):
         self.names = {"inputs": {}, "outputs": {}}
         self.pinned: list[tuple[str, int]] = []
         self.hidden: set[tuple[str, int]] = set()
-        self._items: dict[tuple[str, int], pg.PlotDataItem] = {}
+        # every lane of a kind is one curve (a path broken between lanes):
+        # a curve per lane costs pyqtgraph a paint and a setData each
+        self._items: dict[str, pg.PlotDataItem] = {
+            kind: _merged_curve(self.plot, colour)
+            for kind, colour in (("outputs", style.OUTPUT_COLOUR),
+                                 ("inputs", style.INPUT_COLOUR))}
+        self._blocks: dict[str, pg.BarGraphItem] = {}     # dense runs, filled
         self._lanes: list[tuple[str, int]] = []
-        self._bands: list[pg.LinearRegionItem] = []
+        self._lane_y: dict[tuple[str, int], float] = {}
+        self._bands: Optional[pg.BarGraphItem] = None
         self.pin_count = 64
 
         lay = QtWidgets.QVBoxLayout(self)
@@ -58,7 +65,7 @@ class LanesPanel(TimePanel):
     def set_pin_names(self, inputs: dict[int, str], outputs: dict[int, str]) -> None:
         self.names = {"inputs": dict(inputs), "outputs": dict(outputs)}
         self._lanes = []                 # relabel on the next draw
-        self._view_dirty = True
+        self._mark_dirty()
 
     def lane_label(self, kind: str, pin: int) -> str:
         name = self.names[kind].get(pin)
@@ -71,7 +78,7 @@ class LanesPanel(TimePanel):
         self.hidden.discard(key)
         if key not in self.pinned:
             self.pinned.append(key)
-        self._view_dirty = True
+        self._mark_dirty()
 
     def remove_lane(self, kind: str, pin: int) -> None:
         """Hide this pin's lane (until it is pinned again)."""
@@ -79,12 +86,12 @@ class LanesPanel(TimePanel):
         if key in self.pinned:
             self.pinned.remove(key)
         self.hidden.add(key)
-        self._view_dirty = True
+        self._mark_dirty()
 
     def reset_lanes(self) -> None:
         self.pinned.clear()
         self.hidden.clear()
-        self._view_dirty = True
+        self._mark_dirty()
 
     def y_labels(self) -> list[str]:
         """The lane names, top to bottom (as last drawn)."""
@@ -104,33 +111,20 @@ class LanesPanel(TimePanel):
 
     # ---------------------------------------------------------------- draw
     def _relayout(self, lanes: list[tuple[str, int]]) -> None:
-        for key in list(self._items):
-            if key not in lanes:
-                self.plot.removeItem(self._items.pop(key))
-        for band in self._bands:
-            self.plot.removeItem(band)
-        self._bands = []
         n = len(lanes)
-        ticks = []
-        for i, key in enumerate(lanes):
-            y = (n - 1 - i) * self.LANE
-            # a static band behind every lane: where its 0 and 1 levels are
-            band = pg.LinearRegionItem((y - 0.2, y + 1.2), orientation="horizontal",
-                                       movable=False, brush=pg.mkBrush(style.LANE_BANDS[i % 2]),
-                                       pen=pg.mkPen(None))
-            band.setZValue(-50)
-            for line in band.lines:
-                line.setPen(pg.mkPen(None))
-                line.setHoverPen(pg.mkPen(None))
-            self.plot.addItem(band, ignoreBounds=True)
-            self._bands.append(band)
-            item = self._items.get(key)
-            if item is None:
-                c = style.OUTPUT_COLOUR if key[0] == "outputs" else style.INPUT_COLOUR
-                item = style.new_curve(self.plot, c, stepMode="right")   # sample and hold
-                self._items[key] = item
-            item.setPos(0, y)
-            ticks.append((y + 0.5, self.lane_label(*key)))
+        ys = np.array([(n - 1 - i) * self.LANE for i in range(n)], dtype=float)
+        # one item paints every lane's band (where its 0 and 1 levels are)
+        if self._bands is not None:
+            self.plot.removeItem(self._bands)
+            self._bands = None
+        if n:
+            self._bands = pg.BarGraphItem(
+                x0=-1e9, width=2e9, y0=ys - 0.2, height=1.4, pen=pg.mkPen(None),
+                brushes=[pg.mkBrush(style.LANE_BANDS[i % 2]) for i in range(n)])
+            self._bands.setZValue(-50)
+            self.plot.addItem(self._bands, ignoreBounds=True)
+        self._lane_y = {key: float(y) for key, y in zip(lanes, ys)}
+        ticks = [(y + 0.5, self.lane_label(*key)) for key, y in zip(lanes, ys)]
         self.plot.getAxis("left").setTicks([ticks, []])
         top = max(n, 1) * self.LANE
         self.plot.setYRange(-0.35, top - 0.15, padding=0)
@@ -141,12 +135,57 @@ class LanesPanel(TimePanel):
         if lanes != self._lanes:
             self._relayout(lanes)
         m = self.model
-        t = self.x(a, b)
-        for key, item in self._items.items():
-            item.setData(t, m.bit_series(key[0], key[1], a, b))
+        t = m.time.view()[a:b] - self.offset
+        end = self._extend if (self._extend and len(t)) else (t[-1] if len(t) else 0.0)
+        px = max(16, int(self.plot.getViewBox().width()))
+        per_px = max((t1 - t0) / px, 1e-12)
+        left = t0 - self.offset
+        for kind, item in self._items.items():
+            keys = [k for k in lanes if k[0] == kind]
+            if not keys or not len(t):
+                item.setData([], [])
+                self._set_blocks(kind, (), (), ())
+                continue
+            rb = m.outputs if kind == "outputs" else m.inputs
+            x, y, connect, blocks = lane_path(rb.views()[:, a:b], [p for _, p in keys],
+                                              [self._lane_y[k] for k in keys], t, end, left,
+                                              per_px)
+            item.setData(x, y, connect=connect)
+            self._set_blocks(kind, *blocks)
         self._empty.setVisible(not lanes)
         if not lanes:
             center_item(self._empty, self.plot)
+
+    def _set_blocks(self, kind: str, x0, x1, y0) -> None:
+        """Runs of pixel columns that each show both levels, filled (one item a kind)."""
+        item = self._blocks.get(kind)
+        if not len(x0):
+            if item is not None:
+                item.hide()
+            return
+        if item is None:
+            colour = style.OUTPUT_COLOUR if kind == "outputs" else style.INPUT_COLOUR
+            item = pg.BarGraphItem(x0=x0, x1=x1, y0=y0, height=1.0, pen=pg.mkPen(None),
+                                   brush=pg.mkBrush(colour))
+            self.plot.addItem(item)
+            self._blocks[kind] = item
+        else:
+            item.setOpts(x0=x0, x1=x1, y0=y0, height=1.0)
+        item.setPos(0, 0)
+        item.show()
+
+    def merged_data(self, kind: str = "outputs") -> tuple[np.ndarray, np.ndarray]:
+        """The merged curve's points of every ``kind`` lane (as last drawn)."""
+        x, y = self._items[kind].getOriginalDataset()
+        return (np.asarray(x) if x is not None else np.empty(0),
+                np.asarray(y) if y is not None else np.empty(0))
+
+    def watched(self) -> list:
+        return [self.model.inputs, self.model.outputs]
+
+    def shift(self, dx: float) -> None:
+        for item in (*self._items.values(), *self._blocks.values()):
+            item.setPos(dx, 0)
 
     # --------------------------------------------------------- context menu
     def _lane_at(self, pos: QtCore.QPoint) -> Optional[tuple[str, int]]:
@@ -194,3 +233,101 @@ class LanesPanel(TimePanel):
                                                 0, 0, PINS - 1)
         if ok:
             self.pin_lane(kind, pin)
+
+
+def _merged_curve(plot: pg.PlotItem, colour: str) -> pg.PlotDataItem:
+    """A curve for many lanes: no clipping or downsampling by pyqtgraph (its
+    x goes back to the left edge at every lane; :func:`lane_path` already
+    keeps only the edges)."""
+    item = pg.PlotDataItem(pen=style.pen(colour))
+    item.setSkipFiniteCheck(True)
+    plot.addItem(item)
+    item.setClipToView(False)
+    item.setDownsampling(auto=False)
+    return item
+
+
+def lane_path(words: np.ndarray, pins, ys, t: np.ndarray, end: float, left: float,
+              per_px: float):
+    """The points of a logic-analyser path for many lanes at once.
+
+    ``words``: the (8, n) input or output words of the samples at times
+    ``t``; ``pins`` the lanes' pins, ``ys`` their baselines. Each lane is held
+    from its first sample to ``end``, with two points at every edge (the
+    level before and after), so a lane costs 2 + 2 x its edges points however
+    many samples it holds. Where edges are denser than a pixel column
+    (``per_px`` seconds from ``left``), only the first and the last edge of
+    each column are kept: the column still shows both levels; and where
+    several columns in a row each hold both levels, the path keeps only the
+    first and last edge of that run, which becomes a block (drawn filled).
+    Returns x, y, pyqtgraph's ``connect`` array (False at the last point of a
+    lane) and the blocks (x0, x1, baseline y)."""
+    pins = np.asarray(pins, dtype=np.int64)
+    lanes = len(pins)
+    ys = np.asarray(ys, dtype=float)
+    bits = ((words[pins // 32] >> (pins % 32).astype(np.uint32)[:, None]) & 1).astype(np.int8)
+    li, ii = np.nonzero(bits[:, 1:] != bits[:, :-1])       # edges, lane by lane, in time
+    ii = ii + 1                                              # the sample the new level starts at
+    te = t[ii]
+    blocks = (np.empty(0), np.empty(0), np.empty(0))
+    if len(li) > 1:
+        keep, blocks = _thin(li, te, left, per_px)
+        blocks = (blocks[0], blocks[1], ys[blocks[2]])
+        li, ii, te = li[keep], ii[keep], te[keep]
+    edges = np.bincount(li, minlength=lanes)
+    counts = 2 + 2 * edges
+    starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    total = int(counts.sum())
+    x = np.empty(total)
+    y = np.empty(total)
+    x[starts] = t[0]
+    y[starts] = bits[:, 0]
+    ends = starts + counts - 1
+    x[ends] = end
+    y[ends] = bits[:, -1]
+    if len(li):
+        first_edge = np.concatenate(([0], np.cumsum(edges)[:-1]))
+        rank = np.arange(len(li)) - first_edge[li]
+        pos = starts[li] + 1 + 2 * rank
+        x[pos] = te
+        x[pos + 1] = te
+        y[pos] = bits[li, ii - 1]
+        y[pos + 1] = bits[li, ii]
+    y += np.repeat(ys, counts)
+    connect = np.ones(total, dtype=bool)
+    connect[ends] = False
+    return x, y, connect, blocks
+
+
+def _thin(li: np.ndarray, te: np.ndarray, left: float, per_px: float):
+    """Which edges (lane ``li``, time ``te``, sorted by lane then time) to
+    keep, and the blocks (x0, x1, lane index) of runs of pixel columns that
+    each hold two or more edges."""
+    col = np.floor((te - left) / per_px).astype(np.int64)
+    col -= col.min()
+    key = li * (int(col.max()) + 2) + col        # + 2: a lane's columns never touch the next
+    new = np.ones(len(key), dtype=bool)
+    new[1:] = key[1:] != key[:-1]
+    gf = np.nonzero(new)[0]                      # each column's first edge
+    gl = np.append(gf[1:] - 1, len(key) - 1)     # and last
+    gkey = key[gf]
+    dense = (gl - gf) >= 1                       # both levels in the column
+    # runs of dense columns next to each other (in one lane)
+    joined = np.zeros(len(gf), dtype=bool)
+    joined[1:] = dense[1:] & dense[:-1] & (gkey[1:] == gkey[:-1] + 1)
+    run_start = ~joined
+    run_id = np.cumsum(run_start) - 1
+    run_len = np.bincount(run_id)
+    in_block = run_len[run_id] >= 2
+    keep = np.zeros(len(key), dtype=bool)
+    alone = ~in_block
+    keep[gf[alone]] = True
+    keep[gl[alone]] = True
+    rs = np.nonzero(run_start & in_block)[0]     # the first column of each block
+    if len(rs):
+        re = rs + run_len[run_id[rs]] - 1          # and its last
+        first, last = gf[rs], gl[re]
+        keep[first] = True
+        keep[last] = True
+        return keep, (te[first], te[last], li[first])
+    return keep, (np.empty(0), np.empty(0), np.empty(0, dtype=np.int64))

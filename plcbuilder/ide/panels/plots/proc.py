@@ -53,6 +53,8 @@ class ProcPanel(TimePanel):
             self.plot.addItem(t, ignoreBounds=True)
             self._labels.append(t)
         self._ticks: tuple = ()
+        self._drawn_messages = -1                   # the model's message_version drawn
+        self._label_pos: list[tuple[float, float]] = []   # where the shown labels are
         self._tick_labels: list[tuple[int, str]] = []
         self._empty = empty_text(self.plot, "No samples yet: start a procedure")
 
@@ -79,6 +81,19 @@ class ProcPanel(TimePanel):
         lay.setSpacing(0)
         lay.addWidget(self.toolbar)
         lay.addWidget(split, 1)
+
+    def watched(self) -> list:
+        return [self.model.scalars]
+
+    def data_changed(self) -> bool:
+        return (self.model.message_version != self._drawn_messages
+                or super().data_changed())
+
+    def shift(self, dx: float) -> None:
+        self.curve.setPos(dx, 0)
+        self.markers.setPos(dx, 0)
+        for lab, (x, y) in zip(self._labels, self._label_pos):
+            lab.setPos(x + dx, y)
 
     def add_messages(self, rows) -> None:
         for m in rows:
@@ -120,7 +135,8 @@ class ProcPanel(TimePanel):
         self._update_ticks()
         t = self.x(a, b)
         proc = m.scalars.view(0)[a:b]
-        self.curve.setData(t, proc)
+        self.curve.setData(t, self.hold(proc))
+        self._drawn_messages = m.message_version
         self._empty.setVisible(len(m) == 0)
         if len(m) == 0:
             center_item(self._empty, self.plot)
@@ -131,7 +147,7 @@ class ProcPanel(TimePanel):
         if rows:
             mt = np.fromiter((r.t_ms * 1e-3 for r in rows), dtype=float, count=len(rows)) \
                 - self.offset
-            idx = np.clip(np.searchsorted(t, mt, side="right") - 1, 0, len(t) - 1)
+            idx = np.clip(np.searchsorted(t, mt, side="right") - 1, 0, len(proc) - 1)
             my = proc[idx]
             self.markers.setData(mt, my)
         else:
@@ -147,6 +163,7 @@ class ProcPanel(TimePanel):
         line_h = 16.0
         placed_rects: list[tuple[float, float, float, float]] = []
         placed = 0
+        self._label_pos = []
         for k in range(len(rows) - 1, -1, -1):      # newest first
             if placed >= self.MAX_LABELS:
                 break
@@ -174,6 +191,7 @@ class ProcPanel(TimePanel):
                 lab.setText(text)
             lab.setAnchor((ax, anchor_y))
             lab.setPos(mt[k], my[k])
+            self._label_pos.append((mt[k], my[k]))
             lab.show()
             placed += 1
         for lab in self._labels[placed:]:

@@ -3,6 +3,7 @@ the y-range fit and :class:`TimePanel`, the base of the plots."""
 
 from __future__ import annotations
 
+import time
 from typing import Callable, Optional
 
 import numpy as np
@@ -143,7 +144,21 @@ class TimePanel(QtWidgets.QWidget):
     The plots' x coordinate is time relative to ``offset`` (the right edge
     while following), so that following moves the data, not the view; the
     :class:`~plcbuilder.ide.panels.style.TimeAxis` labels absolute time.
+
+    Redraws cost only what changed: a panel redraws its curves (``setData``)
+    when the values it shows changed, its view changed or the model started
+    over. When only time advanced (every new sample equals the last one
+    drawn), the curves are not touched: they were drawn holding their last
+    value up to a horizon ahead of the newest sample, and following just
+    moves them left (``setPos``) and the time axis with them, at most
+    ``SCROLL_FPS`` times a second, and only while something runs.
     """
+
+    sig_dirty = Signal()
+    """The view changed (window, follow, lanes, pins): a redraw is due."""
+
+    SCROLL_FPS = 10         # time-only moves a second (at most)
+    HORIZON = 0.25          # curves hold their last value this part of the window ahead
 
     def __init__(self, model: RunModel, timebase: TimeBase,
                  on_clear: Optional[Callable[[], None]] = None, parent=None):
@@ -159,7 +174,15 @@ class TimePanel(QtWidgets.QWidget):
         self._setting_range = False
         self._xrange: Optional[tuple[float, float]] = None
         self.offset = 0.0
-        self.frames = 0
+        self.frames = 0             # full redraws
+        self.moves = 0              # time-only moves
+        self._drawn_offset = 0.0    # the offset the curves' data were drawn at
+        self._horizon = 0.0         # absolute time the drawn curves hold up to
+        self._extend = 0.0          # x (relative) the next draw holds curves up to (0: none)
+        self._base: list = []       # the newest row of each watched buffer at the last draw
+        self._checked = 0           # model rows compared with _base so far
+        self._last_move = 0.0
+        self._pending_move = False  # a time-only move put off (SCROLL_FPS)
         timebase.sig_changed.connect(self._mark_dirty)
 
     # ------------------------------------------------------------- plumbing
@@ -185,6 +208,7 @@ class TimePanel(QtWidgets.QWidget):
     def _mark_dirty(self, *args) -> None:
         if not self._setting_range:
             self._view_dirty = True
+            self.sig_dirty.emit()
 
     def visible_span(self) -> tuple[float, float]:
         """The absolute time range [t0, t1] (seconds) the plots show."""
@@ -194,18 +218,90 @@ class TimePanel(QtWidgets.QWidget):
         return r0 + self.offset, r1 + self.offset
 
     def x(self, a: int, b: int) -> np.ndarray:
-        """Sample times [a, b) in the plots' x coordinate."""
-        return self.model.time.view()[a:b] - self.offset
+        """Sample times [a, b) in the plots' x coordinate; while following, one
+        more point at the horizon (see :meth:`hold`)."""
+        t = self.model.time.view()[a:b] - self.offset
+        if self._extend and len(t):
+            t = np.append(t, self._extend)
+        return t
 
-    def refresh(self, force: bool = False) -> bool:
-        """Redraw from the model if anything changed; returns whether it drew."""
-        if not force and self.model.version == self._drawn_version and not self._view_dirty:
+    def hold(self, y: np.ndarray) -> np.ndarray:
+        """``y`` with its last value held to the horizon (pairs with :meth:`x`)."""
+        if self._extend and len(y):
+            return np.append(y, y[-1])
+        return y
+
+    def watched(self) -> list:
+        """The model's ring buffers this panel shows (a change in them redraws)."""
+        return []
+
+    def data_changed(self) -> bool:
+        """Whether a value this panel shows changed since it last drew (not
+        only time: new samples equal to the last one drawn change nothing)."""
+        m = self.model
+        total = m.time.total
+        n = total - self._checked
+        if n <= 0:
             return False
-        if self.model.epoch != self._epoch:
-            self._epoch = self.model.epoch
+        if not self._base or n >= len(m):
+            return True
+        for rb, base in zip(self.watched(), self._base):
+            new = rb.views(last=n)
+            if new.shape[1] and bool((new != base[:, None]).any()):
+                return True
+        self._checked = total
+        return False
+
+    def refresh(self, force: bool = False, moving: bool = True) -> bool:
+        """Redraw from the model what changed; returns whether it drew or moved.
+        ``moving``: time may scroll (something runs); when False, samples
+        that only advance time leave the plots still."""
+        m = self.model
+        if m.epoch != self._epoch:
+            self._epoch = m.epoch
             self.model_cleared()
+            force = True
+        if not force and not self._view_dirty:
+            if m.version == self._drawn_version:
+                return False
+            if self.data_changed():
+                force = True
+            else:
+                self._drawn_version = m.version
+                return self._move(moving)
+        return self._redraw()
+
+    def _move(self, moving: bool) -> bool:
+        """Only time advanced: move the curves, not their data."""
+        if not self.timebase.follow or not moving or not self._time_plots:
+            return False
+        now = time.monotonic()
+        if now - self._last_move < 1.0 / self.SCROLL_FPS:
+            self._pending_move = True
+            return False
         t0, t1 = self.visible_span()
-        if self.timebase.follow and self._time_plots:
+        if t1 > self._horizon:
+            return self._redraw()
+        if t1 == self.offset:
+            return False
+        self._last_move = now
+        self._pending_move = False
+        self.offset = t1
+        self.shift(self._drawn_offset - t1)
+        for ax in self._time_axes:
+            ax.set_offset(t1)
+        self.moves += 1
+        return True
+
+    def move_pending(self) -> bool:
+        """A time-only move was put off (the redraw timer comes back for it)."""
+        return self._pending_move
+
+    def _redraw(self) -> bool:
+        m = self.model
+        t0, t1 = self.visible_span()
+        follow = self.timebase.follow and bool(self._time_plots)
+        if follow:
             self.offset = t1
             rng = (t0 - t1, 0.0)
             if rng != self._xrange:
@@ -215,14 +311,29 @@ class TimePanel(QtWidgets.QWidget):
                 finally:
                     self._setting_range = False
                 self._xrange = rng
+            ahead = max(0.05, (t1 - t0) * self.HORIZON)
+            self._extend = ahead
+            self._horizon = t1 + ahead
+        else:
+            self._extend = 0.0
+            self._horizon = m.t_end
         for ax in self._time_axes:
             ax.set_offset(self.offset)
-        a, b = self.model.window(t0, t1)
+        a, b = m.window(t0, t1)
+        self._drawn_offset = self.offset
+        self.shift(0.0)
         self.draw(a, b, t0, t1)
-        self._drawn_version = self.model.version
+        self._drawn_version = m.version
+        self._base = [rb.latest() for rb in self.watched()] if len(m) else []
+        self._checked = m.time.total
         self._view_dirty = False
+        self._pending_move = False
+        self._last_move = time.monotonic()
         self.frames += 1
         return True
+
+    def shift(self, dx: float) -> None:
+        """Move the drawn curves ``dx`` along x (time-only moves)."""
 
     def draw(self, a: int, b: int, t0: float, t1: float) -> None:  # pragma: no cover
         raise NotImplementedError
