@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections import deque
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from importlib import resources
@@ -50,7 +51,8 @@ from plcbuilder.testing.spec import (TESTS_DIR, Condition, Expectation, Names, T
                                      TestFileError, load_dir, pin_names, resolve)
 from plcbuilder.testing.coverage import ProcedureCoverage, summarize
 
-__all__ = ["Failure", "Suite", "SuiteRun", "TestResult", "prepare", "run_suite", "run_test"]
+__all__ = ["Failure", "RecordedRun", "Suite", "SuiteRun", "TestResult", "prepare", "record_run",
+           "run_suite", "run_test"]
 
 CHUNK_MS = 1000
 #: Below this much simulated time in all, a pool costs more than it saves:
@@ -580,6 +582,27 @@ def trace_name(name: str) -> str:
     return (safe or "test")[:80] + ".csv"
 
 
+def _last_failing_tick(result: TestResult) -> int:
+    ticks = [f.tick for f in result.failures if f.tick is not None]
+    return max(ticks) if ticks else (result.ended_at_ms or 0)
+
+
+def _recording(env: Env, machine: Optional[str]) -> Controller:
+    """A fresh controller for a rerun: the fast backend, a sample every tick."""
+    c = Controller(_machine(machine if machine is not None else env.machine),
+                   backend="fast", variables=env.variables, record_samples=True)
+    c.load(env.programs)
+    return c
+
+
+def _replay(c: Controller, tc: TestCase, ticks: int, take: Callable[[Controller], None]) -> None:
+    """Run ``tc`` again on ``c`` (from :func:`_recording`) for ``ticks`` ticks (at
+    most ``tc.ms``); ``take(c)`` drains the samples and events after every
+    chunk and once at the end. The same test gives the same run."""
+    drive(c, tc.scenario, min(ticks, tc.ms), until_idle=False, on_chunk=lambda: take(c))
+    take(c)
+
+
 def write_trace(tc: TestCase, env: Env, machine: Optional[str], folder: Path,
                 result: TestResult) -> Path:
     """Run ``tc`` again with a CSV trace to ``folder``: from tick 0 through the
@@ -591,19 +614,58 @@ def write_trace(tc: TestCase, env: Env, machine: Optional[str], folder: Path,
         raise UsageError(f"{folder}: cannot make the trace folder: {exc.strerror or exc}") \
             from None
     path = folder / trace_name(tc.name)
-    ticks = [f.tick for f in result.failures if f.tick is not None]
-    last = max(ticks) if ticks else (result.ended_at_ms or 0)
-    c = Controller(_machine(machine if machine is not None else env.machine),
-                   backend="fast", variables=env.variables, record_samples=True)
-    c.load(env.programs)
+    c = _recording(env, machine)
     writer = TraceWriter(path, c.machine)
     try:
-        drive(c, tc.scenario, min(last + 1, tc.ms), until_idle=False,
-              on_chunk=lambda: (writer.write(c.drain_sample_rows()), c.drain_events()))
-        writer.write(c.drain_sample_rows())
+        _replay(c, tc, _last_failing_tick(result) + 1,
+                lambda c: (writer.write(c.drain_sample_rows()), c.drain_events()))
     finally:
         writer.close()
     return path
+
+
+#: How far past the (last) failing tick :func:`record_run` records, in ms.
+RECORD_AFTER_MS = 100
+
+
+@dataclass
+class RecordedRun:
+    """A test's run, recorded again for inspection (the IDE's "Open Failing Run")."""
+    name: str
+    samples: list                 # Sample, one a tick from 0 (the last ``keep`` of them)
+    events: list                  # Started, Ended, Message, Print, Fault, as they came
+    failing_tick: Optional[int]   # the first failing condition's tick (None: it passed)
+    end_ms: int                   # the ticks recorded: 0 … end_ms - 1
+    result: Optional[TestResult] = None
+
+
+def record_run(suite: Suite, name: str, *, after_ms: int = RECORD_AFTER_MS,
+               keep: Optional[int] = None, result: Optional[TestResult] = None) -> RecordedRun:
+    """Run the test ``name`` of ``suite`` (to judge it, unless ``result`` is
+    given) and then again recording every tick, as ``--trace-failed`` does:
+    from tick 0 through ``after_ms`` past its last failing tick (or the end of
+    its run), at most to its ``ms``. ``keep``: only the newest that many
+    samples (a long run; None: all). Raises SuiteError when the project did
+    not build or has no test ``name``."""
+    if suite.env is None:
+        raise SuiteError("the project did not build; nothing to run")
+    tc = next((t for t in suite.tests if t.name == name), None)
+    if tc is None:
+        raise SuiteError(f"no test named {name!r}")
+    env = suite.env
+    machine = suite.machines.get(tc.name, env.machine)
+    if result is None:
+        result = run_test(tc, env, machine)
+    failing = next((f.tick for f in result.failures if f.tick is not None), None)
+    end = min(_last_failing_tick(result) + 1 + max(0, after_ms), tc.ms)
+    samples: list = deque(maxlen=keep) if keep else []
+    events: list = []
+
+    def take(c: Controller) -> None:
+        samples.extend(c.drain_samples())
+        events.extend(c.drain_events())
+    _replay(_recording(env, machine), tc, end, take)
+    return RecordedRun(tc.name, list(samples), events, failing, end, result)
 
 
 def _drive(c: Controller, tc: TestCase, stop_early: bool):

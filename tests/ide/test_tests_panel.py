@@ -6,8 +6,11 @@ main window)."""
 from __future__ import annotations
 
 import pytest
+from PySide6 import QtCore, QtWidgets
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QMessageBox
+
+from plcbuilder.controller import events as ev
 
 from plcbuilder.ide.editor import MK_COVERED, MK_UNCOVERED
 from plcbuilder.ide.main_window import Act, MainWindow
@@ -131,3 +134,143 @@ def test_double_click_in_the_window_opens_the_test_file(qtbot, win, proj):
     ed = win.current_editor()
     assert ed is not None and ed.path.endswith("b.toml")
     assert ed.cursor_line_col()[0] == 10
+
+
+# ---------------------------------------------------------- open the failing run
+
+def item_named(panel, name):
+    return next(panel.tree.topLevelItem(i) for i in range(panel.tree.topLevelItemCount())
+                if panel.tree.topLevelItem(i).text(0) == name)
+
+
+def test_open_failing_run_is_for_a_selected_failing_test(qtbot, panel):
+    assert not panel.open_run_button.isEnabled()
+    run_and_wait(qtbot, panel)
+    panel.tree.setCurrentItem(item_named(panel, "pulse on in ticks 5..7"))
+    assert not panel.open_run_button.isEnabled()            # it passed
+    assert not panel.menu_for(panel.tree.currentItem()).actions()[0].isEnabled()
+    panel.tree.setCurrentItem(item_named(panel, "branch two"))
+    assert panel.open_run_button.isEnabled()
+    act = panel.menu_for(panel.tree.currentItem()).actions()[0]
+    assert act.text() == "Open Failing Run" and act.isEnabled()
+    with qtbot.waitSignal(panel.sig_open_run, timeout=30000) as blocker:
+        act.trigger()                                          # the context menu's
+    rec = blocker.args[0]
+    assert rec.name == "branch two" and rec.failing_tick == 1
+    assert [s.t_ms for s in rec.samples] == list(range(40))   # ms = 40: the whole run
+    assert not panel.running()
+
+
+class LiveConnection(QtCore.QObject):
+    """A controller connection that only sends what the test emits."""
+    sig_connected = QtCore.Signal(str)
+    sig_disconnected = QtCore.Signal(str)
+    sig_state = QtCore.Signal(object, int)
+    sig_events = QtCore.Signal(list)
+    sig_samples = QtCore.Signal(list)
+    sig_error = QtCore.Signal(str)
+
+    def __init__(self):
+        super().__init__()
+        self.connected = False
+        self.embedded = True
+
+    def __getattr__(self, name):
+        if name in ("start_embedded", "connect_to", "upload", "start", "stop", "set_input",
+                    "set_adc", "set_speed", "reset", "shutdown"):
+            return lambda *a: None
+        raise AttributeError(name)
+
+
+def live_sample(t):
+    z = (0,) * 8
+    return ev.Sample(t_ms=t, running="M03", proc=0, message=0, inputs=z, outputs=(1,) + z[1:],
+                     pwm=z, dac=z, adc=z, axes=(0,) * 9, velocities=(0,) * 9)
+
+
+@pytest.fixture
+def live_win(qtbot, tmp_path, monkeypatch):
+    for name in ("warning", "question", "critical", "information"):
+        monkeypatch.setattr(QMessageBox, name, lambda *a, **k: QMessageBox.StandardButton.No)
+    conn = LiveConnection()
+    w = MainWindow(Settings(str(tmp_path / "config" / "settings.ini")), connection=conn,
+                   start_controller=True, debounce_ms=20)
+    qtbot.addWidget(w)
+    w.resize(1200, 800)
+    w.show()
+    qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
+    yield w, conn
+    w.shutdown()
+
+
+def test_open_failing_run_shows_it_in_the_run_panels_until_back_to_live(qtbot, live_win, tmp_path):
+    win, conn = live_win
+    proj = make_project(tmp_path / "p2", {"long": LONG_FAILING})
+    assert win.open_project(proj)
+    rp, panel = win.run_panels, win.tests_panel
+    conn.sig_samples.emit([live_sample(t) for t in range(5000, 5100)])   # live telemetry
+    assert len(rp.model) == 100
+    with qtbot.waitSignal(panel.sig_finished, timeout=30000):
+        panel.run_tests()
+    panel.tree.setCurrentItem(item_named(panel, "pulse too long"))
+    assert panel.open_run_button.text() == "Open Failing Run"
+    with qtbot.waitSignal(rp.sig_recorded, timeout=30000):
+        qtbot.mouseClick(panel.open_run_button, Qt.MouseButton.LeftButton)
+    # the recorded run: ticks 0 … 8 + 100 (a little past the failing tick 8)
+    assert rp.recorded == "pulse too long" and rp.failing_ms == 8
+    assert len(rp.model) == 109 and rp.model.t_end == pytest.approx(0.108)
+    assert rp.model.t_end >= 0.008
+    assert rp.model.pin_state("outputs", 3) == 0 and 3 in rp.model.active_outputs
+    assert win.run_docks["outputs"].isVisible()
+    assert not rp.timebase.follow
+    rp.tick()
+    for p in rp.time_panels:
+        t0, t1 = p.visible_span()
+        assert t0 <= 0.008 <= t1
+    assert rp._markers
+    for p, _plot, line in rp._markers:
+        assert line.value() + p.offset == pytest.approx(0.008)
+    banner = rp.banners[1]                                   # the Outputs dock's toolbar
+    assert not banner.isHidden()
+    assert "showing test run 'pulse too long' (recorded), failing at t = 8 ms" in banner.text()
+    assert panel.open_run_button.text() == "Back to Live" and panel.open_run_button.isEnabled()
+    assert "failing at t = 8 ms" in win.statusBar().currentMessage()
+
+    # live telemetry does not overwrite it
+    conn.sig_samples.emit([live_sample(t) for t in range(5100, 5200)])
+    conn.sig_events.emit([ev.Message(5150, 101, None, 0, 0, "M03")])
+    rp.tick()
+    assert len(rp.model) == 109 and rp.model.t_end == pytest.approx(0.108)
+    assert rp.recorded == "pulse too long" and rp.held == 100
+
+    # until the user goes back to live (the same button)
+    qtbot.mouseClick(panel.open_run_button, Qt.MouseButton.LeftButton)
+    assert rp.recorded is None and len(rp.model) == 0 and rp.timebase.follow
+    assert not rp._markers and banner.isHidden()
+    assert panel.open_run_button.text() == "Open Failing Run"
+    conn.sig_samples.emit([live_sample(t) for t in range(5200, 5300)])
+    assert len(rp.model) == 100 and rp.model.t_end == pytest.approx(5.299)
+
+
+def test_clear_in_the_run_panels_also_goes_back_to_live(qtbot, live_win, tmp_path):
+    win, conn = live_win
+    assert win.open_project(make_project(tmp_path / "p3", {"long": LONG_FAILING}))
+    rp, panel = win.run_panels, win.tests_panel
+    with qtbot.waitSignal(panel.sig_finished, timeout=30000):
+        panel.run_tests()
+    with qtbot.waitSignal(rp.sig_recorded, timeout=30000):
+        assert panel.open_failing_run("pulse too long")
+    rp.lanes.toolbar.findChildren(QtWidgets.QToolButton)[-1].click()   # Clear
+    assert rp.recorded is None and panel.showing is None
+
+
+#: fails at tick 8: output 3 is on in ticks 5..7 only; the run is 1000 ms long
+LONG_FAILING = """\
+[[test]]
+name = "pulse too long"
+ms = 1000
+scenario = "start PULSE @ 0"
+[[test.expect]]
+during_ms = [5, 8]
+outputs_on = [3]
+"""

@@ -18,6 +18,7 @@ import time
 from typing import Mapping, Optional
 
 from PySide6 import QtCore, QtWidgets
+import pyqtgraph as pg  # noqa: I001 - after PySide6 (it takes the loaded binding)
 
 from plcbuilder.api import abi
 from plcbuilder.link.client import ControllerStatus
@@ -38,6 +39,7 @@ __all__ = ["RunPanels", "pin_names_from_defines", "default_pin_names"]
 FPS = 40                       # redraws a second (at most)
 VARIABLES_INTERVAL_MS = 250    # watch polls while something runs
 BUSY_GRACE = 0.5               # seconds the plots keep moving after the last run ended
+MARKER_COLOUR = "#b3261e"      # the failing tick of a recorded test run
 
 
 #: Pin names from defines (INPUT_* / OUTPUT_*): a name -> value text, (text, span) or int.
@@ -60,6 +62,10 @@ class RunPanels(QtCore.QObject):
     sig_open_location = Signal(str, int)
     """A fault was clicked in the log: its source file and line (1-based). The
     file is the one the compiler recorded, or ``NAME.plc`` of the procedure."""
+
+    sig_recorded = Signal(object)
+    """The panels show a recorded test run (its name), or the live controller
+    again (None)."""
 
     DOCKS = RUN_DOCKS
 
@@ -105,6 +111,18 @@ class RunPanels(QtCore.QObject):
         self.inputs.set_enabled(False)
         for panel in self.time_panels:
             panel.sig_dirty.connect(self.wake)
+        self.recorded: Optional[str] = None   # the test run shown instead of live telemetry
+        self.failing_ms: Optional[int] = None
+        self.held = 0                 # live samples not shown while a recorded run is
+        self._markers: list = []      # (panel, plot, InfiniteLine) at the failing tick
+        self.banners: list[QtWidgets.QLabel] = []   # "showing test run …  Back to Live"
+        for panel in self.time_panels:
+            label = QtWidgets.QLabel()
+            label.setTextFormat(Qt.TextFormat.RichText)
+            label.linkActivated.connect(lambda _link: self.back_to_live())
+            label.hide()
+            panel.toolbar.extra.addWidget(label)
+            self.banners.append(label)
 
         self.log.sig_open_location.connect(self.sig_open_location)
         self.inputs.sig_set_input.connect(lambda pin, v: self.connection.set_input(pin, v))
@@ -151,9 +169,75 @@ class RunPanels(QtCore.QObject):
         self.inputs.set_pin_names(inputs)
 
     def clear(self) -> None:
-        """Forget the recorded samples and messages (the log keeps its rows)."""
+        """Forget the recorded samples and messages (the log keeps its rows);
+        while a recorded test run is shown, go back to live."""
+        if self.recorded is not None:
+            self.back_to_live()
+            return
         self.model.clear()
         self._cleared()
+
+    def show_recorded(self, name: str, samples: list, events: list,
+                      failing_ms: Optional[int] = None) -> None:
+        """Show a recorded test run instead of the live telemetry (which is not
+        shown until :meth:`back_to_live`): its samples and events, the Proc and
+        Outputs docks raised, not following, the failing tick in view with a
+        line at it."""
+        self.recorded, self.failing_ms, self.held = name, failing_ms, 0
+        self.model.clear()
+        self.model.add_samples(samples)
+        self._cleared()
+        rows = self.model.add_events(events)
+        if rows:
+            self.proc.add_messages(rows)
+        at = f", failing at t = {failing_ms} ms" if failing_ms is not None else ""
+        text = f"showing test run '{name}' (recorded){at}"
+        self.log.add_note(text, "link")
+        self.log.add_events(events)
+        for label in self.banners:
+            label.setText(f"<span style='color:{MARKER_COLOUR}'>{text}</span> &nbsp;"
+                          f"<a href='live'>Back to Live</a>")
+            label.setToolTip(f"{text}; the live telemetry is not shown until Back to Live "
+                             f"(or Clear)")
+            label.show()
+        self._remove_markers()
+        if failing_ms is not None:
+            pen = pg.mkPen(MARKER_COLOUR, width=1.5, style=Qt.PenStyle.DashLine)
+            for panel in self.time_panels:
+                for plot in panel._time_plots:
+                    line = pg.InfiniteLine(angle=90, movable=False, pen=pen)
+                    line.setZValue(20)
+                    plot.addItem(line, ignoreBounds=True)
+                    self._markers.append((panel, plot, line))
+        for key in ("proc", "outputs"):
+            self._docks[key].show()
+            self._docks[key].raise_()
+        t = self.model.time.view()
+        first = float(t[0]) if len(t) else 0.0
+        t1 = max(self.model.t_end, (failing_ms or 0) * 1e-3)
+        t0 = max(first, t1 - self.timebase.window) if self.timebase.window > 0 else first
+        if t1 - t0 < 0.01:
+            t1 = t0 + 0.01
+        for panel in self.time_panels:
+            panel.show_span(t0, t1)
+        self._place_markers()
+        self.sig_recorded.emit(name)
+        self.wake()
+
+    def back_to_live(self) -> None:
+        """Stop showing a recorded test run: the plots start over with the
+        live telemetry, following it."""
+        if self.recorded is None:
+            return
+        self.recorded, self.failing_ms = None, None
+        for label in self.banners:
+            label.hide()
+        self._remove_markers()
+        self.model.clear()
+        self._cleared()
+        self.timebase.set_follow(True)
+        self.log.add_note("back to the live controller", "link")
+        self.sig_recorded.emit(None)
 
     def wake(self, *args) -> None:
         """Something may need a redraw: run the redraw timer (it stops itself)."""
@@ -177,6 +261,8 @@ class RunPanels(QtCore.QObject):
             if self._shown(panel):
                 work |= panel.refresh(moving=moving)
                 work |= panel.move_pending()
+        if self._markers:
+            self._place_markers()
         self.proc.flush()
         self.log.flush()
         if self._shown(self.inputs):
@@ -200,6 +286,15 @@ class RunPanels(QtCore.QObject):
     def _shown(w: QtWidgets.QWidget) -> bool:
         return w.isVisible()
 
+    def _place_markers(self) -> None:
+        for panel, _plot, line in self._markers:
+            line.setPos(self.failing_ms * 1e-3 - panel.offset)
+
+    def _remove_markers(self) -> None:
+        for _panel, plot, line in self._markers:
+            plot.removeItem(line)
+        self._markers = []
+
     def _cleared(self) -> None:
         for p in self.time_panels:
             p._epoch = self.model.epoch
@@ -216,6 +311,9 @@ class RunPanels(QtCore.QObject):
                     self.var_timer.start()
 
     def _on_samples(self, samples: list) -> None:
+        if self.recorded is not None:       # a recorded run is shown: live waits
+            self.held += len(samples)
+            return
         epoch = self.model.epoch
         self.model.add_samples(samples)
         if self.model.epoch != epoch:
@@ -223,7 +321,7 @@ class RunPanels(QtCore.QObject):
         self.wake()
 
     def _on_events(self, events: list) -> None:
-        rows = self.model.add_events(events)
+        rows = self.model.add_events(events) if self.recorded is None else []
         if rows:
             self.proc.add_messages(rows)
         self.log.add_events(events)

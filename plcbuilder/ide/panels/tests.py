@@ -20,7 +20,7 @@ from typing import Optional
 
 from PySide6 import QtCore, QtWidgets
 
-from plcbuilder.testing.runner import SuiteError, prepare, run_suite
+from plcbuilder.testing.runner import SuiteError, prepare, record_run, run_suite
 from plcbuilder.testing.spec import TESTS_DIR, load_dir
 
 Qt = QtCore.Qt
@@ -63,6 +63,31 @@ class _Worker(QtCore.QObject):
                                               f"{type(exc).__name__}: {exc}"))
 
 
+class _RecordWorker(QtCore.QObject):
+    """Builds the project and reruns one test, recording it (``record_run``)."""
+
+    sig_done = Signal(object)
+    """(RecordedRun or None, message)."""
+
+    def __init__(self, root: Path, name: str, keep: Optional[int]):
+        super().__init__()
+        self.root, self.name, self.keep = root, name, keep
+
+    def run(self) -> None:
+        try:
+            suite = prepare(self.root)
+            if not suite.built:
+                bad = ", ".join(pb.name for pb in suite.compiled if not pb.ok)
+                self.sig_done.emit((None, f"not run: {bad} did not compile"))
+                return
+            rec = record_run(suite, self.name, keep=self.keep)
+            self.sig_done.emit((rec, f"recorded '{rec.name}': {rec.end_ms} ms"))
+        except SuiteError as exc:
+            self.sig_done.emit((None, f"not run: {exc}"))
+        except Exception as exc:  # noqa: BLE001 - shown in the panel, never a crash
+            self.sig_done.emit((None, f"not run: internal error: {type(exc).__name__}: {exc}"))
+
+
 class TestsPanel(QtWidgets.QWidget):
     """The list of tests and their results."""
 
@@ -77,6 +102,15 @@ class TestsPanel(QtWidgets.QWidget):
     sig_finished = Signal(str)
     """A run finished (its summary line)."""
 
+    sig_open_run = Signal(object)
+    """Open Failing Run recorded a test's run: the RecordedRun, for the run panels."""
+
+    sig_back_to_live = Signal()
+    """Back to Live: the run panels should show the live controller again."""
+
+    #: the newest samples a recorded run keeps (the run panels' capacity)
+    RECORD_KEEP = 30000
+
     def __init__(self, parent=None):
         super().__init__(parent)
         self.root: Optional[Path] = None
@@ -84,6 +118,7 @@ class TestsPanel(QtWidgets.QWidget):
         self._worker: Optional[_Worker] = None
         self.results: dict[str, object] = {}
         self.coverage = None
+        self.showing: Optional[str] = None    # the recorded test run the run panels show
 
         self.run_all_button = QtWidgets.QPushButton("Run All")
         self.run_all_button.setToolTip("Build the project and run every test (Ctrl+T)")
@@ -91,9 +126,13 @@ class TestsPanel(QtWidgets.QWidget):
         self.coverage_box = QtWidgets.QCheckBox("Coverage")
         self.coverage_box.setToolTip("Record which lines ran and mark them in the editors "
                                      "(runs on the reference interpreter)")
+        self.open_run_button = QtWidgets.QPushButton("Open Failing Run")
+        self.open_run_button.setToolTip("Run the selected failing test again and show its "
+                                        "run in the run panels, at the failing tick")
         self.summary = QtWidgets.QLabel("")
         bar = QtWidgets.QHBoxLayout()
-        for w in (self.run_all_button, self.run_one_button, self.coverage_box):
+        for w in (self.run_all_button, self.run_one_button, self.open_run_button,
+                  self.coverage_box):
             bar.addWidget(w)
         bar.addWidget(self.summary, 1)
 
@@ -123,8 +162,12 @@ class TestsPanel(QtWidgets.QWidget):
 
         self.run_all_button.clicked.connect(lambda: self.run_tests())
         self.run_one_button.clicked.connect(self.run_selected)
+        self.open_run_button.clicked.connect(self._open_run_clicked)
         self.tree.itemDoubleClicked.connect(self._open_item)
         self.tree.currentItemChanged.connect(lambda cur, _prev: self._show_detail(cur))
+        self.tree.currentItemChanged.connect(lambda *_a: self._update_buttons())
+        self.tree.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
+        self.tree.customContextMenuRequested.connect(self._context_menu)
         self._update_buttons()
 
     # ============================================================== public
@@ -187,16 +230,61 @@ class TestsPanel(QtWidgets.QWidget):
             item = self.tree.topLevelItem(i)
             if item.data(NAME, ROLE_KIND) == "test" and (names is None or item.text(NAME) in names):
                 item.setText(STATUS, "running…")
+        self._start(_Worker(self.root, set(names) if names is not None else None,
+                            self.coverage_box.isChecked()), self._on_done)
+        return True
+
+    def _start(self, worker, done) -> None:
         thread = QtCore.QThread(self)
-        worker = _Worker(self.root, set(names) if names is not None else None,
-                         self.coverage_box.isChecked())
         worker.moveToThread(thread)
         thread.started.connect(worker.run)
-        worker.sig_done.connect(self._on_done)
+        worker.sig_done.connect(done)
         self._thread, self._worker = thread, worker
         self._update_buttons()
         thread.start()
+
+    def _end_thread(self) -> None:
+        thread, self._thread, self._worker = self._thread, None, None
+        if thread is not None:
+            thread.quit()
+            thread.wait()
+            thread.deleteLater()
+
+    def failing_selected(self) -> Optional[str]:
+        """The selected test's name when its last run failed (else None)."""
+        item = self.tree.currentItem()
+        if item is None or item.data(NAME, ROLE_KIND) != "test":
+            return None
+        r = self.results.get(item.text(NAME))
+        return r.name if r is not None and r.failures else None
+
+    def open_failing_run(self, name: Optional[str] = None) -> bool:
+        """Run the failing test ``name`` (None: the selected one) again in the
+        background, recording it; ``sig_open_run`` brings its RecordedRun.
+        False when nothing can run."""
+        name = name if name is not None else self.failing_selected()
+        if name is None or self.root is None or self.running():
+            return False
+        self.summary.setText(f"recording '{name}'…")
+        self._start(_RecordWorker(self.root, name, self.RECORD_KEEP), self._on_recorded)
         return True
+
+    def set_showing(self, name: Optional[str]) -> None:
+        """The run panels show the recorded run ``name`` (None: live again)."""
+        self.showing = name
+        self._update_buttons()
+
+    def menu_for(self, item) -> QtWidgets.QMenu:
+        """The context menu of a row."""
+        menu = QtWidgets.QMenu(self)
+        act = menu.addAction("Open Failing Run")
+        r = self.results.get(item.text(NAME)) if item is not None else None
+        act.setEnabled(bool(r is not None and r.failures and not self.running()
+                            and item.data(NAME, ROLE_KIND) == "test"))
+        act.triggered.connect(lambda: self.open_failing_run(item.text(NAME)))
+        if self.showing is not None:
+            menu.addAction("Back to Live", self.sig_back_to_live.emit)
+        return menu
 
     def run_selected(self) -> bool:
         item = self.tree.currentItem()
@@ -207,11 +295,7 @@ class TestsPanel(QtWidgets.QWidget):
     # ============================================================= private
     def _on_done(self, outcome) -> None:
         results, coverage, errors, message = outcome
-        thread, self._thread, self._worker = self._thread, None, None
-        if thread is not None:
-            thread.quit()
-            thread.wait()
-            thread.deleteLater()
+        self._end_thread()
         for r in results:
             self.results[r.name] = r
         self.reload()
@@ -223,6 +307,25 @@ class TestsPanel(QtWidgets.QWidget):
             self.coverage = coverage
             self.sig_coverage.emit(coverage)
         self.sig_finished.emit(message)
+
+    def _on_recorded(self, outcome) -> None:
+        rec, message = outcome
+        self._end_thread()
+        self.summary.setText(message)
+        self._update_buttons()
+        if rec is not None:
+            self.sig_open_run.emit(rec)
+
+    def _open_run_clicked(self) -> None:
+        if self.showing is not None:
+            self.sig_back_to_live.emit()
+        else:
+            self.open_failing_run()
+
+    def _context_menu(self, pos) -> None:
+        item = self.tree.itemAt(pos)
+        if item is not None:
+            self.menu_for(item).exec(self.tree.viewport().mapToGlobal(pos))
 
     def _show_result(self, item, r) -> None:
         if r.passed:
@@ -279,6 +382,12 @@ class TestsPanel(QtWidgets.QWidget):
         idle = self.root is not None and not self.running()
         self.run_all_button.setEnabled(idle)
         self.run_one_button.setEnabled(idle)
+        if self.showing is not None:
+            self.open_run_button.setText("Back to Live")
+            self.open_run_button.setEnabled(True)
+        else:
+            self.open_run_button.setText("Open Failing Run")
+            self.open_run_button.setEnabled(idle and self.failing_selected() is not None)
 
 
 def wire(win) -> None:
@@ -287,7 +396,26 @@ def wire(win) -> None:
     panel, es = win.tests_panel, win.editor_stack
     panel.sig_open_location.connect(lambda f, line: win.open_location(f, line))
     panel.sig_coverage.connect(lambda cov: show_coverage(es, cov))
+    panel.sig_open_run.connect(lambda rec: show_recorded_run(win, rec))
+    panel.sig_back_to_live.connect(lambda: win.run_panels is not None
+                                   and win.run_panels.back_to_live())
     es.sig_editor_created.connect(lambda *_a: show_coverage(es, panel.coverage))
+
+
+def show_recorded_run(win, rec) -> bool:
+    """Show a RecordedRun in the window's run panels (made now if they are
+    not yet); False when the window has none."""
+    panels = win.ensure_run_panels()
+    if panels is None:
+        win.tests_panel.summary.setText("no run panels to show the run in")
+        return False
+    if not getattr(panels, "_tests_wired", False):
+        panels._tests_wired = True
+        panels.sig_recorded.connect(win.tests_panel.set_showing)
+    panels.show_recorded(rec.name, rec.samples, rec.events, rec.failing_tick)
+    at = f", failing at t = {rec.failing_tick} ms" if rec.failing_tick is not None else ""
+    win.statusBar().showMessage(f"Showing test run '{rec.name}' (recorded){at}", 8000)
+    return True
 
 
 def _brush(colour: str):

@@ -200,6 +200,14 @@ class TimePanel(QtWidgets.QWidget):
         if isinstance(ax, style.TimeAxis):
             self._time_axes.append(ax)
 
+    def show_span(self, t0: float, t1: float) -> None:
+        """Stop following and show the absolute time range [t0, t1] (seconds)."""
+        self.timebase.set_follow(False)
+        if self._time_plots:
+            self.offset, self._xrange = 0.0, None
+            self._time_plots[0].setXRange(t0, t1, padding=0)
+        self._mark_dirty()
+
     def _user_moved(self, mask) -> None:
         if mask is None or (isinstance(mask, (list, tuple)) and mask and mask[0]):
             self._xrange = None
