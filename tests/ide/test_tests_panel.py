@@ -274,3 +274,25 @@ scenario = "start PULSE @ 0"
 during_ms = [5, 8]
 outputs_on = [3]
 """
+
+
+def test_a_long_recorded_run_name_never_widens_the_docks(qtbot, live_win):
+    """Docks never grow by themselves: the banner over the plots and the Tests
+    dock's summary take the room there is, whatever the test's name."""
+    win, _conn = live_win
+    rp, panel = win.run_panels, win.tests_panel
+    outputs = win.run_docks["outputs"]
+
+    def widths(name: str) -> tuple:
+        rp.show_recorded(name, [], [], 8)
+        panel.summary.setText(f"recorded '{name}': 151 ms")
+        return (outputs.minimumSizeHint().width(), panel.minimumSizeHint().width(),
+                win.minimumSizeHint().width())
+
+    window_before = win.minimumSizeHint().width()
+    short = widths("t")
+    long_name = "a test whose name goes on and on " * 8
+    assert widths(long_name) == short
+    assert short[2] == window_before
+    assert long_name.strip() in rp.banners[1].toolTip()
+    rp.back_to_live()

@@ -14,6 +14,8 @@ something runs and the watch is shown.
 
 from __future__ import annotations
 
+import html
+
 import time
 from typing import Mapping, Optional
 
@@ -119,6 +121,11 @@ class RunPanels(QtCore.QObject):
         for panel in self.time_panels:
             label = QtWidgets.QLabel()
             label.setTextFormat(Qt.TextFormat.RichText)
+            # a long test name must never widen the dock (and the window): the
+            # label takes the room there is, the link first, the whole text in its tooltip
+            label.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,
+                                QtWidgets.QSizePolicy.Policy.Preferred)
+            label.setMinimumWidth(0)
             label.linkActivated.connect(lambda _link: self.back_to_live())
             label.hide()
             panel.toolbar.extra.addWidget(label)
@@ -195,8 +202,8 @@ class RunPanels(QtCore.QObject):
         self.log.add_note(text, "link")
         self.log.add_events(events)
         for label in self.banners:
-            label.setText(f"<span style='color:{MARKER_COLOUR}'>{text}</span> &nbsp;"
-                          f"<a href='live'>Back to Live</a>")
+            label.setText(f"<a href='live'>Back to Live</a> &nbsp;"
+                          f"<span style='color:{MARKER_COLOUR}'>{html.escape(text, quote=False)}</span>")
             label.setToolTip(f"{text}; the live telemetry is not shown until Back to Live "
                              f"(or Clear)")
             label.show()

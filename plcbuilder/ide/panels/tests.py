@@ -130,6 +130,8 @@ class TestsPanel(QtWidgets.QWidget):
         self.open_run_button.setToolTip("Run the selected failing test again and show its "
                                         "run in the run panels, at the failing tick")
         self.summary = QtWidgets.QLabel("")
+        self.summary.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,    # never widens the dock
+                                   QtWidgets.QSizePolicy.Policy.Preferred)
         bar = QtWidgets.QHBoxLayout()
         for w in (self.run_all_button, self.run_one_button, self.open_run_button,
                   self.coverage_box):
