@@ -17,7 +17,7 @@ from plcbuilder.ide.main_window import Act, MainWindow
 from plcbuilder.ide.panels.tests import STATUS, TestsPanel
 from plcbuilder.ide.settings import Settings
 
-from tests.testing._proj import FAILING, PASSING, make_project
+from tests.testing._proj import FAILING, LONG_FAILING, PASSING, make_project
 
 @pytest.fixture
 def proj(tmp_path):
@@ -262,18 +262,6 @@ def test_clear_in_the_run_panels_also_goes_back_to_live(qtbot, live_win, tmp_pat
         assert panel.open_failing_run("pulse too long")
     rp.lanes.toolbar.findChildren(QtWidgets.QToolButton)[-1].click()   # Clear
     assert rp.recorded is None and panel.showing is None
-
-
-#: fails at tick 8: output 3 is on in ticks 5..7 only; the run is 1000 ms long
-LONG_FAILING = """\
-[[test]]
-name = "pulse too long"
-ms = 1000
-scenario = "start PULSE @ 0"
-[[test.expect]]
-during_ms = [5, 8]
-outputs_on = [3]
-"""
 
 
 def test_a_long_recorded_run_name_never_widens_the_docks(qtbot, live_win):

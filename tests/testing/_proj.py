@@ -90,3 +90,14 @@ def make_project(root: Path, tests: dict[str, str] | None = None,
         for name, text in tests.items():
             (root / "tests" / f"{name}.toml").write_text(text, encoding="utf-8")
     return root
+
+#: fails at tick 8: PULSE's output 3 is on in ticks 5..7 only; the run is 1000 ms long
+LONG_FAILING = """\
+[[test]]
+name = "pulse too long"
+ms = 1000
+scenario = "start PULSE @ 0"
+[[test.expect]]
+during_ms = [5, 8]
+outputs_on = [3]
+"""

@@ -9,23 +9,12 @@ from plcbuilder.controller.events import Ended, Message, Sample, Started
 from plcbuilder.testing.runner import (RECORD_AFTER_MS, SuiteError, prepare, record_run,
                                        run_suite)
 
-from tests.testing._proj import FAILING, make_project
-
-#: fails at tick 8 (output 3 is on in ticks 5..7 only); the run is 1000 ms long
-LONG = """\
-[[test]]
-name = "pulse too long"
-ms = 1000
-scenario = "start PULSE @ 0"
-[[test.expect]]
-during_ms = [5, 8]
-outputs_on = [3]
-"""
+from tests.testing._proj import FAILING, LONG_FAILING, make_project
 
 
 @pytest.fixture
 def suite(tmp_path):
-    return prepare(make_project(tmp_path / "p", {"long": LONG, "b": FAILING}))
+    return prepare(make_project(tmp_path / "p", {"long": LONG_FAILING, "b": FAILING}))
 
 
 def test_records_every_tick_to_a_little_past_the_failing_tick(suite):
