@@ -334,13 +334,14 @@ def _procedure_builds(project: Project, progress: Optional[Progress], strict: Op
 
     if progress:
         progress(0, total, "")
+    root = _real(project.root)          # resolved once, not once a procedure
     for i, proc in enumerate(procs):
         folder = proc.path.parent
         if folder not in options_for:
             options_for[folder] = project.compile_options(proc.path, strict=strict,
                                                           extra_includes=extra_includes)
         options = options_for[folder]
-        problem = _outside_problem(proc, project) or _name_problem(proc, by_name)
+        problem = _outside_problem(proc, root) or _name_problem(proc, by_name)
         by_name.setdefault(proc.name, proc)
         if problem is not None:
             finished(i, ProcedureBuild(proc, [problem], None, options.limit))
@@ -472,11 +473,11 @@ def _real(p: Path) -> Path:
         return p.absolute()
 
 
-def _outside_problem(proc: Procedure, project: Project) -> Optional[Diagnostic]:
+def _outside_problem(proc: Procedure, root: Path) -> Optional[Diagnostic]:
     """A source file that is a link out of the project: an error, and it is not
     read (its lines would be echoed in diagnostics)."""
     real = _real(proc.path)
-    if real.is_relative_to(_real(project.root)):
+    if real.is_relative_to(root):
         return None
     return error("source-outside-project",
                  f"{proc.path} is a link to {real}, outside the project; Build All compiles "
@@ -489,8 +490,8 @@ def _build_dir_problem(project: Project) -> Optional[Diagnostic]:
     build_dir = project.build_dir
     if not os.path.lexists(build_dir):
         return None
-    real = _real(build_dir)
-    if real.is_relative_to(_real(project.root)) and real != _real(project.root):
+    real, root = _real(build_dir), _real(project.root)
+    if real.is_relative_to(root) and real != root:
         return None
     return error("build-outside-project",
                  f"{build_dir} leads to {real}, outside the project; Build All writes only "
