@@ -43,6 +43,13 @@ class SimulationDown(RuntimeError):
 
 # ===================================================================== telemetry
 
+
+def _append(q, items: list) -> int:
+    """Append items to the bounded deque q; how many of its oldest fell out."""
+    over = max(len(q) + len(items) - q.maxlen, 0)
+    q.extend(items)
+    return over
+
 class TelemetryQueue:
     """One subscriber's bounded queue of sample changes and events.
 
@@ -78,17 +85,9 @@ class TelemetryQueue:
         with self._lock:
             self.t_ms = t_ms
             if self.want_samples and samples:
-                q = self._samples
-                over = len(q) + len(samples) - q.maxlen
-                if over > 0:
-                    self.missed += over
-                q.extend(samples)
+                self.missed += _append(self._samples, samples)
             if self.want_events and events:
-                q = self._events
-                over = len(q) + len(events) - q.maxlen
-                if over > 0:
-                    self.missed_events += over
-                q.extend(events)
+                self.missed_events += _append(self._events, events)
 
     def take(self, limit: Optional[int] = None) -> Optional[tuple[list, list, int, int, int]]:
         """(samples, events, missed, missed_events, t_ms) since the last take (the
