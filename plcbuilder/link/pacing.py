@@ -43,12 +43,12 @@ class SimulationDown(RuntimeError):
 
 # ===================================================================== telemetry
 
-
 def _append(q, items: list) -> int:
     """Append items to the bounded deque q; how many of its oldest fell out."""
     over = max(len(q) + len(items) - q.maxlen, 0)
     q.extend(items)
     return over
+
 
 class TelemetryQueue:
     """One subscriber's bounded queue of sample changes and events.
