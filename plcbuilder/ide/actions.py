@@ -59,6 +59,18 @@ class Act:
     CONNECT = "connect"
     EMBEDDED = "embedded"
     ABOUT = "about"
+    BUILD_UPLOAD_START = "build_upload_start"
+    # the debugger (plcbuilder.ide.debug.actions makes these)
+    PAUSE = "pause"
+    STEP_OVER = "step_over"
+    STEP_INTO = "step_into"
+    STEP_OUT = "step_out"
+    STEP_TICK = "step_tick"
+    RUN_TO_CURSOR = "run_to_cursor"
+    TOGGLE_BREAKPOINT = "toggle_breakpoint"
+    TOGGLE_ALL_BREAKPOINTS = "toggle_all_breakpoints"
+    REMOVE_ALL_BREAKPOINTS = "remove_all_breakpoints"
+    RELEASE_ALL = "release_all"
 
 
 def add_action(win, actions: dict, name, text, slot=None, shortcut=None, ic=None, tip=None,
@@ -145,8 +157,10 @@ def build_actions(win) -> dict[str, QAction]:
       "Compile every procedure and write build/eeprom.rom")
     A(Act.UPLOAD, "&Upload", win.upload, "Ctrl+U", "upload",
       "Upload build/eeprom.rom to the controller")
-    A(Act.START, "&Start…", win.start_procedure, "F5", "start",
+    A(Act.START, "&Start…", win.start_or_continue, "F5", "start",
       "Start a procedure on the controller (by name or M-code, with eparam)")
+    A(Act.BUILD_UPLOAD_START, "Build, Upload and Start", win.run_actions.build_upload_start,
+      None, None, "Build All, upload the image and start the current editor's procedure")
     A(Act.START_CURRENT, "Start &This Procedure", win.run_actions.start_current, "Ctrl+F5", None,
       "Start the procedure of the current editor with the last eparam")
     A(Act.STOP, "S&top", win.stop, "Shift+F5", "stop",
@@ -189,7 +203,8 @@ def build_menus(win) -> None:
     for name in (Act.BUILD_ALL, Act.UPLOAD):
         m.addAction(a(name))
     m = mb.addMenu("&Run")
-    for name in (Act.START, Act.START_CURRENT, Act.STOP, None, Act.RUN_TESTS):
+    for name in (Act.START, Act.START_CURRENT, Act.BUILD_UPLOAD_START, Act.STOP, None,
+                 Act.RUN_TESTS):
         m.addAction(a(name)) if name else m.addSeparator()
     m.addSeparator()
     speed = m.addMenu(icon("speed"), "Simulation &Speed")
@@ -286,7 +301,8 @@ def update_actions(win) -> None:
         win.action(Act.SAVE).setEnabled(False)
         win.action(Act.TOGGLE_COMMENT).setEnabled(False)
     run = win.connection is not None and has_project
-    for name in (Act.UPLOAD, Act.START, Act.START_CURRENT, Act.STOP, Act.RESET_CONTROLLER):
+    for name in (Act.UPLOAD, Act.START, Act.START_CURRENT, Act.STOP, Act.RESET_CONTROLLER,
+                 Act.BUILD_UPLOAD_START):
         win.action(name).setEnabled(run)
     for name in (Act.CONNECT, Act.EMBEDDED):
         win.action(name).setEnabled(win.connection is not None)
