@@ -64,12 +64,13 @@ class DebugSession(QObject):
         self.forces_panel.sig_force.connect(self.force)
         self.forces_panel.sig_release.connect(self.release)
         self.forces_panel.sig_release_all.connect(self.release_all)
-        win.editor_stack.sig_editor_created.connect(self.attach)
         win.tree.sig_file_renamed.connect(self.store.rename)
         win.tree.sig_file_deleted.connect(lambda p: self.store.clear(p))
 
     def wire_connection(self) -> None:
-        """Follow the controller connection (once the window has one)."""
+        """Follow the new editors (after the lint, whose hover it extends) and
+        the controller connection (once the window has one)."""
+        self.win.editor_stack.sig_editor_created.connect(self.attach)
         c = self.connection
         if c is not None and hasattr(c, "sig_halted"):
             c.sig_halted.connect(self._on_halted)
