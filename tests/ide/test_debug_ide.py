@@ -6,27 +6,25 @@ the real embedded controller are in test_debug_live.py."""
 from __future__ import annotations
 
 import zlib
-from pathlib import Path
 
 import pytest
-from PySide6.QtCore import QObject, QPoint, Qt, QTimer, Signal
+from PySide6.QtCore import QObject, Qt, QTimer, Signal
 from PySide6.QtGui import QKeySequence
-from PySide6.QtWidgets import QApplication, QDialog, QMessageBox
+from PySide6.QtWidgets import QDialog, QMessageBox
 
 from plcbuilder.ide.actions import Act
 from plcbuilder.ide.debug.breakpoint_dialog import BreakpointDialog
 from plcbuilder.ide.debug.callstack import frames_of
 from plcbuilder.ide.debug.inline import inline_values, names_on_lines
 from plcbuilder.ide.editor import (MK_BREAKPOINT, MK_BREAKPOINT_CONDITIONAL,
-                                   MK_BREAKPOINT_DISABLED, MK_BREAKPOINT_UNVERIFIED, MK_EXEC,
+                                   MK_BREAKPOINT_DISABLED, MK_BREAKPOINT_UNVERIFIED,
                                    MK_LOGPOINT, MK_WAIT)
-from plcbuilder.ide.editor.style import MARGIN_FOLD, MARGIN_NUMBERS, MARGIN_SYMBOLS
 from plcbuilder.ide.main_window import MainWindow
 from plcbuilder.ide.settings import Settings
 from plcbuilder.link.client import ControllerStatus
 from plcbuilder.project.new import create_project
 
-HOME_LINE = 31            # M80.plc: "      sens=portget(INPUT_HOME_Z);"
+from tests.ide._debug import HOME_LINE, click_margin
 
 
 class DebugConnection(QObject):
@@ -112,18 +110,6 @@ def make_window(qtbot, settings, no_prompts):
 def open_m80(w, example):
     assert w.open_project(example)
     return w.open_file(example / "hardware" / "M80.plc")
-
-
-def margin_point(ed, line: int) -> QPoint:
-    x = ed.marginWidthN(MARGIN_NUMBERS) + ed.marginWidthN(MARGIN_SYMBOLS) // 2
-    pos = ed.positionFromLine(line - 1)
-    y = ed.pointYFromPosition(pos) + ed.textHeight(line - 1) // 2
-    return QPoint(x, y)
-
-
-def click_margin(qtbot, ed, line: int, button=Qt.MouseButton.LeftButton) -> None:
-    ed.goto_line(line)
-    qtbot.mouseClick(ed.viewport(), button, pos=margin_point(ed, line))
 
 
 def halted_state(t_ms=1234, line=HOME_LINE, statez=0, sens=0):
