@@ -178,7 +178,7 @@ class RunActions(QObject):
         """Ask before starting old code: ``"build"`` (Build, Upload and Start),
         ``"start"`` (start anyway) or None (cancel)."""
         box = QMessageBox(QMessageBox.Icon.Warning, "Start",
-                          f"The controller would not run what the editors show:\n\n"
+                          "The controller would not run what the editors show:\n\n"
                           + "\n".join(f"  • {r}" for r in reasons)
                           + f"\n\nBuild All, upload the image and start {name}?",
                           parent=self.parent())
