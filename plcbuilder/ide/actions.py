@@ -227,6 +227,8 @@ def fill_view_menu(win) -> None:
             m.addAction(dock.toggleViewAction())
     m.addSeparator()
     m.addAction(win.toolbar.toggleViewAction())
+    if getattr(win, "debug_toolbar", None) is not None:
+        m.addAction(win.debug_toolbar.toggleViewAction())
     m.addSeparator()
     for name in (Act.ZOOM_IN, Act.ZOOM_OUT, Act.ZOOM_RESET, None, Act.NEXT_TAB,
                  Act.PREVIOUS_TAB, None, Act.RESET_LAYOUT):

@@ -190,6 +190,8 @@ class EditorMarks:
         ed = self.editor
         if texts == self.inline:
             return
+        # the preferences' restyle resets every style: set the inline one each time
+        self.apply_theme(getattr(getattr(ed, "prefs", None), "theme", "light") == "dark")
         for line in self.inline:
             if line not in texts and 1 <= line <= ed.lineCount():
                 ed.eOLAnnotationSetText(line - 1, "")
