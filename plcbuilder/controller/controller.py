@@ -267,6 +267,7 @@ class Controller:
         if ms < 0:
             raise ControllerError(f"cannot step {ms} ms")
         self._plc.run(ms)
+        self.debugger.settle()
 
     def run_until_idle(self, ms: int) -> int:
         """Run at most ``ms`` ticks, stopping after the first tick that leaves
@@ -274,7 +275,9 @@ class Controller:
         ms = self._int(ms, "ms")
         if ms < 0:
             raise ControllerError(f"cannot step {ms} ms")
-        return self._plc.run(ms, until_idle=True)
+        ran = self._plc.run(ms, until_idle=True)
+        self.debugger.settle()
+        return ran
 
     def idle(self) -> bool:
         """No procedure runs and none is due to start."""

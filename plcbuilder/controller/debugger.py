@@ -31,7 +31,7 @@ from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import Op, size_of, validate
 from plcbuilder.bytecode.program import LoadError, Program
 from plcbuilder.controller import vm
-from plcbuilder.controller.events import Log
+from plcbuilder.controller.events import Halted, Log, Resumed
 
 REASONS = ("breakpoint", "step", "pause", "fault")
 HIT_MODES = ("eq", "ge", "every")
@@ -168,6 +168,7 @@ class Debugger:
         self._stepping: Optional[tuple] = None            # (process, kind, depth)
         self._step_end_tick = False                       # halt at this tick's end
         self.halt: Optional[Halt] = None
+        self._told: Optional[Halt] = None                 # the halt last announced
         #: halt at a runtime fault (on while any breakpoint is set, or when asked)
         self.halt_on_fault = False
 
@@ -258,14 +259,14 @@ class Debugger:
             bp.condition = str(cond.get("text") or "")
             bp.code = bytes(cond["code"])
         self._resolve(bp, programs)
+        if bp.reason is not None and programs:
+            raise DebugError(f"{what}: {bp.reason}")
         if programs and not bp.where:
             last = max((e.line for p in programs for e in p.lines
                         if _same_file(p.files[e.file] if e.file < len(p.files) else "", file)),
                        default=0)
             raise DebugError(f"{what}: {file} has no code on line {line} or after it "
                              f"(its last line with code is {last})")
-        if bp.reason is not None and programs:
-            raise DebugError(f"{what}: {bp.reason}")
         return bp
 
     def _programs_with(self, file: str) -> list[Program]:
@@ -447,12 +448,27 @@ class Debugger:
             self._run_to.clear()
             self._remark()
 
+    def settle(self) -> None:
+        """Announce what changed since the last call: a ``resumed`` event when
+        the halt announced is over, a ``halted`` event (with the state) for a
+        new one. The controller calls it after running ticks and after each command."""
+        h = self.halt
+        if h is self._told:
+            return
+        events = self.plc.events
+        if self._told is not None:
+            events.append(Resumed(self.plc.t))
+        if h is not None:
+            events.append(Halted(self.plc.t, self.halted_state()))
+        self._told = h
+
     # ------------------------------------------------------------ commands
     def pause(self) -> None:
         """Halt at the end of the current tick (now, between ticks)."""
         if self.halt is None:
             self.halt = Halt("pause")
             self._finish_command()
+        self.settle()
 
     def resume(self) -> None:
         """Continue: the rest of a halted tick runs (it may halt again)."""
@@ -460,6 +476,7 @@ class Debugger:
             return
         self.halt = None
         self.plc.resume_tick()
+        self.settle()
 
     def step(self, kind: str, procedure: Optional[str] = None) -> None:
         """Step ``kind`` (tick, into, over, out) in ``procedure`` (default: the one halted)."""
@@ -470,12 +487,11 @@ class Debugger:
         if kind == "tick":                  # the rest of this tick, or one whole tick
             self.halt = None
             mid_tick = self.plc.mid_tick
-            if not self.plc.resume_tick():
-                return                       # halted again inside the tick
-            if not mid_tick:
+            if self.plc.resume_tick() and not mid_tick:
                 self.plc.run(1)
             if self.halt is None:
                 self.halt = Halt("step")
+            self.settle()
             return
         p = self._procedure(procedure)
         depth = len(self._position(p)[1])
@@ -484,6 +500,7 @@ class Debugger:
         self._remark()
         self.halt = None
         self.plc.resume_tick()
+        self.settle()
 
     def run_to(self, file: str, line: int) -> dict:
         """Run until any procedure reaches ``file:line`` (a one-time breakpoint)."""
@@ -501,6 +518,7 @@ class Debugger:
         self._remark()
         self.halt = None
         self.plc.resume_tick()
+        self.settle()
         return {"file": file, "line": min(ln for ln, _ in found.values())}
 
     def _procedure(self, name: Optional[str]):

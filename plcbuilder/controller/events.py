@@ -83,7 +83,22 @@ class Log:
     type: str = "log"
 
 
-Event = Started | Ended | Message | Print | Fault | Note | Log
+@dataclass(frozen=True)
+class Halted:
+    """The debugger halted the controller; ``state`` is the halted state (docs/debugging.md)."""
+    t_ms: int
+    state: dict
+    type: str = "halted"
+
+
+@dataclass(frozen=True)
+class Resumed:
+    """The controller goes on after a halt."""
+    t_ms: int
+    type: str = "resumed"
+
+
+Event = Started | Ended | Message | Print | Fault | Note | Log | Halted | Resumed
 
 
 @dataclass
@@ -111,7 +126,7 @@ def to_dict(obj) -> dict:
 def from_dict(d: dict):
     """The inverse of :func:`to_dict` for events (by their ``type``) and samples."""
     kinds = {"started": Started, "ended": Ended, "message": Message, "print": Print,
-             "fault": Fault, "note": Note, "log": Log}
+             "fault": Fault, "note": Note, "log": Log, "halted": Halted, "resumed": Resumed}
     t = d.get("type")
     if t == "fault" and "calls" in d:
         d = dict(d, calls=tuple(tuple(c) for c in d["calls"]))
