@@ -84,8 +84,11 @@ _UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT
                        abi.SLOT_VAR00 + 1})
 #: What the controller sends a suspended procedure to have its variables written back.
 SYNC = object()
+#: What the controller sends a procedure suspended at a tick end to have it raise
+#: Handoff there (the reference interpreter then runs it: vm.HANDOVER)
+HANDOVER = vm.HANDOVER
 #: How a tick end that answers SYNC begins.
-_SYNC_ANSWER = "if (yield) is not None:"
+_SYNC_ANSWER = "if (_m := (yield)) is not None:"
 #: A pseudo slot that values read from the host's ``io`` depend on: any call
 #: out (which may change the pins) first writes them to temporaries.
 _IO = -1
@@ -843,22 +846,30 @@ class _Gen:
             self.emit(ind, "continue")
 
     def tick_end(self, ind: int, resume: Optional[int] = None, depth: int = 0) -> None:
+        # HANDOVER: the reference interpreter goes on from here (callers add their
+        # return addresses where they are not tracked: see the CALL terminator)
+        stack = ", ".join(f"_{k}" for k in range(depth))
+        handover = f"raise Handoff({resume}, [{stack}], {'rets' if self.tracked else '()'}, 0)"
         if self.syncs:
             # between ticks the controller may ask for the variables (send(SYNC)):
             # they go back to the slots, and are read again when the tick goes on
-            self.emit(ind, "if (yield) is not None:")
+            self.emit(ind, _SYNC_ANSWER)
             if self.cached:
                 self.emit(ind + 1, self._store_cached())
-            self.emit(ind + 1, "while (yield) is not None:")
-            self.emit(ind + 2, "pass")
+            self.emit(ind + 1, "while _m is not None:")
+            self.emit(ind + 2, "if _m is HANDOVER:")
+            self.emit(ind + 3, handover)
+            self.emit(ind + 2, "_m = yield")
             if self.cached:
                 self.emit(ind + 1, self._load_cached())
                 self._check_ranges(ind + 1, resume, depth)
         else:
-            self.emit(ind, "yield")
+            self.emit(ind, "if (yield) is not None:")
+            self.emit(ind + 1, handover)
         if self.budget:
             self.emit(ind, "n = 0")
-        self.known.pop(abi.SLOT_MESSAGE, None)    # the controller clears message at a tick end
+        # the controller clears message at a tick end, and a debugger may write any slot
+        self.known = {}
 
     def _check_ranges(self, ind: int, resume: Optional[int], depth: int) -> None:
         """After a SYNC: the variables read back must be in the ranges the code
@@ -1181,6 +1192,10 @@ class _Gen:
             self.emit(ind, "except VMFault as _e:")      # a fault names its callers
             self.emit(ind + 1, f"_e.callers.append({i.offset})")
             self.emit(ind + 1, "raise")
+            if callee.gen and not self.tracked:           # a handover names them too
+                self.emit(ind, "except Handoff as _h:")
+                self.emit(ind + 1, f"_h.rets = ({i.end},) + _h.rets")
+                self.emit(ind + 1, "raise")
             self.known = {}
             return i.end, stack
         if op is Op.GVARGET:
@@ -1194,7 +1209,8 @@ class _Gen:
             if self.latency:
                 self.emit(ind, f"if lat and plain({addr}):")
                 self.emit(ind + 1, "for _ in range(lat):")
-                self.emit(ind + 2, "yield")
+                self.emit(ind + 2, "while (yield) is not None:")   # no handover while waiting
+                self.emit(ind + 3, "pass")
                 if self.budget:
                     self.emit(ind + 1, "n = 0")
                 self.known.pop(abi.SLOT_MESSAGE, None)
@@ -1220,7 +1236,7 @@ class _Gen:
 
 # ------------------------------------------------------------------ runtime
 
-_NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff,
+_NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff, "HANDOVER": HANDOVER,
               "__builtins__": {"len": len, "range": range}}
 #: (code, make or None, why not translated, whether its tick ends answer SYNC)
 _CACHE: dict[tuple, tuple[bytes, Optional[Callable], str, bool]] = {}

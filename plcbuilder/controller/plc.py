@@ -32,7 +32,8 @@ from plcbuilder.bytecode.semantics import wrap
 from plcbuilder.controller import fastvm, vm
 from plcbuilder.controller.events import (Ended, Fault, Message, Note, Print, Sample,
                                           Started)
-from plcbuilder.controller.vm import Handoff, Host, ProcExit, VMFault
+from plcbuilder.controller.forces import ForcedSlots
+from plcbuilder.controller.vm import HANDOVER, Handoff, Host, ProcExit, VMFault
 
 SOFTWARE_PERIOD_MS = 100
 #: Exit code reported for a procedure that ended with a runtime fault (not in the seed's table).
@@ -49,7 +50,7 @@ class Process:
     """One run of a procedure."""
 
     __slots__ = ("name", "program", "kind", "slots", "eparam", "started_at", "resume",
-                 "host", "ended_at", "exit_code", "syncing")
+                 "host", "ended_at", "exit_code", "syncing", "runner")
 
     def __init__(self, program: Program, slots: list[int], eparam: int, started_at: int,
                  host: Host):
@@ -65,6 +66,8 @@ class Process:
         self.exit_code: Optional[int] = None
         #: the fast backend's generator when it keeps variables in locals between ticks
         self.syncing = None
+        #: the generator that runs it (either backend), None once it ended
+        self.runner = None
 
     def sync(self) -> None:
         """Make ``slots`` hold every variable's value now (the fast backend keeps
@@ -108,6 +111,9 @@ class PLC:
         self._last_row: tuple = _NO_ROW
         #: a CodeCoverage recording the instructions that run (reference backend only)
         self.coverage = None
+        #: procedure name -> {slot: value} of its forced variables (controller/forces.py):
+        #: such a procedure runs on the reference interpreter over ForcedSlots
+        self.var_forces: dict[str, dict[int, int]] = {}
         self.events: deque = deque(maxlen=EVENT_BUFFER)
         self.samples: deque = deque(maxlen=SAMPLE_BUFFER)
         self.programs: dict[str, Program] = {}
@@ -195,14 +201,22 @@ class PLC:
         if program.kind is Kind.SOFTWARE:
             slots[abi.SLOT_PARAM] = eparam
         host = self._host(program.name, program.kind)
+        forced = self.var_forces.get(program.name) if self.var_forces else None
+        if forced:
+            slots = ForcedSlots(slots)
+            for slot, value in forced.items():
+                slots.hold(slot, value)
         p = Process(program, slots, eparam, self.t, host)
-        if self.backend == "fast":
+        if forced:
+            gen = vm.run_reference(program, slots, host, cover=self.coverage)
+        elif self.backend == "fast":
             gen = fastvm.make_runner(program, slots, host)
             if fastvm.answers_sync(program, host):
                 p.syncing = gen
         else:
             gen = vm.run_reference(program, slots, host, cover=self.coverage)
         p.resume = gen.__next__
+        p.runner = gen
         self.last[program.name] = p
         self.events.append(Started(self.t, program.name, program.kind.label, eparam))
         return p
@@ -216,6 +230,7 @@ class PLC:
         p.ended_at = self.t
         p.exit_code = code
         p.resume = _finished
+        p.runner = None
         self.events.append(Ended(self.t, p.name, p.kind.label, code, abi.exit_name(code),
                                  p.slots[abi.SLOT_VEXIT]))
         if p is self.hw:
@@ -258,6 +273,7 @@ class PLC:
                 gen = vm.run_reference(p.program, p.slots, p.host, pc=exc.pc, stack=exc.stack,
                                        rets=exc.rets, count=exc.count)
                 p.resume = gen.__next__
+                p.runner = gen
                 try:
                     p.resume()
                     return
@@ -267,6 +283,48 @@ class PLC:
             else:                           # a bug must not bring the controller down
                 self._fault(p, None, f"internal error: {type(exc).__name__}: {exc}")
             return
+
+    # ------------------------------------------------------- forced slots
+    def hold_slot(self, p: Process, slot: int, value: int) -> bool:
+        """Force variable ``slot`` of the running ``p`` to ``value`` (a debugger's
+        force): p goes on, from where it is, on the reference interpreter over
+        :class:`ForcedSlots`. False when p cannot change over now (it waits
+        for a gvarget's latency): then try again after a tick."""
+        if not isinstance(p.slots, ForcedSlots):
+            if not self._hand_over(p):
+                return False
+        p.slots.hold(slot, value)
+        return True
+
+    def release_slot(self, p: Process, slot: int, restore: bool) -> None:
+        """Release a forced slot of ``p``: it keeps the forced value, or takes
+        the value the program last stored (``restore``). p stays on the
+        reference interpreter until it ends."""
+        if isinstance(p.slots, ForcedSlots):
+            p.slots.release(slot, restore)
+
+    def _hand_over(self, p: Process) -> bool:
+        """Run ``p`` on the reference interpreter over ForcedSlots from where it is."""
+        gen = p.runner
+        if p.ended_at is not None or gen is None:
+            return False
+        kw = {}
+        if gen.gi_suspended:              # at a tick end
+            try:
+                gen.send(HANDOVER)
+            except Handoff as h:
+                kw = dict(pc=h.pc, stack=h.stack, rets=h.rets, count=h.count)
+            else:
+                return False               # waiting for a gvarget: no handover there
+        elif gen.gi_frame is None or gen.gi_running:
+            return False
+        # (not started yet: the reference interpreter starts it from its entry)
+        p.slots = ForcedSlots(p.slots)
+        new = vm.run_reference(p.program, p.slots, p.host, cover=self.coverage, **kw)
+        p.resume = new.__next__
+        p.runner = new
+        p.syncing = None
+        return True
 
     # ------------------------------------------------------------- starts
     def start_hardware(self, name: str, eparam: int = 0) -> None:

@@ -81,6 +81,13 @@ class Handoff(Exception):
         self.count = count
 
 
+#: Sent to a procedure suspended at a tick end (``gen.send(HANDOVER)``): it raises
+#: :class:`Handoff` with its state there, so that a new reference interpreter
+#: (over other slots: a debugger's forces) goes on from that point. A procedure
+#: waiting for a gvarget's latency ignores it (it stays suspended).
+HANDOVER = object()
+
+
 class Host:
     """What a running procedure reaches outside itself.
 
@@ -230,7 +237,8 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                 if len(stack) > STACK_LIMIT:
                     raise VMFault(pc, FAULT_OVERFLOW)
                 pc = args[pc] if cond else nexts[pc]
-                yield
+                if (yield) is not None:
+                    raise Handoff(pc, stack, tuple(calls), 0)
                 count = 0
                 continue
             elif k == K_INC:
@@ -257,7 +265,8 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                     if len(stack) > STACK_LIMIT:
                         raise VMFault(pc, FAULT_OVERFLOW)
                     for _ in range(lat):
-                        yield
+                        while (yield) is not None:
+                            pass
                     count = 0
                 push(gvarget(a))
             elif k == K_PORTGET:
@@ -272,7 +281,8 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                 if len(stack) > STACK_LIMIT:
                     raise VMFault(pc, FAULT_OVERFLOW)
                 pc = nexts[pc]
-                yield
+                if (yield) is not None:
+                    raise Handoff(pc, stack, tuple(calls), 0)
                 count = 0
                 continue
             elif k == K_CALL:
