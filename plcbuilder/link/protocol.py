@@ -23,6 +23,9 @@ Messages
         speed {mode, factor?}           step {ms}
         reset {}                        event {handler}
         ping {}
+        write {target, value}           force {target, value}
+        release {target, mode}          release_all {mode}
+        forces {}                       (write and force: SPEC §6)
 
     server -> client:
         welcome {id, version, server, pid, t_ms, speed}   the answer to hello
@@ -91,6 +94,11 @@ _MAX_ID_TEXT = 64
 REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state", "variables",
                       "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping"})
 REPLIES = frozenset({"welcome", "result", "error", "telemetry", "bye"})
+#: Write and force (controller/forces.py); their changes also travel as "forces" events.
+FORCE_REQUESTS = frozenset({"write", "force", "release", "release_all", "forces"})
+REQUESTS = REQUESTS | FORCE_REQUESTS
+#: How a release leaves its target: its current value, or the program's (the wiring).
+RELEASE_MODES = ("keep", "restore")
 
 #: Speed modes of the ``speed`` request.
 SPEED_MODES = ("realtime", "factor", "max", "pause")
