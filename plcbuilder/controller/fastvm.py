@@ -84,8 +84,12 @@ _UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT
                        abi.SLOT_VAR00 + 1})
 #: What the controller sends a suspended procedure to have its variables written back.
 SYNC = object()
+#: What the controller sends a procedure suspended at a tick end to have it raise
+#: Handoff there (the reference interpreter then runs it: vm.HANDOVER); the
+#: debugger throws vm.Migrate in for the same
+HANDOVER = vm.HANDOVER
 #: How a tick end that answers SYNC begins (then the offset it yields).
-_SYNC_ANSWER = "if (yield "
+_SYNC_ANSWER = "if (_m := (yield "
 #: A pseudo slot that values read from the host's ``io`` depend on: any call
 #: out (which may change the pins) first writes them to temporaries.
 _IO = -1
@@ -859,27 +863,32 @@ class _Gen:
     def tick_end(self, ind: int, resume: Optional[int] = None, depth: int = 0,
                  at: int = 0) -> None:
         """A tick end: yields ``at`` (the offset of the instruction ending the
-        tick); a Migrate thrown in while suspended hands the exact state over."""
+        tick); a Migrate thrown in, or HANDOVER sent, while suspended hands the
+        exact state over (the variables written back first)."""
         self.emit(ind, "try:")
         if self.syncs:
             # between ticks the controller may ask for the variables (send(SYNC)):
             # they go back to the slots, and are read again when the tick goes on
-            self.emit(ind + 1, f"if (yield {at}) is not None:")
+            self.emit(ind + 1, f"{_SYNC_ANSWER}{at})) is not None:")
             if self.cached:
                 self.emit(ind + 2, self._store_cached())
-            self.emit(ind + 2, f"while (yield {at}) is not None:")
-            self.emit(ind + 3, "pass")
+            self.emit(ind + 2, "while _m is not None:")
+            self.emit(ind + 3, "if _m is HANDOVER:")
+            self.emit(ind + 4, "raise Migrate")
+            self.emit(ind + 3, f"_m = yield {at}")
             if self.cached:
                 self.emit(ind + 2, self._load_cached())
                 self._check_ranges(ind + 2, resume, depth)
         else:
-            self.emit(ind + 1, f"yield {at}")
+            self.emit(ind + 1, f"if (yield {at}) is HANDOVER:")
+            self.emit(ind + 2, "raise Migrate")
         self.emit(ind, "except Migrate:")
         stack = ", ".join(f"_{k}" for k in range(depth))
         self.emit(ind + 1, f"raise Handoff({resume}, [{stack}], {self.rets()}, 0) from None")
         if self.budget:
             self.emit(ind, "n = 0")
-        self.known.pop(abi.SLOT_MESSAGE, None)    # the controller clears message at a tick end
+        # the controller clears message at a tick end, and a debugger may write any slot
+        self.known = {}
 
     def _check_ranges(self, ind: int, resume: Optional[int], depth: int) -> None:
         """After a SYNC: the variables read back must be in the ranges the code
@@ -1225,8 +1234,9 @@ class _Gen:
             if self.latency:
                 self.emit(ind, f"if lat and plain({addr}):")
                 self.emit(ind + 1, "for _ in range(lat):")
-                self.emit(ind + 2, "try:")
-                self.emit(ind + 3, f"yield {i.offset}")
+                self.emit(ind + 2, "try:")                   # no handover while waiting
+                self.emit(ind + 3, f"while (yield {i.offset}) is not None:")
+                self.emit(ind + 4, "pass")
                 self.emit(ind + 2, "except Migrate:")        # the wait starts again there
                 items = "".join(f"_{k}, " for k in range(len(stack)))
                 self.emit(ind + 3, f"raise Handoff({i.offset}, [{items}{addr}], {self.rets()}, 0)"
@@ -1257,7 +1267,7 @@ class _Gen:
 # ------------------------------------------------------------------ runtime
 
 _NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff, "Halted": Halted,
-              "Migrate": Migrate, "tuple": tuple,
+              "Migrate": Migrate, "HANDOVER": HANDOVER, "tuple": tuple,
               "__builtins__": {"len": len, "range": range}}
 #: (code, make or None, why not translated, whether its tick ends answer SYNC)
 _CACHE: dict[tuple, tuple[bytes, Optional[Callable], str, bool]] = {}

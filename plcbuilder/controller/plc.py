@@ -32,7 +32,9 @@ from plcbuilder.bytecode.semantics import wrap
 from plcbuilder.controller import fastvm, vm
 from plcbuilder.controller.events import (Ended, Fault, Message, Note, Print, Sample,
                                           Started)
-from plcbuilder.controller.vm import HALT, Halted, Handoff, Host, Migrate, ProcExit, VMFault
+from plcbuilder.controller.forces import ForcedSlots
+from plcbuilder.controller.vm import (HALT, HANDOVER, Halted, Handoff, Host, Migrate, ProcExit,
+                                      VMFault)
 
 SOFTWARE_PERIOD_MS = 100
 #: Exit code reported for a procedure that ended with a runtime fault (not in the seed's table).
@@ -72,6 +74,11 @@ class Process:
         self.fault = None
         #: runs code that asks the debugger (the reference interpreter, or watched fast code)
         self.watched = False
+
+    @property
+    def runner(self):
+        """The generator that runs it (either backend; forces.py's name for ``gen``)."""
+        return self.gen
 
     def set_gen(self, gen) -> None:
         self.gen = gen
@@ -130,6 +137,9 @@ class PLC:
         self.watching = False
         #: the rest of a tick halted by the debugger: (t, procedures still to run, ran)
         self._rest = None
+        #: procedure name -> {slot: value} of its forced variables (controller/forces.py):
+        #: such a procedure runs on the reference interpreter over ForcedSlots
+        self.var_forces: dict[str, dict[int, int]] = {}
         self.events: deque = deque(maxlen=EVENT_BUFFER)
         self.samples: deque = deque(maxlen=SAMPLE_BUFFER)
         self.programs: dict[str, Program] = {}
@@ -217,11 +227,19 @@ class PLC:
         if program.kind is Kind.SOFTWARE:
             slots[abi.SLOT_PARAM] = eparam
         host = self._host(program.name, program.kind)
+        forced = self.var_forces.get(program.name) if self.var_forces else None
+        if forced:
+            slots = ForcedSlots(slots)
+            for slot, value in forced.items():
+                slots.hold(slot, value)
         p = Process(program, slots, eparam, self.t, host)
         dbg = self.debugger
         if dbg is not None:
             host.debug = dbg.watch(p)
-        if self.backend == "fast":
+        if forced:
+            gen = vm.run_reference(program, slots, host, cover=self.coverage)
+            p.watched = True
+        elif self.backend == "fast":
             p.watched = dbg is not None and dbg.watched(program)
             gen = fastvm.make_runner(program, slots, host, watched=p.watched)
             if not p.watched and fastvm.answers_sync(program, host):
@@ -309,6 +327,47 @@ class PLC:
             else:                           # a bug must not bring the controller down
                 self._fault(p, None, f"internal error: {type(exc).__name__}: {exc}")
             return
+
+    # ------------------------------------------------------- forced slots
+    def hold_slot(self, p: Process, slot: int, value: int) -> bool:
+        """Force variable ``slot`` of the running ``p`` to ``value`` (a debugger's
+        force): p goes on, from where it is, on the reference interpreter over
+        :class:`ForcedSlots`. False when p cannot change over now (it waits
+        for a gvarget's latency): then try again after a tick."""
+        if not isinstance(p.slots, ForcedSlots):
+            if not self._hand_over(p):
+                return False
+        p.slots.hold(slot, value)
+        return True
+
+    def release_slot(self, p: Process, slot: int, restore: bool) -> None:
+        """Release a forced slot of ``p``: it keeps the forced value, or takes
+        the value the program last stored (``restore``). p stays on the
+        reference interpreter until it ends."""
+        if isinstance(p.slots, ForcedSlots):
+            p.slots.release(slot, restore)
+
+    def _hand_over(self, p: Process) -> bool:
+        """Run ``p`` on the reference interpreter over ForcedSlots from where it is."""
+        gen = p.gen
+        if p.ended_at is not None or gen is None:
+            return False
+        kw = {}
+        if gen.gi_suspended:              # at a tick end
+            try:
+                gen.send(HANDOVER)
+            except Handoff as h:
+                kw = dict(pc=h.pc, stack=h.stack, rets=h.rets, count=h.count)
+            else:
+                return False               # waiting for a gvarget: no handover there
+        elif gen.gi_frame is None or gen.gi_running:
+            return False
+        # (not started yet: the reference interpreter starts it from its entry)
+        p.slots = ForcedSlots(p.slots)
+        new = vm.run_reference(p.program, p.slots, p.host, cover=self.coverage, **kw)
+        p.set_gen(new)
+        p.syncing, p.watched = None, True
+        return True
 
     # ------------------------------------------------------------- starts
     def start_hardware(self, name: str, eparam: int = 0) -> None:
