@@ -228,9 +228,8 @@ class _Worker(threading.Thread):
     def _hook_notifications(self, client: Client) -> None:
         """The controller's own ``halted``/``resumed`` messages, when the client
         passes them on (on its reader thread: only queue them)."""
-        hook = getattr(client, "set_notification_callback", None)
-        if hook is not None:
-            hook(lambda mtype, msg: self.post(mtype, msg))
+        if hasattr(client, "notification_callback"):
+            client.notification_callback = lambda msg: self.post(str(msg.get("type")), msg)
 
     def _wait_endpoint(self, child: ControllerProcess) -> runtime.Endpoint:
         ep = child.wait_endpoint(SPAWN_TIMEOUT, cancel=self.stopping)

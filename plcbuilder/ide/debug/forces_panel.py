@@ -88,7 +88,7 @@ class ForcesPanel(QWidget):
             item.setText(1, str(f.get("value")))
             since = f.get("since_ms")
             item.setText(2, f"t = {since} ms" if since is not None else "")
-            item.setTextAlignment(1, int(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter))
+            item.setTextAlignment(1, Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
         self.release_all_button.setEnabled(bool(self.forces))
         self.release_button.setEnabled(bool(self.forces))
 

@@ -187,7 +187,8 @@ class DebugSession(QObject):
         return menu
 
     def edit_breakpoint(self, bp: Breakpoint, focus: str = "condition") -> bool:
-        dlg = BreakpointDialog(self.win, bp, self.condition_error, focus)
+        dlg = BreakpointDialog(self.win, bp, lambda text: self.condition_error(text, bp.path),
+                               focus)
         if dlg.exec() != BreakpointDialog.DialogCode.Accepted:
             return False
         self.store.update(bp, **dlg.values())
@@ -269,7 +270,9 @@ class DebugSession(QObject):
         fn = getattr(api, "compile_condition", None)
         if fn is None:
             return None, None
-        where = self.win.project.root if self.win.project is not None else path
+        # the breakpoint's file gives the condition its #include and #define lines
+        where = path if path and not str(path).startswith("<") else (
+            self.win.project.root if self.win.project is not None else None)
         try:
             result = fn(text, where)
         except Exception as exc:  # noqa: BLE001 - a compiler bug is a refused condition
@@ -280,8 +283,8 @@ class DebugSession(QObject):
         msgs = [getattr(d, "message", str(d)) for d in diags]
         return None, "; ".join(msgs) or "it does not compile"
 
-    def condition_error(self, text: str) -> Optional[str]:
-        return self.compile_condition(text)[1]
+    def condition_error(self, text: str, path: str = "") -> Optional[str]:
+        return self.compile_condition(text, path)[1]
 
     def _on_breakpoint_answers(self, file_name: str, answers: list) -> None:
         for p in self.store.set_answers(self._sent.get(file_name, []), answers):
@@ -420,6 +423,7 @@ class DebugSession(QObject):
     # ============================================================== verbs
     def continue_(self) -> None:
         if self.connected():
+            self._send_pending()          # breakpoints just changed go first
             self.connection.debug_continue()
 
     def pause(self) -> None:
@@ -432,6 +436,7 @@ class DebugSession(QObject):
         if not self.connected():
             return
         proc = None if kind == "tick" else self.step_procedure()
+        self._send_pending()
         self.connection.debug_step(kind, proc)
 
     def run_to(self, path: Optional[str] = None, line: Optional[int] = None) -> bool:
@@ -443,6 +448,7 @@ class DebugSession(QObject):
             if not self.breakable(ed):
                 return False
             path, line = ed.path, ed.cursor_line_col()[0]
+        self._send_pending()
         self.connection.debug_run_to(Path(path).name, int(line))
         self.sig_message.emit(f"Running to {Path(path).name}:{line}…", 3000)
         return True
