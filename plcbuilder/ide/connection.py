@@ -31,6 +31,7 @@ from __future__ import annotations
 import queue
 import threading
 import time
+import zlib
 from typing import Optional, Sequence
 
 from PySide6 import QtCore
@@ -114,7 +115,8 @@ class _Worker(threading.Thread):
         self.restarts = 0
         self.steps = StepSamples()
         self.breakpoints: dict[str, list] = {}  # file -> specs the controller has
-        self.debugging = False                  # poll debug_state with the state
+        self.debugging = False                  # a debug verb was used: follow the halts
+        self.notified = False                   # the client passes halted/resumed on
 
     # ----------------------------------------------------------------- plumbing
     def post(self, kind: str, payload=None) -> None:
@@ -228,7 +230,8 @@ class _Worker(threading.Thread):
     def _hook_notifications(self, client: Client) -> None:
         """The controller's own ``halted``/``resumed`` messages, when the client
         passes them on (on its reader thread: only queue them)."""
-        if hasattr(client, "notification_callback"):
+        self.notified = hasattr(client, "notification_callback")
+        if self.notified:
             client.notification_callback = lambda msg: self.post(str(msg.get("type")), msg)
 
     def _wait_endpoint(self, child: ControllerProcess) -> runtime.Endpoint:
@@ -252,7 +255,7 @@ class _Worker(threading.Thread):
             if now >= next_state:
                 next_state = now + STATE_INTERVAL
                 self.post("state", client.state())
-                if self.debugging:
+                if self.debugging and not self.notified:    # no halted/resumed messages
                     self._debug_state(client)
             try:
                 cmd = self.commands.get(timeout=max(0.0, min(0.05, next_state - now)))
@@ -296,7 +299,7 @@ class _Worker(threading.Thread):
                 result = client.request(verb, **fields)
                 self.post("breakpoints", (fields["file"], result.get("breakpoints", [])))
             elif verb in DEBUG_VERBS:
-                self.debugging = True
+                self.debugging = self.debugging or verb not in FORCE_VERBS
                 if verb == "debug_state":
                     self._debug_state(client)
                     return
@@ -418,6 +421,10 @@ class ControllerConnection(QtCore.QObject):
         self.welcome: dict = {}
         self.halted: Optional[dict] = None      # the last halted state (None: running)
         self.debugger = False                   # the controller answers the debug requests
+        #: CRC-32 (hex) of an image this connection is uploading: what the controller
+        #: runs once the upload (queued in order) is done, until a state says so
+        self.uploaded_crc: Optional[str] = None
+        self._upload_done = False
         self.forces: list = []                  # the last list of forces
 
     # -------------------------------------------------------------- lifecycle
@@ -460,13 +467,16 @@ class ControllerConnection(QtCore.QObject):
         self._inbox = worker.inbox = queue.SimpleQueue()
         self._worker = worker
         self.missed = 0
+        self.uploaded_crc = None
         worker.start()
         self._pump.start()
 
     # ---------------------------------------------------------------- requests
     def upload(self, image_bytes: bytes) -> None:
         """Upload an eeprom.rom image (kept, and uploaded again after a restart)."""
-        self._send("upload", bytes(image_bytes))
+        data = bytes(image_bytes)
+        self.uploaded_crc = f"{zlib.crc32(data):08x}"
+        self._send("upload", data)
 
     def start(self, name: str, eparam: int = 0) -> None:
         self._send("start", name, int(eparam))
@@ -602,6 +612,8 @@ class ControllerConnection(QtCore.QObject):
             flush()                     # keep the order of telemetry and the rest
             if kind == "state":
                 self.last_state = payload
+                if self._upload_done:           # this state knows the uploaded image
+                    self.uploaded_crc, self._upload_done = None, False
                 self.sig_state.emit(payload, self.missed)
             elif kind == "connected":
                 self.address, self.welcome = payload
@@ -623,11 +635,16 @@ class ControllerConnection(QtCore.QObject):
                 self.sig_variables.emit(dict(payload))
             elif kind == "result":
                 verb, result = payload
+                if verb == "upload":
+                    self._upload_done = True
                 self.sig_result.emit(verb, dict(result) if isinstance(result, dict) else {})
             elif kind == "note":
                 self.sig_note.emit(str(payload))
             elif kind in ("debug_state", "halted", "resumed"):
                 self._on_debug_state(kind, payload)
+            elif kind == "refused":
+                if payload[0] == "upload":
+                    self.uploaded_crc = None
             elif kind == "breakpoints":
                 self.sig_breakpoints.emit(*payload)
             elif kind == "breakpoints_refused":

@@ -172,7 +172,8 @@ class RunActions(QObject):
         from plcbuilder.ide.image_state import stale_reasons
         unsaved = [ed.path for ed in self.editors.modified_editors()]
         st = getattr(self.connection, "last_state", None)
-        return stale_reasons(self.project, unsaved, getattr(st, "image_crc32", None))
+        loaded = getattr(self.connection, "uploaded_crc", None) or getattr(st, "image_crc32", None)
+        return stale_reasons(self.project, unsaved, loaded)
 
     def ask_stale_start(self, name: str, reasons: list[str]) -> Optional[str]:
         """Ask before starting old code: ``"build"`` (Build, Upload and Start),

@@ -301,8 +301,6 @@ class DebugSession(QObject):
         self.store.reset_answers()
         self._sent.clear()
         self.send_all()
-        if self.debuggable():
-            self.connection.request_forces()
         self.sig_state_changed.emit()
 
     def _on_disconnected(self, _reason: str) -> None:
