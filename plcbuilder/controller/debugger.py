@@ -100,8 +100,14 @@ class Watch:
         self._program = process.program
         self.marks = debugger._marks_of(process.program)
 
+        name = process.program.name
+
         def brk(pc: int, rets, _d=debugger, _p=process) -> bool:
-            return _d._reached(_p, pc, rets)
+            if _d._busy:                    # a step or a run-to goes on
+                return _d._reached(_p, pc, rets)
+            at = _d._at.get(name)
+            bps = at.get(pc) if at is not None else None
+            return bps is not None and _d._breakpoints_at(_p, pc, rets, bps)
 
         self.brk = brk
 
@@ -163,7 +169,9 @@ class Debugger:
         self._bps: dict[str, list[Breakpoint]] = {}      # by file as given
         self._marks: dict[str, list] = {}                 # program name -> per-offset marks
         self._tables: dict[str, tuple[list, list]] = {}   # program name -> (base, table)
-        self._at: dict[tuple[str, int], list[Breakpoint]] = {}
+        #: program name -> offset -> the enabled breakpoints there
+        self._at: dict[str, dict[int, list[Breakpoint]]] = {}
+        self._busy = False                                # a step or a run-to goes on
         self._run_to: dict[str, set[int]] = {}
         self._stepping: Optional[tuple] = None            # (process, kind, depth)
         self._step_end_tick = False                       # halt at this tick's end
@@ -314,18 +322,17 @@ class Debugger:
         """Marks from the breakpoints, the run-to targets and the step, set in
         place (running interpreters see them); procedures running plain fast
         code whose program gains marks go over to the reference interpreter."""
-        at: dict[tuple[str, int], list[Breakpoint]] = {}
+        at: dict[str, dict[int, list[Breakpoint]]] = {}
         for bps in self._bps.values():
             for bp in bps:
                 if not bp.enabled:
                     continue
                 for name, (_line, pcs) in bp.where.items():
                     for pc in pcs:
-                        at.setdefault((name, pc), []).append(bp)
+                        at.setdefault(name, {}).setdefault(pc, []).append(bp)
         self._at = at
-        want: dict[str, set[int]] = {}
-        for name, pc in at:
-            want.setdefault(name, set()).add(pc)
+        self._busy = self._stepping is not None or bool(self._run_to)
+        want: dict[str, set[int]] = {name: set(pcs) for name, pcs in at.items()}
         for name, pcs in self._run_to.items():
             want.setdefault(name, set()).update(pcs)
         step = self._stepping
@@ -348,7 +355,8 @@ class Debugger:
                 for p in self.plc.running():
                     if p.program is program:
                         self.plc.watch_process(p)
-        self.plc.watching = self.on
+        self.plc.halting = self.on
+        self.plc.watching = self._stepping is not None or bool(self._run_to)
 
     def _marks_of(self, program: Program) -> list:
         marks = self._marks.get(program.name)
@@ -376,7 +384,12 @@ class Debugger:
                 return self._halt_at("step", p, pc, rets)
         if pc in self._run_to.get(p.program.name, ()):
             return self._halt_at("step", p, pc, rets)
-        for bp in self._at.get((p.program.name, pc), ()):
+        bps = self._at.get(p.program.name, {}).get(pc)
+        return bps is not None and self._breakpoints_at(p, pc, rets, bps)
+
+    def _breakpoints_at(self, p, pc: int, rets, bps: list) -> bool:
+        """The breakpoints at pc decide: a condition, a hit count, a logpoint, a halt."""
+        for bp in bps:
             if bp.code is not None and not self._holds(bp, p):
                 continue
             bp.hits += 1
