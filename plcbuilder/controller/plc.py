@@ -518,8 +518,9 @@ class PLC:
         self.t = t + 1
         return True
 
-    def running(self, include_faulted: bool = True) -> list[Process]:
-        """The procedures running: the hardware one, then software by name."""
+    def running(self) -> list[Process]:
+        """The procedures running (a procedure halted at its fault too): the
+        hardware one, then software by name."""
         out = [self.hw] if self.hw is not None else []
         return out + list(self._sw_order)
 
