@@ -24,6 +24,9 @@ How the code is translated:
   outside hands the procedure to the reference interpreter where it is.
 - Tick ends: a plain ``yield`` whose answer is tested against None (SYNC);
   a loop's condition is taken before the tick ends, and each way ends it.
+  ``HANDOVER`` (after a SYNC, where the tick end answers SYNC) raises
+  :class:`~plcbuilder.controller.vm.Handoff` there, so that the reference
+  interpreter goes on from that point (a debugger forcing a variable).
 - A constant pin's ``portget`` reads ``io.in_bits`` where the value is used,
   and ``portset``/``portclr`` test ``io.out_bits`` before calling.
 - Control flow: a block with exactly one predecessor is written inline at its
@@ -88,7 +91,9 @@ SYNC = object()
 #: Handoff there (the reference interpreter then runs it: vm.HANDOVER)
 HANDOVER = vm.HANDOVER
 #: How a tick end that answers SYNC begins.
-_SYNC_ANSWER = "if (_m := (yield)) is not None:"
+_SYNC_ANSWER = "if (yield) is not None:"
+#: How it waits, answering SYNC, for the tick to go on (or HANDOVER): only there.
+_SYNC_WAIT = "while (_m := (yield)) is not None:"
 #: A pseudo slot that values read from the host's ``io`` depend on: any call
 #: out (which may change the pins) first writes them to temporaries.
 _IO = -1
@@ -856,10 +861,9 @@ class _Gen:
             self.emit(ind, _SYNC_ANSWER)
             if self.cached:
                 self.emit(ind + 1, self._store_cached())
-            self.emit(ind + 1, "while _m is not None:")
+            self.emit(ind + 1, _SYNC_WAIT)
             self.emit(ind + 2, "if _m is HANDOVER:")
             self.emit(ind + 3, handover)
-            self.emit(ind + 2, "_m = yield")
             if self.cached:
                 self.emit(ind + 1, self._load_cached())
                 self._check_ranges(ind + 1, resume, depth)
@@ -1273,7 +1277,7 @@ def factory(program: Program, latency: bool = False,
     exec(compile(src, filename, "exec"), ns)
     if len(_CACHE) > 256:
         _CACHE.clear()
-    _CACHE[key] = (program.code, ns["make"], "", _SYNC_ANSWER in src)
+    _CACHE[key] = (program.code, ns["make"], "", _SYNC_WAIT in src)
     return ns["make"]
 
 

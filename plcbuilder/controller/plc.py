@@ -311,6 +311,7 @@ class PLC:
         kw = {}
         if gen.gi_suspended:              # at a tick end
             try:
+                p.sync()                   # (one that keeps locals takes HANDOVER after SYNC)
                 gen.send(HANDOVER)
             except Handoff as h:
                 kw = dict(pc=h.pc, stack=h.stack, rets=h.rets, count=h.count)
