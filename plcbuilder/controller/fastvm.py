@@ -24,6 +24,9 @@ How the code is translated:
   outside hands the procedure to the reference interpreter where it is.
 - Tick ends: a plain ``yield`` whose answer is tested against None (SYNC);
   a loop's condition is taken before the tick ends, and each way ends it.
+  ``HANDOVER`` (after a SYNC, where the tick end answers SYNC) raises
+  :class:`~plcbuilder.controller.vm.Handoff` there, so that the reference
+  interpreter goes on from that point (a debugger forcing a variable).
 - A constant pin's ``portget`` reads ``io.in_bits`` where the value is used,
   and ``portset``/``portclr`` test ``io.out_bits`` before calling.
 - Control flow: a block with exactly one predecessor is written inline at its
@@ -89,7 +92,9 @@ SYNC = object()
 #: debugger throws vm.Migrate in for the same
 HANDOVER = vm.HANDOVER
 #: How a tick end that answers SYNC begins (then the offset it yields).
-_SYNC_ANSWER = "if (_m := (yield "
+_SYNC_ANSWER = "if (yield "
+#: How it waits, answering SYNC, for the tick to go on (or HANDOVER): only there.
+_SYNC_WAIT = "while (_m := (yield "
 #: A pseudo slot that values read from the host's ``io`` depend on: any call
 #: out (which may change the pins) first writes them to temporaries.
 _IO = -1
@@ -869,13 +874,12 @@ class _Gen:
         if self.syncs:
             # between ticks the controller may ask for the variables (send(SYNC)):
             # they go back to the slots, and are read again when the tick goes on
-            self.emit(ind + 1, f"{_SYNC_ANSWER}{at})) is not None:")
+            self.emit(ind + 1, f"{_SYNC_ANSWER}{at}) is not None:")
             if self.cached:
                 self.emit(ind + 2, self._store_cached())
-            self.emit(ind + 2, "while _m is not None:")
+            self.emit(ind + 2, f"{_SYNC_WAIT}{at})) is not None:")
             self.emit(ind + 3, "if _m is HANDOVER:")
             self.emit(ind + 4, "raise Migrate")
-            self.emit(ind + 3, f"_m = yield {at}")
             if self.cached:
                 self.emit(ind + 2, self._load_cached())
                 self._check_ranges(ind + 2, resume, depth)
@@ -1307,7 +1311,7 @@ def factory(program: Program, latency: bool = False,
     exec(compile(src, filename, "exec"), ns)
     if len(_CACHE) > 256:
         _CACHE.clear()
-    _CACHE[key] = (program.code, ns["make"], "", _SYNC_ANSWER in src)
+    _CACHE[key] = (program.code, ns["make"], "", _SYNC_WAIT in src)
     return ns["make"]
 
 

@@ -42,6 +42,7 @@ from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.controller.events import Forces as ForcesEvent
 from plcbuilder.controller.events import Note
+from plcbuilder.controller.vm import HANDOVER, Handoff, run_reference
 
 __all__ = ["ForceError", "ForcedSlots", "Forces", "Target", "parse_target", "parse_value",
            "MODES"]
@@ -171,6 +172,10 @@ class Forces:
         return [{"target": name, "value": v, "since_ms": since}
                 for name, (_t, v, since, _s) in self._held.items()]
 
+    def check(self, target) -> str:
+        """The canonical name of a target that exists; ForceError otherwise."""
+        return self._resolve(target)[0].name
+
     def is_forced(self, target) -> bool:
         return self._resolve(target)[0].name in self._held
 
@@ -246,8 +251,8 @@ class Forces:
                 self.plc.var_forces.pop(t.proc, None)
             self.pending.discard(t.name)
             p = self._running(t)
-            if p is not None and held is not None:
-                self.plc.release_slot(p, slot, restore)
+            if p is not None and held is not None and isinstance(p.slots, ForcedSlots):
+                p.slots.release(slot, restore)      # it stays on the reference interpreter
         elif t.kind == "in":
             m.release_input(t.n, restore)
         elif t.kind == "out":
@@ -307,8 +312,41 @@ class Forces:
     # ------------------------------------------------------------ helpers
     def _hold_running(self, t: Target, slot: int, value: int) -> None:
         p = self._running(t)
-        if p is not None and not self.plc.hold_slot(p, slot, value):
+        if p is not None and not self._hold_slot(p, slot, value):
             self.pending.add(t.name)
+
+    def _hold_slot(self, p, slot: int, value: int) -> bool:
+        """Force variable ``slot`` of the running process ``p`` to ``value``: p
+        goes on, from where it is, on the reference interpreter over
+        :class:`ForcedSlots`. False when p cannot change over now (it waits for
+        a gvarget's latency): then it is tried again before the next step."""
+        if not isinstance(p.slots, ForcedSlots) and not self._hand_over(p):
+            return False
+        p.slots.hold(slot, value)
+        return True
+
+    def _hand_over(self, p) -> bool:
+        """Run ``p`` on the reference interpreter over ForcedSlots from where it is."""
+        gen = p.runner
+        if p.ended_at is not None or gen is None:
+            return False
+        kw = {}
+        if gen.gi_suspended:              # at a tick end
+            try:
+                p.sync()                   # (one that keeps locals takes HANDOVER after SYNC)
+                gen.send(HANDOVER)
+            except Handoff as h:
+                kw = dict(pc=h.pc, stack=h.stack, rets=h.rets, count=h.count)
+            else:
+                return False               # waiting for a gvarget: no handover there
+        elif gen.gi_frame is None or gen.gi_running:
+            return False
+        # (not started yet: the reference interpreter starts it from its entry)
+        p.slots = ForcedSlots(p.slots)
+        new = run_reference(p.program, p.slots, p.host, cover=self.plc.coverage, **kw)
+        p.set_gen(new)                     # (the debugger's watch goes with it: p.host)
+        p.syncing, p.watched = None, True
+        return True
 
     def _changed(self) -> None:
         self.plc.events.append(ForcesEvent(self.plc.t, tuple(self.list())))

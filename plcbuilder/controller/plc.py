@@ -34,8 +34,7 @@ from plcbuilder.controller import fastvm, vm
 from plcbuilder.controller.events import (Ended, Fault, Message, Note, Print, Sample,
                                           Started)
 from plcbuilder.controller.forces import ForcedSlots
-from plcbuilder.controller.vm import (HALT, HANDOVER, Halted, Handoff, Host, Migrate, ProcExit,
-                                      VMFault)
+from plcbuilder.controller.vm import HALT, Halted, Handoff, Host, Migrate, ProcExit, VMFault
 
 SOFTWARE_PERIOD_MS = 100
 #: Exit code reported for a procedure that ended with a runtime fault (not in the seed's table).
@@ -331,47 +330,6 @@ class PLC:
             else:                           # a bug must not bring the controller down
                 self._fault(p, None, f"internal error: {type(exc).__name__}: {exc}")
             return
-
-    # ------------------------------------------------------- forced slots
-    def hold_slot(self, p: Process, slot: int, value: int) -> bool:
-        """Force variable ``slot`` of the running ``p`` to ``value`` (a debugger's
-        force): p goes on, from where it is, on the reference interpreter over
-        :class:`ForcedSlots`. False when p cannot change over now (it waits
-        for a gvarget's latency): then try again after a tick."""
-        if not isinstance(p.slots, ForcedSlots):
-            if not self._hand_over(p):
-                return False
-        p.slots.hold(slot, value)
-        return True
-
-    def release_slot(self, p: Process, slot: int, restore: bool) -> None:
-        """Release a forced slot of ``p``: it keeps the forced value, or takes
-        the value the program last stored (``restore``). p stays on the
-        reference interpreter until it ends."""
-        if isinstance(p.slots, ForcedSlots):
-            p.slots.release(slot, restore)
-
-    def _hand_over(self, p: Process) -> bool:
-        """Run ``p`` on the reference interpreter over ForcedSlots from where it is."""
-        gen = p.gen
-        if p.ended_at is not None or gen is None:
-            return False
-        kw = {}
-        if gen.gi_suspended:              # at a tick end
-            try:
-                gen.send(HANDOVER)
-            except Handoff as h:
-                kw = dict(pc=h.pc, stack=h.stack, rets=h.rets, count=h.count)
-            else:
-                return False               # waiting for a gvarget: no handover there
-        elif gen.gi_frame is None or gen.gi_running:
-            return False
-        # (not started yet: the reference interpreter starts it from its entry)
-        p.slots = ForcedSlots(p.slots)
-        new = vm.run_reference(p.program, p.slots, p.host, cover=self.coverage, **kw)
-        p.set_gen(new)
-        p.syncing, p.watched = None, True
-        return True
 
     # ------------------------------------------------------------- starts
     def start_hardware(self, name: str, eparam: int = 0) -> None:

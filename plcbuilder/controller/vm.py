@@ -95,8 +95,9 @@ class Migrate(Exception):
 
 #: Sent to a procedure suspended at a tick end (``gen.send(HANDOVER)``): it raises
 #: :class:`Handoff` with its state there, so that a new reference interpreter
-#: (over other slots: a debugger's forces) goes on from that point. A procedure
-#: waiting for a gvarget's latency ignores it (it stays suspended).
+#: (over other slots: a debugger's forces) goes on from that point. A fast-backend
+#: procedure that keeps variables in locals takes it after a SYNC; one waiting for
+#: a gvarget's latency ignores it (it stays suspended).
 HANDOVER = object()
 
 
