@@ -317,10 +317,11 @@ class _Worker(threading.Thread):
         except ConnectionLost:
             raise
         except RefusedError as exc:
+            if verb == "set_breakpoints":       # the Breakpoints panel says why
+                self.post("breakpoints_refused", (args[0]["file"], exc.reason))
+                return
             self.post("error", f"{verb}: {exc.reason}")
             self.post("refused", (verb, exc.reason))
-            if verb == "set_breakpoints":
-                self.post("breakpoints_refused", (args[0]["file"], exc.reason))
             return
         self.post("result", (verb, result))
         if verb in ("upload", "reset", "start", "stop") and self.debugging:

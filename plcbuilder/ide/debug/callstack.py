@@ -18,6 +18,7 @@ from PySide6.QtWidgets import QLabel, QTreeWidget, QTreeWidgetItem, QVBoxLayout,
 from plcbuilder.ide.icons import icon
 
 ROLE_FRAME = Qt.ItemDataRole.UserRole + 1
+ROLE_TEXTS = Qt.ItemDataRole.UserRole + 2
 REASONS = {"breakpoint": "halted at a breakpoint", "step": "halted after a step",
            "pause": "paused", "fault": "halted at a fault"}
 
@@ -70,8 +71,8 @@ class CallStackPanel(QWidget):
         self.header.setStyleSheet("padding: 3px 6px;")
         self.tree = QTreeWidget(self)
         self.tree.setObjectName("callStack")
-        self.tree.setColumnCount(2)
-        self.tree.setHeaderLabels(["Procedure / call", "Where"])
+        self.tree.setColumnCount(1)
+        self.tree.setHeaderHidden(True)         # one column: a narrow dock shows it all
         self.tree.setUniformRowHeights(True)
         self.tree.itemClicked.connect(self._clicked)
         self.tree.itemActivated.connect(self._clicked)
@@ -97,24 +98,27 @@ class CallStackPanel(QWidget):
         for proc in state.get("procedures") or ():
             name = str(proc.get("name"))
             top = QTreeWidgetItem(self.tree)
-            top.setText(0, f"{name} ({proc.get('kind', '')})" if proc.get("kind") else name)
             waiting = bool(proc.get("at_loop_end"))
-            top.setText(1, "waiting at its loop's end (next tick)" if waiting else
-                        ("halted here" if name == halting else "at its line"))
+            state = "waiting at its loop's end" if waiting else (
+                "halted here" if name == halting else "at its line")
+            top.setText(0, f"{name} — {state}")
+            top.setToolTip(0, f"{name} ({proc.get('kind', '')}): {state}"
+                           + (" (for the next tick)" if waiting else ""))
             top.setIcon(0, icon("file-plc-sw" if proc.get("kind") == "software" else "file-plc"))
             if name == halting:
                 top.setFont(0, bold)
             for f in frames_of(proc):
                 item = QTreeWidgetItem(top)
                 callee = f.get("procedure") or name
-                item.setText(0, f"{callee}()" if f["index"] else f"{callee}()  ◀")
-                item.setText(1, f"{Path(str(f.get('file') or '?')).name}:{f.get('line')}")
+                where = f"{Path(str(f.get('file') or '?')).name}:{f.get('line')}"
+                call = f"{callee}()" if f["index"] else f"{callee}()  ◀"
+                item.setText(0, f"{call}   {where}")
+                item.setData(0, ROLE_TEXTS, (call, where))
                 item.setData(0, ROLE_FRAME, (name, f["index"], str(f.get("file") or ""),
                                              int(f.get("line") or 0)))
                 if f["index"] == 0:
                     item.setForeground(0, QBrush(QColor("#8a6d00" if not waiting else "#1f5fa8")))
             top.setExpanded(True)
-        self.tree.resizeColumnToContents(0)
         first = self.tree.topLevelItem(0)
         if first is not None and first.childCount():
             for i in range(self.tree.topLevelItemCount()):
@@ -132,7 +136,8 @@ class CallStackPanel(QWidget):
         return out
 
     def frame_texts(self) -> list[tuple[str, str]]:
-        return [(it.text(0), it.text(1)) for it in self.frame_items()]
+        """(call, where) of each frame shown: ``("find_home_z()  ◀", "M80.plc:31")``."""
+        return [tuple(it.data(0, ROLE_TEXTS)) for it in self.frame_items()]
 
     # -------------------------------------------------------------- private
     def _clicked(self, item: QTreeWidgetItem, _column: int = 0) -> None:

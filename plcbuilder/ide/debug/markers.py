@@ -25,9 +25,8 @@ from plcbuilder.ide.editor.style import M
 BREAKPOINT_RED = "#e51400"
 EXEC_YELLOW = "#f2c200"
 WAIT_BLUE = "#2f7fd1"
-#: line backgrounds (BGR order is made by _bgr), alpha 0..255
-LINE_BACKS = {MK_EXEC_LINE: ("#ffe866", 110), MK_WAIT_LINE: ("#9cc8f5", 90),
-              MK_FRAME_LINE: ("#a8e0a8", 90)}
+#: line backgrounds, opaque (the caret line hides while halted: it would cover them)
+LINE_BACKS = {MK_EXEC_LINE: "#fff1a8", MK_WAIT_LINE: "#d6e8fb", MK_FRAME_LINE: "#d9f2d9"}
 INLINE_STYLE = 60          # the style of inline values (free: lexers use 0..17, Scintilla 32..39)
 EOL_BOXED = 2              # EOLANNOTATION_BOXED
 SIZE = 14
@@ -114,10 +113,9 @@ class EditorMarks:
             ed.send(M.RGBAImageSetHeight, SIZE)
             ed.send(M.RGBAImageSetScale, 100)
             ed.send(M.MarkerDefineRGBAImage, mk, ctypes.addressof(buf))
-        for mk, (colour, alpha) in LINE_BACKS.items():
+        for mk, colour in LINE_BACKS.items():
             ed.markerDefine(mk, int(Scintilla.MarkerSymbol.Background))
             ed.markerSetBack(mk, _bgr(colour))
-            ed.markerSetAlpha(mk, alpha)
         self.apply_theme(dark=False)
         ed.eOLAnnotationSetVisible(EOL_BOXED)
 
@@ -168,6 +166,7 @@ class EditorMarks:
         for mk in (MK_EXEC, MK_EXEC_LINE, MK_WAIT, MK_WAIT_LINE, MK_FRAME_LINE):
             ed.markerDeleteAll(mk)
         count = ed.lineCount()
+        marked = False
         for lines, arrow, back in ((exec_lines, MK_EXEC, MK_EXEC_LINE),
                                    (wait_lines, MK_WAIT, MK_WAIT_LINE),
                                    (frame_lines, None, MK_FRAME_LINE)):
@@ -176,6 +175,10 @@ class EditorMarks:
                     if arrow is not None:
                         ed.markerAdd(line - 1, arrow)
                     ed.markerAdd(line - 1, back)
+                    marked = True
+        # Scintilla paints the caret line over marker backgrounds: hide it while
+        # this editor shows where a halted procedure is
+        ed.setCaretLineVisible(not marked)
 
     def exec_lines(self, marker: int = MK_EXEC) -> list[int]:
         out, line0 = [], self.editor.markerNext(0, 1 << marker)

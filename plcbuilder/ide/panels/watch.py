@@ -269,6 +269,7 @@ class WatchPanel(QtWidgets.QWidget):
                         flags |= Qt.ItemFlag.ItemIsEditable
                     elif c == COL_FORCE:
                         flags |= Qt.ItemFlag.ItemIsUserCheckable
+                        item.setCheckState(Qt.CheckState.Unchecked)   # (draws the box)
                     item.setFlags(flags)
                     self.table.setItem(r, c, item)
                 if item.text() != text:
