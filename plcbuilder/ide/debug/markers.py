@@ -100,6 +100,7 @@ class EditorMarks:
         self._handles: dict[int, Breakpoint] = {}    # marker handle -> breakpoint
         self._images: list = []
         self.inline: dict[int, str] = {}             # 1-based line -> inline text shown
+        self._caret_back = None                       # the caret line's colour while hidden
         self._define()
 
     # ---------------------------------------------------------------- set-up
@@ -177,8 +178,15 @@ class EditorMarks:
                     ed.markerAdd(line - 1, back)
                     marked = True
         # Scintilla paints the caret line over marker backgrounds: hide it while
-        # this editor shows where a halted procedure is
-        ed.setCaretLineVisible(not marked)
+        # this editor shows where a halted procedure is (showing it again resets
+        # its colour: put the theme's back)
+        if marked and self._caret_back is None:
+            self._caret_back = ed.caretLineBack()
+            ed.setCaretLineVisible(False)
+        elif not marked and self._caret_back is not None:
+            ed.setCaretLineVisible(True)
+            ed.setCaretLineBack(self._caret_back)
+            self._caret_back = None
 
     def exec_lines(self, marker: int = MK_EXEC) -> list[int]:
         out, line0 = [], self.editor.markerNext(0, 1 << marker)
@@ -195,9 +203,7 @@ class EditorMarks:
             return
         # the preferences' restyle resets every style: set the inline one each time
         self.apply_theme(getattr(getattr(ed, "prefs", None), "theme", "light") == "dark")
-        for line in self.inline:
-            if line not in texts and 1 <= line <= ed.lineCount():
-                ed.eOLAnnotationSetText(line - 1, "")
+        ed.eOLAnnotationClearAll()          # (an empty text would still draw its box)
         count = ed.lineCount()
         for line, text in texts.items():
             if 1 <= line <= count:

@@ -243,6 +243,8 @@ class InputsPanel(QtWidgets.QWidget):
         for pin, b in self.buttons.items():
             w = pin // 32
             v = (int(s.inputs[w]) >> (pin % 32)) & 1 if w < len(s.inputs) else 0
+            if pin in self.forced_pins:       # what the program reads (also while halted)
+                v = 1 if self.forced_pins[pin] else 0
             pend = self._pending.get(pin)
             if pend is not None:
                 if pend[0] == v or now > pend[1]:
@@ -253,7 +255,7 @@ class InputsPanel(QtWidgets.QWidget):
                 b.setChecked(bool(v))
         for ch, lab in enumerate(self.readings):
             if ch < len(s.adc):
-                text = str(s.adc[ch]) + (" F" if ch in self.forced_adc else "")
+                text = (f"{self.forced_adc[ch]} F" if ch in self.forced_adc else str(s.adc[ch]))
                 if lab.text() != text:
                     lab.setText(text)
 
