@@ -280,11 +280,12 @@ def test_a_halt_shows_lines_call_stack_inline_values_and_hover(make_window, exam
     lube = w.open_file(example / "software" / "LUBE.plc")
     conn.connect_now()
     w.ensure_run_panels()
+    caret_line = ed.caretLineBack()
     assert not w.action(Act.STEP_OVER).isEnabled()
     conn.sig_halted.emit(halted_state())
     # the halting procedure's editor is current, at its line, marked
     assert w.current_editor() is ed and ed.cursor_line_col()[0] == HOME_LINE
-    assert ed.debug_marks.exec_lines() == [HOME_LINE]
+    assert ed.debug_marks.exec_lines() == [HOME_LINE] and not ed.caretLineVisible()
     assert lube.debug_marks.exec_lines(MK_WAIT) == [14]          # waiting at its loop's end
     # call stack: M80's frames innermost first, LUBE waiting
     texts = w.debug.call_stack.frame_texts()
@@ -317,6 +318,9 @@ def test_a_halt_shows_lines_call_stack_inline_values_and_hover(make_window, exam
     assert conn.calls[-1] == ("debug_continue",)
     conn.sig_resumed.emit(1300)
     assert ed.debug_marks.exec_lines() == [] and ed.debug_marks.inline == {}
+    assert bytes(ed.eOLAnnotationText(HOME_LINE - 1)) == b""
+    # the caret line, hidden while halted (it would cover the halted line), is back
+    assert ed.caretLineVisible() and ed.caretLineBack() == caret_line
     assert w.action(Act.START).text() == "&Start…" and w.action(Act.PAUSE).isEnabled()
 
 
