@@ -28,6 +28,7 @@ from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.debugger import DebugError
 from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
+from plcbuilder.controller.recorder import image_id
 from plcbuilder.controller.session import UsageError, build_scenario, run_session
 from plcbuilder.controller.scenario import Action
 from plcbuilder.controller.variables_xml import load_variables
@@ -186,13 +187,17 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
         c = Controller(mconf, backend=opts.backend, variables=tg.variables,
                        gvarget_latency_ms=opts.gvarget_latency_ms,
                        record_samples=opts.trace is not None)
-        c.load(tg.programs, autostart=tg.single is None)
+        replay = _replay_image(c, tg.programs, sc)
+        if replay is None:
+            c.load(tg.programs, autostart=tg.single is None)
     except ControllerError as exc:
         raise UsageError(str(exc)) from None
     if tg.single is not None:
         sc.actions.insert(0, Action(0, "start", tg.single.name, opts.eparam))
     _set_breaks(c, opts.breaks, target)
     report = run_session(c, sc, limit, trace=opts.trace, target=str(target))
+    if replay:
+        report["notes"].insert(0, {"t_ms": 0, "level": "warning", "text": replay})
     forces = report.pop("forces", None)          # (the forces stay last)
     report["halted"] = _halted_report(c.debugger.halted_state()) if opts.breaks else None
     if forces is not None:
@@ -305,6 +310,22 @@ def _halted_report(state: Optional[dict]) -> Optional[dict]:
             "vars": mine["vars"] if mine else {},
             "fault": state["fault"], "breakpoint": state["breakpoint"],
             "procedures": state["procedures"], "machine": state["machine"]}
+
+
+def _replay_image(c: Controller, programs: list, sc) -> Optional[str]:
+    """A scenario with ``upload`` lines (a recorded session) loads the image
+    there, not at 0: None when it has none (load now), else '' or a warning
+    that the image recorded is not the one this target builds."""
+    uploads = [a for a in sc.actions if a.kind == "upload"]
+    if not uploads:
+        return None
+    c.replay_image = list(programs)
+    have = image_id(programs)
+    other = sorted({a.name for a in uploads if a.name and a.name != have})
+    if not other:
+        return ""
+    return (f"the recording loaded image {', '.join(other)}; this project builds image {have}: "
+            f"the replay runs the project's image and may differ from the session")
 
 
 def _compile_target(target: Path, opts: RunOptions) -> _Target:

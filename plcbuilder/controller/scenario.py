@@ -16,6 +16,7 @@ file (``--scenario FILE``), whose lines are the same::
     force in 2=1 @ 20          # TARGET=VALUE @ MS: hold until released
     release in 2 keep @ 30     # TARGET [keep|restore] @ MS (default restore)
     release all @ 40           # everything forced [keep|restore]
+    upload 1c2d3e4f @ 0        # load the image here (a recorded session's upload)
 
 A target is ``PROC.var``, ``in N``, ``out N``, ``adc N``, ``pwm N``, ``dac N`` or
 ``gvar N`` (controller/forces.py).
@@ -39,7 +40,8 @@ from plcbuilder._support.numbers import INT32, WORD32, parse_int_in, to_int32
 from plcbuilder.controller.forces import MODES, ForceError, parse_target
 
 MAX_SCENARIO_BYTES = 4 << 20
-KINDS = ("start", "input", "adc", "stop", "event", "bind", "write", "force", "release")
+KINDS = ("start", "input", "adc", "stop", "event", "bind", "write", "force", "release",
+         "upload")
 
 
 class ScenarioError(ValueError):
@@ -73,6 +75,8 @@ class Action:
             return f"{self.kind} {self.name}={self.a} @ {self.t_ms}"
         if self.kind == "release":
             return f"release {self.name} {MODES[self.b]} @ {self.t_ms}"
+        if self.kind == "upload":
+            return f"upload {self.name} @ {self.t_ms}" if self.name else f"upload @ {self.t_ms}"
         return f"stop @ {self.t_ms}"
 
 
@@ -221,10 +225,22 @@ def parse_release(text: str) -> Action:
     return Action(t, "release", name, 0, MODES.index(mode))
 
 
+def parse_upload(text: str) -> Action:
+    """``[IMAGE][@MS]``: load the image there (a recorded session's upload;
+    IMAGE, 8 hex digits, names the image recorded)."""
+    body, t = _split_time(text, "upload")
+    ident = body.strip().lower()
+    if ident and (len(ident) != 8 or any(c not in "0123456789abcdef" for c in ident)):
+        raise ScenarioError(f"upload: the image is named by 8 hex digits (as recorded), "
+                            f"not {body.strip()!r}")
+    return Action(t, "upload", ident)
+
+
 _PARSERS: dict[str, Callable[[str], Action]] = {
     "start": parse_start, "input": parse_input, "adc": parse_adc,
     "stop": parse_stop, "event": parse_event, "bind": parse_bind,
     "write": parse_write, "force": parse_force, "release": parse_release,
+    "upload": parse_upload,
 }
 
 
@@ -305,12 +321,14 @@ def apply(controller, action: Action) -> None:
             controller.release_all(MODES[action.b])
         else:
             controller.release(action.name, MODES[action.b])
+    elif action.kind == "upload":
+        controller.reload()
     else:  # pragma: no cover
         raise ScenarioError(f"unknown action {action.kind!r}")
 
 
 #: Actions that can start a procedure (the run is not over while one is due).
-STARTING = frozenset({"start", "stop", "event", "bind"})
+STARTING = frozenset({"start", "stop", "event", "bind", "upload"})
 #: Actions that can change an input (which may be bound to a procedure).
 _PIN_CHANGES = frozenset({"input", "write", "force", "release"})
 

@@ -111,6 +111,8 @@ def check_scenario(sc: Scenario, controller) -> None:
     channel the machine does not have."""
     machine = controller.machine
     programs = controller.programs
+    if getattr(controller, "replay_image", None) is not None:   # loaded by an upload line
+        programs = {**{p.name: p for p in controller.replay_image}, **programs}
     n_in = getattr(machine, "input_count", 256)
     for a in sc.actions:
         if a.kind in ("start", "bind") and a.name not in programs:
