@@ -676,7 +676,7 @@ class _Cache:
         source = self.info(proc.path, keep=True)
         if source is None:
             return None
-        put(CACHE_VERSION, self.fingerprint, proc.kind.label, options.strict,
+        put(CACHE_VERSION, self.fingerprint, proc.kind.label, options.strict, options.target,
             options.limit, str(proc.path), self.cwd, source[0], str(options.root))
         dirs = [Path(d) for d in options.include_dirs]
         put(len(dirs), *[str(d) for d in dirs])
