@@ -401,6 +401,21 @@ class Project:
     def target(self) -> str:
         return self.settings.target
 
+    def target_settings(self) -> dict:
+        """What the controller needs to run this project's target (the keyword
+        arguments of controller.targets.TargetConfig); reads the Huazhong
+        parameters file (ProjectError naming its line when it is wrong)."""
+        from plcbuilder.project.parameters import load_parameters
+        st = self.settings
+        out = {"name": st.target}
+        if st.target == T.HUAZHONG:
+            out["parameters"] = tuple(load_parameters(self.parameters_path))
+        if st.target == T.TGMOTION:
+            out.update(cycle_time_us=st.cycle_time_us,
+                       program_periods_us=tuple(st.program_periods_us),
+                       instruction_ns=st.instruction_ns)
+        return out
+
     @property
     def limits(self) -> Limits:
         return self.settings.limits
