@@ -108,7 +108,8 @@ class Settings:
     def to_toml(self) -> str:
         """The settings file's text (every key written, with comments)."""
         def line(key: str, value: str, comment: str) -> str:
-            return f"{key} = {value}".ljust(27) + f"# {comment}\n"
+            text = f"{key} = {value}"
+            return text.ljust(27) + (" " if len(text) >= 27 else "") + f"# {comment}\n"
         lim = self.limits
         return ("# PLC Builder project settings (see docs/projects.md in PLC Builder)\n"
                 + line("name", _toml_str(self.name), "the project's name")
