@@ -1,6 +1,7 @@
 """The Huazhong built-in PLC (seed 001, SPEC §9 "huazhong").
 
-At the start ``init()`` runs once. Then every 1 ms tick:
+At the start ``init()`` runs once (after a first batch read, so that it sees
+the inputs and the parameters). Then every 1 ms tick:
 
 1. the batch read: X from the machine's inputs (input pin 8n+b is bit b of
    X[n]), F from the CNC (the plain registers ``CNC_F_BASE + n``), P from the
@@ -64,6 +65,7 @@ class HuazhongPLC(TargetPLC):
     def tick(self, t: int, p: Process) -> None:
         if self._init_due:
             self._init_due = False
+            self._batch_read()                  # init() sees the inputs and P too
             self.call("init")
             if self.hw is not p or not self._read_periods(p):
                 return                          # a fault ended the program
