@@ -240,3 +240,24 @@ def test_banks_run_the_same_on_both_vms():
         results.append(regs)
     assert results[0] == results[1]
     assert results[0][T.BANKS["R"].base + 3] == 13 and results[0][T.BANKS["G"].base + 4] == 26
+
+
+def test_seed_null_program_runs():
+    """The seed's plc_null.cld: the smallest program, which compiles and runs
+    (and does nothing), in this language's spelling."""
+    c = controller("""
+        // plc_null: the PLC's empty frame
+        init()
+        {
+        }
+        plc1()
+        {
+            plc1_time = 16;
+        }
+        plc2()
+        {
+            plc2_time = 32;
+        }""", "huazhong")
+    c.step(100)
+    assert faults(c) == [] and not c.idle()
+    assert c.plc.calls == {"init": 1, "plc1": 7, "plc2": 4}

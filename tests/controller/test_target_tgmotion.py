@@ -133,8 +133,8 @@ def test_tgm_data_through_gvarget_and_gvarset():
     """Shared memory (`TGM_Data`, 512 KiB) is reached with `gvarget`/`gvarset` on
     addresses documented by the project."""
     c = controller(tgm(head="#include <tgmotion.h>\n",
-                       ini="gvarset(TGM_DATA + TGM_DATA_WORDS - 1, 7); "
-                           "gvarset(TGM_DATA + TGM_DATA_WORDS, 9);",
+                       ini="gvarset(TGM_DATA + TGM_WORDS - 1, 7); "
+                           "gvarset(TGM_DATA + TGM_WORDS, 9);",
                        p04="a = gvarget(TGM_DATA + 131071) + 1; gvarset(TGM_DATA + 5, a);"),
                    "tgmotion")
     c.step(1)
@@ -154,3 +154,20 @@ def test_run_report_has_registers_calls_and_budget():
     assert rep["calls"] == {"Program_01": 2, "Program_02": 2, "Program_03": 2,
                             "Program_04": 2, "Program_05": 20, "Program_Ini": 1}
     assert rep["budget"] == [] and rep["cycles"] == 2
+
+
+def test_seed_program_02_example_runs():
+    """The seed's example of an empty Program_02 (``return 1;``, here exit(1)),
+    with the other five likewise: the PLC starts and cycles without faults."""
+    c = controller("""
+        Program_Ini() { exit(1); }
+        Program_01() { exit(1); }
+        Program_02()
+        {
+            exit(1);
+        }
+        Program_03() { exit(1); }
+        Program_04() { exit(1); }
+        Program_05() { exit(1); }""", "tgmotion")
+    c.step(10)
+    assert faults(c) == [] and not c.idle() and c.plc.cycle == 20
