@@ -15,6 +15,7 @@ from typing import Callable, Optional
 
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import ControllerStatus
+from plcbuilder.controller.targets import TargetConfig
 from plcbuilder.image.manifest import Image, ImageError, Limits, read_image
 from plcbuilder.link import protocol
 from plcbuilder.link.pacing import Simulation, SimulationDown, TelemetryQueue
@@ -109,8 +110,10 @@ class Service:
             _debug(traceback.format_exc())
             raise Refused(f"image refused: unreadable ({type(exc).__name__}: {exc})") from None
 
-    def load_image(self, data: bytes) -> dict:
-        """Validate a whole image, then load it at once; on refusal nothing changes."""
+    def load_image(self, data: bytes, target: Optional[dict] = None) -> dict:
+        """Validate a whole image, then load it at once; on refusal nothing changes.
+        ``target`` (docs/targets.md): the controller runs that target's schedule
+        from now on (a new controller on the same machine when it changes)."""
         try:
             image = self.check_image(data)
         except Refused:
@@ -118,7 +121,7 @@ class Service:
             raise
 
         def swap():
-            controller = self.sim.controller
+            controller = self._for_target(target)
             previous = list(controller.programs.values())
             try:
                 controller.load([p.program for p in image.procedures])
@@ -154,7 +157,31 @@ class Service:
         except BadRequest:
             self.refused += 1
             raise
-        return self.load_image(data)
+        return self.load_image(data, protocol.decode_target(msg))
+
+    def _for_target(self, target: Optional[dict]) -> Controller:
+        """The controller to load an image for ``target`` into: the one running,
+        or a new one on the same machine when the target changes (Huazhong's
+        B registers carried over). Runs on the simulation thread."""
+        current = self.sim.controller
+        name = (target or {}).get("name", "mycnc")
+        config = None
+        if name != "mycnc":
+            fields = dict(target)
+            for key in ("parameters", "program_periods_us"):
+                if key in fields:
+                    fields[key] = tuple(fields[key])
+            kept = current.retained() if current.target is not None and \
+                current.target.name == name else None
+            try:
+                config = TargetConfig(**fields, retained=tuple(kept) if kept else None)
+            except TypeError as exc:
+                raise ControllerError(f"target: {exc}") from None
+        if config == current.target:
+            return current
+        new = Controller(current.machine.config, backend=current.backend, target=config)
+        self.sim.replace_controller(new)
+        return new
 
     # ---------------------------------------------------------------- procedures
     def handle_start(self, msg: dict, session: Session) -> dict:
@@ -220,7 +247,13 @@ class Service:
         return self.state().to_dict()
 
     def handle_variables(self, msg: dict, session: Session) -> dict:
-        return {"variables": self._on_sim(self.sim.controller.variables)}
+        def read():
+            c = self.sim.controller
+            out = {"variables": c.variables()}
+            if c.target is not None:
+                out["target"] = c.target_report()
+            return out
+        return self._on_sim(read)
 
     # ---------------------------------------------------------------- time
     def handle_speed(self, msg: dict, session: Session) -> dict:
@@ -274,6 +307,12 @@ class Service:
 
         def go():
             new = factory()
+            old = self.sim.controller
+            if old.target is not None:         # a restart: the same target, B kept
+                kept = old.retained()
+                new = Controller(new.machine.config, backend=new.backend,
+                                 target=replace(old.target,
+                                                retained=tuple(kept) if kept else None))
             if self.image is not None:
                 new.load([p.program for p in self.image.procedures])
             self.sim.replace_controller(new)

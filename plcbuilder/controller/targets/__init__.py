@@ -13,7 +13,7 @@ software PLC. The controller picks one with :func:`make_plc`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Optional
 
 from plcbuilder.bytecode import targets as T
@@ -34,7 +34,6 @@ class TargetConfig:
     cycle_time_us: int = 500
     program_periods_us: tuple[int, int, int] = (1000, 1000, 1000)
     instruction_ns: int = T.TGM_DEFAULT_INSTRUCTION_NS
-    extra: dict = field(default_factory=dict)
 
     def check(self) -> None:
         """Raise TargetConfigError naming the first value out of range."""
