@@ -132,6 +132,7 @@ class Checker:
                     self._expr(s.target)      # x |= v reads x
             if type(s.target) is A.Index:
                 self._index(s.target, write=True)
+                self._width(s)
             else:
                 self._target(s.target)
                 self._period(s)
@@ -206,6 +207,15 @@ class Checker:
             self.diags.append(warning("read-bank", f"{e.bank} is read from the "
                                       f"{'machine' if e.bank == 'X' else 'CNC'} at the start of "
                                       f"every tick: this write is lost then", e.span))
+
+    def _width(self, s: A.Assign) -> None:
+        """Y[0] = 0x1ff; stores 0xff: say so (a write keeps the element's width)."""
+        bank = T.BANKS.get(s.target.bank)
+        v = _const(s.value) if s.op == "=" else None
+        if bank is not None and self.profile.banks and v is not None and not 0 <= v <= bank.mask:
+            self.diags.append(warning("element-width", f"{s.target.bank} holds {bank.bits}-bit "
+                                      f"elements: this stores {v & bank.mask} "
+                                      f"(0x{v & bank.mask:x}), not {v}", s.value.span))
 
     def _period(self, s: A.Assign) -> None:
         """plc1_time = 0; (a period must be at least 1 ms)."""

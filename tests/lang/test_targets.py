@@ -103,3 +103,18 @@ def test_constant_index_is_one_register_computed_index_goes_through_the_latches(
     _, r = diags(HZ.replace("plc1() { }", "plc1() { Y[3] = X[i]; }"), "huazhong")
     consts = [i.arg for i in instructions(r.program) if i.arg is not None and i.arg > 100000]
     assert consts == [T.BANKS["Y"].base + 3, T.INDEX_LATCH, T.BANKS["X"].load]
+
+
+def test_a_constant_wider_than_the_element_is_a_warning():
+    """A write truncates to the element's width"""
+    found, r = diags(HZ.replace("plc1() { }", "plc1() { Y[0] = 0x1ff; G[0] = 0xffff; }"),
+                     "huazhong", "element-width")
+    assert r.ok and len(found) == 1 and "stores 255 (0xff), not 511" in found[0].message
+
+
+def test_highlighter_knows_the_target_tokens():
+    from pygments.token import Error
+    from plcbuilder.lang.highlight import PlcLexer
+    toks = list(PlcLexer().get_tokens("Y[0] |= 0x80; a -= 1;"))
+    assert not any(t is Error for t, _ in toks)
+    assert ("|=" in [v for _, v in toks]) and ("[" in [v for _, v in toks])
