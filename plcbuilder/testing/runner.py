@@ -565,8 +565,7 @@ def run_test(tc: TestCase, env: Env, machine: Optional[str] = None,
     try:
         c = Controller(_machine(machine if machine is not None else env.machine),
                        backend=env.backend, variables=env.variables, record_samples=False,
-                       coverage=None if env.target is not None else coverage,
-                       target=env.target)
+                       coverage=coverage, target=env.target)
         c.load(env.programs)
         check_scenario(tc.scenario, c)
         result.ended_at_ms, seen, watches = _drive(c, tc, env.stop_early)

@@ -106,3 +106,13 @@ def test_b_kept_across_runs_with_a_state_file(tmp_path):
     state.write_text("{not json")
     with pytest.raises(api.UsageError):
         api.run(project.root, api.RunOptions(ms=5, state=state))
+
+
+def test_coverage_of_a_target_program(tmp_path):
+    """plcbuilder test --coverage reports the target program's lines that ran."""
+    project = api.create_project(tmp_path / "p", target="huazhong")
+    run = api.test(project.root, api.TestOptions(coverage=True, jobs=1))
+    assert run.exit_status == 0
+    (cov,) = run.run.coverage
+    d = cov.to_dict()
+    assert d["name"] == "plc" and d["covered"] == d["lines"] > 10 and d["percent"] == 100.0

@@ -94,7 +94,7 @@ class TargetPLC(PLC):
         if p is None or name not in self.entries:
             return None
         self.calls[name] += 1
-        r = call(self.entries.get(name), p.slots, p.host)
+        r = call(self.entries.get(name), p.slots, p.host, cover=self.coverage)
         if r.fault is not None:
             self._fault(p, r.fault.pc, r.fault.text, r.fault.callers)
             return None

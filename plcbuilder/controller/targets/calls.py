@@ -75,9 +75,11 @@ def _frame_of(tb):
     return frame
 
 
-def call(entry: Program, slots: list[int], host: Host, limit: int = CALL_LIMIT) -> CallResult:
-    """Run the procedure ``entry`` starts at over ``slots`` to its end."""
-    gen = vm.run_reference(entry, slots, host)
+def call(entry: Program, slots: list[int], host: Host, limit: int = CALL_LIMIT,
+         cover=None) -> CallResult:
+    """Run the procedure ``entry`` starts at over ``slots`` to its end
+    (``cover``: a CodeCoverage recording the instructions that run)."""
+    gen = vm.run_reference(entry, slots, host, cover=cover)
     total = 0
     while True:
         try:
