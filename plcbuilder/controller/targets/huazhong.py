@@ -29,6 +29,7 @@ from plcbuilder.controller.targets.base import TargetPLC
 from plcbuilder.controller.vm import Host, VMFault
 
 _NO_CALL = -(1 << 60)
+_ZERO_F = [0] * T.BANKS["F"].size
 
 
 class HuazhongPLC(TargetPLC):
@@ -99,9 +100,17 @@ class HuazhongPLC(TargetPLC):
         for n in range(min(len(x), (m.input_count + 7) // 8)):
             x[n] = (bits >> (8 * n)) & 0xFF
         f = self.banks["F"]
-        get = m.gvarget
-        for n in range(len(f)):
-            f[n] = get(T.CNC_F_BASE + n) & 0xFFFF
+        regs = getattr(m, "_regs", None)        # the machine's plain registers (as plc.py reads
+        if isinstance(regs, dict):              # machine._sample): the registers set, not
+            base, end = T.CNC_F_BASE, T.CNC_F_BASE + len(f)   # 256 lookups a tick
+            f[:] = _ZERO_F
+            for k, v in regs.items():
+                if base <= k < end:
+                    f[k - base] = v & 0xFFFF
+        else:
+            get = m.gvarget
+            for n in range(len(f)):
+                f[n] = get(T.CNC_F_BASE + n) & 0xFFFF
         self.banks["P"][:] = self.parameters
 
     def _batch_write(self) -> None:
