@@ -79,8 +79,8 @@ def target_outline(project: Project) -> list[tuple[str, str]]:
                 ("plc1", "every plc1_time ms (16 until set)"),
                 ("plc2", "every plc2_time ms (32 until set)")]
     if st.target == "tgmotion":
-        from plcbuilder.bytecode.targets import TGM_SLOTS
-        slot = st.cycle_time_us / TGM_SLOTS[st.cycle_time_us]
+        from plcbuilder.lang.targets import slots_per_cycle
+        slot = st.cycle_time_us / slots_per_cycle(st.cycle_time_us)
         p1, p2, p3 = st.program_periods_us
         return [("Program_Ini", "once, at the start"),
                 ("Program_01", f"every {p1} µs, lowest priority"),

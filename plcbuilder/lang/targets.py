@@ -78,5 +78,10 @@ def near_miss(name: str, required: tuple[str, ...]) -> Optional[str]:
     return None
 
 
+def slots_per_cycle(cycle_us: int) -> int:
+    """TG Motion: the slots of one cycle (5 for 250 and 500 µs, 10 for 1000 µs)."""
+    return T.TGM_SLOTS[cycle_us]
+
+
 def bank_names() -> str:
     return ", ".join(f"{b.name}[0..{b.size - 1}]" for b in T.BANKS.values())
