@@ -171,3 +171,17 @@ def test_seed_program_02_example_runs():
         Program_05() { exit(1); }""", "tgmotion")
     c.step(10)
     assert faults(c) == [] and not c.idle() and c.plc.cycle == 20
+
+
+def test_the_trace_is_the_oscilloscope():
+    """The trace of §7 is this target's oscilloscope."""
+    # Program_04 sets output 3 and Program_05 clears it again in the slots after
+    # the fourth: at the end of the tick it is off, at the oscilloscope's sample on.
+    c = controller(tgm(p04="portset(3); after = 1;",
+                       p05="if (after) { n = n + 1; if (n > 0) portclr(3); }"), "tgmotion",
+                   cycle_time_us=1000)
+    c.record_samples = True
+    c.step(3)
+    assert 3 not in c.machine.outputs_on()
+    rows = c.drain_sample_rows()
+    assert len(rows) == 3 and all(r[4]["outputs"][0] & (1 << 3) for r in rows)

@@ -59,6 +59,7 @@ class TgMotionPLC(TargetPLC):
         #: oscilloscope: (t_us, cycle, input word 0, output word 0), after each Program_04
         self.scope: deque = deque(maxlen=SCOPE_SAMPLES)
         self.scope_count = 0
+        self._scope_fields = None                 # the machine's fields at the tick's last sample
         self.missed: dict[str, int] = {}
         self._reset_schedule()
 
@@ -173,8 +174,22 @@ class TgMotionPLC(TargetPLC):
         """The oscilloscope's sample, right after Program_04."""
         m = self.machine
         self.scope_count += 1
+        self._scope_fields = m.sample_fields()
         self.scope.append((round(t_us, 3), cycle, m.in_bits & 0xFFFFFFFF,
                            m.out_bits & 0xFFFFFFFF))
+
+    def _after_tick(self, t: int, ran) -> None:
+        """The end of the tick as on myCNC, but the tick's sample (the trace) is
+        the oscilloscope's: the machine as it was right after the tick's last
+        Program_04, not at the end of the tick."""
+        samples = self.samples
+        before = samples[-1] if samples else None
+        fields, self._scope_fields = self._scope_fields, None
+        super()._after_tick(t, ran)
+        if fields is not None and samples and samples[-1] is not before:
+            row = samples[-1][:4] + (fields,)
+            samples[-1] = row
+            self._last_row = row
 
     # ----------------------------------------------------------------- host
     def _target_host(self, base: Host) -> Host:
