@@ -77,6 +77,10 @@ class Service:
         self.refused = 0
         self.clients = 0            # kept up to date by the Server
         self.step_budget = 2.0      # seconds of wall time one step request may take
+        #: the controller's kept state (Huazhong's B registers) by target, and the
+        #: file it is kept in across restarts of the server (None: in memory only)
+        self.state_path = None
+        self.kept: dict[str, tuple] = {}
 
     # ---------------------------------------------------------------- dispatch
     def dispatch(self, msg: dict, session: Session) -> dict:
@@ -172,7 +176,7 @@ class Service:
                 if key in fields:
                     fields[key] = tuple(fields[key])
             kept = current.retained() if current.target is not None and \
-                current.target.name == name else None
+                current.target.name == name else self.kept.get(name)
             try:
                 config = TargetConfig(**fields, retained=tuple(kept) if kept else None)
             except TypeError as exc:
@@ -318,6 +322,37 @@ class Service:
             self.sim.replace_controller(new)
             return new.t_ms
         return {"t_ms": self._on_sim(go)}
+
+    def load_state(self, path) -> None:
+        """Read the kept state from ``path`` (docs/targets.md: a restart keeps
+        Huazhong's B registers); a missing file is an empty state. Raises
+        ValueError naming the file when it cannot be used."""
+        import json
+        from pathlib import Path
+        from plcbuilder._support.files import read_bounded
+        path = Path(path)
+        if path.exists():
+            try:
+                doc = json.loads(read_bounded(path, 1 << 20, "state file").decode("utf-8"))
+                self.kept = {name: tuple(int(v) for v in doc[name]["B"]) for name in doc}
+            except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError) as exc:
+                raise ValueError(f"{path}: not a controller state file: {exc}") from None
+        self.state_path = path          # only a state read (or none yet) is written back
+
+    def save_state(self) -> None:
+        """Write the kept state (the running controller's B registers) to the
+        state file, when there is one."""
+        if self.state_path is None:
+            return
+        import json
+        from plcbuilder._support.files import atomic_write
+        c = self.sim.controller
+        kept = c.retained()
+        if kept is not None:
+            self.kept[c.target.name] = tuple(kept)
+        if self.kept:
+            atomic_write(self.state_path, json.dumps(
+                {name: {"B": list(v)} for name, v in sorted(self.kept.items())}) + "\n")
 
     def handle_ping(self, msg: dict, session: Session) -> dict:
         return {"pong": True}

@@ -66,3 +66,32 @@ def test_upload_without_a_target_goes_back_to_mycnc(served):
     c.upload(image_of(compile_programs(["M03"])))
     assert srv.sim.controller.target is None
     assert c.variables_and_target()[1] == {}
+
+
+def test_b_kept_across_a_restart_of_the_server(tmp_path):
+    """`B[n]` (100 16-bit words kept across controller restarts): the server's
+    state file (plcbuilder controller --state FILE)."""
+    state = tmp_path / "state.json"
+    image = image_of([compiled(HZ, "huazhong")])
+    seen = []
+    for _ in range(2):
+        srv = ControllerServer(port=0, speed="factor", factor=50.0, frame_timeout=0.2,
+                               hello_timeout=1.0)
+        srv.service.load_state(state)
+        srv.sim.batch = 0.001
+        srv.start()
+        c = Client.connect(*srv.address, srv.token, timeout=10.0)
+        try:
+            c.upload(image, target={"name": "huazhong"})
+            assert _wait(lambda: c.variables_and_target()[1].get("registers", {}).get("B"))
+            seen.append(c.variables_and_target()[1]["registers"]["B"])
+        finally:
+            c.close()
+            srv.close()
+    assert seen == [{"0": 1}, {"0": 2}]
+    state.write_text("[1, 2")
+    srv = ControllerServer(port=0)
+    with pytest.raises(ValueError):
+        srv.service.load_state(state)
+    srv.close(shutdown=False)
+    assert state.read_text() == "[1, 2"            # a file it could not read is left alone
