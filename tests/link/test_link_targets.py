@@ -31,7 +31,7 @@ def served():
     srv.close()
 
 
-def _wait(pred, seconds=5.0):
+def _wait(pred, seconds=20.0):
     end = time.monotonic() + seconds
     while time.monotonic() < end:
         if pred():
