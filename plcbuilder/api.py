@@ -14,7 +14,7 @@ nothing here keeps global state or prints.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
@@ -27,6 +27,7 @@ from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
 from plcbuilder.controller.session import UsageError, build_scenario, run_session
+from plcbuilder.controller.targets import TargetConfig
 from plcbuilder.controller.scenario import Action
 from plcbuilder.controller.variables_xml import load_variables
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
@@ -127,6 +128,8 @@ class RunOptions:
     trace: Optional[Path] = None         # CSV, one row per tick (gzip when it ends in .gz)
     backend: str = "fast"
     gvarget_latency_ms: int = 0
+    #: the controller's kept state (Huazhong's B registers): read before, written after
+    state: Optional[Path] = None
 
 
 @dataclass
@@ -146,6 +149,7 @@ class _Target:
     machine_path: Optional[Path]
     variables: Optional[list[int]]
     single: Optional[Program]            # the procedure of a single-file target
+    target: Optional[TargetConfig] = None   # the project's target profile (docs/targets.md)
 
 
 def run(target, options: Optional[RunOptions] = None) -> RunResult:
@@ -175,17 +179,45 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
         mconf = load_machine(machine_path) if machine_path is not None else default_machine()
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
+    config = tg.target
+    if config is not None and opts.state is not None:
+        config = replace(config, retained=_read_state(opts.state, config.name))
     try:
         c = Controller(mconf, backend=opts.backend, variables=tg.variables,
                        gvarget_latency_ms=opts.gvarget_latency_ms,
-                       record_samples=opts.trace is not None)
-        c.load(tg.programs, autostart=tg.single is None)
+                       record_samples=opts.trace is not None, target=config)
+        c.load(tg.programs, autostart=tg.single is None or config is not None)
     except ControllerError as exc:
         raise UsageError(str(exc)) from None
-    if tg.single is not None:
+    if tg.single is not None and config is None:
         sc.actions.insert(0, Action(0, "start", tg.single.name, opts.eparam))
     report = run_session(c, sc, limit, trace=opts.trace, target=str(target))
+    if opts.state is not None and c.retained() is not None:
+        _write_state(opts.state, config.name, c.retained())
     return RunResult(tg.compiled, report)
+
+
+def _read_state(path: Path, target: str) -> Optional[tuple[int, ...]]:
+    """The B registers kept in a state file (None when it does not exist yet)."""
+    import json
+    if not Path(path).exists():
+        return None
+    try:
+        doc = json.loads(read_bounded(path, 1 << 20, "state file").decode("utf-8"))
+        kept = doc[target]["B"]
+        if not isinstance(kept, list) or not all(type(v) is int for v in kept):
+            raise ValueError("B must be a list of whole numbers")
+        return tuple(kept)
+    except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError) as exc:
+        raise UsageError(f"{path}: not a controller state file: {exc}") from None
+
+
+def _write_state(path: Path, target: str, kept: list[int]) -> None:
+    import json
+    try:
+        atomic_write(path, json.dumps({target: {"B": kept}}) + "\n")
+    except OSError as exc:
+        raise UsageError(f"{path}: cannot write the state: {exc.strerror or exc}") from None
 
 
 def _compile_target(target: Path, opts: RunOptions) -> _Target:
@@ -201,7 +233,11 @@ def _compile_target(target: Path, opts: RunOptions) -> _Target:
                                  include_dirs=tuple(opts.include_dirs))
     r = compile_file(target, options)
     program = r.program if r.ok else None
-    return _Target([program] if program else [], [r], None, None, program)
+    config = None
+    if options.target != "mycnc":
+        project = Project.find_for(target)
+        config = _target_config(project) if project is not None else TargetConfig(options.target)
+    return _Target([program] if program else [], [r], None, None, program, config)
 
 
 def _compile_project(root: Path, opts: RunOptions) -> _Target:
@@ -231,7 +267,16 @@ def _compile_project(root: Path, opts: RunOptions) -> _Target:
     if machine is None and project.settings.machine != DEFAULT_MACHINE:
         raise UsageError(f"{project.settings_path}: machine: no such file "
                          f"{project.machine_path}")
-    return _Target(programs, compiled, machine, variables, None)
+    return _Target(programs, compiled, machine, variables, None,
+                   _target_config(project) if project.target != "mycnc" else None)
+
+
+def _target_config(project: Project) -> TargetConfig:
+    """The controller's configuration of the project's target (reads its files)."""
+    try:
+        return TargetConfig(**project.target_settings())
+    except ProjectError as exc:
+        raise UsageError(str(exc)) from None
 
 
 # ------------------------------------------------------------------- test

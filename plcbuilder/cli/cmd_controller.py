@@ -97,6 +97,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--runtime-file", type=Path, metavar="FILE",
                    help="where to write the address and token (default: the user's runtime "
                         "folder; see docs/protocol.md)")
+    p.add_argument("--state", type=Path, metavar="FILE",
+                   help="keep the controller's state (a Huazhong program's B registers) in "
+                        "FILE: read at the start, written when it stops (docs/targets.md)")
     p.add_argument("--parent", type=int_in(1, (1 << 31) - 1), metavar="PID",
                    help="stop (as on SIGTERM) when process PID has ended: the IDE passes its "
                         "own id for the controller it starts")
@@ -150,6 +153,13 @@ def run(args: argparse.Namespace) -> int:
         say(f"plcbuilder controller: cannot listen on {args.host}:{args.port}: "
             f"{exc.strerror or exc}", True)
         return EXIT_FAIL
+    if args.state is not None:
+        try:
+            srv.service.load_state(args.state)
+        except ValueError as exc:
+            srv.close(shutdown=False)
+            say(f"plcbuilder controller: {exc}", True)
+            return EXIT_FAIL
     try:
         old = runtime.read(path)
         if old.pid != os.getpid() and runtime.pid_alive(old.pid):

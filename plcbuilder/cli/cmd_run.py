@@ -62,6 +62,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--trace", type=Path, metavar="FILE.csv",
                    help="write one CSV row per tick (streamed; gzip if it ends in .gz)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--state", type=Path, metavar="FILE",
+                   help="the controller's kept state (Huazhong's B registers): read from FILE "
+                        "before the run when it exists, written to it after")
     p.add_argument("--backend", choices=("fast", "reference"), default="fast",
                    help=argparse.SUPPRESS)
     p.add_argument("--gvarget-latency", type=int_in(0, MAX_LATENCY_MS, "ms"), default=0,
@@ -96,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
                           adcs=args.adc, scenario=args.scenario, machine=args.machine,
                           software=args.software, strict=args.strict, include_dirs=tuple(args.include),
                           trace=args.trace, backend=args.backend,
-                          gvarget_latency_ms=args.gvarget_latency)
+                          gvarget_latency_ms=args.gvarget_latency, state=args.state)
         try:
             result = api.run(target, opts)
         except api.UsageError as exc:
@@ -164,6 +167,11 @@ def summary(rep: dict, out: term.Out) -> str:
         own = {k: v for k, v in variables.items()
                if not (k.startswith("var") and k[3:].isdigit()) or v}
         lines.append(f"{name}: " + ", ".join(f"{k}={v}" for k, v in own.items()))
+    if "registers" in rep:
+        for bank, vals in rep["registers"].items():
+            if vals:
+                lines.append(f"{bank}: " + " ".join(f"[{i}]={v}" for i, v in vals.items()))
+        lines.append("calls: " + ", ".join(f"{n} {k}" for n, k in rep["calls"].items()))
     still = [p["name"] for p in rep["procedures"] if p["ended_at_ms"] is None]
     why = "time limit" if still else "nothing left to run"
     lines.append(f"run ended at {rep['ended_at_ms']} ms ({why})")

@@ -190,7 +190,8 @@ class ReportCollector:
         for name, entry in self.open.items():          # still running: its vexit so far
             entry["vexit"] = variables.get(name, {}).get("vexit")
         st = c.state()
-        return {
+        extra = c.target_report() if hasattr(c, "target_report") else {}
+        return {**extra,
             "target": str(target),
             "ended_at_ms": ended,
             "procedures": self.procedures,

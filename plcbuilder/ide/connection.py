@@ -95,6 +95,7 @@ class _Worker(threading.Thread):
         self.client: Optional[Client] = None
         self.child: Optional[ControllerProcess] = None
         self.image: Optional[bytes] = None      # re-uploaded after a restart
+        self.target: Optional[dict] = None      # the image's target profile (docs/targets.md)
         self.speed: Optional[tuple[str, Optional[float]]] = None
         self.variables_pending = False
         self.restarts = 0
@@ -187,7 +188,7 @@ class _Worker(threading.Thread):
         client.subscribe(self._on_telemetry, queue=_telemetry_queue(self.speed), lossless=True)
         if self.image is not None and self.restarts:
             try:
-                result = client.upload(self.image)
+                result = client.upload(self.image, target=self.target)
                 self.post("result", ("upload", result))
                 self.post("note", "uploaded the image again after the controller came back")
             except RefusedError as exc:
@@ -232,8 +233,8 @@ class _Worker(threading.Thread):
     def _run_command(self, client: Client, verb: str, args: tuple) -> None:
         try:
             if verb == "upload":
-                self.image = args[0]
-                result = client.upload(args[0])
+                self.image, self.target = args[0], args[1]
+                result = client.upload(args[0], target=args[1])
             elif verb == "start":
                 result = client.start(args[0], int(args[1]))
             elif verb == "stop":
@@ -251,7 +252,10 @@ class _Worker(threading.Thread):
                 result = client.event(args[0])
             elif verb == "variables":
                 self.variables_pending = False
-                self.post("variables", client.variables())
+                variables, target = client.variables_and_target()
+                self.post("variables", variables)
+                if target:
+                    self.post("registers", target)
                 return
             else:
                 result = client.request(verb, **(args[0] if args else {}))
@@ -304,6 +308,11 @@ class ControllerConnection(QtCore.QObject):
     """The answer to :meth:`request_variables`: ``{procedure: {variable: value}}``,
     each procedure's variables in slot order (an ``object`` signal: a ``dict``
     signal would sort the keys)."""
+
+    sig_registers = Signal(object)
+    """With :meth:`request_variables`, on a target other than myCNC: the target's
+    report ``{"registers": {bank: {index: value}}, "calls": {...}, "budget": [...]}``
+    (docs/targets.md)."""
 
     sig_result = Signal(str, dict)
     """A request was done: its verb and the controller's result object."""
@@ -370,9 +379,10 @@ class ControllerConnection(QtCore.QObject):
         self._pump.start()
 
     # ---------------------------------------------------------------- requests
-    def upload(self, image_bytes: bytes) -> None:
-        """Upload an eeprom.rom image (kept, and uploaded again after a restart)."""
-        self._send("upload", bytes(image_bytes))
+    def upload(self, image_bytes: bytes, target: Optional[dict] = None) -> None:
+        """Upload an eeprom.rom image (kept, and uploaded again after a restart);
+        ``target``: the project's target profile (None: myCNC)."""
+        self._send("upload", bytes(image_bytes), target)
 
     def start(self, name: str, eparam: int = 0) -> None:
         self._send("start", name, int(eparam))
@@ -466,6 +476,8 @@ class ControllerConnection(QtCore.QObject):
                 self.sig_error.emit(str(payload))
             elif kind == "variables":
                 self.sig_variables.emit(dict(payload))
+            elif kind == "registers":
+                self.sig_registers.emit(dict(payload))
             elif kind == "result":
                 verb, result = payload
                 self.sig_result.emit(verb, dict(result) if isinstance(result, dict) else {})

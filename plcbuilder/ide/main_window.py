@@ -136,6 +136,8 @@ class MainWindow(QMainWindow):
         self._project = project
         self.editor_stack.project = self.lint.project = self.run_actions.project = project
         self.tests_panel.set_project(project.root if project is not None else None)
+        if self.run_panels is not None:
+            self.run_panels.set_target(project.target if project is not None else "mycnc")
 
     @property
     def connection(self):
@@ -460,6 +462,8 @@ class MainWindow(QMainWindow):
             self.statusBar().showMessage(f"The run panels are not available: {exc}")
             return None
         self.run_panels.sig_open_location.connect(lambda f, ln: self.open_location(f, ln))
+        if self._project is not None:
+            self.run_panels.set_target(self._project.target)
         if self._pin_defines is not None:
             self._set_pin_names(self._pin_defines)
         return self.run_panels

@@ -17,7 +17,7 @@ from PySide6.QtGui import QAction, QActionGroup
 from PySide6.QtWidgets import QComboBox, QMessageBox
 
 from plcbuilder._support.files import read_bounded
-from plcbuilder.api import Kind
+from plcbuilder.api import Kind, ProjectError
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.build_panel import BuildPanel, BuildRunner
 from plcbuilder.link.protocol import MAX_IMAGE
@@ -116,7 +116,16 @@ class RunActions(QObject):
                                 f"Cannot read {self.project.image_path}:\n\n"
                                 f"{exc.strerror or exc}\n\nBuild the project first.")
             return False
-        self.connection.upload(data)
+        try:
+            target = self.project.target_settings()
+        except ProjectError as exc:
+            QMessageBox.warning(self.parent(), "Upload", str(exc))
+            return False
+        if target["name"] == "mycnc":
+            target = None
+        else:
+            target = {k: list(v) if isinstance(v, tuple) else v for k, v in target.items()}
+        self.connection.upload(data, target)
         self.sig_message.emit(f"Uploading {self.project.image_path.name} "
                               f"({len(data)} bytes)…", 5000)
         return True

@@ -15,7 +15,7 @@ Messages
     message on a connection must be ``hello {version, token}``.
 
     client -> server (requests):
-        hello {version, token}          upload {image: base64}
+        hello {version, token}          upload {image: base64, target?}
         start {name | mcode, eparam}    stop {}
         input {pin, value}              adc {channel, value}
         state {}                        variables {}
@@ -403,6 +403,29 @@ def decode_image(msg: dict, max_image: int = MAX_IMAGE) -> bytes:
     if len(data) > max_image:
         raise BadRequest(f"upload: the image is {len(data)} bytes, more than {max_image}")
     return data
+
+
+#: upload's optional ``target``: the target profile the image is for (docs/targets.md)
+TARGET_KEYS = {"name": str, "parameters": list, "cycle_time_us": int,
+               "program_periods_us": list, "instruction_ns": int}
+
+
+def decode_target(msg: dict) -> Optional[dict]:
+    """The ``target`` of an upload request, checked for shape (the controller
+    checks the values), or None when there is none. Raises BadRequest."""
+    t = msg.get("target")
+    if t is None:
+        return None
+    if not isinstance(t, dict) or not isinstance(t.get("name"), str):
+        raise BadRequest("upload: 'target' must be an object with a 'name'")
+    for key, value in t.items():
+        want = TARGET_KEYS.get(key)
+        if want is None:
+            raise BadRequest(f"upload: unknown target key {key!r}")
+        if type(value) is not want or (want is list and len(value) > 100) or \
+                (want is list and not all(type(v) is int for v in value)):
+            raise BadRequest(f"upload: target {key!r} has the wrong type")
+    return t
 
 
 # ------------------------------------------------------------------ telemetry encoding

@@ -764,6 +764,11 @@ class ControllerServer:
             runtime.remove(self._endpoint, self.runtime_file, self._previous)
         self.sim.stop(shutdown=shutdown)
         self.server.stop()
+        try:
+            self.service.save_state()           # Huazhong's B, for the next start
+        except OSError as exc:
+            from plcbuilder.link.protocol import debug
+            debug(f"cannot write the controller state: {exc}")
 
     def __enter__(self) -> "ControllerServer":
         return self.start()

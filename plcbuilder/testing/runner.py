@@ -44,6 +44,7 @@ from plcbuilder.controller.machine import Machine
 from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
 from plcbuilder.controller.scenario import STARTING, apply, drive
 from plcbuilder.controller.session import TraceWriter, UsageError, check_scenario
+from plcbuilder.controller.targets import TargetConfig
 from plcbuilder.controller.variables_xml import load_variables
 from plcbuilder.project.build import ProcedureBuild, compile_all
 from plcbuilder.project.model import DEFAULT_MACHINE, Project, ProjectError
@@ -133,6 +134,7 @@ class Env:
     backend: str = "fast"
     coverage: bool = False
     stop_early: bool = True
+    target: Optional[TargetConfig] = None  # the project's target profile (None: mycnc)
 
 
 _MACHINES: dict[Optional[str], object] = {}
@@ -235,7 +237,13 @@ def prepare(root, select: Optional[str] = None, *, tests_dir: Optional[Path] = N
             continue
         suite.machines[t.name] = path
         suite.tests.append(t)
-    suite.env = Env(programs, variables, default)
+    target = None
+    if project.target != "mycnc":
+        try:
+            target = TargetConfig(**project.target_settings())
+        except ProjectError as exc:
+            raise SuiteError(str(exc)) from None
+    suite.env = Env(programs, variables, default, target=target)
     return suite
 
 
@@ -271,7 +279,7 @@ def run_suite(suite: Suite, *, coverage: bool = False, jobs: Optional[int] = Non
     if env is None:
         raise SuiteError("the project did not build; nothing to run")
     env = Env(env.programs, env.variables, env.machine, "reference" if coverage else "fast",
-              coverage, stop_early=not coverage)
+              coverage, stop_early=not coverage, target=env.target)
     work = [(t, suite.machines.get(t.name, env.machine)) for t in todo]
     n = _jobs(jobs, todo)
     hits: dict[str, set[int]] = {}
@@ -557,7 +565,7 @@ def run_test(tc: TestCase, env: Env, machine: Optional[str] = None,
     try:
         c = Controller(_machine(machine if machine is not None else env.machine),
                        backend=env.backend, variables=env.variables, record_samples=False,
-                       coverage=coverage)
+                       coverage=coverage, target=env.target)
         c.load(env.programs)
         check_scenario(tc.scenario, c)
         result.ended_at_ms, seen, watches = _drive(c, tc, env.stop_early)
@@ -590,7 +598,8 @@ def _last_failing_tick(result: TestResult) -> int:
 def _recording(env: Env, machine: Optional[str]) -> Controller:
     """A fresh controller for a rerun: the fast backend, a sample every tick."""
     c = Controller(_machine(machine if machine is not None else env.machine),
-                   backend="fast", variables=env.variables, record_samples=True)
+                   backend="fast", variables=env.variables, record_samples=True,
+                   target=env.target)
     c.load(env.programs)
     return c
 

@@ -30,6 +30,7 @@ from plcbuilder.ide.panels.inputs import InputsPanel
 from plcbuilder.ide.panels.log import LogPanel
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.plots import AnalogPanel, AxesPanel, LanesPanel, ProcPanel, TimeBase
+from plcbuilder.ide.panels.registers import RegistersPanel, bit_names
 from plcbuilder.ide.panels.watch import WatchPanel
 from plcbuilder.lang import symbols as lang_symbols
 
@@ -87,6 +88,11 @@ class RunPanels(QtCore.QObject):
         self.axes = AxesPanel(self.model, self.timebase, clear)
         self.inputs = InputsPanel(self.model)
         self.watch = WatchPanel()
+        #: a target's registers, under the watch (hidden on myCNC: docs/targets.md)
+        self.registers = RegistersPanel()
+        self.watch.layout().addWidget(self.registers)
+        self.target = "mycnc"
+        self._pin_names: tuple[dict, dict] = ({}, {})
         self.log = LogPanel()
         self.time_panels = (self.proc, self.lanes, self.analog, self.axes)
         widgets = {"proc": self.proc, "outputs": self.lanes, "analog": self.analog,
@@ -146,6 +152,8 @@ class RunPanels(QtCore.QObject):
             c.sig_note.connect(lambda text: self.log.add_note(text, "link"))
         if hasattr(c, "sig_variables"):
             c.sig_variables.connect(self._on_variables)
+        if hasattr(c, "sig_registers"):
+            c.sig_registers.connect(self._on_registers)
         if getattr(c, "connected", False):
             self._on_connected(getattr(c, "address", ""))
 
@@ -170,10 +178,23 @@ class RunPanels(QtCore.QObject):
         return self._docks[key]
 
     def set_pin_names(self, inputs: Mapping[int, str], outputs: Mapping[int, str]) -> None:
-        """Names for the lanes and toggles (from the project's pins.h)."""
+        """Names for the lanes and toggles (from the project's pins.h); on the
+        Huazhong target each is first the bank bit it is (X0.0, Y0.7)."""
         inputs, outputs = dict(inputs), dict(outputs)
+        self._pin_names = (inputs, outputs)
+        if self.target == "huazhong":
+            inputs = bit_names(max(64, max(inputs, default=0) + 1), "X", inputs)
+            outputs = bit_names(max(64, max(outputs, default=0) + 1), "Y", outputs)
         self.lanes.set_pin_names(inputs, outputs)
         self.inputs.set_pin_names(inputs)
+
+    def set_target(self, target: str) -> None:
+        """The open project's target (docs/targets.md): the lanes' names, and
+        the registers under the watch (shown once the controller reports them)."""
+        self.target = target or "mycnc"
+        if self.target == "mycnc":
+            self.registers.set_report({})
+        self.set_pin_names(*self._pin_names)
 
     def clear(self) -> None:
         """Forget the recorded samples and messages (the log keeps its rows);
@@ -397,6 +418,10 @@ class RunPanels(QtCore.QObject):
             self._final_poll -= 1
         if hasattr(self.connection, "request_variables"):
             self.connection.request_variables()
+
+    def _on_registers(self, report: dict) -> None:
+        if self.target != "mycnc":
+            self.registers.set_report(report)
 
     def _on_variables(self, variables: dict) -> None:
         self.watch.set_variables(variables, self._running)
