@@ -250,6 +250,8 @@ class History:
             if msg:
                 sig["message"].append(t, msg)
                 self._message_reset = t + 1
+            elif not len(sig["message"]):
+                sig["message"].append(t, 0)
             sig["proc"].append(t, proc)
             sig["running"].append(t, self._string(running))
             if f is not self._last_fields:
