@@ -57,7 +57,7 @@ __all__ = [
     "disassemble", "error", "events", "image_of", "instructions", "kind_of", "load_machine", "load_program",
     "load_variables", "options_for", "proc_name", "read_image", "render_text", "run", "summary",
     "write_image", "TestFileError", "TestOptions", "TestRun", "junit_xml", "test", "write_junit",
-    "Capturer", "History", "Trace", "TriggerError", "parse_trigger", "load_trace", "save_trace",
+    "Capturer", "History", "Trace", "TriggerError", "parse_trigger", "watched_variables", "load_trace", "save_trace",
     "export_trace", "compare_traces", "TraceFileError", "ExportError",
 ]
 

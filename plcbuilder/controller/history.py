@@ -268,6 +268,22 @@ class History:
             elif kind == "ended":
                 self._add(f"run {d['name']}", BIT).append(t, 0)
 
+    def feed_samples(self, samples: Iterable, events: Iterable = ()) -> None:
+        """The same from :class:`~plcbuilder.controller.events.Sample` objects
+        (what a client of the controller's server receives)."""
+        rows = []
+        last = None
+        for s in samples:
+            f = {"inputs": tuple(s.inputs), "outputs": tuple(s.outputs), "pwm": tuple(s.pwm),
+                 "dac": tuple(s.dac), "adc": tuple(s.adc), "axes": tuple(s.axes)}
+            if last is not None and f == last:
+                f = last
+            rows.append((s.t_ms, s.running, s.proc, s.message, f))
+            last = f
+        if rows and self._last_fields is not None and rows[0][4] == self._last_fields:
+            rows[0] = rows[0][:4] + (self._last_fields,)
+        self.feed(rows, events)
+
     def _fields(self, t: int, f: dict, old: Optional[dict]) -> None:
         sig = self.signals
         for bank, count in (("in", self.input_count), ("out", self.output_count)):
