@@ -26,8 +26,10 @@ from plcbuilder.controller import events
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
+from plcbuilder.controller.history import History, Trace
 from plcbuilder.controller.session import UsageError, build_scenario, run_session
 from plcbuilder.controller.targets import TargetConfig
+from plcbuilder.controller.trigger import Capturer, TriggerError, parse_trigger, watched_variables
 from plcbuilder.controller.scenario import Action
 from plcbuilder.controller.variables_xml import load_variables
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
@@ -44,6 +46,7 @@ from plcbuilder.project.model import DEFAULT_MACHINE, kind_of
 from plcbuilder.testing.junit import junit_xml, write_junit
 from plcbuilder.testing.runner import Suite, SuiteError, SuiteRun, prepare, run_suite
 from plcbuilder.testing.spec import TestFileError
+from plcbuilder.trace import compare as trace_compare, export as trace_export, file as trace_file
 
 __all__ = [
     "Action", "BUILTIN_PREFIX", "BuildResult", "CompileOptions", "CompileResult", "ConfigError",
@@ -55,7 +58,12 @@ __all__ = [
     "disassemble", "error", "events", "image_of", "instructions", "kind_of", "load_machine", "load_program",
     "load_variables", "options_for", "proc_name", "read_image", "render_text", "run", "summary",
     "write_image", "TestFileError", "TestOptions", "TestRun", "junit_xml", "test", "write_junit",
+    "Capturer", "History", "Trace", "TriggerError", "parse_trigger", "watched_variables", "load_trace", "save_trace",
+    "export_trace", "compare_traces", "TraceFileError", "ExportError",
 ]
+
+TraceFileError = trace_file.TraceFileError
+ExportError = trace_export.ExportError
 
 DEFAULT_MS = 60_000
 MAX_MS = 7 * 24 * 3600 * 1000          # a week of simulated time
@@ -130,6 +138,13 @@ class RunOptions:
     gvarget_latency_ms: int = 0
     #: the controller's kept state (Huazhong's B registers): read before, written after
     state: Optional[Path] = None
+    trigger: Optional[str] = None        # SPEC §7 trigger spec (controller/trigger.py)
+    pre_ms: int = 0
+    post_ms: int = 0
+    trigger_mode: str = "single"
+    capture: Optional[Path] = None       # where the capture goes (.plctrace, .vcd or .csv)
+    history: Optional[Path] = None       # the whole session as a trace file
+    watch: Sequence[str] = ()            # PROC.var recorded each tick into the history
 
 
 @dataclass
@@ -191,7 +206,28 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
         raise UsageError(str(exc)) from None
     if tg.single is not None and config is None:
         sc.actions.insert(0, Action(0, "start", tg.single.name, opts.eparam))
-    report = run_session(c, sc, limit, trace=opts.trace, target=str(target))
+    history = capturer = None
+    watch = list(opts.watch)
+    if opts.trigger is not None or opts.history is not None or watch:
+        history = History(c.machine)
+    if opts.trigger is not None:
+        if opts.capture is None:
+            raise UsageError("--trigger needs --capture FILE (where the capture is written)")
+        try:
+            trig = parse_trigger(opts.trigger)
+            capturer = Capturer(history, trig, opts.pre_ms, opts.post_ms, opts.trigger_mode)
+        except TriggerError as exc:
+            raise UsageError(str(exc)) from None
+        watch += [w for w in watched_variables(trig) if w not in watch]
+    elif opts.capture is not None:
+        raise UsageError("--capture needs --trigger SPEC (what starts the capture)")
+    report = run_session(c, sc, limit, trace=opts.trace, target=str(target), history=history,
+                         capturer=capturer, watch=watch)
+    if history is not None:
+        report["capture"] = _save_capture(capturer, opts) if capturer is not None else None
+        if opts.history is not None:
+            _save_trace(history.snapshot(meta={"target": str(target)}), opts.history, "--history")
+            report["history"] = {"file": str(opts.history), "bytes": history.nbytes()}
     if opts.state is not None and c.retained() is not None:
         _write_state(opts.state, config.name, c.retained())
     return RunResult(tg.compiled, report)
@@ -218,6 +254,33 @@ def _write_state(path: Path, target: str, kept: list[int]) -> None:
         atomic_write(path, json.dumps({target: {"B": kept}}) + "\n")
     except OSError as exc:
         raise UsageError(f"{path}: cannot write the state: {exc.strerror or exc}") from None
+
+
+def _save_trace(trace, path: Path, option: str) -> None:
+    try:
+        if path.suffix.lower() in (".vcd", ".csv"):
+            trace_export.export(trace, path)
+        else:
+            trace_file.save(trace, path)
+    except (trace_export.ExportError, trace_file.TraceFileError) as exc:
+        raise UsageError(f"{option}: {exc}") from None
+
+
+def _save_capture(capturer, opts: RunOptions) -> Optional[dict]:
+    """Write the first capture to ``--capture`` (later ones, in normal or auto
+    mode, beside it as NAME-2.EXT, …); the report's ``capture`` entry."""
+    caps = capturer.captures
+    if not caps:
+        return None
+    files = []
+    for i, cap in enumerate(caps):
+        path = opts.capture if i == 0 else \
+            opts.capture.with_name(f"{opts.capture.stem}-{i + 1}{opts.capture.suffix}")
+        _save_trace(cap, path, "--capture")
+        files.append(str(path))
+    first = caps[0].meta["trigger"]
+    return {"trigger": opts.trigger, "t_ms": first["t_ms"], "from_ms": caps[0].t_start,
+            "to_ms": caps[0].t_end, "file": files[0], "count": len(caps), "files": files}
 
 
 def _compile_target(target: Path, opts: RunOptions) -> _Target:
@@ -277,6 +340,28 @@ def _target_config(project: Project) -> TargetConfig:
         return TargetConfig(**project.target_settings())
     except ProjectError as exc:
         raise UsageError(str(exc)) from None
+
+
+# ----------------------------------------------------------------- traces
+
+def load_trace(path) -> Trace:
+    """Reopen a trace file (``.plctrace``); raises TraceFileError saying why not."""
+    return trace_file.load(path)
+
+
+def save_trace(trace: Trace, path) -> None:
+    """Save a trace as a ``.plctrace`` file, atomically; raises TraceFileError."""
+    trace_file.save(trace, path)
+
+
+def export_trace(trace: Trace, path, fmt: Optional[str] = None, *, per_tick: bool = False) -> str:
+    """Export as CSV (per change, or ``per_tick``) or VCD; raises ExportError."""
+    return trace_export.export(trace, path, fmt, per_tick=per_tick)
+
+
+def compare_traces(a: Trace, b: Trace) -> "trace_compare.Difference":
+    """The first tick where two traces differ, and in which signals."""
+    return trace_compare.compare(a, b)
 
 
 # ------------------------------------------------------------------- test

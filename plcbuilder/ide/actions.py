@@ -59,6 +59,11 @@ class Act:
     CONNECT = "connect"
     EMBEDDED = "embedded"
     ABOUT = "about"
+    OPEN_TRACE = "open_trace"
+    SAVE_TRACE = "save_trace"
+    EXPORT_TRACE = "export_trace"
+    EXPORT_PLOT = "export_plot"
+    COMPARE_TRACE = "compare_trace"
 
 
 def add_action(win, actions: dict, name, text, slot=None, shortcut=None, ic=None, tip=None,
@@ -161,6 +166,17 @@ def build_actions(win) -> dict[str, QAction]:
     A(Act.EMBEDDED, "Use the &Embedded Controller", win.run_actions.use_embedded, None, "controller",
       "Run the simulated controller as a child process of the IDE")
     A(Act.ABOUT, "&About PLC Builder", win.about)
+    from plcbuilder.ide import trace_actions as ta
+    A(Act.OPEN_TRACE, "Open &Trace…", lambda: ta.open_trace(win), None, None,
+      "Open a saved trace or capture (.plctrace) in the run panels")
+    A(Act.SAVE_TRACE, "Save Trace…", lambda: ta.save_trace(win), None, None,
+      "Save the trace on show, or the whole session so far, as a .plctrace file")
+    A(Act.EXPORT_TRACE, "Export Trace…", lambda: ta.export_trace(win), None, None,
+      "Export the trace on show, or the whole session, as VCD or CSV")
+    A(Act.EXPORT_PLOT, "Export Plot Image…", lambda: ta.export_plot(win), None, None,
+      "Save the plots of the first visible run dock as PNG or SVG")
+    A(Act.COMPARE_TRACE, "Compare with Trace…", lambda: ta.compare_trace(win), None, None,
+      "The first tick where the trace on show (or the session) differs from a trace file")
     context = [actions[a] for a in (Act.TOGGLE_COMMENT, Act.GOTO_DEFINITION)] + \
         [None] + [actions[a] for a in (Act.FIND, Act.GOTO_LINE)]
     win.editor_stack.context_actions = context
@@ -177,7 +193,8 @@ def build_menus(win) -> None:
     m.addAction(a(Act.CLOSE_PROJECT))
     m.addSeparator()
     for name in (Act.SAVE, Act.SAVE_ALL, Act.REVERT, None, Act.CLOSE_EDITOR, Act.CLOSE_ALL,
-                 None, Act.PREFERENCES, None, Act.QUIT):
+                 None, Act.OPEN_TRACE, Act.SAVE_TRACE, Act.EXPORT_TRACE, Act.EXPORT_PLOT,
+                 Act.COMPARE_TRACE, None, Act.PREFERENCES, None, Act.QUIT):
         m.addAction(a(name)) if name else m.addSeparator()
     m = mb.addMenu("&Edit")
     for name in (Act.UNDO, Act.REDO, None, Act.CUT, Act.COPY, Act.PASTE, Act.SELECT_ALL, None,

@@ -170,7 +170,7 @@ def test_pin_names_from_a_compiled_project_file():
 def test_docks_have_names_and_render(qtbot, panels, fake, tmp_path):
     docks = panels.docks()
     names = [d.objectName() for d in docks]
-    assert len(set(names)) == 7 and all(names)
+    assert len(set(names)) == len(panels.DOCKS) == 8 and all(names)
     assert [d.windowTitle() for d in docks][:2] == ["Proc / messages", "Outputs"]
     fake.sig_samples.emit([sample(t, proc=70, outputs=t & 1, pwm=(t,), axes=(t, 2 * t))
                            for t in range(500)])

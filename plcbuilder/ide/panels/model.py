@@ -196,6 +196,39 @@ class RunModel:
     def __len__(self) -> int:
         return len(self.time)
 
+    def resize(self, capacity: int) -> None:
+        """Keep up to ``capacity`` samples from now on (a long recorded trace
+        shown whole); forgets what it has. The live capacity comes back with
+        ``resize(live_capacity)``."""
+        capacity = max(1, int(capacity))
+        if capacity == self.capacity:
+            self.clear()
+            return
+        self.capacity = capacity
+        self.time = RingBuffer(capacity, 1, np.float64)
+        self.scalars = RingBuffer(capacity, 2, np.float64)
+        self.inputs = RingBuffer(capacity, WORDS, np.uint32)
+        self.outputs = RingBuffer(capacity, WORDS, np.uint32)
+        self.analog = RingBuffer(capacity, 24, np.float64)
+        self.axes = RingBuffer(capacity, 2 * len(AXES), np.float64)
+        self.clear()
+
+    def sample_at(self, t: float) -> Optional[dict]:
+        """Every value the model holds at time ``t`` (seconds): the newest kept
+        sample at or before it, as {"t", "proc", "message", "inputs", "outputs",
+        "analog", "positions"}; None before the first sample."""
+        times = self.time.view()
+        i = int(np.searchsorted(times, t + 1e-9, side="right")) - 1
+        if i < 0:
+            return None
+        na = len(AXES)
+        return {"t": float(times[i]),
+                "proc": int(self.scalars.view(0)[i]), "message": int(self.scalars.view(1)[i]),
+                "inputs": [int(self.inputs.view(w)[i]) for w in range(WORDS)],
+                "outputs": [int(self.outputs.view(w)[i]) for w in range(WORDS)],
+                "analog": [float(self.analog.view(c)[i]) for c in range(24)],
+                "positions": [float(self.axes.view(c)[i]) for c in range(na)]}
+
     @property
     def t_end(self) -> float:
         """The newest sample's time in seconds (0 when empty)."""
