@@ -33,6 +33,8 @@ from plcbuilder.controller.events import to_dict
 CHUNK = 1024
 #: signal kinds
 BIT, INT, TEXT = "bit", "int", "text"
+#: the axes a history may hold, in their order (X..W)
+AXES = abi.AXES
 
 
 class Signal:

@@ -5,9 +5,8 @@ from __future__ import annotations
 
 from typing import Optional
 
-from plcbuilder.bytecode import abi
 from plcbuilder.controller.events import Sample, from_dict
-from plcbuilder.controller.history import TEXT, Trace
+from plcbuilder.controller.history import AXES, TEXT, Trace
 
 WORDS = 8
 
@@ -56,7 +55,7 @@ def to_samples(trace: Trace) -> list[Sample]:
             t, text("running"), value("proc"), value("message"), tuple(ins), tuple(outs),
             tuple(value(f"pwm {n}") for n in range(8)), tuple(value(f"dac {n}") for n in range(8)),
             tuple(value(f"adc {n}") for n in range(8)),
-            tuple(value(f"axis {a}") for a in abi.AXES), (0,) * len(abi.AXES)))
+            tuple(value(f"axis {a}") for a in AXES), (0,) * len(AXES)))
     return out
 
 
