@@ -26,6 +26,7 @@ from plcbuilder.controller import events
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
+from plcbuilder.controller.io_dat import io_dat_of, load_io_dat, with_io_dat
 from plcbuilder.controller.session import UsageError, build_scenario, run_session
 from plcbuilder.controller.scenario import Action
 from plcbuilder.controller.variables_xml import load_variables
@@ -146,6 +147,7 @@ class _Target:
     machine_path: Optional[Path]
     variables: Optional[list[int]]
     single: Optional[Program]            # the procedure of a single-file target
+    io_dat: Optional[Path] = None        # the project's IO.DAT (softMC input presets)
 
 
 def run(target, options: Optional[RunOptions] = None) -> RunResult:
@@ -173,6 +175,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     machine_path = opts.machine if opts.machine is not None else tg.machine_path
     try:
         mconf = load_machine(machine_path) if machine_path is not None else default_machine()
+        if tg.io_dat is not None:
+            mconf = with_io_dat(mconf, load_io_dat(tg.io_dat))
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
     try:
@@ -231,7 +235,7 @@ def _compile_project(root: Path, opts: RunOptions) -> _Target:
     if machine is None and project.settings.machine != DEFAULT_MACHINE:
         raise UsageError(f"{project.settings_path}: machine: no such file "
                          f"{project.machine_path}")
-    return _Target(programs, compiled, machine, variables, None)
+    return _Target(programs, compiled, machine, variables, None, io_dat_of(project.root))
 
 
 # ------------------------------------------------------------------- test
