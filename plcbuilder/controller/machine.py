@@ -71,7 +71,7 @@ class Machine:
             wired |= 1 << w.pin
         self._preset = cfg.input_preset & ~wired & self._in_mask   # IO.DAT's INP
         self._preset_lost = cfg.input_preset & wired & self._in_mask
-        self.vio = VirtualIO(cfg.dip)
+        self.vio = VirtualIO(cfg.dip, self._forget_sample)
         present = set(self.motion.present_idx)
         self.pls = PlsBank(cfg.pls, output_count=cfg.output_count,
                            axis_present=present.__contains__,
@@ -314,7 +314,8 @@ class Machine:
 
     def sample_fields(self) -> dict:
         """inputs/outputs (8 words each), pwm, dac, adc (8 each), axes (9 machine
-        positions, 0.01 mm) and velocities (9, 0.01 mm/s), all tuples of ints.
+        positions, 0.01 mm), velocities (9, 0.01 mm/s) and vio (the virtual input
+        and output words, unsigned), all tuples of ints.
         The same dict is returned until something changes: do not modify it."""
         s = self._sample
         if s is None:
@@ -328,6 +329,7 @@ class Machine:
                 "adc": tuple(self._adc),
                 "axes": tuple(m.ipos),
                 "velocities": m.velocity_report(),
+                "vio": (self.vio.vin, self.vio.vout),
             }
         return s
 
@@ -390,6 +392,9 @@ class Machine:
         shift = 32 * k
         new = (self.out_bits & ~(_M32 << shift)) | ((value & _M32) << shift)
         self._set_outputs(new & self._out_mask)
+
+    def _forget_sample(self) -> None:
+        self._sample = None
 
     def _pls_write(self, target: int, level: int) -> None:
         """A PLS sets its output: physical output ``target``, or VOUT.n for PLS_VOUT + n."""
