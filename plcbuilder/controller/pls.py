@@ -32,6 +32,7 @@ so the evaluation is deterministic.
 
 from __future__ import annotations
 
+import math
 from bisect import bisect_right
 from typing import Callable, Optional
 
@@ -84,6 +85,7 @@ class Pls:
         self.status = OK
         self._points2: list[int] = []
         self._count = 0
+        self._down = self._up = 0     # the band (doubled) in which the count stays
 
     @classmethod
     def from_config(cls, number: int, c: PlsConfig) -> "Pls":
@@ -116,25 +118,47 @@ class Pls:
         """Enable at axis position ``x`` (0.01 mm); the output level to write."""
         self._points2 = [2 * p for p in self.points()]
         self._count = count_at(self._points2, 2 * self.repeat, 2 * x)
+        self._band()
         self.enabled = True
         self.state = level(self.polarity, self._count)
         return self.state
 
+    def _point2(self, i: int) -> float:
+        """The i-th switch point (1-based over the whole repeated pattern), doubled;
+        ±inf past the ends of a pattern that does not repeat."""
+        pts = self._points2
+        if self.repeat:
+            m, j = divmod(i - 1, len(pts))
+            return pts[j] + 2 * m * self.repeat
+        if i < 1:
+            return -math.inf
+        return pts[i - 1] if i <= len(pts) else math.inf
+
+    def _band(self) -> None:
+        # the count changes only once 2x - h reaches the next point up, or 2x + h
+        # drops below the point the count last passed
+        self._down = self._point2(self._count)
+        self._up = self._point2(self._count + 1)
+
     def follow(self, x: int) -> bool:
         """The axis is at ``x``: move the count within the hysteresis band. True
         when the output level changed."""
-        pts, r2, h = self._points2, 2 * self.repeat, self.hysteresis
+        y, h = 2 * x, self.hysteresis
+        if self._down <= y + h and y - h < self._up:
+            return False                        # inside the band: nothing to do
+        pts, r2 = self._points2, 2 * self.repeat
         c = self._count
-        lo = count_at(pts, r2, 2 * x - h)       # points passed going up (p + h/2 <= x)
+        lo = count_at(pts, r2, y - h)           # points passed going up (p + h/2 <= x)
         if c < lo:
             c = lo
         else:
-            hi = count_at(pts, r2, 2 * x + h)   # points still below going down (p - h/2 <= x)
+            hi = count_at(pts, r2, y + h)       # points still below going down (p - h/2 <= x)
             if c > hi:
                 c = hi
         if c == self._count:
             return False
         self._count = c
+        self._band()
         new = level(self.polarity, c)
         if new == self.state:
             return False

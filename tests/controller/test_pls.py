@@ -412,3 +412,52 @@ def test_machine_file_pls_in_the_registers():
     assert m.gvarget(b + f["POSITION"] + 1) == 225
     assert m.pls.report() == [{"pls": 1, "name": "cam", "axis": "X", "output": "VOUT.3",
                                "enabled": False, "state": 0}]
+
+
+def _walk_reference(points, repeat, h, polarity, xs):
+    """The seed's hysteresis rule, point by point: going up a point p is passed
+    once x >= p + h/2, going down once x < p - h/2 (the points of a repeating
+    pattern listed far enough each way)."""
+    reach = 2000 // repeat + 2 if repeat else 0       # enough repetitions for |x| <= 1500
+    pts = sorted({p + m * repeat for p in points for m in range(-reach, reach + 1)}) \
+        if repeat else list(points)
+    c = sum(1 for p in pts if p <= xs[0])
+    offset = sum(1 for p in pts if p < points[0]) if repeat else 0
+    out = []
+    for x in xs[1:]:
+        while c < len(pts) and 2 * x >= 2 * pts[c] + h:
+            c += 1
+        while c > 0 and 2 * x < 2 * pts[c - 1] - h:
+            c -= 1
+        out.append(level(polarity, c - offset))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_noisy_walks_follow_the_rule(seed):
+    """SPEC §9: "hysteresis split half each way by the direction of motion" with
+    "a repeat interval" and "an initial polarity": random walks with noise around
+    the switch points give, tick by tick, the output of the rule walked point by
+    point."""
+    import random
+
+    from plcbuilder.controller.pls import Pls
+
+    rng = random.Random(seed)
+    points = sorted(rng.sample(range(-300, 300), rng.randint(1, 6)))
+    repeat = rng.choice([0, points[-1] - points[0] + rng.randint(1, 200)])
+    h = rng.choice([0, 1, 2, 7, 30])
+    p = Pls(1)
+    p.count, p.positions[:len(points)] = len(points), points
+    p.repeat, p.hysteresis, p.polarity, p.target = repeat, h, rng.randint(0, 1), 0
+    xs = [rng.randint(-500, 500)]
+    for _ in range(3000):
+        step = rng.choice([-3, -2, -1, 0, 1, 2, 3]) if rng.random() < 0.7 else \
+            rng.randint(-40, 40)
+        xs.append(max(-1500, min(1500, xs[-1] + step)))
+    p.start(xs[0])
+    got = []
+    for x in xs[1:]:
+        p.follow(x)
+        got.append(p.state)
+    assert got == _walk_reference(points, repeat, h, p.polarity, xs)
