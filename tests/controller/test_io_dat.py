@@ -34,8 +34,9 @@ def test_the_seeds_format():
     ("DIP=0x100\n", 1, "too wide: DIP holds 8 bits"),
 ])
 def test_errors_name_file_and_line(text, line, words):
-    """SPEC §9: "IO.DAT errors" — "each a clear diagnostic or refusal naming the
-    file and line, nothing else changes"."""
+    """SPEC §9: "physical inputs preset from an `IO.DAT` file in the project
+    (`INP=0xXX`, `DIP=0xXX` lines, as the seed shows)"; anything else in the file
+    is refused naming the file and the line (issue 15, "Bad input")."""
     with pytest.raises(ConfigError) as exc:
         parse_io_dat(text, "proj/IO.DAT")
     assert exc.value.file == "proj/IO.DAT" and exc.value.line == line
@@ -89,7 +90,8 @@ def test_wired_inputs_win_with_a_warning():
 
 
 def test_without_io_dat_nothing_changes():
-    """SPEC §9: the preset comes from the project's IO.DAT; without one the
+    """SPEC §9: "physical inputs preset from an `IO.DAT` file in the project";
+    without one the
     machine is as described."""
     cfg = parse_machine("")
     assert with_io_dat(cfg, None) is cfg

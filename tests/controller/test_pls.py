@@ -344,8 +344,9 @@ def test_several_pls_on_one_axis_and_a_procedure_in_between(backend):
 
 
 def test_evaluated_after_motion_each_ms():
-    """SPEC §9 / brief: the PLS is evaluated each tick after the motion advances:
-    during a move its output changes in the very ms the position crosses the point."""
+    """SPEC §2: "At the end of every tick: ... the motion controller advances 1
+    ms"; a PLS is evaluated right after, so during a move its output changes in
+    the very ms the position crosses the point."""
     m = Machine(machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [10.0]\n'
                         'enabled = true\n'))
     m.g0move(0x3, 1, 2000)
@@ -379,9 +380,9 @@ def test_evaluated_after_motion_each_ms():
     ('[[pls]]\naxis = "X"\noutput = 1\npositions = [1.0]\ncolour = 2\n', 12, "unknown key"),
 ])
 def test_machine_file_errors_name_file_and_line(text, line, words):
-    """SPEC §9: "a PLS with non-increasing positions ... each a clear diagnostic or
-    refusal naming the file and line, nothing else changes" — a machine file with
-    a bad [[pls]] is refused with the file, the line and the key."""
+    """SPEC §9: "an increasing list of positions where the output toggles"; a
+    machine file with non-increasing positions (or another bad [[pls]]) is refused
+    naming the file, the line and the key (issue 15, "Bad input")."""
     with pytest.raises(ConfigError) as exc:
         machine(text)
     err = exc.value
@@ -390,7 +391,7 @@ def test_machine_file_errors_name_file_and_line(text, line, words):
 
 
 def test_at_most_eight_pls():
-    """SPEC §9 / the register map: PLS1..PLS8 (the k-th [[pls]] is PLS k)."""
+    """The register map (bytecode/softmc.py): PLS1..PLS8 (the k-th [[pls]] is PLS k)."""
     one = '[[pls]]\naxis = "X"\noutput = 1\npositions = [1.0]\n'
     assert len(machine(one * 8).pls) == 8
     with pytest.raises(ConfigError, match="at most 8"):

@@ -127,7 +127,8 @@ def test_dip_is_read_only_and_comes_from_io_dat():
 
 
 def test_reset_clears_virtual_io():
-    """SPEC §9: virtual I/O is part of the machine; a reset (power-on) clears it."""
+    """SPEC §9: softMC I/O is "available on every target as part of the machine";
+    a reset (power-on) clears the virtual inputs and outputs."""
     m = Machine()
     m.gvarset(softmc.VOUT_WORD, 0xF0)
     m.gvarset(softmc.VIN_BIT_BASE + 4, 1)
@@ -152,8 +153,9 @@ def test_names_are_built_in_and_described():
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_run_report_lists_virtual_outputs(backend):
-    """SPEC §9: virtual outputs are outputs of the machine: the run report lists
-    the ones on (``vouts``) and the virtual inputs on (``vins``), numbered 1..32."""
+    """SPEC §9: softMC I/O is "available on every target as part of the machine":
+    the run report lists the virtual outputs on (``vouts``) and the virtual
+    inputs on (``vins``), numbered 1..32."""
     c, events = run_hw("main()\n{\n  gvarset(VOUT_4, 1);\n  gvarset(VIN_9, 1);\n"
                        "  exit(99);\n}\n", backend=backend)
     rc = ReportCollector(c)

@@ -79,8 +79,8 @@ def _run_samples():
 
 
 def test_virtual_and_pls_outputs_are_lanes(qtbot, panels):
-    """SPEC §9 / issue: "The panels show virtual outputs and PLS outputs like
-    physical ones": a PLS on VOUT.3, one on output 6 and VOUT.32 written by the
+    """Issue 15 (softMC I/O): "The panels show virtual outputs and PLS outputs
+    like physical ones": a PLS on VOUT.3, one on output 6 and VOUT.32 written by the
     procedure each get a lane, with the edges the run had."""
     p, fake = panels
     samples = _run_samples()

@@ -68,8 +68,9 @@ def test_run_presets_inputs_from_io_dat(project):
 
 
 def test_run_refuses_a_bad_io_dat(project):
-    """SPEC §9: "IO.DAT errors" — "a clear diagnostic or refusal naming the file
-    and line, nothing else changes": the run does not start."""
+    """SPEC §9: "physical inputs preset from an `IO.DAT` file in the project
+    (`INP=0xXX`, `DIP=0xXX` lines, as the seed shows)"; a bad file is refused
+    naming the file and the line (issue 15, "Bad input"): the run does not start."""
     (project / "IO.DAT").write_text("INP=0x01\nINP 3\n", encoding="ascii")
     with pytest.raises(api.UsageError) as exc:
         api.run(project, api.RunOptions(starts=["PRESET@0"], ms=100))
@@ -104,7 +105,8 @@ def test_cli_run_json(project, tmp_path):
 
 
 def test_scenario_tests_see_io_dat(project):
-    """SPEC §9: the IO.DAT preset holds in ``plcbuilder test`` too."""
+    """SPEC §9: "physical inputs preset from an `IO.DAT` file in the project" —
+    in ``plcbuilder test`` too."""
     (project / "tests").mkdir()
     (project / "tests" / "preset.toml").write_text(
         '[[test]]\nname = "preset"\nms = 50\nscenario = "start PRESET @ 0"\n'
@@ -115,7 +117,8 @@ def test_scenario_tests_see_io_dat(project):
 
 
 def test_scenario_tests_refuse_a_bad_io_dat(project):
-    """SPEC §9: "IO.DAT errors": ``plcbuilder test`` refuses with file and line."""
+    """SPEC §9: "physical inputs preset from an `IO.DAT` file in the project";
+    with a bad one ``plcbuilder test`` refuses, naming the file and the line."""
     (project / "IO.DAT").write_text("\n\nDIP=0x1FF\n", encoding="ascii")
     (project / "tests").mkdir()
     (project / "tests" / "t.toml").write_text(
@@ -126,7 +129,8 @@ def test_scenario_tests_refuse_a_bad_io_dat(project):
 
 
 def test_the_ides_controller_gets_io_dat(project):
-    """SPEC §9: the preset holds in the controller the IDE starts (``plcbuilder
+    """SPEC §9: "physical inputs preset from an `IO.DAT` file in the project" —
+    in the controller the IDE starts (``plcbuilder
     controller --io-dat``, built by make_controller)."""
     c = make_controller(None, None, project / "IO.DAT")()
     assert 20 in c.machine.inputs_on()
