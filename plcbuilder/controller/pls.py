@@ -10,6 +10,9 @@ disabled at run time. The rules (docs: the targets chapter):
   first segment, p1 ≤ x < p2) and the other level when c is even. So enabling the
   PLS anywhere sets the output "according to the current position so that when
   the axis reaches the first segment, the output polarity is as indicated".
+* The default polarity is 1. The seed says both ("The default value for polarity
+  is 0" and, after a PLS is declared, "The initial output polarity is 1"); 1 is
+  what its set-up list and all its figures (on at the first position) show.
 * With a repeat interval R > 0 the switch points are p_i + m·R for every integer
   m (the positions must span less than R), so each point still toggles.
 * Hysteresis h moves every switch point h/2 forward for positive motion and h/2
@@ -22,7 +25,8 @@ disabled at run time. The rules (docs: the targets chapter):
   Disabling leaves the output as it is.
 * Properties change only while the PLS is disabled. A register write that would
   change one while it is enabled is refused: nothing changes, ``PLS<k>_STATUS``
-  reads ``PLS_REFUSED_ENABLED`` and the run log gets a warning. Every write sets
+  reads ``PLS_REFUSED_ENABLED`` and the run log gets a warning (once per PLS,
+  field and reason until the machine resets). Every write sets
   the status (0 when taken). Enabling checks the positions (``PLS_BAD_POSITIONS``)
   and that the output and the axis exist (``PLS_NOT_READY``).
 
