@@ -27,6 +27,7 @@ from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
 from plcbuilder.controller.history import History, Trace
+from plcbuilder.controller.io_dat import io_dat_of, load_io_dat, with_io_dat
 from plcbuilder.controller.session import UsageError, build_scenario, run_session
 from plcbuilder.controller.targets import TargetConfig
 from plcbuilder.controller.trigger import Capturer, TriggerError, parse_trigger, watched_variables
@@ -165,6 +166,7 @@ class _Target:
     variables: Optional[list[int]]
     single: Optional[Program]            # the procedure of a single-file target
     target: Optional[TargetConfig] = None   # the project's target profile (docs/targets.md)
+    io_dat: Optional[Path] = None        # the project's IO.DAT (softMC input presets)
 
 
 def run(target, options: Optional[RunOptions] = None) -> RunResult:
@@ -192,6 +194,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     machine_path = opts.machine if opts.machine is not None else tg.machine_path
     try:
         mconf = load_machine(machine_path) if machine_path is not None else default_machine()
+        if tg.io_dat is not None:
+            mconf = with_io_dat(mconf, load_io_dat(tg.io_dat))
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
     config = tg.target
@@ -331,7 +335,8 @@ def _compile_project(root: Path, opts: RunOptions) -> _Target:
         raise UsageError(f"{project.settings_path}: machine: no such file "
                          f"{project.machine_path}")
     return _Target(programs, compiled, machine, variables, None,
-                   _target_config(project) if project.target != "mycnc" else None)
+                   _target_config(project) if project.target != "mycnc" else None,
+                   io_dat_of(project.root))
 
 
 def _target_config(project: Project) -> TargetConfig:

@@ -80,6 +80,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="machine description (default: the built-in default machine)")
     p.add_argument("--variables", type=Path, metavar="FILE",
                    help="plc-variables.xml: initial values of var00..var15")
+    p.add_argument("--io-dat", type=Path, metavar="FILE", dest="io_dat",
+                   help="IO.DAT: softMC presets of the inputs (INP=0x.., DIP=0x..)")
     p.add_argument("--image", type=Path, metavar="FILE",
                    help="an eeprom.rom image to load at start")
     p.add_argument("--speed", type=parse_speed, default=("realtime", 1.0),
@@ -123,7 +125,8 @@ def run(args: argparse.Namespace) -> int:
         say(f"plcbuilder controller: --port must be from 0 to 65535, is {args.port}", True)
         return EXIT_USAGE
     try:
-        factory = make_controller(args.machine, args.variables, backend=args.backend,
+        factory = make_controller(args.machine, args.variables, args.io_dat,
+                                  backend=args.backend,
                                   gvarget_latency_ms=max(0, args.gvarget_latency))
     except ConfigError as exc:
         say(f"plcbuilder controller: {exc}", True)

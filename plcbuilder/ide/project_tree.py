@@ -232,6 +232,10 @@ class ProjectTree(QWidget):
             it.setToolTip(0, str(path) + ("" if path.exists() else "  (not there yet)"))
             if not path.exists():
                 it.setForeground(0, QBrush(QColor("#9a9a9a")))
+        io_dat = p.root / "IO.DAT"               # softMC input presets, when the project has one
+        if io_dat.is_file():
+            it = self._item(root, "Input presets  ·  IO.DAT", "variables", W_FILE, str(io_dat))
+            it.setToolTip(0, f"{io_dat}: INP presets inputs 0..22, DIP is register IO_DAT_DIP")
         self._apply_decorations()
         self._restore_view_state(expanded, selected, first=not expanded)
         self.tree.setUpdatesEnabled(True)
@@ -455,7 +459,8 @@ class ProjectTree(QWidget):
             procs = ()
         return (p.name, procs, tuple(h.name for h in self._headers()),
                 p.machine_path.exists(), p.variables_path.exists(), p.settings_path.exists(),
-                p.settings.target, p.settings.program_periods_us, p.settings.cycle_time_us)
+                p.settings.target, p.settings.program_periods_us, p.settings.cycle_time_us,
+                (p.root / "IO.DAT").is_file())
 
     def _watch(self) -> None:
         old = self.watcher.directories() + self.watcher.files()

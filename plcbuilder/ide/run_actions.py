@@ -209,6 +209,8 @@ class RunActions(QObject):
             args += ["--machine", str(p.machine_path)]
         if p.variables_path.is_file():
             args += ["--variables", str(p.variables_path)]
+        if (p.root / "IO.DAT").is_file():
+            args += ["--io-dat", str(p.root / "IO.DAT")]
         lim = p.limits
         args += ["--limits", f"{lim.hw_proc},{lim.hw_total},{lim.sw_proc}"]
         return args

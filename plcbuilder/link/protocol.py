@@ -469,14 +469,14 @@ class ChangeEncoder:
         if prev is None:
             d = {1: running, 2: proc, 3: message}
             for i, name in enumerate(_MACHINE_FIELDS, 4):
-                d[i] = fields[name]
+                d[i] = fields.get(name, ())
         else:
             d = {i: v for i, (v, p) in enumerate(zip(head, prev), 1) if v != p}
             pf = self._prev_fields
             if fields is not pf:
                 for i, name in enumerate(_MACHINE_FIELDS, 4):
-                    v = fields[name]
-                    if v != pf[name]:
+                    v = fields.get(name, ())
+                    if v != pf.get(name, ()):
                         d[i] = v
         d[0] = t
         self._prev, self._prev_fields = head, fields

@@ -687,11 +687,15 @@ class Server:
 
 # ===================================================================== together
 
-def make_controller(machine=None, variables=None, **kwargs) -> Callable[[], Controller]:
-    """A factory of controllers for a machine file and a plc-variables.xml (paths
-    or None for the defaults). Raises ConfigError on a bad file."""
+def make_controller(machine=None, variables=None, io_dat=None,
+                    **kwargs) -> Callable[[], Controller]:
+    """A factory of controllers for a machine file, a plc-variables.xml and an
+    IO.DAT (paths or None for the defaults). Raises ConfigError on a bad file."""
+    from plcbuilder.controller import io_dat as io_dat_file
     from plcbuilder.controller import machine_config, variables_xml
     mc = machine_config.load_machine(machine) if machine else machine_config.default_machine()
+    if io_dat:
+        mc = io_dat_file.with_io_dat(mc, io_dat_file.load_io_dat(io_dat))
     vs = variables_xml.load_variables(variables) if variables else None
 
     def factory() -> Controller:

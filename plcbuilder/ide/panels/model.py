@@ -159,6 +159,7 @@ class RunModel:
         self.scalars = RingBuffer(self.capacity, 2, np.float64)     # proc, message
         self.inputs = RingBuffer(self.capacity, WORDS, np.uint32)
         self.outputs = RingBuffer(self.capacity, WORDS, np.uint32)
+        self.vouts = RingBuffer(self.capacity, 1, np.uint32)        # softMC VOUT.1..32
         self.analog = RingBuffer(self.capacity, 24, np.float64)     # PWM0-7, DAC0-7, ADC0-7
         self.axes = RingBuffer(self.capacity, 2 * len(AXES), np.float64)  # pos mm, vel mm/s
         self.message_limit = int(messages)
@@ -174,9 +175,12 @@ class RunModel:
     # ------------------------------------------------------------------ state
     def clear(self) -> None:
         """Forget everything (a controller reset or restart)."""
-        for rb in (self.time, self.scalars, self.inputs, self.outputs, self.analog, self.axes):
+        for rb in (self.time, self.scalars, self.inputs, self.outputs, self.vouts, self.analog,
+                   self.axes):
             rb.clear()
         self._out_ever = np.zeros(WORDS, dtype=np.uint32)
+        self._vout_ever = 0
+        self.active_vouts: set[int] = set()        # bit n-1 for VOUT.n
         self._in_ever_set = np.zeros(WORDS, dtype=np.uint32)
         self._in_ever_clear = np.zeros(WORDS, dtype=np.uint32)
         self._analog_ever = np.zeros(24, dtype=bool)
@@ -257,6 +261,13 @@ class RunModel:
         outs = (table[:, _OUT] & _MASK32).astype(np.uint32)
         self.inputs.extend(ins)
         self.outputs.extend(outs)
+        vouts = np.fromiter((s.vio[1] if len(s.vio) > 1 else 0 for s in samples),
+                            dtype=np.int64, count=n)
+        self.vouts.extend((vouts & _MASK32).astype(np.uint32).reshape(n, 1))
+        vout_or = int(np.bitwise_or.reduce(vouts)) & _MASK32
+        if vout_or & ~self._vout_ever:
+            self._vout_ever |= vout_or
+            self.active_vouts = _bits_set(np.array([self._vout_ever], dtype=np.uint32))
         analog = table[:, _ANALOG].astype(np.float64)
         self.analog.extend(analog)
         motion = table[:, _MOTION] * 0.01            # 0.01 mm -> mm, 0.01 mm/s -> mm/s
@@ -326,9 +337,15 @@ class RunModel:
         n = len(t)
         return max(0, min(a, n)), max(0, min(b, n))
 
+    def words(self, which: str) -> RingBuffer:
+        """The ring buffer of ``which``: "outputs", "inputs" or "vouts" (VOUT.n is
+        bit n-1 of its one word)."""
+        return {"outputs": self.outputs, "inputs": self.inputs, "vouts": self.vouts}[which]
+
     def bit_series(self, which: str, pin: int, a: int = 0, b: Optional[int] = None) -> np.ndarray:
-        """Pin ``pin`` of the inputs or outputs (``which``) over samples [a, b), 0/1 as uint8."""
-        rb = self.outputs if which == "outputs" else self.inputs
+        """Pin ``pin`` of the inputs, outputs or virtual outputs (``which``; bit
+        n-1 for VOUT.n) over samples [a, b), 0/1 as uint8."""
+        rb = self.words(which)
         words = rb.view(pin // 32)[a:b]
         return ((words >> np.uint32(pin % 32)) & np.uint32(1)).astype(np.uint8)
 
@@ -337,7 +354,7 @@ class RunModel:
         s = self.last_sample
         if s is None:
             return None
-        words = s.outputs if which == "outputs" else s.inputs
+        words = {"outputs": s.outputs, "inputs": s.inputs, "vouts": s.vio[1:]}[which]
         if pin // 32 >= len(words):
             return 0
         return (int(words[pin // 32]) >> (pin % 32)) & 1
