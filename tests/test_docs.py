@@ -68,7 +68,7 @@ def broken_links(path: Path) -> list[str]:
 def test_the_manual_has_its_chapters():
     names = {p.name for p in PAGES}
     for chapter in ("ide", "language", "projects", "controller", "machine", "protocol",
-                    "development"):
+                    "development", "debugging", "traces", "tests", "targets"):
         assert f"{chapter}.md" in names
     front = links(ROOT / "README.md")
     assert "docs/images/ide-homing.png" in front

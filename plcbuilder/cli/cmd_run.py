@@ -79,6 +79,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="write the whole session as a trace: .plctrace, .vcd or .csv")
     g.add_argument("--watch", action="append", default=[], metavar="PROC.var",
                    help="record a variable every tick into the history (repeatable)")
+    p.add_argument("--break", dest="breaks", action="append", default=[],
+                   metavar="FILE:LINE[:COND]",
+                   help="halt before FILE's line LINE runs (or the next line with code), "
+                        "when COND (a PLC expression) is not 0; the run ends there and the "
+                        "JSON's 'halted' says where (repeatable; docs/debugging.md)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--state", type=Path, metavar="FILE",
                    help="the controller's kept state (Huazhong's B registers): read from FILE "
@@ -120,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
                           gvarget_latency_ms=args.gvarget_latency, trigger=args.trigger,
                           pre_ms=args.pre, post_ms=args.post, trigger_mode=args.trigger_mode,
                           capture=args.capture, history=args.history, watch=tuple(args.watch),
-                          state=args.state)
+                          state=args.state, breaks=args.breaks)
         try:
             result = api.run(target, opts)
         except api.UsageError as exc:
@@ -202,5 +207,12 @@ def summary(rep: dict, out: term.Out) -> str:
         lines.append(f"history: {rep['history']['file']}")
     still = [p["name"] for p in rep["procedures"] if p["ended_at_ms"] is None]
     why = "time limit" if still else "nothing left to run"
+    h = rep.get("halted")
+    if h is not None:
+        where = " <- ".join(f"{f['procedure']}() line {f['line']}" for f in h["stack"])
+        lines.append(out.paint("bad", f"halted ({h['reason']}) at {h['t_ms']} ms in "
+                                      f"{h['procedure']}: {h['file']}:{h['line']}"
+                                      + (f" [{where}]" if where else "")))
+        why = "halted"
     lines.append(f"run ended at {rep['ended_at_ms']} ms ({why})")
     return "\n".join(lines)
