@@ -97,6 +97,7 @@ class _Worker(threading.Thread):
         self.image: Optional[bytes] = None      # re-uploaded after a restart
         self.speed: Optional[tuple[str, Optional[float]]] = None
         self.variables_pending = False
+        self.registers_pending = False
         self.restarts = 0
         self.steps = StepSamples()
 
@@ -158,6 +159,8 @@ class _Worker(threading.Thread):
                 self.speed = (args[0], args[1])
             elif verb == "variables":
                 self.variables_pending = False
+            elif verb == "registers":
+                self.registers_pending = False
             else:
                 self.post("error", f"{verb}: not done, the connection to the controller "
                                    "was lost")
@@ -253,6 +256,10 @@ class _Worker(threading.Thread):
                 self.variables_pending = False
                 self.post("variables", client.variables())
                 return
+            elif verb == "registers":
+                self.registers_pending = False
+                self.post("registers", client.registers(args[0]))
+                return
             else:
                 result = client.request(verb, **(args[0] if args else {}))
         except ConnectionLost:
@@ -304,6 +311,9 @@ class ControllerConnection(QtCore.QObject):
     """The answer to :meth:`request_variables`: ``{procedure: {variable: value}}``,
     each procedure's variables in slot order (an ``object`` signal: a ``dict``
     signal would sort the keys)."""
+
+    sig_registers = Signal(object)
+    """The answer to :meth:`request_registers`: ``{address: value}``."""
 
     sig_result = Signal(str, dict)
     """A request was done: its verb and the controller's result object."""
@@ -413,6 +423,15 @@ class ControllerConnection(QtCore.QObject):
         w.variables_pending = True
         self._send("variables")
 
+    def request_registers(self, addresses) -> None:
+        """Ask for the values of global registers; the answer comes as
+        sig_registers. A request still waiting is not repeated."""
+        w = self._worker
+        if w is None or not self.connected or w.registers_pending:
+            return
+        w.registers_pending = True
+        self._send("registers", [int(a) for a in addresses])
+
     def _send(self, verb: str, *args) -> None:
         w = self._worker
         if w is None:
@@ -466,6 +485,8 @@ class ControllerConnection(QtCore.QObject):
                 self.sig_error.emit(str(payload))
             elif kind == "variables":
                 self.sig_variables.emit(dict(payload))
+            elif kind == "registers":
+                self.sig_registers.emit(dict(payload))
             elif kind == "result":
                 verb, result = payload
                 self.sig_result.emit(verb, dict(result) if isinstance(result, dict) else {})

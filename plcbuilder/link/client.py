@@ -298,6 +298,11 @@ class Client:
     def variables(self) -> dict[str, dict[str, int]]:
         return self.request("variables").get("variables", {})
 
+    def registers(self, addresses) -> dict[int, int]:
+        """The values of global registers now, ``{address: value}``."""
+        r = self.request("registers", addresses=[int(a) for a in addresses])
+        return dict(zip(r.get("addresses", []), r.get("values", [])))
+
     def speed(self, mode: str, factor: Optional[float] = None) -> dict:
         """realtime, factor (with ``factor``), max or pause."""
         fields = {"mode": mode}
