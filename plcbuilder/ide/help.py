@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Iterable, Optional
 
 from PySide6.QtCore import Qt, QUrl
-from PySide6.QtGui import QDesktopServices, QKeySequence, QTextCursor
+from PySide6.QtGui import QDesktopServices, QImageReader, QKeySequence, QTextCursor
 from PySide6.QtWidgets import (QDialog, QHeaderView, QLabel, QLineEdit, QListWidget,
                                QListWidgetItem, QSplitter, QTableWidget, QTableWidgetItem,
                                QTextBrowser, QVBoxLayout, QWidget)
@@ -60,7 +60,7 @@ def chapter_title(path: Path) -> str:
     try:
         for line in path.read_text(encoding="utf-8").splitlines():
             if line.startswith("# "):
-                return line[2:].strip()
+                return line[2:].strip().replace("`", "")
     except OSError:
         pass
     return path.stem
@@ -96,7 +96,7 @@ class HelpWindow(QWidget):
         split.addWidget(self.list)
         split.addWidget(self.browser)
         split.setStretchFactor(1, 1)
-        split.setSizes([200, 760])
+        split.setSizes([240, 760])
         lay = QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
         lay.addWidget(split)
@@ -129,6 +129,7 @@ class HelpWindow(QWidget):
             self.browser.setSearchPaths([str(path.parent)])
             self.browser.document().setBaseUrl(QUrl.fromLocalFile(str(path)))
             self.browser.setMarkdown(text)
+            self.fit_images()
             for i in range(self.list.count()):
                 if self.list.item(i).data(Qt.ItemDataRole.UserRole) == str(path):
                     self.list.blockSignals(True)
@@ -138,6 +139,40 @@ class HelpWindow(QWidget):
             return self.scroll_to_heading(anchor)
         self.browser.verticalScrollBar().setValue(0)
         return True
+
+    def fit_images(self) -> int:
+        """Scale the chapter's pictures down to the width of the view (the
+        screenshots are larger than it); returns how many were scaled."""
+        doc = self.browser.document()
+        widest = max(200, self.browser.viewport().width() - 40)
+        n = 0
+        block = doc.begin()
+        while block.isValid():
+            it = block.begin()
+            while not it.atEnd():
+                frag = it.fragment()
+                fmt = frag.charFormat()
+                if frag.isValid() and fmt.isImageFormat():
+                    img_fmt = fmt.toImageFormat()
+                    size = QImageReader(self._image_path(img_fmt.name())).size()
+                    if size.isValid() and size.width() > widest:
+                        img_fmt.setWidth(widest)
+                        img_fmt.setHeight(size.height() * widest / size.width())
+                        cur = QTextCursor(doc)
+                        cur.setPosition(frag.position())
+                        cur.setPosition(frag.position() + frag.length(),
+                                        QTextCursor.MoveMode.KeepAnchor)
+                        cur.setCharFormat(img_fmt)
+                        n += 1
+                it += 1
+            block = block.next()
+        return n
+
+    def _image_path(self, name: str) -> str:
+        p = Path(QUrl(name).toLocalFile() or name)
+        if not p.is_absolute() and self.current is not None:
+            p = self.current.parent / p
+        return str(p)
 
     def open_named(self, stem: str, anchor: str = "") -> bool:
         if self.folder is None:

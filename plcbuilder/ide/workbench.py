@@ -79,10 +79,16 @@ class Workbench(QObject):
                                     area.RightDockWidgetArea)
         win.registers_dock = make_dock(win, "Registers", "registersDock", self.registers,
                                        area.RightDockWidgetArea)
-        win.tabifyDockWidget(win.disasm_dock, win.registers_dock)
+        # beside the plots when there are run docks, else tabbed together
+        beside = win.right_docks[0] if win.right_docks else win.disasm_dock
+        for d in (win.disasm_dock, win.registers_dock):
+            if d is not beside:
+                win.tabifyDockWidget(beside, d)
         for d in (win.find_dock, win.references_dock, win.disasm_dock, win.registers_dock):
             d.hide()
         win.problems_dock.raise_()
+        for d in win.right_docks:
+            d.raise_()
         if win.connection is not None:
             self.registers.set_connection(win.connection)
 
@@ -265,6 +271,8 @@ class Workbench(QObject):
                 skipped.append(Path(path).name)
                 continue
             changed.append(path)
+        self.references.show_hits(f"{plan.old} was renamed to {plan.new}: Shift+F12 on it "
+                                  "lists its places again", [])
         lint = self.win.lint
         if any(p.endswith(".h") for p in changed):
             lint.refresh_header_defines()

@@ -29,7 +29,9 @@ from typing import Mapping, Optional, Sequence
 from plcbuilder.bytecode import abi
 from plcbuilder.diagnostics import Span
 from plcbuilder.lang.builtins import FUNCTIONS, KEYWORDS, PREDEFINED
-from plcbuilder.lang.preprocess import BUILTIN_PREFIX
+from plcbuilder._support.files import read_bounded
+from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
+from plcbuilder.lang.source import MAX_SOURCE_BYTES
 from plcbuilder.lang.symbols import DEFINE, PROCEDURE, VARIABLE, SymbolIndex, index, tokens_of
 
 BUILTIN = "built-in"
@@ -109,7 +111,8 @@ def scope_of(name: str, origin: str, sources: Mapping[str, str],
     if not IDENTIFIER.fullmatch(name or "") or origin not in sources:
         return None
     idx = _index(origin, sources[origin], include_dirs)
-    sym = idx.defines.get(name) or idx.procedures.get(name) or idx.variables.get(name)
+    sym = idx.defines.get(name) or idx.procedures.get(name) or idx.variables.get(name) or \
+        _header_procedure(name, idx, sources, include_dirs)
     if sym is None:
         if is_builtin(name):
             return Scope(name, BUILTIN, None, tuple(sources))
@@ -132,6 +135,27 @@ def scope_of(name: str, origin: str, sources: Mapping[str, str],
         elif sym.kind == PROCEDURE and any(_same_file(h, where) for h in other.includes):
             files.append(path)
     return Scope(name, sym.kind, sym.span, tuple(files))
+
+
+def _header_procedure(name: str, idx: SymbolIndex, sources: Mapping[str, str],
+                      include_dirs: Sequence[Path]):
+    """The procedure ``name`` of a header the file includes (myCNC profiles keep
+    helper procedures in headers), or None."""
+    for header in idx.includes:
+        text = next((t for p, t in sources.items() if _same_file(p, header)), None)
+        if text is None:
+            if header.startswith(BUILTIN_PREFIX):
+                text = builtin_header(header[len(BUILTIN_PREFIX):])
+            else:
+                try:
+                    text = read_bounded(header, MAX_SOURCE_BYTES).decode("utf-8", "replace")
+                except OSError:
+                    text = None
+        if text:
+            sym = _index(header, text, include_dirs).procedures.get(name)
+            if sym is not None:
+                return sym
+    return None
 
 
 def find_references(scope: Scope, sources: Mapping[str, str]) -> list[Reference]:

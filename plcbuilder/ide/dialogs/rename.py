@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from PySide6.QtCore import Qt, QTimer
-from PySide6.QtGui import QFontDatabase
+from PySide6.QtGui import QBrush, QColor, QFontDatabase
 from PySide6.QtWidgets import (QDialog, QDialogButtonBox, QLabel, QLineEdit, QTreeWidget,
                                QTreeWidgetItem, QVBoxLayout)
 
@@ -39,7 +39,7 @@ class RenameDialog(QDialog):
         self.edit.selectAll()
         self.error = error_label(self)
         self.preview = QTreeWidget(self)
-        self.preview.setHeaderLabels(["Line", "Before → after"])
+        self.preview.setHeaderLabels(["Line", "Before", "After"])
         self.preview.setRootIsDecorated(True)
         self.preview.setUniformRowHeights(True)
         self.preview.setFont(QFontDatabase.systemFont(QFontDatabase.SystemFont.FixedFont))
@@ -86,7 +86,7 @@ class RenameDialog(QDialog):
         for path, refs in plan.edits.items():
             shown = os.path.relpath(path, self.root) if self.root and not path.startswith("<") \
                 else path
-            top = QTreeWidgetItem([f"{shown}  ({len(refs)})", ""])
+            top = QTreeWidgetItem([f"{shown}  ({len(refs)})", "", ""])
             self.preview.addTopLevelItem(top)
             top.setFirstColumnSpanned(True)
             by_line: dict[int, list] = {}
@@ -95,13 +95,17 @@ class RenameDialog(QDialog):
             for line, on_line in by_line.items():
                 before = on_line[0].text.strip()
                 after = renamed_line(on_line[0], on_line, new).strip()
-                item = QTreeWidgetItem([str(line), f"{before}\n{after}"])
-                item.setToolTip(1, f"before: {before}\nafter:  {after}")
-                item.setText(1, f"{before}  →  {after}")
+                item = QTreeWidgetItem([str(line), before, after])
+                item.setToolTip(1, before)
+                item.setToolTip(2, after)
+                item.setForeground(1, QBrush(QColor("#b71c1c")))
+                item.setForeground(2, QBrush(QColor("#1b5e20")))
                 item.setTextAlignment(0, Qt.AlignmentFlag.AlignRight)
                 top.addChild(item)
         self.preview.expandAll()
         self.preview.resizeColumnToContents(0)
+        half = max(200, (self.preview.viewport().width() - self.preview.columnWidth(0)) // 2)
+        self.preview.setColumnWidth(1, half)
         n, files = plan.count, len(plan.edits)
         self.summary.setText(f"{n} change{'s' * (n != 1)} in {files} file{'s' * (files != 1)}")
 

@@ -40,7 +40,7 @@ class DisasmView(QWidget):
         self.header.setWordWrap(True)
         self.tree = QTreeWidget(self)
         self.tree.setColumnCount(4)
-        self.tree.setHeaderLabels(["Source / offset", "Bytes", "Instruction", "Operand"])
+        self.tree.setHeaderLabels(["Offset", "Bytes", "Instruction", "Operand"])
         self.tree.setUniformRowHeights(True)
         self.tree.setAlternatingRowColors(True)
         self.tree.header().setStretchLastSection(True)
@@ -55,6 +55,7 @@ class DisasmView(QWidget):
         lay.addWidget(self.header)
         lay.addWidget(self.tree)
         self._line_items: dict[tuple[str, int], QTreeWidgetItem] = {}
+        self._bytes: dict[int, int] = {}          # id(line item) -> its bytes
 
     # ------------------------------------------------------------ public
     def clear_view(self, why: str) -> None:
@@ -88,38 +89,49 @@ class DisasmView(QWidget):
         grey = QBrush(QColor("#7f7f7f"))
         proc_item = line_item = None
         last = None
+        self._bytes = {}
+        groups: list[tuple[QTreeWidgetItem, str]] = []     # line items and their text
+        procs: list[tuple[QTreeWidgetItem, list]] = []
         for d in instrs:
             if d.starts_proc or proc_item is None:
                 proc_item = QTreeWidgetItem([f"{d.proc or 'main'}()", "", "", ""])
                 proc_item.setFont(0, bold)
                 self.tree.addTopLevelItem(proc_item)
-                proc_item.setFirstColumnSpanned(True)
+                procs.append((proc_item, []))
                 last = None
             f = resolve(d.file, path)
             if (f, d.line) != last or line_item is None:
                 last = (f, d.line)
                 src = self._line_text(f, d.line)
                 where = f"{Path(f).name}:{d.line}" if f else "?"
-                line_item = QTreeWidgetItem([f"{where}  {src}", "0", "", ""])
+                line_item = QTreeWidgetItem(["", "", "", ""])
                 line_item.setFont(0, bold)
                 line_item.setData(0, ROLE_LOCATION, (f, d.line or 1, 1))
-                line_item.setToolTip(0, src)
+                line_item.setToolTip(0, f"{where}: {src}")
                 proc_item.addChild(line_item)
+                procs[-1][1].append(line_item)
+                groups.append((line_item, f"{where}  {src}"))
+                self._bytes[id(line_item)] = 0
                 if f is not None and d.line is not None:
                     self._line_items.setdefault((file_key(f), d.line), line_item)
-            line_item.setText(1, str(int(line_item.text(1)) + d.size))
+            self._bytes[id(line_item)] += d.size
             ins = QTreeWidgetItem([f"{d.offset:5d}", d.raw.hex(" "), d.op.name, d.operand])
             ins.setForeground(1, grey)
             ins.setData(0, ROLE_LOCATION, (f, d.line or 1, 1))
             line_item.addChild(ins)
-        for i in range(self.tree.topLevelItemCount()):
-            top = self.tree.topLevelItem(i)
-            total = sum(int(top.child(j).text(1)) for j in range(top.childCount()))
+        for item, text in groups:
+            n = self._bytes[id(item)]
+            item.setText(0, f"{n:3d} B  {text}")
+            item.setFirstColumnSpanned(True)
+        for top, lines in procs:
+            total = sum(self._bytes[id(i)] for i in lines)
             top.setText(0, f"{top.text(0)}   {total} bytes")
+            top.setFirstColumnSpanned(True)
         self.tree.expandAll()
-        self.tree.setColumnWidth(0, max(260, min(self.tree.sizeHintForColumn(0), 520)))
-        for c in (1, 2):
-            self.tree.resizeColumnToContents(c)
+        fm = self.tree.fontMetrics()
+        self.tree.setColumnWidth(0, self.tree.indentation() * 3 + fm.horizontalAdvance("000000"))
+        self.tree.setColumnWidth(1, fm.horizontalAdvance("00 00 00 00 00 00"))
+        self.tree.setColumnWidth(2, fm.horizontalAdvance("GVARSET000"))
         return len(instrs)
 
     def follow(self, path: str, line: int) -> None:
@@ -131,7 +143,7 @@ class DisasmView(QWidget):
 
     def line_bytes(self) -> dict[tuple[str, int], int]:
         """{(file key, line): bytes} as listed (for tests)."""
-        return {k: int(item.text(1)) for k, item in self._line_items.items()}
+        return {k: self._bytes[id(item)] for k, item in self._line_items.items()}
 
     # ------------------------------------------------------------ private
     def _line_text(self, f: Optional[str], line: Optional[int]) -> str:

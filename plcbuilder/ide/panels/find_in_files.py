@@ -28,13 +28,15 @@ class SearchError(ValueError):
 def compile_pattern(text: str, *, regex: bool = False, case: bool = False,
                     whole_word: bool = False) -> re.Pattern:
     """The pattern to search for; raises SearchError for a bad regular expression."""
+    flags = 0 if case else re.IGNORECASE
     body = text if regex else re.escape(text)
-    if whole_word:
-        body = rf"(?<![A-Za-z0-9_])(?:{body})(?![A-Za-z0-9_])"
     try:
-        return re.compile(body, 0 if case else re.IGNORECASE)
+        pattern = re.compile(body, flags)      # alone first: wrapped, a stray [ could close
     except re.error as exc:
         raise SearchError(f"not a valid regular expression: {exc}") from None
+    if whole_word:
+        pattern = re.compile(rf"(?<![A-Za-z0-9_])(?:{body})(?![A-Za-z0-9_])", flags)
+    return pattern
 
 
 def search(sources: Mapping[str, str], text: str, *, regex: bool = False, case: bool = False,

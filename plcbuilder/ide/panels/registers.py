@@ -20,8 +20,8 @@ from PySide6.QtWidgets import (QAbstractItemView, QComboBox, QHBoxLayout, QHeade
 
 from plcbuilder.api import abi
 
-COL_NAME, COL_NUMBER, COL_KIND, COL_MEANING, COL_VALUE = range(5)
-HEADERS = ("Name", "Number", "Kind", "Meaning", "Value")
+COL_NAME, COL_NUMBER, COL_VALUE, COL_KIND, COL_MEANING = range(5)
+HEADERS = ("Name", "Number", "Value", "Kind", "Meaning")
 ROLE_ADDRESS = Qt.ItemDataRole.UserRole + 1     # on the Name item of a register row
 KIND_VARIABLE = "predefined variable"
 #: The kinds a register value can be read for.
@@ -91,8 +91,8 @@ class RegisterBrowser(QWidget):
         self.model.setHorizontalHeaderLabels(list(HEADERS))
         self._rows_of: dict[int, list[int]] = {}      # register -> model rows
         for name, value, kind, meaning in rows():
-            items = [QStandardItem(name), QStandardItem(str(value)), QStandardItem(kind),
-                     QStandardItem(meaning), QStandardItem("")]
+            items = [QStandardItem(name), QStandardItem(str(value)), QStandardItem(""),
+                     QStandardItem(kind), QStandardItem(meaning)]
             for it in items:
                 it.setEditable(False)
             items[COL_NUMBER].setData(int(value), Qt.ItemDataRole.DisplayRole)   # sorts as a number
@@ -128,11 +128,11 @@ class RegisterBrowser(QWidget):
         self.table.sortByColumn(-1, Qt.SortOrder.AscendingOrder)
         hh = self.table.horizontalHeader()
         hh.setSectionResizeMode(QHeaderView.ResizeMode.Interactive)
-        hh.setStretchLastSection(False)
-        self.table.resizeColumnsToContents()
-        self.table.setColumnWidth(COL_NAME, min(self.table.columnWidth(COL_NAME), 260))
-        self.table.setColumnWidth(COL_MEANING, 260)
-        self.table.setColumnWidth(COL_VALUE, 80)
+        hh.setStretchLastSection(True)
+        fm = self.table.fontMetrics()
+        for col, sample in ((COL_NAME, "GVAR_CURRENT_MOTION_CODE__"), (COL_NUMBER, "-0000000"),
+                            (COL_VALUE, "-00000000"), (COL_KIND, "predefined variable_")):
+            self.table.setColumnWidth(col, fm.horizontalAdvance(sample))
         self.table.activated.connect(self._on_activated)
         self.status = QLabel("", self)
         self.status.setContentsMargins(6, 0, 6, 2)
