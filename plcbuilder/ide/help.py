@@ -140,6 +140,11 @@ class HelpWindow(QWidget):
         self.browser.verticalScrollBar().setValue(0)
         return True
 
+    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        if self.current is not None:
+            self.fit_images()
+
     def fit_images(self) -> int:
         """Scale the chapter's pictures down to the width of the view (the
         screenshots are larger than it); returns how many were scaled."""

@@ -62,8 +62,13 @@ class _Filter(QSortFilterProxyModel):
         self.kind = ""
 
     def set(self, text: str, kind: str) -> None:
-        self.text, self.kind = text.strip().lower(), kind
-        self.invalidateFilter()
+        if hasattr(self, "beginFilterChange"):          # Qt 6.9 and later
+            self.beginFilterChange()
+            self.text, self.kind = text.strip().lower(), kind
+            self.endFilterChange(QSortFilterProxyModel.Direction.Rows)
+        else:
+            self.text, self.kind = text.strip().lower(), kind
+            self.invalidateFilter()
 
     def filterAcceptsRow(self, row: int, parent) -> bool:  # noqa: N802 - Qt override
         m = self.sourceModel()
