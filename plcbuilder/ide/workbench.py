@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Optional
 
 from PySide6.QtCore import QObject, Qt
-from PySide6.QtWidgets import QDockWidget, QMenu, QMessageBox
+from PySide6.QtWidgets import QMenu, QMessageBox
 
 from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.ide import actions as acts, code_bytes
@@ -218,7 +218,6 @@ class Workbench(QObject):
         what = "built-in name" if scope.kind == references.BUILTIN else scope.kind
         summary = (f"{scope.name} ({what}): {len(refs)} reference{'s' * (len(refs) != 1)} "
                    f"in {files} file{'s' * (files != 1)}")
-        self.references.tree.root = self.win.project.root if self.win.project else None
         n = self.references.show_hits(summary, hits)
         self.win.references_dock.show()
         self.win.references_dock.raise_()
@@ -372,6 +371,15 @@ class Workbench(QObject):
         return text
 
     # ============================================================ signals
+    def on_project_opened(self, root: str) -> None:
+        """Another project: the history and the old project's results go."""
+        self.nav.clear()
+        for tree in (self.references.tree, self.find_panel.tree):
+            tree.root = Path(root)
+            tree.clear()
+        self.references.summary.setText("Shift+F12 on a name lists where it is used")
+        self.find_panel.summary.setText("")
+
     def on_current_changed(self, ed) -> None:
         self.outline.set_editor(ed)
         self.refresh_build_views()
@@ -414,7 +422,7 @@ def install(win) -> Workbench:
     es.sig_editor_created.connect(wb.on_editor_created)
     win.lint.sig_diagnostics_updated.connect(wb.refresh_build_views)
     win.tree.sig_file_deleted.connect(wb.nav.forget_file)
-    win.sig_project_opened.connect(lambda _root: wb.nav.clear())
+    win.sig_project_opened.connect(wb.on_project_opened)
     for panel in (wb.references, wb.find_panel, wb.disasm):
         panel.sig_open_location.connect(wb.jump)
     wb.outline.sig_goto.connect(lambda line, col: wb.jump(win.current_editor().path, line, col)

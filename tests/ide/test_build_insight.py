@@ -4,15 +4,17 @@ editor margin, and Build, Upload and Start."""
 
 from pathlib import Path
 
-from PySide6.QtCore import Qt
-
 from plcbuilder import api
 from plcbuilder.ide import code_bytes
 from plcbuilder.ide.actions import Act
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.run_actions import Step
-from tests.ide._workbench import (FakeConnection, caret_on, make_window, project,  # noqa: F401
-                                  prompts, settle, win)
+from tests.ide import _workbench
+from tests.ide._workbench import FakeConnection, caret_on, settle
+
+# the fixtures
+make_window, project, prompts, win = (_workbench.make_window, _workbench.project,
+                                      _workbench.prompts, _workbench.win)
 
 
 def compiled(path: Path):

@@ -9,7 +9,11 @@ from PySide6.QtGui import QKeySequence
 
 from plcbuilder.ide import help as ide_help
 from plcbuilder.ide.actions import Act
-from tests.ide._workbench import make_window, project, prompts, win  # noqa: F401
+from tests.ide import _workbench
+
+# the fixtures
+make_window, project, prompts, win = (_workbench.make_window, _workbench.project,
+                                      _workbench.prompts, _workbench.win)
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 

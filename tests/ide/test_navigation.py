@@ -12,8 +12,12 @@ from plcbuilder.ide.dialogs.quick_open import QuickOpenDialog, fuzzy_score, rank
 from plcbuilder.ide.dialogs.rename import RenameDialog
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.panels.find_in_files import SearchError, search
-from tests.ide._workbench import (caret_on, make_window, project, prompts, settle,  # noqa: F401
-                                  win)
+from tests.ide import _workbench
+from tests.ide._workbench import caret_on, settle
+
+# the fixtures
+make_window, project, prompts, win = (_workbench.make_window, _workbench.project,
+                                      _workbench.prompts, _workbench.win)
 
 
 def where(w):
@@ -125,6 +129,8 @@ def test_find_in_files_lists_matches_of_unsaved_text_and_opens_them(win, project
     shown = [(Path(f).name, line) for f, line, _c in panel.tree.hits_shown()]
     assert ("M05.plc", 9) in shown and ("mine.h", 2) in shown and ("M03.plc", 9) in shown
     assert "matches in 4 files" in panel.summary.text()
+    tops = [panel.tree.topLevelItem(i).text(0) for i in range(panel.tree.topLevelItemCount())]
+    assert "hardware/M05.plc  (3)" in tops                   # paths in the project
     panel.whole_word.setChecked(True)
     panel.regex.setChecked(True)
     panel.pattern.setText("MY_P[")
@@ -253,3 +259,13 @@ def test_outline_lists_goes_and_follows(win, project, qtbot):
     qtbot.waitUntil(lambda: outline.item_named("count") is not None, timeout=3000)
     w.open_file(project / "include" / "mine.h")
     assert outline.item_named("MY_PIN").text(1) == "3"
+
+
+def test_a_very_large_file_is_not_outlined(win, project, qtbot):
+    from plcbuilder.ide.panels.outline import MAX_OUTLINE_CHARS
+    ed = win.open_file(project / "hardware" / "LONE.plc")
+    outline = win.workbench.outline
+    ed.set_text("main()\n{\n" + "  a = 1;\n" * (MAX_OUTLINE_CHARS // 9 + 1) + "};\n",
+                keep_undo=True)
+    outline.refresh()
+    assert "too large to outline" in outline.note.text() and not outline.items

@@ -8,8 +8,12 @@ from plcbuilder.api import abi
 from plcbuilder.ide.actions import Act
 from plcbuilder.ide.panels.registers import (COL_KIND, COL_NAME, COL_NUMBER, COL_VALUE,
                                              MAX_LIVE_ROWS, RegisterBrowser, rows)
-from tests.ide._workbench import (FakeConnection, caret_on, make_window, project,  # noqa: F401
-                                  prompts, settle, win)
+from tests.ide import _workbench
+from tests.ide._workbench import FakeConnection, caret_on, settle
+
+# the fixtures
+make_window, project, prompts, win = (_workbench.make_window, _workbench.project,
+                                      _workbench.prompts, _workbench.win)
 
 
 def listed(b: RegisterBrowser, col=COL_NAME):

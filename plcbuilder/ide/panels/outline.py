@@ -6,6 +6,7 @@ short pause in typing)."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Optional
 
 from PySide6.QtCore import Qt, QTimer, Signal
@@ -21,8 +22,8 @@ ROLE_ITEM = Qt.ItemDataRole.UserRole + 1
 GROUPS = ((lang_symbols.PROCEDURE, "Procedures", KIND_PROCEDURE),
           (lang_symbols.DEFINE, "Defines", KIND_DEFINE),
           (lang_symbols.VARIABLE, "Variables", KIND_VARIABLE))
-#: Texts larger than this are not outlined while typing (only when opened).
-MAX_LIVE_CHARS = 400_000
+#: Texts larger than this are not outlined (reading their names would hold up typing).
+MAX_OUTLINE_CHARS = 200_000
 
 
 def _kind_icon(kind: int) -> QIcon:
@@ -90,9 +91,12 @@ class OutlinePanel(QWidget):
             self.note.setText("No file open")
             self.note.show()
             return
-        text = ed.text()
-        if len(text) > MAX_LIVE_CHARS and self.tree.topLevelItemCount():
+        if ed.length() > MAX_OUTLINE_CHARS:
+            self.note.setText(f"{Path(ed.path).name} is too large to outline "
+                              f"(over {MAX_OUTLINE_CHARS // 1000} kB)")
+            self.note.show()
             return
+        text = ed.text()
         idx = lang_symbols.index(text, ed.path)
         self.items = idx.outline()
         bold = QFont(self.tree.font())
