@@ -269,3 +269,17 @@ def test_a_very_large_file_is_not_outlined(win, project, qtbot):
                 keep_undo=True)
     outline.refresh()
     assert "too large to outline" in outline.note.text() and not outline.items
+
+
+def test_matches_on_one_line_share_a_row(qtbot):
+    from plcbuilder.ide.panels.results import Hit, ResultsTree
+    tree = ResultsTree()
+    qtbot.addWidget(tree)
+    line = "timer=2;do{timer--;}while(timer>0);"
+    hits = [Hit("/p/M03.plc", 20, c, c + 5, line) for c in (1, 12, 27)] + \
+        [Hit("/p/M03.plc", 21, 1, 6, "timer=0;")]
+    assert tree.set_hits(hits) == 4
+    top = tree.topLevelItem(0)
+    assert top.text(0) == "/p/M03.plc  (4)"
+    assert [top.child(i).text(0) for i in range(top.childCount())] == ["20  ×3", "21"]
+    assert tree.hits_shown() == [("/p/M03.plc", 20, 1), ("/p/M03.plc", 21, 1)]

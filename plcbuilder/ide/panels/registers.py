@@ -11,6 +11,7 @@ others) about once a second, and only while it is visible.
 
 from __future__ import annotations
 
+import re
 from typing import Optional
 
 from PySide6.QtCore import QSortFilterProxyModel, Qt, QTimer, Signal
@@ -43,6 +44,9 @@ def rows() -> list[tuple[str, int, str, str]]:
             meaning = desc if desc and desc != name else ""
             if meaning.startswith(name + ":"):
                 meaning = meaning[len(name) + 1:].strip()
+            m = re.fullmatch(r"GVAR_HW_(ADC|DAC|PWM)(\d)", name)
+            if m and not meaning:
+                meaning = f"{m.group(1)} channel {m.group(2)}"
         elif kind == "exit code":
             meaning = abi.EXIT_DESCRIPTIONS.get(value, "")
         out.append((name, value, kind, meaning))

@@ -60,24 +60,36 @@ class ResultsTree(QTreeWidget):
         self.itemClicked.connect(self._on_activated)
 
     def set_hits(self, hits: Iterable[Hit]) -> int:
-        """Show these places (in their order, grouped by file); returns how many."""
+        """Show these places (in their order, grouped by file, one row a line:
+        ``12  ×3`` is three places on line 12); returns how many places."""
         self.clear()
         groups: dict[str, QTreeWidgetItem] = {}
         n = 0
         mono = QFont("monospace")
         mono.setStyleHint(QFont.StyleHint.Monospace)
+        last = None                       # (file, line) of the row before: one row a line
         for h in hits:
+            n += 1
+            if last == (h.file, h.line):
+                item = top.child(top.childCount() - 1)
+                count = item.data(1, ROLE_LOCATION) + 1
+                item.setData(1, ROLE_LOCATION, count)
+                item.setText(0, f"{h.line}  ×{count}")
+                continue
+            last = (h.file, h.line)
             top = groups.get(h.file)
             if top is None:
                 top = QTreeWidgetItem([display_path(h.file, self.root), ""])
                 top.setIcon(0, icon("file-header" if h.file.endswith(".h") else "file-plc"))
                 top.setData(0, ROLE_LOCATION, (h.file, 1, 1))
+                top.setData(1, ROLE_LOCATION, 0)
                 self.addTopLevelItem(top)
                 top.setFirstColumnSpanned(True)
                 groups[h.file] = top
             text = h.text.replace("\t", "    ")
             item = QTreeWidgetItem([str(h.line), text.strip() + (f"    ({h.note})" if h.note else "")])
             item.setData(0, ROLE_LOCATION, (h.file, h.line, h.col))
+            item.setData(1, ROLE_LOCATION, 1)
             item.setData(0, Qt.ItemDataRole.TextAlignmentRole,
                          int(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter))
             item.setFont(1, mono)
@@ -85,14 +97,14 @@ class ResultsTree(QTreeWidget):
             if h.note:
                 item.setForeground(1, QBrush(QColor("#2e7d32")))
             top.addChild(item)
-            n += 1
         for top in groups.values():
-            top.setText(0, f"{top.text(0)}  ({top.childCount()})")
+            found = sum(top.child(i).data(1, ROLE_LOCATION) for i in range(top.childCount()))
+            top.setText(0, f"{top.text(0)}  ({found})")
         self.expandAll()
         return n
 
     def hits_shown(self) -> list[tuple[str, int, int]]:
-        """(file, line, column) of every place listed, in order (for tests)."""
+        """(file, line, column) of every row listed, in order (for tests)."""
         out = []
         for i in range(self.topLevelItemCount()):
             top = self.topLevelItem(i)
