@@ -39,6 +39,7 @@ from plcbuilder.ide.panels.outline import OutlinePanel
 from plcbuilder.ide.panels.registers import RegisterBrowser
 from plcbuilder.ide.panels.results import Hit, ResultsPanel
 from plcbuilder.lang import references
+from plcbuilder.lang import symbols as lang_symbols
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
 
 MAX_SOURCE = 4 << 20
@@ -365,10 +366,23 @@ class Workbench(QObject):
             text = f"{word}: nothing is known about this name" if word else \
                 "Put the caret on a name or a number"
         ed.callTipShow(s if word else pos, text)
-        if word and self.registers.select_name(word):
+        if word and self._select_register(ed, s, word):
             self.win.registers_dock.show()
             self.win.registers_dock.raise_()
         return text
+
+    def _select_register(self, ed, start: int, word: str) -> bool:
+        """Select ``word`` in the Registers dock: a name of the myCNC tables, or
+        a number where it means one (``gvarget(6060)``, ``exit(99)``)."""
+        if not word[0].isdigit():
+            return self.registers.select_name(word)
+        value = lang_symbols.number_of(word)
+        line0 = ed.lineFromPosition(start)
+        context = lang_symbols.number_context(ed.byte_range_text(ed.positionFromLine(line0),
+                                                                  start))
+        kind = {"register": "register", "exit": "exit code", "message": "message",
+                "proc": "proc state"}.get(context)
+        return value is not None and kind is not None and self.registers.select_number(value, kind)
 
     # ============================================================ signals
     def on_project_opened(self, root: str) -> None:

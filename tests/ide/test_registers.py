@@ -109,3 +109,16 @@ def test_what_is_this_explains_the_name_at_the_caret(win, project, qtbot):
     assert w.workbench.registers.current_name() == "PLCCMD_REPLY_TO_MYCNC"
     caret_on(ed, "MY_PIN")
     assert "#define MY_PIN 3" in w.workbench.what_is_this()
+
+
+def test_what_is_this_on_a_number_selects_what_it_means(win, project, qtbot):
+    w = win
+    ed = w.open_file(project / "hardware" / "M03.plc")
+    ed.set_text(ed.text().replace("exit(99);", "code = gvarget(6060); exit(99);"),
+                keep_undo=True)
+    caret_on(ed, "6060")
+    assert "GVAR_CURRENT_MOTION_CODE" in w.workbench.what_is_this()
+    assert w.workbench.registers.current_name() == "GVAR_CURRENT_MOTION_CODE"
+    caret_on(ed, "99")
+    assert w.workbench.what_is_this().startswith("exit code 99")
+    assert w.workbench.registers.current_name() == "plc_exit_normal"

@@ -181,6 +181,15 @@ class RegisterBrowser(QWidget):
         self.table.scrollTo(idx, QAbstractItemView.ScrollHint.PositionAtCenter)
         return True
 
+    def select_number(self, value: int, kind: str) -> bool:
+        """Show and select the first row of this kind with this number (a
+        register number under the caret: kind "register"); False if none."""
+        for row in range(self.model.rowCount()):
+            if self.model.item(row, COL_KIND).text() == kind and \
+                    self.model.item(row, COL_NUMBER).data(Qt.ItemDataRole.DisplayRole) == value:
+                return self.select_name(self.model.item(row, COL_NAME).text())
+        return False
+
     def current_name(self) -> Optional[str]:
         idx = self.table.currentIndex()
         if not idx.isValid():
