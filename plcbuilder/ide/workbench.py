@@ -43,6 +43,8 @@ from plcbuilder.lang import symbols as lang_symbols
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
 
 MAX_SOURCE = 4 << 20
+#: The settings key that remembers View → Code Bytes in Margin.
+CODE_BYTES_KEY = "view/code_bytes"
 #: folders of a project whose files Quick Open does not list
 SKIP_DIRS = {"build", ".git", "__pycache__", ".plcbuilder"}
 QUICK_OPEN_SUFFIXES = (".plc", ".h", ".toml", ".xml", ".md", ".txt")
@@ -316,6 +318,7 @@ class Workbench(QObject):
 
     def set_show_bytes(self, on: bool) -> None:
         self.show_bytes = bool(on)
+        self.win.settings.qs.setValue(CODE_BYTES_KEY, self.show_bytes)
         for ed in self.win.editors():
             if ed is not self.win.current_editor():
                 code_bytes.show_margin(ed, None)
@@ -474,6 +477,7 @@ def _actions(win, wb: Workbench) -> None:
     act = A(Act.CODE_BYTES, "Code &Bytes in Margin", None, None, None,
             "Show the code bytes of each source line beside it", checkable=True)
     act.toggled.connect(wb.set_show_bytes)
+    act.setChecked(str(win.settings.qs.value(CODE_BYTES_KEY, False)).lower() == "true")
     A(Act.BUILD_UPLOAD_START, "Build, Upload and Start", win.run_actions.build_upload_start,
       "Ctrl+R", "start", "Build All, upload the image and start the current procedure")
     A(Act.REGISTERS, "&Registers", lambda: (win.registers_dock.show(),

@@ -82,6 +82,17 @@ def test_code_bytes_in_the_margin_follow_the_compile(win, project, qtbot):
     assert w.action(Act.CODE_BYTES) in w.view_menu.actions()
 
 
+def test_code_bytes_in_the_margin_is_remembered(make_window, project, qtbot):
+    w = make_window()
+    w.action(Act.CODE_BYTES).trigger()
+    w.settings.sync()
+    again = make_window()
+    assert again.action(Act.CODE_BYTES).isChecked()
+    again.open_project(project)
+    ed = again.open_file(project / "hardware" / "M05.plc")
+    qtbot.waitUntil(lambda: code_bytes.margin_texts(ed) != {}, timeout=10000)
+
+
 def test_build_upload_and_start_runs_the_steps_in_order(make_window, project, qtbot):
     conn = FakeConnection()
     w = make_window(connection=conn, start_controller=True)
