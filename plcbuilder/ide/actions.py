@@ -64,6 +64,20 @@ class Act:
     EXPORT_TRACE = "export_trace"
     EXPORT_PLOT = "export_plot"
     COMPARE_TRACE = "compare_trace"
+    # navigation, build insight, registers and help (made by plcbuilder.ide.workbench)
+    BACK = "back"
+    FORWARD = "forward"
+    QUICK_OPEN = "quick_open"
+    FIND_IN_FILES = "find_in_files"
+    FIND_REFERENCES = "find_references"
+    RENAME_SYMBOL = "rename_symbol"
+    SHOW_DISASSEMBLY = "show_disassembly"
+    CODE_BYTES = "code_bytes"
+    BUILD_UPLOAD_START = "build_upload_start"
+    REGISTERS = "registers"
+    MANUAL = "manual"
+    SHORTCUTS = "shortcuts"
+    WHAT_IS_THIS = "what_is_this"
 
 
 def add_action(win, actions: dict, name, text, slot=None, shortcut=None, ic=None, tip=None,
@@ -305,6 +319,13 @@ def update_actions(win) -> None:
     run = win.connection is not None and has_project
     for name in (Act.UPLOAD, Act.START, Act.START_CURRENT, Act.STOP, Act.RESET_CONTROLLER):
         win.action(name).setEnabled(run)
+    if Act.BUILD_UPLOAD_START in win._actions:          # the workbench's actions
+        win.action(Act.BUILD_UPLOAD_START).setEnabled(run)
+        for name in (Act.FIND_REFERENCES, Act.RENAME_SYMBOL, Act.WHAT_IS_THIS):
+            win.action(name).setEnabled(has_editor)
+        win.action(Act.RENAME_SYMBOL).setEnabled(has_editor and has_project and not ed.builtin)
+        for name in (Act.QUICK_OPEN, Act.FIND_IN_FILES):
+            win.action(name).setEnabled(has_project)
     for name in (Act.CONNECT, Act.EMBEDDED):
         win.action(name).setEnabled(win.connection is not None)
     win.run_actions.speed_combo.setEnabled(win.connection is not None)

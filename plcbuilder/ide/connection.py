@@ -98,6 +98,7 @@ class _Worker(threading.Thread):
         self.target: Optional[dict] = None      # the image's target profile (docs/targets.md)
         self.speed: Optional[tuple[str, Optional[float]]] = None
         self.variables_pending = False
+        self.registers_pending = False
         self.restarts = 0
         self.steps = StepSamples()
 
@@ -159,6 +160,8 @@ class _Worker(threading.Thread):
                 self.speed = (args[0], args[1])
             elif verb == "variables":
                 self.variables_pending = False
+            elif verb == "registers":
+                self.registers_pending = False
             else:
                 self.post("error", f"{verb}: not done, the connection to the controller "
                                    "was lost")
@@ -255,7 +258,11 @@ class _Worker(threading.Thread):
                 variables, target = client.variables_and_target()
                 self.post("variables", variables)
                 if target:
-                    self.post("registers", target)
+                    self.post("target_report", target)
+                return
+            elif verb == "registers":
+                self.registers_pending = False
+                self.post("registers", client.registers(args[0]))
                 return
             else:
                 result = client.request(verb, **(args[0] if args else {}))
@@ -310,6 +317,9 @@ class ControllerConnection(QtCore.QObject):
     signal would sort the keys)."""
 
     sig_registers = Signal(object)
+    """The answer to :meth:`request_registers`: ``{address: value}``."""
+
+    sig_target_report = Signal(object)
     """With :meth:`request_variables`, on a target other than myCNC: the target's
     report ``{"registers": {bank: {index: value}}, "calls": {...}, "budget": [...]}``
     (docs/targets.md)."""
@@ -423,6 +433,15 @@ class ControllerConnection(QtCore.QObject):
         w.variables_pending = True
         self._send("variables")
 
+    def request_registers(self, addresses) -> None:
+        """Ask for the values of global registers; the answer comes as
+        sig_registers. A request still waiting is not repeated."""
+        w = self._worker
+        if w is None or not self.connected or w.registers_pending:
+            return
+        w.registers_pending = True
+        self._send("registers", [int(a) for a in addresses])
+
     def _send(self, verb: str, *args) -> None:
         w = self._worker
         if w is None:
@@ -478,6 +497,8 @@ class ControllerConnection(QtCore.QObject):
                 self.sig_variables.emit(dict(payload))
             elif kind == "registers":
                 self.sig_registers.emit(dict(payload))
+            elif kind == "target_report":
+                self.sig_target_report.emit(dict(payload))
             elif kind == "result":
                 verb, result = payload
                 self.sig_result.emit(verb, dict(result) if isinstance(result, dict) else {})

@@ -32,7 +32,7 @@ from PySide6.QtGui import QAction
 from PySide6.QtWidgets import QApplication, QFileDialog, QMainWindow, QMessageBox
 
 from plcbuilder.api import Kind
-from plcbuilder.ide import actions, dialogs, docks
+from plcbuilder.ide import actions, dialogs, docks, workbench
 from plcbuilder.ide.actions import Act
 from plcbuilder.ide.build_panel import BuildPanel
 from plcbuilder.ide.editor import CodeEditor, file_key
@@ -116,6 +116,7 @@ class MainWindow(QMainWindow):
         actions.build_toolbar(self)
         self._wire()
         self._setup_run_side()
+        workbench.install(self)             # navigation, disassembly, registers, help
         self.default_state = self.saveState()
         docks.restore_layout(self)
         self._update_actions()
@@ -172,6 +173,7 @@ class MainWindow(QMainWindow):
         return self.editor_stack.open_file(path, line, col, focus=focus)
 
     def open_location(self, file: str, line: int, col: int = 1) -> Optional[CodeEditor]:
+        self.workbench.nav.record()          # for Back
         return self.editor_stack.open_location(file, line, col)
 
     def open_paths(self, paths: list) -> None:
@@ -209,9 +211,11 @@ class MainWindow(QMainWindow):
         self.editor_stack.show_find(replace)
 
     def goto_line_dialog(self) -> bool:
+        self.workbench.nav.record()          # for Back
         return self.editor_stack.goto_line_dialog()
 
     def goto_definition(self, word: str) -> bool:
+        self.workbench.nav.record()          # for Back
         return self.lint.goto_definition(word)
 
     def build_all(self) -> bool:
@@ -387,7 +391,7 @@ class MainWindow(QMainWindow):
         es.sig_current_changed.connect(self._on_current_changed)
         es.sig_title_changed.connect(self._update_title)
         es.sig_cursor_moved.connect(self.status.show_cursor)
-        es.sig_goto_definition.connect(lint.goto_definition)
+        es.sig_goto_definition.connect(self.goto_definition)
         es.sig_file_saved.connect(self._on_file_saved)
         es.sig_changes_discarded.connect(lint.on_changes_discarded)
         es.sig_reveal.connect(self._reveal)

@@ -31,6 +31,7 @@ class Step(enum.Enum):
     IDLE = "idle"                            # no build running
     BUILD = "build"                          # Build All alone
     BUILD_THEN_UPLOAD = "build then upload"  # Upload asked for a build first
+    BUILD_UPLOAD_START = "build, upload, start"  # Build, Upload and Start
 
 
 class RunActions(QObject):
@@ -63,6 +64,7 @@ class RunActions(QObject):
         self.step = Step.IDLE
         self.last_eparam = 0
         self.last_start = ""
+        self.start_after_upload: Optional[str] = None   # Build, Upload and Start: what to start
         self.build_runner = BuildRunner(self)
         self.build_runner.sig_progress.connect(self._on_build_progress)
         self.build_runner.sig_finished.connect(self._on_build_finished)
@@ -104,6 +106,25 @@ class RunActions(QObject):
         if self.prefs.build_before_upload or stale:
             return self._build(Step.BUILD_THEN_UPLOAD)
         return self.upload_image()
+
+    def build_upload_start(self, name: Optional[str] = None) -> bool:
+        """Build All, upload the image and start ``name`` (default: the current
+        editor's procedure, else the last one started) with the last eparam —
+        each step only when the one before it succeeded."""
+        if self.project is None or self.connection is None:
+            self.sig_message.emit("No controller to start a procedure on", 4000)
+            return False
+        if name is None:
+            ed = self.editors.current_editor()
+            name = Path(ed.path).stem if ed is not None and ed.kind is not None else \
+                self.last_start
+        if not name:
+            return self.start_procedure()          # asks which
+        self.start_after_upload = name
+        if not self._build(Step.BUILD_UPLOAD_START):
+            self.start_after_upload = None
+            return False
+        return True
 
     def upload_image(self) -> bool:
         """Upload the image Build All wrote."""
@@ -272,7 +293,9 @@ class RunActions(QObject):
     def _on_build_finished(self, result) -> None:
         self.build_panel.show_result(result, self.build_runner.elapsed)
         self.sig_build_ended.emit()
-        upload = self.step is Step.BUILD_THEN_UPLOAD
+        upload = self.step in (Step.BUILD_THEN_UPLOAD, Step.BUILD_UPLOAD_START)
+        start, self.start_after_upload = (self.start_after_upload
+                                          if self.step is Step.BUILD_UPLOAD_START else None), None
         self.step = Step.IDLE
         if isinstance(result, BaseException):
             self.sig_message.emit(f"Build failed: {result}", 8000)
@@ -286,8 +309,9 @@ class RunActions(QObject):
             self.sig_message.emit(f"Build failed: {e} error{'s' * (e != 1)}, "
                                   f"{w} warning{'s' * (w != 1)}", 8000)
         self.sig_build_finished.emit(result)
-        if upload and result.ok:
-            self.upload_image()
+        if upload and result.ok and self.upload_image() and start:
+            # the link runs requests in order: the start follows the upload
+            self.start_procedure(start, self.last_eparam)
 
     def _connect_to_address(self, address: str) -> None:
         host, _, port = address.rpartition(":")

@@ -310,6 +310,10 @@ class Client:
         """(variables, the target's report: registers, calls, budget ({} on myCNC))."""
         answer = self.request("variables")
         return answer.get("variables", {}), answer.get("target", {})
+    def registers(self, addresses) -> dict[int, int]:
+        """The values of global registers now, ``{address: value}``."""
+        r = self.request("registers", addresses=[int(a) for a in addresses])
+        return dict(zip(r.get("addresses", []), r.get("values", [])))
 
     def speed(self, mode: str, factor: Optional[float] = None) -> dict:
         """realtime, factor (with ``factor``), max or pause."""

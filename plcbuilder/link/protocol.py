@@ -19,6 +19,7 @@ Messages
         start {name | mcode, eparam}    stop {}
         input {pin, value}              adc {channel, value}
         state {}                        variables {}
+        registers {addresses: [int]}    (read global registers, at most MAX_REGISTERS)
         subscribe {samples?, events?}   unsubscribe {}
         speed {mode, factor?}           step {ms}
         reset {}                        event {handler}
@@ -93,12 +94,16 @@ _MAX_ID_TEXT = 64
 #: Requests a client may send, and the messages a server may send. Dispatch
 #: only ever looks a type up in these sets.
 REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state", "variables",
-                      "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping"}
+                      "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping",
+                      "registers"}
                      | {"set_breakpoints", "debug_continue", "debug_pause", "debug_step",
                         "debug_run_to", "debug_state"})
 #: Events that travel as notifications of their own (not inside telemetry).
 NOTIFICATIONS = frozenset({"halted", "resumed"})
 REPLIES = frozenset({"welcome", "result", "error", "telemetry", "bye"}) | NOTIFICATIONS
+
+#: Addresses one ``registers`` request may read at most.
+MAX_REGISTERS = 256
 
 #: Speed modes of the ``speed`` request.
 SPEED_MODES = ("realtime", "factor", "max", "pause")
@@ -375,6 +380,21 @@ def field_str(msg: dict, name: str, default: Any = ..., max_len: int = 128) -> s
     if len(v) > max_len:
         raise BadRequest(f"{msg.get('type')}: {name!r} is longer than {max_len} characters")
     return v
+
+
+def field_int_list(msg: dict, name: str, max_items: int, lo: int = -(1 << 31),
+                   hi: int = (1 << 31) - 1) -> list[int]:
+    """A list of at most ``max_items`` integers in [lo, hi]."""
+    v = msg.get(name)
+    if not isinstance(v, list):
+        raise BadRequest(f"{msg.get('type')}: {name!r} must be a list of integers")
+    if len(v) > max_items:
+        raise BadRequest(f"{msg.get('type')}: {name!r} holds more than {max_items} items")
+    for x in v:
+        if type(x) is not int or not lo <= x <= hi:
+            raise BadRequest(f"{msg.get('type')}: {name!r} must hold integers from {lo} to "
+                             f"{hi}, holds {x!r}"[:200])
+    return list(v)
 
 
 def field_bool(msg: dict, name: str, default: bool) -> bool:

@@ -262,6 +262,12 @@ class Service(DebugVerbs):
             return out
         return self._on_sim(read)
 
+    def handle_registers(self, msg: dict, session: Session) -> dict:
+        addresses = protocol.field_int_list(msg, "addresses", protocol.MAX_REGISTERS)
+        gvarget = self.sim.controller.machine.gvarget
+        values = self._on_sim(lambda: [gvarget(a) for a in addresses])
+        return {"addresses": addresses, "values": values}
+
     # ---------------------------------------------------------------- time
     def handle_speed(self, msg: dict, session: Session) -> dict:
         mode = protocol.field_str(msg, "mode", max_len=16)

@@ -3,7 +3,7 @@
 On Huazhong the banks' elements that are not 0 (X, Y and R bytes; G, F, P and
 B words), on TG Motion the TGM_Data words that are not 0, then how many times
 each procedure was called and the budget overruns. The values come with the
-watch's poll of the controller (``sig_registers``); the X and Y bits are also
+watch's poll of the controller (``sig_target_report``); the X and Y bits are also
 the input and output lanes, named X0.0 … and Y0.0 … (:func:`bit_names`).
 Hidden on myCNC.
 """

@@ -160,8 +160,8 @@ class RunPanels(QtCore.QObject):
             c.sig_note.connect(lambda text: self.log.add_note(text, "link"))
         if hasattr(c, "sig_variables"):
             c.sig_variables.connect(self._on_variables)
-        if hasattr(c, "sig_registers"):
-            c.sig_registers.connect(self._on_registers)
+        if hasattr(c, "sig_target_report"):
+            c.sig_target_report.connect(self._on_registers)
         if getattr(c, "connected", False):
             self._on_connected(getattr(c, "address", ""))
 
