@@ -15,7 +15,7 @@ nothing here keeps global state or prints.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
@@ -29,7 +29,11 @@ from plcbuilder.controller.debugger import DebugError
 from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
 from plcbuilder.controller.recorder import image_id
+from plcbuilder.controller.history import History, Trace
+from plcbuilder.controller.io_dat import io_dat_of, load_io_dat, with_io_dat
 from plcbuilder.controller.session import UsageError, build_scenario, run_session
+from plcbuilder.controller.targets import TargetConfig
+from plcbuilder.controller.trigger import Capturer, TriggerError, parse_trigger, watched_variables
 from plcbuilder.controller.scenario import Action
 from plcbuilder.controller.variables_xml import load_variables
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
@@ -46,6 +50,7 @@ from plcbuilder.project.model import DEFAULT_MACHINE, kind_of
 from plcbuilder.testing.junit import junit_xml, write_junit
 from plcbuilder.testing.runner import Suite, SuiteError, SuiteRun, prepare, run_suite
 from plcbuilder.testing.spec import TestFileError
+from plcbuilder.trace import compare as trace_compare, export as trace_export, file as trace_file
 
 __all__ = [
     "Action", "BUILTIN_PREFIX", "BuildResult", "CompileOptions", "CompileResult", "ConfigError",
@@ -58,7 +63,12 @@ __all__ = [
     "disassemble", "error", "events", "image_of", "instructions", "kind_of", "load_machine", "load_program",
     "load_variables", "options_for", "proc_name", "read_image", "render_text", "run", "summary",
     "write_image", "TestFileError", "TestOptions", "TestRun", "junit_xml", "test", "write_junit",
+    "Capturer", "History", "Trace", "TriggerError", "parse_trigger", "watched_variables", "load_trace", "save_trace",
+    "export_trace", "compare_traces", "TraceFileError", "ExportError",
 ]
+
+TraceFileError = trace_file.TraceFileError
+ExportError = trace_export.ExportError
 
 DEFAULT_MS = 60_000
 MAX_MS = 7 * 24 * 3600 * 1000          # a week of simulated time
@@ -133,6 +143,15 @@ class RunOptions:
     trace: Optional[Path] = None         # CSV, one row per tick (gzip when it ends in .gz)
     backend: str = "fast"
     gvarget_latency_ms: int = 0
+    #: the controller's kept state (Huazhong's B registers): read before, written after
+    state: Optional[Path] = None
+    trigger: Optional[str] = None        # SPEC §7 trigger spec (controller/trigger.py)
+    pre_ms: int = 0
+    post_ms: int = 0
+    trigger_mode: str = "single"
+    capture: Optional[Path] = None       # where the capture goes (.plctrace, .vcd or .csv)
+    history: Optional[Path] = None       # the whole session as a trace file
+    watch: Sequence[str] = ()            # PROC.var recorded each tick into the history
     breaks: Sequence[str] = ()           # "FILE:LINE[:CONDITION]": the run ends where one halts
 
 
@@ -153,6 +172,8 @@ class _Target:
     machine_path: Optional[Path]
     variables: Optional[list[int]]
     single: Optional[Program]            # the procedure of a single-file target
+    target: Optional[TargetConfig] = None   # the project's target profile (docs/targets.md)
+    io_dat: Optional[Path] = None        # the project's IO.DAT (softMC input presets)
 
 
 def run(target, options: Optional[RunOptions] = None) -> RunResult:
@@ -181,28 +202,106 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     machine_path = opts.machine if opts.machine is not None else tg.machine_path
     try:
         mconf = load_machine(machine_path) if machine_path is not None else default_machine()
+        if tg.io_dat is not None:
+            mconf = with_io_dat(mconf, load_io_dat(tg.io_dat))
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
+    config = tg.target
+    if config is not None and opts.state is not None:
+        config = replace(config, retained=_read_state(opts.state, config.name))
     try:
         c = Controller(mconf, backend=opts.backend, variables=tg.variables,
                        gvarget_latency_ms=opts.gvarget_latency_ms,
-                       record_samples=opts.trace is not None)
+                       record_samples=opts.trace is not None, target=config)
         replay = _replay_image(c, tg.programs, sc)
         if replay is None:
-            c.load(tg.programs, autostart=tg.single is None)
+            c.load(tg.programs, autostart=tg.single is None or config is not None)
     except ControllerError as exc:
         raise UsageError(str(exc)) from None
-    if tg.single is not None:
+    if tg.single is not None and config is None:
         sc.actions.insert(0, Action(0, "start", tg.single.name, opts.eparam))
+    history = capturer = None
+    watch = list(opts.watch)
+    if opts.trigger is not None or opts.history is not None or watch:
+        history = History(c.machine)
+    if opts.trigger is not None:
+        if opts.capture is None:
+            raise UsageError("--trigger needs --capture FILE (where the capture is written)")
+        try:
+            trig = parse_trigger(opts.trigger)
+            capturer = Capturer(history, trig, opts.pre_ms, opts.post_ms, opts.trigger_mode)
+        except TriggerError as exc:
+            raise UsageError(str(exc)) from None
+        watch += [w for w in watched_variables(trig) if w not in watch]
+    elif opts.capture is not None:
+        raise UsageError("--capture needs --trigger SPEC (what starts the capture)")
     _set_breaks(c, opts.breaks, target)
-    report = run_session(c, sc, limit, trace=opts.trace, target=str(target))
+    report = run_session(c, sc, limit, trace=opts.trace, target=str(target), history=history,
+                         capturer=capturer, watch=watch)
     if replay:
         report["notes"].insert(0, {"t_ms": 0, "level": "warning", "text": replay})
     forces = report.pop("forces", None)          # (the forces stay last)
     report["halted"] = _halted_report(c.debugger.halted_state()) if opts.breaks else None
+    if history is not None:
+        report["capture"] = _save_capture(capturer, opts) if capturer is not None else None
+        if opts.history is not None:
+            _save_trace(history.snapshot(meta={"target": str(target)}), opts.history, "--history")
+            report["history"] = {"file": str(opts.history), "bytes": history.nbytes()}
+    if opts.state is not None and c.retained() is not None:
+        _write_state(opts.state, config.name, c.retained())
     if forces is not None:
         report["forces"] = forces
     return RunResult(tg.compiled, report)
+
+
+def _read_state(path: Path, target: str) -> Optional[tuple[int, ...]]:
+    """The B registers kept in a state file (None when it does not exist yet)."""
+    import json
+    if not Path(path).exists():
+        return None
+    try:
+        doc = json.loads(read_bounded(path, 1 << 20, "state file").decode("utf-8"))
+        kept = doc[target]["B"]
+        if not isinstance(kept, list) or not all(type(v) is int for v in kept):
+            raise ValueError("B must be a list of whole numbers")
+        return tuple(kept)
+    except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError) as exc:
+        raise UsageError(f"{path}: not a controller state file: {exc}") from None
+
+
+def _write_state(path: Path, target: str, kept: list[int]) -> None:
+    import json
+    try:
+        atomic_write(path, json.dumps({target: {"B": kept}}) + "\n")
+    except OSError as exc:
+        raise UsageError(f"{path}: cannot write the state: {exc.strerror or exc}") from None
+
+
+def _save_trace(trace, path: Path, option: str) -> None:
+    try:
+        if path.suffix.lower() in (".vcd", ".csv"):
+            trace_export.export(trace, path)
+        else:
+            trace_file.save(trace, path)
+    except (trace_export.ExportError, trace_file.TraceFileError) as exc:
+        raise UsageError(f"{option}: {exc}") from None
+
+
+def _save_capture(capturer, opts: RunOptions) -> Optional[dict]:
+    """Write the first capture to ``--capture`` (later ones, in normal or auto
+    mode, beside it as NAME-2.EXT, …); the report's ``capture`` entry."""
+    caps = capturer.captures
+    if not caps:
+        return None
+    files = []
+    for i, cap in enumerate(caps):
+        path = opts.capture if i == 0 else \
+            opts.capture.with_name(f"{opts.capture.stem}-{i + 1}{opts.capture.suffix}")
+        _save_trace(cap, path, "--capture")
+        files.append(str(path))
+    first = caps[0].meta["trigger"]
+    return {"trigger": opts.trigger, "t_ms": first["t_ms"], "from_ms": caps[0].t_start,
+            "to_ms": caps[0].t_end, "file": files[0], "count": len(caps), "files": files}
 
 
 # -------------------------------------------------------------- debugging
@@ -341,7 +440,11 @@ def _compile_target(target: Path, opts: RunOptions) -> _Target:
                                  include_dirs=tuple(opts.include_dirs))
     r = compile_file(target, options)
     program = r.program if r.ok else None
-    return _Target([program] if program else [], [r], None, None, program)
+    config = None
+    if options.target != "mycnc":
+        project = Project.find_for(target)
+        config = _target_config(project) if project is not None else TargetConfig(options.target)
+    return _Target([program] if program else [], [r], None, None, program, config)
 
 
 def _compile_project(root: Path, opts: RunOptions) -> _Target:
@@ -371,7 +474,39 @@ def _compile_project(root: Path, opts: RunOptions) -> _Target:
     if machine is None and project.settings.machine != DEFAULT_MACHINE:
         raise UsageError(f"{project.settings_path}: machine: no such file "
                          f"{project.machine_path}")
-    return _Target(programs, compiled, machine, variables, None)
+    return _Target(programs, compiled, machine, variables, None,
+                   _target_config(project) if project.target != "mycnc" else None,
+                   io_dat_of(project.root))
+
+
+def _target_config(project: Project) -> TargetConfig:
+    """The controller's configuration of the project's target (reads its files)."""
+    try:
+        return TargetConfig(**project.target_settings())
+    except ProjectError as exc:
+        raise UsageError(str(exc)) from None
+
+
+# ----------------------------------------------------------------- traces
+
+def load_trace(path) -> Trace:
+    """Reopen a trace file (``.plctrace``); raises TraceFileError saying why not."""
+    return trace_file.load(path)
+
+
+def save_trace(trace: Trace, path) -> None:
+    """Save a trace as a ``.plctrace`` file, atomically; raises TraceFileError."""
+    trace_file.save(trace, path)
+
+
+def export_trace(trace: Trace, path, fmt: Optional[str] = None, *, per_tick: bool = False) -> str:
+    """Export as CSV (per change, or ``per_tick``) or VCD; raises ExportError."""
+    return trace_export.export(trace, path, fmt, per_tick=per_tick)
+
+
+def compare_traces(a: Trace, b: Trace) -> "trace_compare.Difference":
+    """The first tick where two traces differ, and in which signals."""
+    return trace_compare.compare(a, b)
 
 
 # ------------------------------------------------------------------- test

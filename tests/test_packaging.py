@@ -47,3 +47,13 @@ def test_installed_wheel_compiles_with_builtin_headers(wheel, tmp_path):
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr
     assert str(target) in r.stdout
+
+
+def test_wheel_ships_the_manual_for_help(wheel):
+    """Help → Manual in an installed IDE reads share/plcbuilder/docs (plcbuilder.ide.help)."""
+    names = set(zipfile.ZipFile(wheel).namelist())
+    data = "plcbuilder-0.1.0.data/data/share/plcbuilder/docs/"
+    for page in sorted((ROOT / "docs").glob("*.md")):
+        assert data + page.name in names
+    for image in sorted((ROOT / "docs" / "images").glob("*")):
+        assert data + "images/" + image.name in names

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from typing import Optional
 
+from plcbuilder.bytecode import softmc
+
 # --------------------------------------------------------------- PLC defines
 PLCCMD: dict[str, int] = {
     "PLCCMD_MOTION_CONTINUE": 1001,
@@ -236,7 +238,8 @@ GVAR.update({
 
 #: Every built-in name, available without any include, in table order.
 BUILTIN_NAMES: dict[str, int] = {}
-for _table in (PLCCMD, PLC_BROADCAST, PLC_MESSAGE, MAPPED_OUT, PROC, EXIT, GVAR):
+for _table in (PLCCMD, PLC_BROADCAST, PLC_MESSAGE, MAPPED_OUT, PROC, EXIT, GVAR, softmc.REGISTERS,
+               softmc.CONSTANTS):
     for _name, _value in _table.items():
         BUILTIN_NAMES.setdefault(_name, _value)
 
@@ -244,7 +247,8 @@ for _table in (PLCCMD, PLC_BROADCAST, PLC_MESSAGE, MAPPED_OUT, PROC, EXIT, GVAR)
 BUILTIN_KIND: dict[str, str] = {}
 for _kind, _table in (("command", PLCCMD), ("broadcast", PLC_BROADCAST), ("message", PLC_MESSAGE),
                       ("mapped output", MAPPED_OUT), ("proc state", PROC), ("exit code", EXIT),
-                      ("register", GVAR)):
+                      ("register", GVAR), ("softMC register", softmc.REGISTERS),
+                      ("softMC constant", softmc.CONSTANTS)):
     for _name in _table:
         BUILTIN_KIND.setdefault(_name, _kind)
 
@@ -316,7 +320,7 @@ def describe_register(addr: int) -> Optional[str]:
         return "software PLC: start hardware procedure M<value>"
     if addr == SOFT_START_EPARAM:
         return "software PLC: eparam for the next hardware procedure started via 100040"
-    return None
+    return softmc.describe(addr)
 
 
 # ------------------------------------------------------ variables and slots

@@ -80,6 +80,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="machine description (default: the built-in default machine)")
     p.add_argument("--variables", type=Path, metavar="FILE",
                    help="plc-variables.xml: initial values of var00..var15")
+    p.add_argument("--io-dat", type=Path, metavar="FILE", dest="io_dat",
+                   help="IO.DAT: softMC presets of the inputs (INP=0x.., DIP=0x..)")
     p.add_argument("--image", type=Path, metavar="FILE",
                    help="an eeprom.rom image to load at start")
     p.add_argument("--speed", type=parse_speed, default=("realtime", 1.0),
@@ -97,6 +99,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--runtime-file", type=Path, metavar="FILE",
                    help="where to write the address and token (default: the user's runtime "
                         "folder; see docs/protocol.md)")
+    p.add_argument("--state", type=Path, metavar="FILE",
+                   help="keep the controller's state (a Huazhong program's B registers) in "
+                        "FILE: read at the start, written when it stops (docs/targets.md)")
     p.add_argument("--parent", type=int_in(1, (1 << 31) - 1), metavar="PID",
                    help="stop (as on SIGTERM) when process PID has ended: the IDE passes its "
                         "own id for the controller it starts")
@@ -120,7 +125,8 @@ def run(args: argparse.Namespace) -> int:
         say(f"plcbuilder controller: --port must be from 0 to 65535, is {args.port}", True)
         return EXIT_USAGE
     try:
-        factory = make_controller(args.machine, args.variables, backend=args.backend,
+        factory = make_controller(args.machine, args.variables, args.io_dat,
+                                  backend=args.backend,
                                   gvarget_latency_ms=max(0, args.gvarget_latency))
     except ConfigError as exc:
         say(f"plcbuilder controller: {exc}", True)
@@ -150,6 +156,13 @@ def run(args: argparse.Namespace) -> int:
         say(f"plcbuilder controller: cannot listen on {args.host}:{args.port}: "
             f"{exc.strerror or exc}", True)
         return EXIT_FAIL
+    if args.state is not None:
+        try:
+            srv.service.load_state(args.state)
+        except ValueError as exc:
+            srv.close(shutdown=False)
+            say(f"plcbuilder controller: {exc}", True)
+            return EXIT_FAIL
     try:
         old = runtime.read(path)
         if old.pid != os.getpid() and runtime.pid_alive(old.pid):

@@ -24,6 +24,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                     "plc-variables.xml, the default machine and plcbuilder.toml.")
     p.add_argument("dir", type=Path, metavar="DIR", help="the folder to create")
     p.add_argument("--name", help="the project's name (default: the folder's name)")
+    p.add_argument("--target", choices=("mycnc", "huazhong", "tgmotion"), default="mycnc",
+                   help="the controller the project is for (docs/targets.md): its example "
+                        "program and tests (default: mycnc)")
     term.add_color_argument(p)
     return p
 
@@ -35,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
     def body() -> int:
         from plcbuilder import api
         try:
-            project = api.create_project(args.dir, args.name)
+            project = api.create_project(args.dir, args.name, target=args.target)
         except api.ProjectError as exc:
             out.print(f"plcbuilder new: error: {exc}", err=True)
             return 1
@@ -43,8 +46,11 @@ def run(args: argparse.Namespace) -> int:
         hw = [p.name for p in procs if p.kind.label == "hardware"]
         sw = [p.name for p in procs if p.kind.label == "software"]
         out.print(f"created project {project.name!r} in {args.dir}")
-        out.print(f"  hardware: {' '.join(hw)}")
-        out.print(f"  software: {' '.join(sw)}")
+        if args.target != "mycnc":
+            out.print(f"  target: {args.target}, program: {' '.join(hw)}")
+        else:
+            out.print(f"  hardware: {' '.join(hw)}")
+            out.print(f"  software: {' '.join(sw)}")
         out.print(f"build it with: plcbuilder build {args.dir}")
         return 0
 

@@ -69,12 +69,33 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    metavar="DIR", help="search DIR for #include files (repeatable)")
     p.add_argument("--trace", type=Path, metavar="FILE.csv",
                    help="write one CSV row per tick (streamed; gzip if it ends in .gz)")
+    g = p.add_argument_group("traces and triggers (docs/traces.md)")
+    g.add_argument("--trigger", metavar="SPEC",
+                   help="capture around the first time SPEC happens: 'out 7 rise', "
+                        "'in 3 fall', 'adc 0 up 1200', 'proc = 33', 'message', 'print = 20001', "
+                        "'M80.var03 bit 2 rise' (needs --capture)")
+    g.add_argument("--pre", type=_nonneg, default=0, metavar="MS",
+                   help="ms kept before the trigger (default 0)")
+    g.add_argument("--post", type=_nonneg, default=0, metavar="MS",
+                   help="ms kept after the trigger (default 0)")
+    g.add_argument("--trigger-mode", choices=("single", "normal", "auto"), default="single",
+                   help="single: one capture; normal: re-arm after each (FILE-2, FILE-3, …); "
+                        "auto: also capture when no trigger came for pre+post ms")
+    g.add_argument("--capture", type=Path, metavar="FILE",
+                   help="write the capture: .plctrace (reopens in the IDE), .vcd or .csv")
+    g.add_argument("--history", type=Path, metavar="FILE",
+                   help="write the whole session as a trace: .plctrace, .vcd or .csv")
+    g.add_argument("--watch", action="append", default=[], metavar="PROC.var",
+                   help="record a variable every tick into the history (repeatable)")
     p.add_argument("--break", dest="breaks", action="append", default=[],
                    metavar="FILE:LINE[:COND]",
                    help="halt before FILE's line LINE runs (or the next line with code), "
                         "when COND (a PLC expression) is not 0; the run ends there and the "
                         "JSON's 'halted' says where (repeatable; docs/debugging.md)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--state", type=Path, metavar="FILE",
+                   help="the controller's kept state (Huazhong's B registers): read from FILE "
+                        "before the run when it exists, written to it after")
     p.add_argument("--backend", choices=("fast", "reference"), default="fast",
                    help=argparse.SUPPRESS)
     p.add_argument("--gvarget-latency", type=int_in(0, MAX_LATENCY_MS, "ms"), default=0,
@@ -110,7 +131,10 @@ def run(args: argparse.Namespace) -> int:
                           scenario=args.scenario, machine=args.machine,
                           software=args.software, strict=args.strict, include_dirs=tuple(args.include),
                           trace=args.trace, backend=args.backend,
-                          gvarget_latency_ms=args.gvarget_latency, breaks=args.breaks)
+                          gvarget_latency_ms=args.gvarget_latency, trigger=args.trigger,
+                          pre_ms=args.pre, post_ms=args.post, trigger_mode=args.trigger_mode,
+                          capture=args.capture, history=args.history, watch=tuple(args.watch),
+                          state=args.state, breaks=args.breaks)
         try:
             result = api.run(target, opts)
         except api.UsageError as exc:
@@ -181,6 +205,18 @@ def summary(rep: dict, out: term.Out) -> str:
     if rep.get("forces"):
         lines.append("forced: " + ", ".join(f"{f['target']}={f['value']} (from {f['since_ms']} ms)"
                                             for f in rep["forces"]))
+    if "registers" in rep:
+        for bank, vals in rep["registers"].items():
+            if vals:
+                lines.append(f"{bank}: " + " ".join(f"[{i}]={v}" for i, v in vals.items()))
+        lines.append("calls: " + ", ".join(f"{n} {k}" for n, k in rep["calls"].items()))
+    if "capture" in rep:
+        cap = rep["capture"]
+        lines.append("capture: " + (f"triggered at {cap['t_ms']} ms, {cap['from_ms']}.."
+                                    f"{cap['to_ms']} ms -> {', '.join(cap['files'])}"
+                                    if cap else "the trigger never fired; nothing written"))
+    if rep.get("history"):
+        lines.append(f"history: {rep['history']['file']}")
     still = [p["name"] for p in rep["procedures"] if p["ended_at_ms"] is None]
     why = "time limit" if still else "nothing left to run"
     h = rep.get("halted")

@@ -29,6 +29,7 @@ from plcbuilder.controller.forces import MODES as _MODES, ForceError, Forces
 from plcbuilder.controller.plc import BACKENDS, PLC, mcode_names
 from plcbuilder.controller.recorder import Recorder, image_id
 from plcbuilder.controller.scenario import Action
+from plcbuilder.controller.targets import TargetConfig, TargetConfigError, make_plc
 
 HANDLER_INIT = "__HANDLER_INIT"
 HANDLER_EXIT = "__HANDLER_EXIT"
@@ -49,7 +50,8 @@ class Controller:
 
     def __init__(self, machine_config=None, *, backend: str = "fast",
                  variables: Optional[Iterable[int]] = None, gvarget_latency_ms: int = 0,
-                 record_samples: bool = True, machine=None, coverage=None):
+                 record_samples: bool = True, machine=None, coverage=None,
+                 target: Optional[TargetConfig] = None):
         if backend not in BACKENDS:
             raise ControllerError(f"unknown backend {backend!r} (use {' or '.join(BACKENDS)})")
         if coverage is not None and backend != "reference":
@@ -58,10 +60,18 @@ class Controller:
             from plcbuilder.controller.machine import Machine
             machine = Machine(machine_config)
         self.machine = machine
+        #: the target profile (docs/targets.md); None: myCNC's hardware and software PLC
+        self.target = target if target is not None and target.name != "mycnc" else None
         try:
-            self._plc = PLC(machine, backend=backend, variables=variables,
-                            gvarget_latency_ms=gvarget_latency_ms, record_samples=record_samples)
-        except (TypeError, ValueError) as exc:
+            if self.target is not None:
+                self._plc = make_plc(self.target, machine, variables=variables,
+                                     gvarget_latency_ms=gvarget_latency_ms,
+                                     record_samples=record_samples)
+            else:
+                self._plc = PLC(machine, backend=backend, variables=variables,
+                                gvarget_latency_ms=gvarget_latency_ms,
+                                record_samples=record_samples)
+        except (TypeError, ValueError, TargetConfigError) as exc:
             raise ControllerError(str(exc)) from None
         self._plc.coverage = coverage            # a CodeCoverage (controller/coverage.py)
         #: breakpoints, stepping, the halted state (controller/debugger.py)
@@ -158,6 +168,14 @@ class Controller:
             plc.grid = plc.t               # the software grid starts at the first load
         self.forces.on_load()              # forces survive the build
         self.recorder.add(Action(plc.t, "upload", image_id(progs)))
+        if self.target is not None:        # a target's one program: it starts now
+            try:
+                plc.program_of(by_name)
+                if autostart:
+                    plc.begin()
+            except ValueError as exc:
+                raise ControllerError(str(exc)) from None
+            return
         if not autostart:
             return
         for name in sorted(by_name):
@@ -396,6 +414,16 @@ class Controller:
                          "crc32": self._crc.get(p.name, 0)}
                         for p in sorted(plc.programs.values(), key=lambda q: q.name)),
         )
+
+    def target_report(self) -> dict:
+        """What a target adds to the run report (registers, calls, budget
+        overruns: docs/targets.md); {} on myCNC."""
+        return self._plc.report() if self.target is not None else {}
+
+    def retained(self) -> Optional[list[int]]:
+        """The Huazhong target's B registers (kept across a restart), else None."""
+        kept = getattr(self._plc, "retained", None)
+        return list(kept) if kept is not None else None
 
     def variables(self) -> dict[str, dict[str, int]]:
         """Each procedure that has run: its variables' latest values, by name."""

@@ -125,6 +125,7 @@ class Sample:
     adc: tuple[int, ...]            # 8 ADC values
     axes: tuple[int, ...]           # machine positions X..W in 0.01 mm (9 values)
     velocities: tuple[int, ...] = field(default=())   # 0.01 mm/s per axis (9 values)
+    vio: tuple[int, ...] = field(default=())          # softMC VIN word, VOUT word (unsigned)
 
 
 def to_dict(obj) -> dict:
@@ -145,7 +146,7 @@ def from_dict(d: dict):
     if t in kinds:
         return kinds[t](**d)
     s = dict(d)
-    for k in ("inputs", "outputs", "pwm", "dac", "adc", "axes", "velocities"):
+    for k in ("inputs", "outputs", "pwm", "dac", "adc", "axes", "velocities", "vio"):
         if k in s:
             s[k] = tuple(s[k])
     return Sample(**s)

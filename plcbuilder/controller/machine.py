@@ -19,22 +19,29 @@ Register map (for users: docs/machine.md, "Registers"):
 17001..09, 17021..29   program / machine position X..W
 5521, 5525             non-zero disables hardware / software limits
 8631, 8632, 8634, 8635 jog: acceleration time, speed units, axis speed, direction
+30000..30232           softMC virtual I/O (controller/virtual_io.py)
+31100..31899           softMC programmable limit switches (controller/pls.py)
 everything else        plain register: keeps what was written, reads 0 before
 =====================  ==================================================
+
+Inputs that the machine file does not wire read the project's IO.DAT preset
+(``MachineConfig.input_preset``) instead of 0.
 """
 
 from __future__ import annotations
 
 from typing import Callable, Optional
 
-from plcbuilder.bytecode import abi
+from plcbuilder.bytecode import abi, softmc
 from plcbuilder.bytecode.abi import AXES
 from plcbuilder.bytecode.semantics import wrap
 
 from .machine_config import ADC_CHANNELS, MachineConfig, default_machine
 from .machine_forces import MachineForces
 from .motion import N_AXES, Motion, fmt_mm
+from .pls import PlsBank
 from .sensors import Sensors
+from .virtual_io import VirtualIO
 
 STOP_MESSAGES = frozenset(abi.PLCCMD[n] for n in (
     "PLCCMD_LINE_STOP", "PLCCMD_LINE_SOFT_STOP", "PLCCMD_MOTION_SKIP",
@@ -61,6 +68,17 @@ class Machine(MachineForces):
         self.motion = Motion(cfg, self._notes)
         self.sensors = Sensors(cfg)
         self._input_names = cfg.input_names()
+        wired = 0
+        for w in cfg.inputs:
+            wired |= 1 << w.pin
+        self._preset = cfg.input_preset & ~wired & self._in_mask   # IO.DAT's INP
+        self._preset_lost = cfg.input_preset & wired & self._in_mask
+        self.vio = VirtualIO(cfg.dip, self._forget_sample)
+        present = set(self.motion.present_idx)
+        self.pls = PlsBank(cfg.pls, output_count=cfg.output_count,
+                           axis_present=present.__contains__,
+                           position=lambda i: self.motion.ipos[i], write=self._pls_write,
+                           notes=self._notes)
         self._get: dict[int, Callable[[int], int]] = {}
         self._set: dict[int, Callable[[int, int], None]] = {}
         self._build_register_map()
@@ -111,6 +129,12 @@ class Machine(MachineForces):
         self._warned: set = set()
         self._recompute_inputs()
         self._sample: Optional[dict] = None
+        self.vio.reset()
+        if self._preset_lost:
+            self._notes.append(("warning", "IO.DAT: INP presets input(s) "
+                                f"{', '.join(map(str, _bits_on(self._preset_lost)))}, which "
+                                "the machine file wires: the wiring wins"))
+        self.pls.reset()
 
     def _build_register_map(self) -> None:
         g, s = self._get, self._set
@@ -154,6 +178,8 @@ class Machine(MachineForces):
         s[abi.JOG_SPEED_UNITS] = self._set_jog_units
         s[abi.JOG_AXIS_SPEED] = self._set_jog_speed
         s[abi.JOG] = self._set_jog
+        self.vio.install(g, s, ro)
+        self.pls.install(g, s)
 
     # ------------------------------------------------------- PLC-facing
     def portset(self, pin: int) -> None:
@@ -292,6 +318,8 @@ class Machine(MachineForces):
             self._recompute_inputs()
         if moved and self._hw_limits and sens.hard_limits:
             self._check_hard_limits()
+        if moved and self.pls.active:
+            self.pls.update()              # the PLSs follow the new positions
         if not self._notes:
             return []
         notes = list(self._notes)
@@ -300,7 +328,8 @@ class Machine(MachineForces):
 
     def sample_fields(self) -> dict:
         """inputs/outputs (8 words each), pwm, dac, adc (8 each), axes (9 machine
-        positions, 0.01 mm) and velocities (9, 0.01 mm/s), all tuples of ints.
+        positions, 0.01 mm), velocities (9, 0.01 mm/s) and vio (the virtual input
+        and output words, unsigned), all tuples of ints.
         The same dict is returned until something changes: do not modify it."""
         s = self._sample
         if s is None:
@@ -314,6 +343,7 @@ class Machine(MachineForces):
                 "adc": tuple(self._adc),
                 "axes": tuple(m.ipos),
                 "velocities": m.velocity_report(),
+                "vio": (self.vio.vin, self.vio.vout),
             }
         return s
 
@@ -343,7 +373,7 @@ class Machine(MachineForces):
     # --------------------------------------------------------- internals
     def _recompute_inputs(self) -> None:
         m = self._ov_mask
-        v = ((self.sensors.wired & ~m) | (self._ov_val & m)) & self._in_mask
+        v = (((self.sensors.wired | self._preset) & ~m) | (self._ov_val & m)) & self._in_mask
         fm = self._fin_mask
         if fm:
             v = (v & ~fm) | (self._fin_val & fm)
@@ -388,6 +418,17 @@ class Machine(MachineForces):
         shift = 32 * k
         new = (self.prog_out & ~(_M32 << shift)) | ((value & _M32) << shift)
         self._set_outputs(new & self._out_mask)
+
+    def _forget_sample(self) -> None:
+        self._sample = None
+
+    def _pls_write(self, target: int, level: int) -> None:
+        """A PLS sets its output: physical output ``target``, or VOUT.n for PLS_VOUT + n."""
+        if target >= softmc.PLS_VOUT:
+            self.vio.set_vout(target - softmc.PLS_VOUT, level)
+        else:
+            bit = 1 << target
+            self._set_outputs(self.out_bits | bit if level else self.out_bits & ~bit)
 
     def _get_output_bit(self, addr: int) -> int:
         return (self.out_bits >> (addr - abi.OUTPUT_STATE_BASE)) & 1

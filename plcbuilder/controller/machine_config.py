@@ -31,6 +31,8 @@ from plcbuilder._support.toml_errors import TomlLocator, decode_error
 from plcbuilder._support.toml_errors import loads as toml_loads
 from plcbuilder.bytecode.abi import AXES
 
+from .pls_config import PlsConfig, parse_pls
+
 MAX_PINS = 256          # 8 words of 32 pins
 MAX_MACHINE_BYTES = 1 << 20   # a machine description file is at most 1 MiB
 ADC_CHANNELS = 8
@@ -147,6 +149,9 @@ class MachineConfig:
     inputs: tuple[InputConfig, ...] = ()
     outputs: tuple[OutputConfig, ...] = ()
     adc: tuple[AdcConfig, ...] = ()
+    pls: tuple[PlsConfig, ...] = ()  # programmable limit switches ([[pls]], controller/pls_config.py)
+    input_preset: int = 0           # IO.DAT's INP: the level of inputs nothing wires
+    dip: int = 0                    # IO.DAT's DIP (register IO_DAT_DIP)
 
     def input_names(self) -> dict[int, str]:
         return {i.pin: i.name for i in self.inputs if i.name}
@@ -253,7 +258,7 @@ def _kind(v: Any) -> str:
     return type(v).__name__
 
 
-_TOP_KEYS = {"name", "description", "io", "motion", "axes", "inputs", "outputs", "adc"}
+_TOP_KEYS = {"name", "description", "io", "motion", "axes", "inputs", "outputs", "adc", "pls"}
 _AXIS_KEYS = {"rapid", "accel", "jog", "min", "max", "start", "offset", "rotary"}
 _INPUT_KEYS = {"pin", "name", "active", "axis", "below", "above", "output", "delay_ms",
                "off_delay_ms", "value", "hard_limit"}
@@ -433,10 +438,12 @@ def parse_machine(text: str, name: str = "<machine>") -> MachineConfig:
             seed=r.integer(d, "seed", p, 0, 0, (1 << 63) - 1),
             min=lo, max=hi))
 
+    pls = parse_pls(r, data.get("pls", []), axes, n_out)
+
     return MachineConfig(name=mname, description=desc, source=name, input_count=n_in,
                          output_count=n_out, start_latency_ms=latency, jog_watchdog_ms=watchdog,
                          axes=MappingProxyType(axes), inputs=tuple(inputs), outputs=tuple(outputs),
-                         adc=tuple(adcs))
+                         adc=tuple(adcs), pls=pls)
 
 
 def load_machine(path) -> MachineConfig:

@@ -734,7 +734,8 @@ class PLC:
         out = []
         for t, running, proc, msg, f in self.take_sample_rows():
             out.append(Sample(t, running, proc, msg, f["inputs"], f["outputs"], f["pwm"],
-                              f["dac"], f["adc"], f["axes"], f["velocities"]))
+                              f["dac"], f["adc"], f["axes"], f["velocities"],
+                              f.get("vio", ())))
         return out
 
     @property

@@ -21,6 +21,8 @@ from typing import Optional, Sequence
 from plcbuilder.bytecode import abi
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import Ended, Fault, Log, Message, Note, Print, Started
+from plcbuilder.controller.history import History
+from plcbuilder.controller.trigger import Capturer
 from plcbuilder.controller.scenario import (Scenario, ScenarioError, drive, parse_adc,
                                             parse_force, parse_input, parse_start, parse_write)
 
@@ -131,26 +133,68 @@ def check_scenario(sc: Scenario, controller) -> None:
 
 
 def run_session(c: Controller, sc: Scenario, limit_ms: int, *, trace: Optional[Path] = None,
-                target="", chunk_ms: int = CHUNK_MS) -> dict:
-    """Run the loaded controller through the scenario (see the module docstring)."""
+                target="", chunk_ms: int = CHUNK_MS, history: Optional[History] = None,
+                capturer: Optional[Capturer] = None, watch: Sequence[str] = ()) -> dict:
+    """Run the loaded controller through the scenario (see the module docstring).
+    With a ``history``, every change goes into it (and ``capturer`` looks at it
+    as it grows); ``watch`` names variables (``PROC.var``) it records each tick,
+    which runs the session one tick at a time."""
     check_scenario(sc, c)
     collector = ReportCollector(c)
     writer = TraceWriter(trace, c.machine) if trace is not None else None
+    watched = [_watched(c, w) for w in watch]
+    if history is not None:
+        c.record_samples = True
+        if writer is None:
+            c.sample_changes_only = True
+        if watched:
+            chunk_ms = 1
 
     def drain() -> None:
-        collector.take(c.drain_events())
+        events = c.drain_events()
+        collector.take(events)
+        rows = c.drain_sample_rows() if (writer is not None or history is not None) else ()
         if writer is not None:
-            writer.write(c.drain_sample_rows())
+            writer.write(rows)
+        if history is not None:
+            history.feed(rows, events)
+            t = c.t_ms - 1
+            if t >= 0:
+                if watched:
+                    variables = c.variables()
+                    for name, (proc, var) in zip(watch, watched):
+                        value = variables.get(proc, {}).get(var)
+                        if value is not None:
+                            history.watch(t, name, value)
+                history.advance_to(t)
+            if capturer is not None:
+                capturer.update()
 
     try:
         ended = drive(c, sc, limit_ms, until_idle=True, chunk_ms=chunk_ms, on_chunk=drain)
         drain()
+        if capturer is not None:
+            capturer.update(final=True)
     except ControllerError as exc:
         raise UsageError(str(exc)) from None
     finally:
         if writer is not None:
             writer.close()
     return collector.report(ended, target)
+
+
+def _watched(c: Controller, name: str) -> tuple[str, str]:
+    """(procedure, variable) of a watched ``PROC.var``; UsageError naming what is wrong."""
+    proc, dot, var = name.partition(".")
+    if not dot or not proc or not var:
+        raise UsageError(f"--watch {name}: name a variable as PROC.var (e.g. M80.var03)")
+    program = c.programs.get(proc)
+    if program is None:
+        loaded = ", ".join(sorted(c.programs)) or "none"
+        raise UsageError(f"--watch {name}: no procedure named {proc} (loaded: {loaded})")
+    if var not in set(program.slot_names().values()):
+        raise UsageError(f"--watch {name}: {proc} has no variable named {var}")
+    return proc, var
 
 
 class ReportCollector:
@@ -204,12 +248,16 @@ class ReportCollector:
         for name, entry in self.open.items():          # still running: its vexit so far
             entry["vexit"] = variables.get(name, {}).get("vexit")
         st = c.state()
-        return {
+        extra = c.target_report() if hasattr(c, "target_report") else {}
+        return {**extra,
             "target": str(target),
             "ended_at_ms": ended,
             "procedures": self.procedures,
             "vars": variables,
             "outputs": m.outputs_on(),
+            "vins": m.vio.vins_on() if hasattr(m, "vio") else [],
+            "vouts": m.vio.vouts_on() if hasattr(m, "vio") else [],
+            "pls": m.pls.report() if hasattr(m, "pls") else [],
             "pwm": list(fields["pwm"]),
             "dac": list(fields["dac"]),
             "messages": self.messages,

@@ -71,6 +71,24 @@ class Act:
     TOGGLE_ALL_BREAKPOINTS = "toggle_all_breakpoints"
     REMOVE_ALL_BREAKPOINTS = "remove_all_breakpoints"
     RELEASE_ALL = "release_all"
+    OPEN_TRACE = "open_trace"
+    SAVE_TRACE = "save_trace"
+    EXPORT_TRACE = "export_trace"
+    EXPORT_PLOT = "export_plot"
+    COMPARE_TRACE = "compare_trace"
+    # navigation, build insight, registers and help (made by plcbuilder.ide.workbench)
+    BACK = "back"
+    FORWARD = "forward"
+    QUICK_OPEN = "quick_open"
+    FIND_IN_FILES = "find_in_files"
+    FIND_REFERENCES = "find_references"
+    RENAME_SYMBOL = "rename_symbol"
+    SHOW_DISASSEMBLY = "show_disassembly"
+    CODE_BYTES = "code_bytes"
+    REGISTERS = "registers"
+    MANUAL = "manual"
+    SHORTCUTS = "shortcuts"
+    WHAT_IS_THIS = "what_is_this"
 
 
 def add_action(win, actions: dict, name, text, slot=None, shortcut=None, ic=None, tip=None,
@@ -175,6 +193,17 @@ def build_actions(win) -> dict[str, QAction]:
     A(Act.EMBEDDED, "Use the &Embedded Controller", win.run_actions.use_embedded, None, "controller",
       "Run the simulated controller as a child process of the IDE")
     A(Act.ABOUT, "&About PLC Builder", win.about)
+    from plcbuilder.ide import trace_actions as ta
+    A(Act.OPEN_TRACE, "Open &Trace…", lambda: ta.open_trace(win), None, None,
+      "Open a saved trace or capture (.plctrace) in the run panels")
+    A(Act.SAVE_TRACE, "Save Trace…", lambda: ta.save_trace(win), None, None,
+      "Save the trace on show, or the whole session so far, as a .plctrace file")
+    A(Act.EXPORT_TRACE, "Export Trace…", lambda: ta.export_trace(win), None, None,
+      "Export the trace on show, or the whole session, as VCD or CSV")
+    A(Act.EXPORT_PLOT, "Export Plot Image…", lambda: ta.export_plot(win), None, None,
+      "Save the plots of the first visible run dock as PNG or SVG")
+    A(Act.COMPARE_TRACE, "Compare with Trace…", lambda: ta.compare_trace(win), None, None,
+      "The first tick where the trace on show (or the session) differs from a trace file")
     context = [actions[a] for a in (Act.TOGGLE_COMMENT, Act.GOTO_DEFINITION)] + \
         [None] + [actions[a] for a in (Act.FIND, Act.GOTO_LINE)]
     win.editor_stack.context_actions = context
@@ -191,7 +220,8 @@ def build_menus(win) -> None:
     m.addAction(a(Act.CLOSE_PROJECT))
     m.addSeparator()
     for name in (Act.SAVE, Act.SAVE_ALL, Act.REVERT, None, Act.CLOSE_EDITOR, Act.CLOSE_ALL,
-                 None, Act.PREFERENCES, None, Act.QUIT):
+                 None, Act.OPEN_TRACE, Act.SAVE_TRACE, Act.EXPORT_TRACE, Act.EXPORT_PLOT,
+                 Act.COMPARE_TRACE, None, Act.PREFERENCES, None, Act.QUIT):
         m.addAction(a(name)) if name else m.addSeparator()
     m = mb.addMenu("&Edit")
     for name in (Act.UNDO, Act.REDO, None, Act.CUT, Act.COPY, Act.PASTE, Act.SELECT_ALL, None,
@@ -306,6 +336,13 @@ def update_actions(win) -> None:
     for name in (Act.UPLOAD, Act.START, Act.START_CURRENT, Act.STOP, Act.RESET_CONTROLLER,
                  Act.BUILD_UPLOAD_START):
         win.action(name).setEnabled(run)
+    if Act.BUILD_UPLOAD_START in win._actions:          # the workbench's actions
+        win.action(Act.BUILD_UPLOAD_START).setEnabled(run)
+        for name in (Act.FIND_REFERENCES, Act.RENAME_SYMBOL, Act.WHAT_IS_THIS):
+            win.action(name).setEnabled(has_editor)
+        win.action(Act.RENAME_SYMBOL).setEnabled(has_editor and has_project and not ed.builtin)
+        for name in (Act.QUICK_OPEN, Act.FIND_IN_FILES):
+            win.action(name).setEnabled(has_project)
     for name in (Act.CONNECT, Act.EMBEDDED):
         win.action(name).setEnabled(win.connection is not None)
     win.run_actions.speed_combo.setEnabled(win.connection is not None)

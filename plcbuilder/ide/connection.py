@@ -110,8 +110,10 @@ class _Worker(threading.Thread):
         self.client: Optional[Client] = None
         self.child: Optional[ControllerProcess] = None
         self.image: Optional[bytes] = None      # re-uploaded after a restart
+        self.target: Optional[dict] = None      # the image's target profile (docs/targets.md)
         self.speed: Optional[tuple[str, Optional[float]]] = None
         self.variables_pending = False
+        self.registers_pending = False
         self.restarts = 0
         self.steps = StepSamples()
         self.breakpoints: dict[str, list] = {}  # file -> specs the controller has
@@ -178,6 +180,8 @@ class _Worker(threading.Thread):
                 self.variables_pending = False
             elif verb == "set_breakpoints":
                 pass                        # the session sends them all when connected
+            elif verb == "registers":
+                self.registers_pending = False
             else:
                 self.post("error", f"{verb}: not done, the connection to the controller "
                                    "was lost")
@@ -207,7 +211,7 @@ class _Worker(threading.Thread):
         client.subscribe(self._on_telemetry, queue=_telemetry_queue(self.speed), lossless=True)
         if self.image is not None and self.restarts:
             try:
-                result = client.upload(self.image)
+                result = client.upload(self.image, target=self.target)
                 self.post("result", ("upload", result))
                 self.post("note", "uploaded the image again after the controller came back")
             except RefusedError as exc:
@@ -268,8 +272,8 @@ class _Worker(threading.Thread):
     def _run_command(self, client: Client, verb: str, args: tuple) -> None:
         try:
             if verb == "upload":
-                self.image = args[0]
-                result = client.upload(args[0])
+                self.image, self.target = args[0], args[1]
+                result = client.upload(args[0], target=args[1])
             elif verb == "start":
                 result = client.start(args[0], int(args[1]))
             elif verb == "stop":
@@ -287,7 +291,14 @@ class _Worker(threading.Thread):
                 result = client.event(args[0])
             elif verb == "variables":
                 self.variables_pending = False
-                self.post("variables", client.variables())
+                variables, target = client.variables_and_target()
+                self.post("variables", variables)
+                if target:
+                    self.post("target_report", target)
+                return
+            elif verb == "registers":
+                self.registers_pending = False
+                self.post("registers", client.registers(args[0]))
                 return
             elif verb == "set_breakpoints":
                 fields = args[0]
@@ -377,6 +388,14 @@ class ControllerConnection(QtCore.QObject):
     """The answer to :meth:`request_variables`: ``{procedure: {variable: value}}``,
     each procedure's variables in slot order (an ``object`` signal: a ``dict``
     signal would sort the keys)."""
+
+    sig_registers = Signal(object)
+    """The answer to :meth:`request_registers`: ``{address: value}``."""
+
+    sig_target_report = Signal(object)
+    """With :meth:`request_variables`, on a target other than myCNC: the target's
+    report ``{"registers": {bank: {index: value}}, "calls": {...}, "budget": [...]}``
+    (docs/targets.md)."""
 
     sig_result = Signal(str, dict)
     """A request was done: its verb and the controller's result object."""
@@ -473,11 +492,12 @@ class ControllerConnection(QtCore.QObject):
         self._pump.start()
 
     # ---------------------------------------------------------------- requests
-    def upload(self, image_bytes: bytes) -> None:
-        """Upload an eeprom.rom image (kept, and uploaded again after a restart)."""
+    def upload(self, image_bytes: bytes, target: Optional[dict] = None) -> None:
+        """Upload an eeprom.rom image (kept, and uploaded again after a restart);
+        ``target``: the project's target profile (None: myCNC)."""
         data = bytes(image_bytes)
         self.uploaded_crc = f"{zlib.crc32(data):08x}"
-        self._send("upload", data)
+        self._send("upload", data, target)
 
     def start(self, name: str, eparam: int = 0) -> None:
         self._send("start", name, int(eparam))
@@ -568,6 +588,14 @@ class ControllerConnection(QtCore.QObject):
 
     def request_forces(self) -> None:
         self._send("forces", {})
+    def request_registers(self, addresses) -> None:
+        """Ask for the values of global registers; the answer comes as
+        sig_registers. A request still waiting is not repeated."""
+        w = self._worker
+        if w is None or not self.connected or w.registers_pending:
+            return
+        w.registers_pending = True
+        self._send("registers", [int(a) for a in addresses])
 
     def _send(self, verb: str, *args) -> None:
         w = self._worker
@@ -634,6 +662,10 @@ class ControllerConnection(QtCore.QObject):
                 self.sig_error.emit(str(payload))
             elif kind == "variables":
                 self.sig_variables.emit(dict(payload))
+            elif kind == "registers":
+                self.sig_registers.emit(dict(payload))
+            elif kind == "target_report":
+                self.sig_target_report.emit(dict(payload))
             elif kind == "result":
                 verb, result = payload
                 if verb == "upload":

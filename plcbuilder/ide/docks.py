@@ -47,7 +47,8 @@ RUN_DOCKS = (("proc", "Proc / messages", "runProcDock"),
              ("axes", "Axes", "runAxesDock"),
              ("inputs", "Inputs", "runInputsDock"),
              ("watch", "Watch", "runWatchDock"),
-             ("log", "Run log", "runLogDock"))
+             ("log", "Run log", "runLogDock"),
+             ("cursors", "Cursors", "runCursorsDock"))
 
 
 def empty_run_docks(win) -> dict:
@@ -67,7 +68,8 @@ def place_run_docks(win, docks: list) -> None:
     by_name = {d.objectName(): d for d in docks}
     right = [by_name[n] for n in ("runOutputsDock", "runProcDock", "runAnalogDock",
                                   "runAxesDock") if n in by_name]
-    lower = [by_name[n] for n in ("runInputsDock", "runWatchDock") if n in by_name]
+    lower = [by_name[n] for n in ("runInputsDock", "runWatchDock", "runCursorsDock")
+             if n in by_name]
     log = by_name.get("runLogDock")
     placed = set(right) | set(lower) | ({log} if log else set())
     area = Qt.DockWidgetArea.RightDockWidgetArea

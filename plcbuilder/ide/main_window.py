@@ -32,7 +32,7 @@ from PySide6.QtGui import QAction
 from PySide6.QtWidgets import QApplication, QFileDialog, QMainWindow, QMessageBox
 
 from plcbuilder.api import Kind
-from plcbuilder.ide import actions, debug, dialogs, docks
+from plcbuilder.ide import actions, debug, dialogs, docks, workbench
 from plcbuilder.ide.actions import Act
 from plcbuilder.ide.debug import actions as debug_actions
 from plcbuilder.ide.build_panel import BuildPanel
@@ -122,6 +122,7 @@ class MainWindow(QMainWindow):
         debug_actions.build_debug_toolbar(self)
         self._wire()
         self._setup_run_side()
+        workbench.install(self)             # navigation, disassembly, registers, help
         self.default_state = self.saveState()
         docks.restore_layout(self)
         self._update_actions()
@@ -142,6 +143,8 @@ class MainWindow(QMainWindow):
         self._project = project
         self.editor_stack.project = self.lint.project = self.run_actions.project = project
         self.tests_panel.set_project(project.root if project is not None else None)
+        if self.run_panels is not None:
+            self.run_panels.set_target(project.target if project is not None else "mycnc")
 
     @property
     def connection(self):
@@ -176,6 +179,7 @@ class MainWindow(QMainWindow):
         return self.editor_stack.open_file(path, line, col, focus=focus)
 
     def open_location(self, file: str, line: int, col: int = 1) -> Optional[CodeEditor]:
+        self.workbench.nav.record()          # for Back
         return self.editor_stack.open_location(file, line, col)
 
     def open_paths(self, paths: list) -> None:
@@ -213,9 +217,11 @@ class MainWindow(QMainWindow):
         self.editor_stack.show_find(replace)
 
     def goto_line_dialog(self) -> bool:
+        self.workbench.nav.record()          # for Back
         return self.editor_stack.goto_line_dialog()
 
     def goto_definition(self, word: str) -> bool:
+        self.workbench.nav.record()          # for Back
         return self.lint.goto_definition(word)
 
     def build_all(self) -> bool:
@@ -399,7 +405,7 @@ class MainWindow(QMainWindow):
         es.sig_current_changed.connect(self._on_current_changed)
         es.sig_title_changed.connect(self._update_title)
         es.sig_cursor_moved.connect(self.status.show_cursor)
-        es.sig_goto_definition.connect(lint.goto_definition)
+        es.sig_goto_definition.connect(self.goto_definition)
         es.sig_file_saved.connect(self._on_file_saved)
         es.sig_changes_discarded.connect(lint.on_changes_discarded)
         es.sig_reveal.connect(self._reveal)
@@ -484,6 +490,8 @@ class MainWindow(QMainWindow):
             return None
         self.run_panels.sig_open_location.connect(lambda f, ln: self.open_location(f, ln))
         self.run_panels.set_forces(self.debug.forces)
+        if self._project is not None:
+            self.run_panels.set_target(self._project.target)
         if self._pin_defines is not None:
             self._set_pin_names(self._pin_defines)
         return self.run_panels

@@ -16,6 +16,7 @@ menu, each with its dialog. The tree follows the folders on disk
 from __future__ import annotations
 
 import os
+import re
 import shutil
 from pathlib import Path
 from typing import Optional
@@ -45,6 +46,7 @@ W_PROCEDURE = "procedure"
 W_HEADER = "header"
 W_BUILTIN_HEADER = "builtin-header"
 W_FILE = "file"
+W_TARGET_PROC = "target-procedure"     # a procedure a target calls (init, Program_04, ...)
 
 BUILTIN_PINS = "<builtin>/pins.h"
 
@@ -66,6 +68,30 @@ def procedure_template(name: str, kind: Kind) -> str:
             "    // ...\n"
             "    exit(99);        // plc_exit_normal\n"
             "};\n")
+
+
+def target_outline(project: Project) -> list[tuple[str, str]]:
+    """(procedure, when the target calls it) for a target project (docs/targets.md);
+    [] for a myCNC project."""
+    st = project.settings
+    if st.target == "huazhong":
+        return [("init", "once, at the start"),
+                ("plc1", "every plc1_time ms (16 until set)"),
+                ("plc2", "every plc2_time ms (32 until set)")]
+    if st.target == "tgmotion":
+        from plcbuilder.lang.targets import slots_per_cycle
+        slot = st.cycle_time_us / slots_per_cycle(st.cycle_time_us)
+        p1, p2, p3 = st.program_periods_us
+        return [("Program_Ini", "once, at the start"),
+                ("Program_01", f"every {p1} µs, lowest priority"),
+                ("Program_02", f"every {p2} µs"),
+                ("Program_03", f"every {p3} µs"),
+                ("Program_04", f"every cycle ({st.cycle_time_us} µs), in the fourth slot"),
+                ("Program_05", f"every slot ({slot:g} µs)")]
+    return []
+
+
+_TARGET_LABEL = {"huazhong": "Huazhong PLC", "tgmotion": "TG Motion PLC"}
 
 
 def header_template(name: str) -> str:
@@ -162,12 +188,18 @@ class ProjectTree(QWidget):
         f = root.font(0)
         f.setBold(True)
         root.setFont(0, f)
-        hw = self._item(root, "Hardware PLC", "folder-hw", W_HW_FOLDER, str(p.hardware_dir))
+        target = p.settings.target
+        hw = self._item(root, _TARGET_LABEL.get(target, "Hardware PLC"), "folder-hw", W_HW_FOLDER,
+                        str(p.hardware_dir))
         hw.setToolTip(0, "hardware/: procedures run by the controller's PLC core, 1 ms ticks; "
-                         "an M-code starts the procedure of its name")
+                         "an M-code starts the procedure of its name" if target == "mycnc" else
+                      f"hardware/: the {target} target's one program (docs/targets.md)")
         sw = self._item(root, "Software PLC", "folder-sw", W_SW_FOLDER, str(p.software_dir))
         sw.setToolTip(0, "software/: procedures run by the host side by side, 100 ms ticks; "
                          "__HANDLER_* ones start on events")
+        sw.setHidden(target != "mycnc" and not any(pr.kind is Kind.SOFTWARE
+                                                   for pr in p.procedures()))
+        outline = target_outline(p)
         for proc in p.procedures():
             parent = hw if proc.kind is Kind.HARDWARE else sw
             ic = "file-plc" if proc.kind is Kind.HARDWARE else \
@@ -175,6 +207,8 @@ class ProjectTree(QWidget):
             it = self._item(parent, proc.name, ic, W_PROCEDURE, str(proc.path))
             it.setToolTip(0, str(proc.path))
             self._describe(it, proc.path, proc.name)
+            if outline and proc.kind is Kind.HARDWARE:
+                self._target_procedures(it, proc.path, outline)
         headers = self._item(root, "Headers", "folder", W_HEADERS, str(p.include_dir))
         headers.setToolTip(0, "include/: searched by #include after the procedure's own folder")
         names = set()
@@ -187,14 +221,21 @@ class ProjectTree(QWidget):
             it = self._item(headers, "pins.h (built-in)", "file-header", W_BUILTIN_HEADER, BUILTIN_PINS)
             it.setToolTip(0, "the built-in default pin map (read-only); copy it into include/ to edit")
             it.setForeground(0, QBrush(QColor("#7d8590")))
-        for label, ic, path in (("Machine", "machine", p.machine_path),
-                                ("Variables", "variables", p.variables_path),
-                                ("Settings", "settings", p.settings_path)):
+        files = [("Machine", "machine", p.machine_path),
+                 ("Variables", "variables", p.variables_path),
+                 ("Settings", "settings", p.settings_path)]
+        if target == "huazhong":
+            files.insert(1, ("Parameters (P)", "variables", p.parameters_path))
+        for label, ic, path in files:
             text = f"{label}  ·  {path.name}"
             it = self._item(root, text, ic, W_FILE, str(path))
             it.setToolTip(0, str(path) + ("" if path.exists() else "  (not there yet)"))
             if not path.exists():
                 it.setForeground(0, QBrush(QColor("#9a9a9a")))
+        io_dat = p.root / "IO.DAT"               # softMC input presets, when the project has one
+        if io_dat.is_file():
+            it = self._item(root, "Input presets  ·  IO.DAT", "variables", W_FILE, str(io_dat))
+            it.setToolTip(0, f"{io_dat}: INP presets inputs 0..22, DIP is register IO_DAT_DIP")
         self._apply_decorations()
         self._restore_view_state(expanded, selected, first=not expanded)
         self.tree.setUpdatesEnabled(True)
@@ -366,6 +407,23 @@ class ProjectTree(QWidget):
         it.setData(0, ROLE_PATH, path)
         return it
 
+    def _target_procedures(self, parent: QTreeWidgetItem, path: Path,
+                           outline: list[tuple[str, str]]) -> None:
+        """The procedures the target calls, under its program, each with when
+        it runs; one the source does not define (yet) in grey."""
+        try:
+            text = path.read_text(encoding="utf-8", errors="replace")
+        except OSError:
+            text = ""
+        for name, when in outline:
+            it = self._item(parent, f"{name}()", "file-plc-sys", W_TARGET_PROC, str(path))
+            it.setData(0, ROLE_DESCRIPTION, when)
+            defined = re.search(rf"^\s*{name}\s*\(\s*\)", text, re.M) is not None
+            it.setToolTip(0, f"{name}(): {when}" + ("" if defined else
+                                                      "  (not in the program yet)"))
+            if not defined:
+                it.setForeground(0, QBrush(QColor("#9a9a9a")))
+
     def _describe(self, item: QTreeWidgetItem, path: Path, name: str) -> None:
         """The file's first comment, in grey beside its name ("spindle on, clockwise")."""
         text = first_comment(path, name)
@@ -400,7 +458,9 @@ class ProjectTree(QWidget):
         except Exception:  # noqa: BLE001
             procs = ()
         return (p.name, procs, tuple(h.name for h in self._headers()),
-                p.machine_path.exists(), p.variables_path.exists(), p.settings_path.exists())
+                p.machine_path.exists(), p.variables_path.exists(), p.settings_path.exists(),
+                p.settings.target, p.settings.program_periods_us, p.settings.cycle_time_us,
+                (p.root / "IO.DAT").is_file())
 
     def _watch(self) -> None:
         old = self.watcher.directories() + self.watcher.files()
@@ -477,7 +537,7 @@ class ProjectTree(QWidget):
     def _activated(self, item: QTreeWidgetItem, _col: int = 0) -> None:
         what = item.data(0, ROLE_WHAT)
         path = item.data(0, ROLE_PATH)
-        if what in (W_PROCEDURE, W_HEADER, W_BUILTIN_HEADER, W_FILE) and path:
+        if what in (W_PROCEDURE, W_HEADER, W_BUILTIN_HEADER, W_FILE, W_TARGET_PROC) and path:
             if what == W_FILE and not Path(path).exists():
                 return
             self.sig_open_file.emit(path)
@@ -501,7 +561,7 @@ class ProjectTree(QWidget):
             menu.addAction(self.action_new_sw)
         if what in (W_PROJECT, W_HEADERS):
             menu.addAction(self.action_new_header)
-        if what in (W_PROCEDURE, W_HEADER, W_BUILTIN_HEADER, W_FILE):
+        if what in (W_PROCEDURE, W_HEADER, W_BUILTIN_HEADER, W_FILE, W_TARGET_PROC):
             a = menu.addAction(icon("open"), "Open")
             a.triggered.connect(lambda: self._activated(item))
         if what == W_PROCEDURE:

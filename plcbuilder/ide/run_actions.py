@@ -24,7 +24,7 @@ from PySide6.QtGui import QAction, QActionGroup
 from PySide6.QtWidgets import QComboBox, QMessageBox
 
 from plcbuilder._support.files import read_bounded
-from plcbuilder.api import Kind
+from plcbuilder.api import Kind, ProjectError
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.build_panel import BuildPanel, BuildRunner
 from plcbuilder.link.protocol import MAX_IMAGE
@@ -126,7 +126,16 @@ class RunActions(QObject):
                                 f"Cannot read {self.project.image_path}:\n\n"
                                 f"{exc.strerror or exc}\n\nBuild the project first.")
             return False
-        self.connection.upload(data)
+        try:
+            target = self.project.target_settings()
+        except ProjectError as exc:
+            QMessageBox.warning(self.parent(), "Upload", str(exc))
+            return False
+        if target["name"] == "mycnc":
+            target = None
+        else:
+            target = {k: list(v) if isinstance(v, tuple) else v for k, v in target.items()}
+        self.connection.upload(data, target)
         self.sig_message.emit(f"Uploading {self.project.image_path.name} "
                               f"({len(data)} bytes)…", 5000)
         return True
@@ -268,6 +277,8 @@ class RunActions(QObject):
             args += ["--machine", str(p.machine_path)]
         if p.variables_path.is_file():
             args += ["--variables", str(p.variables_path)]
+        if (p.root / "IO.DAT").is_file():
+            args += ["--io-dat", str(p.root / "IO.DAT")]
         lim = p.limits
         args += ["--limits", f"{lim.hw_proc},{lim.hw_total},{lim.sw_proc}"]
         return args

@@ -53,15 +53,26 @@ class Paren:
     span: Span
 
 
-Expr = Union[Num, Name, Call, Unary, Binary, Paren]
+@dataclass(slots=True, eq=False)
+class Index:
+    """A register bank element, ``X[n]`` (a target's syntax: docs/targets.md)."""
+    bank: str
+    bank_span: Span
+    index: "Expr"
+    span: Span
+
+
+Expr = Union[Num, Name, Call, Unary, Binary, Paren, Index]
 
 
 # -------------------------------------------------------------- statements
 @dataclass(slots=True, eq=False)
 class Assign:
-    target: Name
+    target: Union[Name, Index]
     value: Expr
     span: Span
+    op: str = "="              # or a compound assignment: "|=", "&=", "^=", "+=", "-="
+    op_span: Optional[Span] = None
 
 
 @dataclass(slots=True, eq=False)

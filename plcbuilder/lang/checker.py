@@ -13,10 +13,12 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 from plcbuilder.bytecode import abi, semantics
+from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.diagnostics import Diagnostic, Related, Span, error, warning
 from plcbuilder.lang import ast as A
 from plcbuilder.lang.builtins import FUNCTIONS, PREDEFINED, REGISTERS, VALUE_TWIN, slot_names
+from plcbuilder.lang.targets import feature_hint, near_miss, profile
 
 
 SHIFT_OPS = {"<<", ">>"}
@@ -56,8 +58,9 @@ class Symbols:
 
 class Checker:
     def __init__(self, module: A.Module, kind: Kind, strict: bool, main_file: str,
-                 source_line=None, syntax_errors: bool = False):
+                 source_line=None, syntax_errors: bool = False, target: str = T.MYCNC):
         self.syntax_errors = syntax_errors
+        self.profile = profile(target)
         self.module = module
         self.kind = kind
         self.strict = strict
@@ -85,7 +88,7 @@ class Checker:
                                         "a procedure cannot have its name", p.name_span))
                 continue
             if p.name in self.slot_names or p.name in REGISTERS \
-                    or p.name in abi.BUILTIN_NAMES:
+                    or p.name in abi.BUILTIN_NAMES or (self.profile.banks and p.name in T.BANKS):
                 self.diags.append(error("reserved-name", f"'{p.name}' is a predefined name; "
                                         "a procedure cannot have its name", p.name_span))
                 continue
@@ -94,7 +97,9 @@ class Checker:
             self.calls[p.name] = []
             self._current = p.name
             self._stmt(p.body)
-        if "main" not in procs and not (self.syntax_errors and not procs):
+        if not self.profile.has_main:
+            self._required()
+        elif "main" not in procs and not (self.syntax_errors and not procs):
             first = self.module.procs[0].name_span if self.module.procs else Span(self.main_file, 1, 1, 1, 2)
             self.diags.append(error("no-main", "no main() procedure: it is where the procedure starts",
                                     first, "add main() { ... exit(99); }"))
@@ -116,7 +121,21 @@ class Checker:
                 self._stmt(x)
         elif t is A.Assign:
             self._expr(s.value)
-            self._target(s.target)
+            if s.op != "=":
+                if not self.profile.compound:
+                    self.diags.append(error("target-syntax", f"compound assignment '{s.op}' is not "
+                                            f"part of the {self.profile.name} language",
+                                            s.op_span or s.span, feature_hint("compound"),
+                                            f"on {self.profile.name} write x = x "
+                                            f"{s.op[0]} value;"))
+                if type(s.target) is A.Name:
+                    self._expr(s.target)      # x |= v reads x
+            if type(s.target) is A.Index:
+                self._index(s.target, write=True)
+                self._width(s)
+            else:
+                self._target(s.target)
+                self._period(s)
         elif t is A.IncDec:
             self._target(s.target, incdec=True)
         elif t is A.CallStmt:
@@ -143,8 +162,81 @@ class Checker:
         self.diags.append(error("strict", f"{what} is not accepted by the controller's compiler (--strict)",
                                 span, hint))
 
+    # ================================================================ targets
+    def _required(self) -> None:
+        """Every procedure the target calls is defined, exactly so named."""
+        procs = self.res.procs
+        req = self.profile.required
+        if self.syntax_errors and not procs:
+            return
+        at = self.module.procs[0].name_span if self.module.procs else Span(self.main_file, 1, 1, 1, 2)
+        for name in req:
+            if name in procs:
+                continue
+            miss = next((p for p in procs.values() if near_miss(p.name, req) == name), None)
+            if miss is not None:
+                self.diags.append(error(
+                    "target-procedure", f"'{miss.name}' must be spelled {name}: the "
+                    f"{self.profile.name} target calls its procedures by their exact names "
+                    "(letter case included)", miss.name_span, f"rename it {name}()"))
+            else:
+                self.diags.append(error(
+                    "target-procedure", f"no {name}() procedure: the {self.profile.name} target "
+                    f"needs {', '.join(n + '()' for n in req)}", at,
+                    f"add {name}() {{ {'exit(1); ' if self.profile.name == T.TGMOTION else ''}}}"))
+
+    def _index(self, e: A.Index, write: bool = False) -> None:
+        """A register bank element X[n]."""
+        self._expr(e.index)
+        if not self.profile.banks:
+            self.diags.append(error("target-syntax", f"register banks ({e.bank}[n]) are not part "
+                                    f"of the {self.profile.name} language", e.span,
+                                    feature_hint("banks")))
+            return
+        bank = T.BANKS.get(e.bank)
+        if bank is None:
+            self.diags.append(error("no-bank", f"no register bank '{e.bank}' (the banks are "
+                                    f"{', '.join(T.BANKS)})", e.bank_span))
+            return
+        n = _const(e.index)
+        if n is not None and not 0 <= n < bank.size:
+            self.diags.append(error("index-range", f"{e.bank}[{n}] is out of range: {e.bank} has "
+                                    f"{bank.size} elements ({e.bank}[0] .. {e.bank}[{bank.size - 1}])",
+                                    e.index.span))
+        if write and e.bank in T.HZ_READ_BANKS and e.bank != "P":
+            self.diags.append(warning("read-bank", f"{e.bank} is read from the "
+                                      f"{'machine' if e.bank == 'X' else 'CNC'} at the start of "
+                                      f"every tick: this write is lost then", e.span))
+
+    def _width(self, s: A.Assign) -> None:
+        """Y[0] = 0x1ff; stores 0xff: say so (a write keeps the element's width)."""
+        bank = T.BANKS.get(s.target.bank)
+        v = _const(s.value) if s.op == "=" else None
+        if bank is not None and self.profile.banks and v is not None and not 0 <= v <= bank.mask:
+            self.diags.append(warning("element-width", f"{s.target.bank} holds {bank.bits}-bit "
+                                      f"elements: this stores {v & bank.mask} "
+                                      f"(0x{v & bank.mask:x}), not {v}", s.value.span))
+
+    def _period(self, s: A.Assign) -> None:
+        """plc1_time = 0; (a period must be at least 1 ms)."""
+        if s.target.id in self.profile.periods and s.op == "=":
+            v = _const(s.value)
+            if v is not None and v <= 0:
+                self.diags.append(error("period", f"{s.target.id} must be at least 1 (ms), "
+                                        f"this sets it to {v}", s.value.span,
+                                        "the seed recommends plc1_time = 16 and plc2_time = 32"))
+
+    def _bank_name(self, name: A.Name) -> bool:
+        if self.profile.banks and name.id in T.BANKS:
+            self.diags.append(error("bank-name", f"'{name.id}' is a register bank; use one "
+                                    f"element: {name.id}[n]", name.span))
+            return True
+        return False
+
     def _target(self, name: A.Name, incdec: bool = False) -> None:
         n = name.id
+        if self._bank_name(name):
+            return
         if n in self.slot_names:
             self.res.slots[n] = self.slot_names[n]
             return
@@ -179,8 +271,13 @@ class Checker:
         t = type(e)
         if t is A.Num:
             return
+        if t is A.Index:
+            self._index(e)
+            return
         if t is A.Name:
             n = e.id
+            if self._bank_name(e):
+                return
             if n in self.slot_names:
                 self.res.slots[n] = self.slot_names[n]
             elif n in REGISTERS:
@@ -324,13 +421,14 @@ class Checker:
 
     def _reachability(self) -> None:
         procs = self.res.procs
-        start = "main" if "main" in procs else None
+        roots = self.profile.roots(procs)
+        start = "main" if "main" in roots else None
         order: list[str] = []
-        if start is None:
+        if not roots:
             order = list(procs)
         else:
-            seen = {start}
-            stack = [start]
+            seen = set(roots)
+            stack = list(reversed(roots))
             while stack:
                 n = stack.pop()
                 order.append(n)
@@ -338,15 +436,16 @@ class Checker:
                     if callee in procs and callee not in seen:
                         seen.add(callee)
                         stack.append(callee)
+            called = "main()" if start else ", ".join(f"{r}()" for r in roots)
             for n, p in procs.items():
                 if n not in seen and p.name_span.file == self.main_file:
                     self.diags.append(warning("unused-procedure",
-                                              f"procedure {n}() is never called from main()",
+                                              f"procedure {n}() is never called from {called}",
                                               p.name_span))
-        # main first, then the rest in source order
+        # main (or the target's procedures) first, then the rest in source order
         rank = {p.name: i for i, p in enumerate(self.module.procs)}
-        rest = sorted((n for n in order if n != "main"), key=lambda n: rank.get(n, 0))
-        self.res.reachable = (["main"] if start else []) + rest
+        rest = sorted((n for n in order if n not in roots), key=lambda n: rank.get(n, 0))
+        self.res.reachable = roots + rest
 
     def _recursion(self) -> None:
         graph = {n: [c for c, _ in self.calls.get(n, []) if c in self.res.procs] for n in self.res.procs}
@@ -406,7 +505,7 @@ class Checker:
                                           f"'{v.name}' is read but never assigned (it is always 0)",
                                           v.read, "variables start at 0; assign it first, "
                                                   "or use a #define for a constant"))
-            elif v.assigned is not None and v.read is None:
+            elif v.assigned is not None and v.read is None and v.name not in self.profile.periods:
                 self.diags.append(warning("never-read", f"'{v.name}' is assigned but never read",
                                           v.assigned))
 
@@ -416,7 +515,13 @@ class Checker:
             p = self.res.procs[n]
             self._current = n
             falls = self._falls(p.body, report=True)
-            if n == "main" and falls:
+            if falls and self.profile.name == T.TGMOTION and n in self.profile.required:
+                self.diags.append(warning(
+                    "no-status", f"{n}() can reach its end without exit(): it then returns 0"
+                    + (", which aborts the PLC's start" if n == "Program_Ini" else ""),
+                    p.body.end_span, "end it with exit(1); (the seed: the return value must "
+                                     "always be provided)"))
+            if n == "main" and falls and self.profile.has_main:
                 self.diags.append(warning(
                     "main-no-exit", "main() can reach its end without exit(); "
                                     "the procedure then ends with exit code 0",

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from itertools import accumulate
 from typing import Optional
 
+from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.opcodes import LONG_FORM, Op, Operand, encode, fits, size_of
 from plcbuilder.bytecode.program import Kind, LineEntry, Program
 from plcbuilder.bytecode.semantics import BINARY_SYMBOL, UNARY_SYMBOL
@@ -179,7 +180,9 @@ class Generator:
         if t is A.Empty:
             return
         self.at(s.span)
-        if t is A.Assign:
+        if t is A.Assign and (type(s.target) is A.Index or s.op != "="):
+            self.assign_target(s)
+        elif t is A.Assign:
             n = s.target.id
             if self.names is not None:
                 self.names.add(n)
@@ -255,6 +258,43 @@ class Generator:
             self.at(s.while_span)
             self.loop_end(s.cond, top)
             self.place(end)
+
+    def assign_target(self, s: A.Assign) -> None:
+        """A compound assignment, or a write to a register bank element
+        (bytecode/targets.py: constant index -> one register; else the latches)."""
+        value = s.value
+        if s.op != "=":
+            value = A.Binary(s.op[0], s.target, s.value, s.span, s.op_span or s.span)
+        target = s.target
+        if type(target) is A.Name:
+            self.stmt(A.Assign(target, value, s.span))
+            return
+        bank = T.BANKS[target.bank]
+        i = const_value(target.index)
+        if i is not None:
+            self.push(bank.base + i)
+            self.expr(value)
+            self.emit(Op.GVARSET)
+            return
+        self.push(T.VALUE_LATCH)
+        self.expr(value)
+        self.emit(Op.GVARSET)
+        self.push(bank.store)
+        self.expr(target.index)
+        self.emit(Op.GVARSET)
+
+    def index(self, e: A.Index) -> None:
+        """Push a register bank element's value."""
+        bank = T.BANKS[e.bank]
+        i = const_value(e.index)
+        if i is not None:
+            self.push(bank.base + i)
+        else:
+            self.push(T.INDEX_LATCH)
+            self.expr(e.index)
+            self.emit(Op.GVARSET)
+            self.push(bank.load)
+        self.emit(Op.GVARGET)
 
     def loop_end(self, cond, top: int) -> None:
         """A loop condition: evaluate it, end the tick, go round again if it held."""
@@ -356,6 +396,8 @@ class Generator:
             for a in e.args:
                 self.expr(a)
             self.emit(FUNCTIONS[e.name].op)
+        elif t is A.Index:
+            self.index(e)
 
     def logical(self, e: A.Binary) -> None:
         false_l, end = self.label(), self.label()

@@ -124,8 +124,8 @@ class PlcLexer(RegexLexer):
             (r"[0-9]+(?![0-9A-Za-z_])", Number.Integer),
             (r"[0-9][0-9A-Za-z_]*", Error),
             # operators and punctuation (longest first)
-            (r"\+\+|--|<<|>>|<=|>=|==|!=|&&|\|\||[-+*/%&|^~!<>=]", Operator),
-            (r"[(){};,]", Punctuation),
+            (r"\+\+|--|<<|>>|<=|>=|==|!=|&&|\|\||[-+&|^]=|[-+*/%&|^~!<>=]", Operator),
+            (r"[(){};,\[\]]", Punctuation),
         ],
         "comment": [
             (r"[^*]+", Comment.Multiline),

@@ -126,7 +126,7 @@ class AstBuilder(Transformer):
                                         f"nested more than {MAX_DEPTH} levels deep", node.span,
                                         "split the expression or statement into simpler parts"))
             # cut the tree here so later passes stay shallow
-            if isinstance(node, (A.Num, A.Name, A.Call, A.Unary, A.Binary, A.Paren)):
+            if isinstance(node, (A.Num, A.Name, A.Call, A.Unary, A.Binary, A.Paren, A.Index)):
                 node = A.Num(0, node.span, "0", synthetic=True)
             else:
                 node = A.Empty(node.span)
@@ -158,6 +158,31 @@ class AstBuilder(Transformer):
         name, _eq, value, semi = c
         target = A.Name(str(name), self._span(name))
         return self._nest(A.Assign(target, value, target.span.cover(self._span(semi))), value)
+
+    def compound(self, c):
+        name, op, value, semi = c
+        target = A.Name(str(name), self._span(name))
+        return self._nest(A.Assign(target, value, target.span.cover(self._span(semi)), op[0],
+                                   op[1]), value)
+
+    def index_assign(self, c):
+        target, eq, value, semi = c
+        return self._nest(A.Assign(target, value, target.span.cover(self._span(semi)), "=",
+                                   self._span(eq)), target, value)
+
+    def index_compound(self, c):
+        target, op, value, semi = c
+        return self._nest(A.Assign(target, value, target.span.cover(self._span(semi)), op[0],
+                                   op[1]), target, value)
+
+    def compound_op(self, c):
+        tok = c[0]
+        return (str(tok), self._span(tok))
+
+    def index(self, c):
+        name, _lb, expr, rb = c
+        ns = self._span(name)
+        return self._nest(A.Index(str(name), ns, expr, ns.cover(self._span(rb))), expr)
 
     def inc(self, c):
         name, _op, semi = c

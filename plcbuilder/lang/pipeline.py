@@ -73,6 +73,8 @@ class CompileOptions:
     #: the folder headers must stay inside (a project's); None: the procedure's
     #: own folder. Include folders named outside it are allowed too.
     root: Optional[Path] = None
+    #: the controller the procedure is for (bytecode.targets.TARGETS; docs/targets.md)
+    target: str = "mycnc"
 
     @property
     def limit(self) -> int:
@@ -196,7 +198,7 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
         module, parse_diags = incremental.parse(pre.tokens, path)
     diags += parse_diags
     checker = Checker(module, options.kind, options.strict, path, pre.sources.line,
-                      syntax_errors=any(d.is_error for d in diags))
+                      syntax_errors=any(d.is_error for d in diags), target=options.target)
     check_diags, resolved, symbols = checker.run()
     diags += check_diags
     symbols.defines = {n: (d.text, d.span) for n, d in pre.defines.items()}
@@ -205,7 +207,7 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
     if not any(d.is_error for d in diags):
         program, size = generate(resolved, name, options.kind, _file_namer(path, file_path),
                                  incremental.code if incremental is not None else None)
-        main = resolved.procs.get("main")
+        main = resolved.procs.get("main") or next(iter(resolved.procs.values()), None)
         at = main.name_span if main else Span.point(path, 1, 1)
         if size > options.limit:
             diags.append(error(

@@ -153,6 +153,56 @@ class SymbolIndex:
     def pin_names(self) -> tuple[dict[int, str], dict[int, str]]:
         return pin_names(self.defines)
 
+    def outline(self) -> list["OutlineItem"]:
+        """What this file itself defines, in the order of the text: its
+        procedures (with the line of their closing brace), defines and
+        variables (at their first assignment). Headers' names are left out."""
+        items: list[OutlineItem] = []
+        for sym in self.defines.values():
+            if sym.span is not None and sym.span.file == self.name:
+                items.append(OutlineItem(sym.name, DEFINE, sym.span.line, sym.span.col,
+                                         sym.span.line, sym.value))
+        for sym in self.procedures.values():
+            end = self._block_end(sym.span)
+            items.append(OutlineItem(sym.name, PROCEDURE, sym.span.line, sym.span.col, end))
+        for sym in self.variables.values():
+            items.append(OutlineItem(sym.name, VARIABLE, sym.span.line, sym.span.col,
+                                     sym.span.line))
+        items.sort(key=lambda it: (it.line, it.col))
+        return items
+
+    def enclosing(self, line: int) -> Optional["OutlineItem"]:
+        """The procedure whose text holds ``line`` (1-based), or None."""
+        for it in self.outline():
+            if it.kind == PROCEDURE and it.line <= line <= it.end_line:
+                return it
+        return None
+
+    def _block_end(self, span: Span) -> int:
+        """The line of the ``}`` that closes the body of the procedure named at ``span``
+        (the last line of the text while it is not closed)."""
+        i = bisect.bisect_left(self._starts, self.offset_of(span.line, span.col))
+        depth = 0
+        for t in self.tokens[i:]:
+            if t.kind == "LBRACE":
+                depth += 1
+            elif t.kind == "RBRACE":
+                depth -= 1
+                if depth == 0:
+                    return t.span.line
+        return len(self._line_starts)
+
+
+@dataclass(frozen=True)
+class OutlineItem:
+    """One entry of a file's outline."""
+    name: str
+    kind: str                  # PROCEDURE, DEFINE or VARIABLE
+    line: int
+    col: int
+    end_line: int              # a procedure's closing brace; the same line otherwise
+    detail: str = ""           # a define's value
+
 
 def unique(items: Iterable[tuple[str, str]]) -> list[tuple[str, str]]:
     """The first item of each name, in order."""

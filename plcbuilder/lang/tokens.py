@@ -19,6 +19,8 @@ from plcbuilder.lang.builtins import KEYWORDS
 PUNCT = {
     "<<": "SHL", ">>": "SHR", "<=": "LE", ">=": "GE", "==": "EQ", "!=": "NE",
     "&&": "ANDAND", "||": "OROR", "++": "INC", "--": "DEC",
+    "|=": "OR_ASSIGN", "&=": "AND_ASSIGN", "^=": "XOR_ASSIGN", "+=": "ADD_ASSIGN",
+    "-=": "SUB_ASSIGN", "[": "LBRACK", "]": "RBRACK",
     "(": "LPAR", ")": "RPAR", "{": "LBRACE", "}": "RBRACE", ";": "SEMI", ",": "COMMA",
     "=": "ASSIGN", "+": "PLUS", "-": "MINUS", "*": "STAR", "/": "SLASH", "%": "PERCENT",
     "<": "LT", ">": "GT", "&": "AMP", "|": "PIPE", "^": "CARET", "!": "BANG", "~": "TILDE",
@@ -35,7 +37,7 @@ _TOKEN_RE = re.compile(r"""
   | (?P<bc>/\*)
   | (?P<num>0[xX][0-9A-Fa-f]*[0-9A-Za-z_]*|[0-9][0-9A-Za-z_]*)
   | (?P<name>[A-Za-z_][A-Za-z0-9_]*)
-  | (?P<punct><<|>>|<=|>=|==|!=|&&|\|\||\+\+|--|[(){};,=+\-*/%<>&|^!~])
+  | (?P<punct><<|>>|<=|>=|==|!=|&&|\|\||\+\+|--|\|=|&=|\^=|\+=|-=|[(){};,=+\-*/%<>&|^!~\[\]])
   | (?P<hash>\#)
   | (?P<bad>.)
   | (?P<eof>\Z) )
@@ -147,7 +149,7 @@ class Tokenizer:
             else:  # bad character or a stray '#'
                 if not directive:
                     if s > bad_run_end:
-                        run = re.match(r"[^\sA-Za-z0-9_(){};,=+\-*/%<>&|^!~]+", text[s:])
+                        run = re.match(r"[^\sA-Za-z0-9_(){};,=+\-*/%<>&|^!~\[\]]+", text[s:])
                         length = len(run.group()) if run else 1
                         bad_run_end = s + length
                         ch = text[s]

@@ -269,10 +269,13 @@ class Client:
         result = reply.get("result")
         return result if isinstance(result, dict) else {}
 
-    def upload(self, image: bytes, timeout: Optional[float] = None) -> dict:
+    def upload(self, image: bytes, timeout: Optional[float] = None,
+               target: Optional[dict] = None) -> dict:
         """Upload an eeprom.rom image; RefusedError with the reason when it is not
-        whole and valid (the previous image keeps running)."""
-        return self.request("upload", timeout, image=protocol.encode_image(image))
+        whole and valid (the previous image keeps running). ``target``: the
+        project's target profile (docs/targets.md; None: myCNC)."""
+        fields = {"target": target} if target is not None else {}
+        return self.request("upload", timeout, image=protocol.encode_image(image), **fields)
 
     def start(self, name: Optional[str] = None, eparam: int = 0, *,
               mcode: Optional[int] = None) -> dict:
@@ -302,6 +305,15 @@ class Client:
 
     def variables(self) -> dict[str, dict[str, int]]:
         return self.request("variables").get("variables", {})
+
+    def variables_and_target(self) -> tuple[dict, dict]:
+        """(variables, the target's report: registers, calls, budget ({} on myCNC))."""
+        answer = self.request("variables")
+        return answer.get("variables", {}), answer.get("target", {})
+    def registers(self, addresses) -> dict[int, int]:
+        """The values of global registers now, ``{address: value}``."""
+        r = self.request("registers", addresses=[int(a) for a in addresses])
+        return dict(zip(r.get("addresses", []), r.get("values", [])))
 
     def speed(self, mode: str, factor: Optional[float] = None) -> dict:
         """realtime, factor (with ``factor``), max or pause."""

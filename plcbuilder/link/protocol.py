@@ -15,10 +15,11 @@ Messages
     message on a connection must be ``hello {version, token}``.
 
     client -> server (requests):
-        hello {version, token}          upload {image: base64}
+        hello {version, token}          upload {image: base64, target?}
         start {name | mcode, eparam}    stop {}
         input {pin, value}              adc {channel, value}
         state {}                        variables {}
+        registers {addresses: [int]}    (read global registers, at most MAX_REGISTERS)
         subscribe {samples?, events?}   unsubscribe {}
         speed {mode, factor?}           step {ms}
         reset {}                        event {handler}
@@ -96,7 +97,8 @@ _MAX_ID_TEXT = 64
 #: Requests a client may send, and the messages a server may send. Dispatch
 #: only ever looks a type up in these sets.
 REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state", "variables",
-                      "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping"}
+                      "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping",
+                      "registers"}
                      | {"set_breakpoints", "debug_continue", "debug_pause", "debug_step",
                         "debug_run_to", "debug_state"})
 #: Events that travel as notifications of their own (not inside telemetry).
@@ -107,6 +109,9 @@ FORCE_REQUESTS = frozenset({"write", "force", "release", "release_all", "forces"
 REQUESTS = REQUESTS | FORCE_REQUESTS
 #: How a release leaves its target: its current value, or the program's (the wiring).
 RELEASE_MODES = ("keep", "restore")
+
+#: Addresses one ``registers`` request may read at most.
+MAX_REGISTERS = 256
 
 #: Speed modes of the ``speed`` request.
 SPEED_MODES = ("realtime", "factor", "max", "pause")
@@ -385,6 +390,21 @@ def field_str(msg: dict, name: str, default: Any = ..., max_len: int = 128) -> s
     return v
 
 
+def field_int_list(msg: dict, name: str, max_items: int, lo: int = -(1 << 31),
+                   hi: int = (1 << 31) - 1) -> list[int]:
+    """A list of at most ``max_items`` integers in [lo, hi]."""
+    v = msg.get(name)
+    if not isinstance(v, list):
+        raise BadRequest(f"{msg.get('type')}: {name!r} must be a list of integers")
+    if len(v) > max_items:
+        raise BadRequest(f"{msg.get('type')}: {name!r} holds more than {max_items} items")
+    for x in v:
+        if type(x) is not int or not lo <= x <= hi:
+            raise BadRequest(f"{msg.get('type')}: {name!r} must hold integers from {lo} to "
+                             f"{hi}, holds {x!r}"[:200])
+    return list(v)
+
+
 def field_bool(msg: dict, name: str, default: bool) -> bool:
     v = msg.get(name, default)
     if not isinstance(v, bool):
@@ -419,6 +439,29 @@ def decode_image(msg: dict, max_image: int = MAX_IMAGE) -> bytes:
     if len(data) > max_image:
         raise BadRequest(f"upload: the image is {len(data)} bytes, more than {max_image}")
     return data
+
+
+#: upload's optional ``target``: the target profile the image is for (docs/targets.md)
+TARGET_KEYS = {"name": str, "parameters": list, "cycle_time_us": int,
+               "program_periods_us": list, "instruction_ns": int}
+
+
+def decode_target(msg: dict) -> Optional[dict]:
+    """The ``target`` of an upload request, checked for shape (the controller
+    checks the values), or None when there is none. Raises BadRequest."""
+    t = msg.get("target")
+    if t is None:
+        return None
+    if not isinstance(t, dict) or not isinstance(t.get("name"), str):
+        raise BadRequest("upload: 'target' must be an object with a 'name'")
+    for key, value in t.items():
+        want = TARGET_KEYS.get(key)
+        if want is None:
+            raise BadRequest(f"upload: unknown target key {key!r}")
+        if type(value) is not want or (want is list and len(value) > 100) or \
+                (want is list and not all(type(v) is int for v in value)):
+            raise BadRequest(f"upload: target {key!r} has the wrong type")
+    return t
 
 
 # ------------------------------------------------------------------ telemetry encoding
@@ -462,14 +505,14 @@ class ChangeEncoder:
         if prev is None:
             d = {1: running, 2: proc, 3: message}
             for i, name in enumerate(_MACHINE_FIELDS, 4):
-                d[i] = fields[name]
+                d[i] = fields.get(name, ())
         else:
             d = {i: v for i, (v, p) in enumerate(zip(head, prev), 1) if v != p}
             pf = self._prev_fields
             if fields is not pf:
                 for i, name in enumerate(_MACHINE_FIELDS, 4):
-                    v = fields[name]
-                    if v != pf[name]:
+                    v = fields.get(name, ())
+                    if v != pf.get(name, ()):
                         d[i] = v
         d[0] = t
         self._prev, self._prev_fields = head, fields

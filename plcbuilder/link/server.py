@@ -696,11 +696,15 @@ class Server:
 
 # ===================================================================== together
 
-def make_controller(machine=None, variables=None, **kwargs) -> Callable[[], Controller]:
-    """A factory of controllers for a machine file and a plc-variables.xml (paths
-    or None for the defaults). Raises ConfigError on a bad file."""
+def make_controller(machine=None, variables=None, io_dat=None,
+                    **kwargs) -> Callable[[], Controller]:
+    """A factory of controllers for a machine file, a plc-variables.xml and an
+    IO.DAT (paths or None for the defaults). Raises ConfigError on a bad file."""
+    from plcbuilder.controller import io_dat as io_dat_file
     from plcbuilder.controller import machine_config, variables_xml
     mc = machine_config.load_machine(machine) if machine else machine_config.default_machine()
+    if io_dat:
+        mc = io_dat_file.with_io_dat(mc, io_dat_file.load_io_dat(io_dat))
     vs = variables_xml.load_variables(variables) if variables else None
 
     def factory() -> Controller:
@@ -773,6 +777,11 @@ class ControllerServer:
             runtime.remove(self._endpoint, self.runtime_file, self._previous)
         self.sim.stop(shutdown=shutdown)
         self.server.stop()
+        try:
+            self.service.save_state()           # Huazhong's B, for the next start
+        except OSError as exc:
+            from plcbuilder.link.protocol import debug
+            debug(f"cannot write the controller state: {exc}")
 
     def __enter__(self) -> "ControllerServer":
         return self.start()

@@ -16,6 +16,7 @@ from typing import Callable, Optional
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.debugger import DebugError
 from plcbuilder.controller.events import ControllerStatus
+from plcbuilder.controller.targets import TargetConfig
 from plcbuilder.image.manifest import Image, ImageError, Limits, read_image
 from plcbuilder.link import protocol
 from plcbuilder.link.pacing import Simulation, SimulationDown, TelemetryQueue
@@ -79,6 +80,10 @@ class Service(DebugVerbs):
         self.refused = 0
         self.clients = 0            # kept up to date by the Server
         self.step_budget = 2.0      # seconds of wall time one step request may take
+        #: the controller's kept state (Huazhong's B registers) by target, and the
+        #: file it is kept in across restarts of the server (None: in memory only)
+        self.state_path = None
+        self.kept: dict[str, tuple] = {}
 
     # ---------------------------------------------------------------- dispatch
     def dispatch(self, msg: dict, session: Session) -> dict:
@@ -112,8 +117,10 @@ class Service(DebugVerbs):
             _debug(traceback.format_exc())
             raise Refused(f"image refused: unreadable ({type(exc).__name__}: {exc})") from None
 
-    def load_image(self, data: bytes) -> dict:
-        """Validate a whole image, then load it at once; on refusal nothing changes."""
+    def load_image(self, data: bytes, target: Optional[dict] = None) -> dict:
+        """Validate a whole image, then load it at once; on refusal nothing changes.
+        ``target`` (docs/targets.md): the controller runs that target's schedule
+        from now on (a new controller on the same machine when it changes)."""
         try:
             image = self.check_image(data)
         except Refused:
@@ -121,7 +128,7 @@ class Service(DebugVerbs):
             raise
 
         def swap():
-            controller = self.sim.controller
+            controller = self._for_target(target)
             previous = list(controller.programs.values())
             try:
                 controller.load([p.program for p in image.procedures])
@@ -157,7 +164,31 @@ class Service(DebugVerbs):
         except BadRequest:
             self.refused += 1
             raise
-        return self.load_image(data)
+        return self.load_image(data, protocol.decode_target(msg))
+
+    def _for_target(self, target: Optional[dict]) -> Controller:
+        """The controller to load an image for ``target`` into: the one running,
+        or a new one on the same machine when the target changes (Huazhong's
+        B registers carried over). Runs on the simulation thread."""
+        current = self.sim.controller
+        name = (target or {}).get("name", "mycnc")
+        config = None
+        if name != "mycnc":
+            fields = dict(target)
+            for key in ("parameters", "program_periods_us"):
+                if key in fields:
+                    fields[key] = tuple(fields[key])
+            kept = current.retained() if current.target is not None and \
+                current.target.name == name else self.kept.get(name)
+            try:
+                config = TargetConfig(**fields, retained=tuple(kept) if kept else None)
+            except TypeError as exc:
+                raise ControllerError(f"target: {exc}") from None
+        if config == current.target:
+            return current
+        new = Controller(current.machine.config, backend=current.backend, target=config)
+        self.sim.replace_controller(new)
+        return new
 
     # ---------------------------------------------------------------- procedures
     def handle_start(self, msg: dict, session: Session) -> dict:
@@ -265,7 +296,19 @@ class Service(DebugVerbs):
         return self.state().to_dict()
 
     def handle_variables(self, msg: dict, session: Session) -> dict:
-        return {"variables": self._on_sim(self.sim.controller.variables)}
+        def read():
+            c = self.sim.controller
+            out = {"variables": c.variables()}
+            if c.target is not None:
+                out["target"] = c.target_report()
+            return out
+        return self._on_sim(read)
+
+    def handle_registers(self, msg: dict, session: Session) -> dict:
+        addresses = protocol.field_int_list(msg, "addresses", protocol.MAX_REGISTERS)
+        gvarget = self.sim.controller.machine.gvarget
+        values = self._on_sim(lambda: [gvarget(a) for a in addresses])
+        return {"addresses": addresses, "values": values}
 
     # ---------------------------------------------------------------- time
     def handle_speed(self, msg: dict, session: Session) -> dict:
@@ -319,11 +362,48 @@ class Service(DebugVerbs):
 
         def go():
             new = factory()
+            old = self.sim.controller
+            if old.target is not None:         # a restart: the same target, B kept
+                kept = old.retained()
+                new = Controller(new.machine.config, backend=new.backend,
+                                 target=replace(old.target,
+                                                retained=tuple(kept) if kept else None))
             if self.image is not None:
                 new.load([p.program for p in self.image.procedures])
             self.sim.replace_controller(new)
             return new.t_ms
         return {"t_ms": self._on_sim(go)}
+
+    def load_state(self, path) -> None:
+        """Read the kept state from ``path`` (docs/targets.md: a restart keeps
+        Huazhong's B registers); a missing file is an empty state. Raises
+        ValueError naming the file when it cannot be used."""
+        import json
+        from pathlib import Path
+        from plcbuilder._support.files import read_bounded
+        path = Path(path)
+        if path.exists():
+            try:
+                doc = json.loads(read_bounded(path, 1 << 20, "state file").decode("utf-8"))
+                self.kept = {name: tuple(int(v) for v in doc[name]["B"]) for name in doc}
+            except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError) as exc:
+                raise ValueError(f"{path}: not a controller state file: {exc}") from None
+        self.state_path = path          # only a state read (or none yet) is written back
+
+    def save_state(self) -> None:
+        """Write the kept state (the running controller's B registers) to the
+        state file, when there is one."""
+        if self.state_path is None:
+            return
+        import json
+        from plcbuilder._support.files import atomic_write
+        c = self.sim.controller
+        kept = c.retained()
+        if kept is not None:
+            self.kept[c.target.name] = tuple(kept)
+        if self.kept:
+            atomic_write(self.state_path, json.dumps(
+                {name: {"B": list(v)} for name, v in sorted(self.kept.items())}) + "\n")
 
     def handle_ping(self, msg: dict, session: Session) -> dict:
         return {"pong": True}

@@ -341,7 +341,8 @@ def _procedure_builds(project: Project, progress: Optional[Progress], strict: Op
             options_for[folder] = project.compile_options(proc.path, strict=strict,
                                                           extra_includes=extra_includes)
         options = options_for[folder]
-        problem = _outside_problem(proc, root) or _name_problem(proc, by_name)
+        problem = (_outside_problem(proc, root) or _name_problem(proc, by_name)
+                   or _target_problem(project, proc, procs))
         by_name.setdefault(proc.name, proc)
         if problem is not None:
             finished(i, ProcedureBuild(proc, [problem], None, options.limit))
@@ -515,8 +516,29 @@ def _name_problem(proc: Procedure, seen: dict[str, Procedure]) -> Optional[Diagn
     return None
 
 
+def _target_problem(project: Project, proc: Procedure,
+                    procs: list[Procedure]) -> Optional[Diagnostic]:
+    """A target other than mycnc runs one program: one .plc file in hardware/
+    (docs/targets.md)."""
+    target = project.target
+    if target == "mycnc":
+        return None
+    at = Span.point(str(proc.path), 1, 1)
+    if proc.kind is Kind.SOFTWARE:
+        return error("target-project", f"the {target} target has no software PLC: "
+                                       f"{proc.path.name} in software/ is not run", at,
+                     "move its procedures into the program in hardware/, or remove the file")
+    first = next(p for p in procs if p.kind is Kind.HARDWARE)
+    if first is not proc:
+        return error("target-project", f"the {target} target runs one program, "
+                                       f"{first.path.name}; this is a second one", at,
+                     f"put its procedures into {first.path.name}, or remove the file")
+    return None
+
+
 def _is_name_problem(pb: ProcedureBuild) -> bool:
-    return any(d.code in ("procedure-name", "duplicate-procedure", "source-outside-project")
+    return any(d.code in ("procedure-name", "duplicate-procedure", "source-outside-project",
+                          "target-project")
                for d in pb.diagnostics)
 
 
@@ -676,7 +698,7 @@ class _Cache:
         source = self.info(proc.path, keep=True)
         if source is None:
             return None
-        put(CACHE_VERSION, self.fingerprint, proc.kind.label, options.strict,
+        put(CACHE_VERSION, self.fingerprint, proc.kind.label, options.strict, options.target,
             options.limit, str(proc.path), self.cwd, source[0], str(options.root))
         dirs = [Path(d) for d in options.include_dirs]
         put(len(dirs), *[str(d) for d in dirs])

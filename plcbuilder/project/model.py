@@ -14,6 +14,7 @@ The settings file::
 
     name = "my machine"            # default: the folder's name
     machine = "machine.toml"       # relative to the project folder
+    target = "mycnc"               # the controller: mycnc, huazhong or tgmotion (docs/targets.md)
 
     [limits]                       # code size limits in bytes
     hw_proc = 512
@@ -26,6 +27,14 @@ The settings file::
     [build]
     strict = false                 # build with --strict (controller compatibility)
     include = ["../shared"]        # more folders #include searches (relative to the project)
+
+    [huazhong]
+    parameters = "parameters.toml" # the P registers' values
+
+    [tgmotion]
+    cycle_time_us = 500            # 250, 500 or 1000
+    cycle_time_program_01_us = 1000   # 100 ... 10000 (also _02_, _03_)
+    instruction_ns = 20            # modelled execution time of one instruction
 
 #include finds headers in the procedure's folder, include/, the folders of
 [build] include, then the built-in headers; a header must lie inside the
@@ -47,6 +56,7 @@ from typing import Optional, Union
 from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder._support.toml_errors import TomlLocator, decode_error
 from plcbuilder._support.toml_errors import loads as toml_loads
+from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.lang.pipeline import CompileOptions
 from plcbuilder.image.manifest import MAX_LIMIT, Limits
@@ -59,6 +69,7 @@ BUILD_DIR = "build"
 VARIABLES_FILE = "plc-variables.xml"
 DEFAULT_MACHINE = "machine.toml"
 IMAGE_FILE = "eeprom.rom"
+DEFAULT_PARAMETERS = "parameters.toml"
 SOURCE_SUFFIX = ".plc"
 MAX_SETTINGS_BYTES = 1 << 20
 
@@ -88,15 +99,23 @@ class Settings:
     controller_address: str = ""
     strict: bool = False
     include: tuple[str, ...] = ()      # [build] include: more include folders
+    target: str = T.MYCNC              # the controller the project is for (docs/targets.md)
+    parameters: str = DEFAULT_PARAMETERS   # [huazhong] parameters: the P registers' file
+    cycle_time_us: int = 500           # [tgmotion]
+    program_periods_us: tuple[int, int, int] = (1000, 1000, 1000)
+    instruction_ns: int = T.TGM_DEFAULT_INSTRUCTION_NS
 
     def to_toml(self) -> str:
         """The settings file's text (every key written, with comments)."""
         def line(key: str, value: str, comment: str) -> str:
-            return f"{key} = {value}".ljust(27) + f"# {comment}\n"
+            text = f"{key} = {value}"
+            return text.ljust(27) + (" " if len(text) >= 27 else "") + f"# {comment}\n"
         lim = self.limits
         return ("# PLC Builder project settings (see docs/projects.md in PLC Builder)\n"
                 + line("name", _toml_str(self.name), "the project's name")
                 + line("machine", _toml_str(self.machine), "the simulated machine's file")
+                + (line("target", _toml_str(self.target), "the controller: mycnc, huazhong or "
+                        "tgmotion (docs/targets.md)") if self.target != T.MYCNC else "")
                 + "\n[limits]\n"
                 + line("hw_proc", str(lim.hw_proc), "bytes of code of one hardware procedure")
                 + line("hw_total", str(lim.hw_total), "... of all hardware procedures together")
@@ -108,7 +127,26 @@ class Settings:
                 + line("strict", "true" if self.strict else "false",
                        "controller compatibility: only what the myCNC manual shows")
                 + line("include", "[" + ", ".join(_toml_str(d) for d in self.include) + "]",
-                       "more #include folders (may be outside the project)"))
+                       "more #include folders (may be outside the project)")
+                + self._target_toml(line))
+
+    def _target_toml(self, line) -> str:
+        """The target's keys: written only for a target other than mycnc (a
+        myCNC project's file stays as it always was)."""
+        if self.target == T.MYCNC:
+            return ""
+        out = ""
+        if self.target == T.HUAZHONG:
+            out += ("\n[huazhong]\n"
+                    + line("parameters", _toml_str(self.parameters), "the P registers' values"))
+        if self.target == T.TGMOTION:
+            out += ("\n[tgmotion]\n"
+                    + line("cycle_time_us", str(self.cycle_time_us), "250, 500 or 1000")
+                    + "".join(line(f"cycle_time_program_0{i + 1}_us", str(v), "100 ... 10000")
+                              for i, v in enumerate(self.program_periods_us))
+                    + line("instruction_ns", str(self.instruction_ns),
+                           "modelled time of one instruction"))
+        return out
 
 
 def _toml_str(s: str) -> str:
@@ -125,10 +163,14 @@ def _toml_str(s: str) -> str:
 
 
 _SCHEMA: dict[str, dict[str, type]] = {
-    "": {"name": str, "machine": str},
+    "": {"name": str, "machine": str, "target": str},
     "limits": {"hw_proc": int, "hw_total": int, "sw_proc": int},
     "controller": {"address": str},
     "build": {"strict": bool, "include": list},
+    "huazhong": {"parameters": str},
+    "tgmotion": {"cycle_time_us": int, "cycle_time_program_01_us": int,
+                 "cycle_time_program_02_us": int, "cycle_time_program_03_us": int,
+                 "instruction_ns": int},
 }
 
 
@@ -174,9 +216,37 @@ def parse_settings(text: str, file: Union[str, Path] = SETTINGS_FILE,
         if not isinstance(d, str) or not d.strip():
             raise ProjectError("include must be a list of folder names (strings)", file,
                                _line_of(text, "build", "include"), "build.include")
+    target = values.get("target", T.MYCNC)
+    if target not in T.TARGETS:
+        raise ProjectError(f"unknown target {target!r} (one of {', '.join(T.TARGETS)})", file,
+                           _line_of(text, "", "target"), "target")
+    parameters = values.get("huazhong.parameters", DEFAULT_PARAMETERS)
+    if not parameters.strip():
+        raise ProjectError("parameters must name a file", file,
+                           _line_of(text, "huazhong", "parameters"), "huazhong.parameters")
+    cycle = values.get("tgmotion.cycle_time_us", 500)
+    if cycle not in T.TGM_CYCLE_TIMES:
+        raise ProjectError(f"must be 250, 500 or 1000 (µs, as TG Motion's Cycle_Time), is {cycle}",
+                           file, _line_of(text, "tgmotion", "cycle_time_us"),
+                           "tgmotion.cycle_time_us")
+    lo, hi = T.TGM_PERIOD_RANGE
+    periods = []
+    for i in (1, 2, 3):
+        key = f"cycle_time_program_0{i}_us"
+        v = values.get(f"tgmotion.{key}", 1000)
+        if not lo <= v <= hi:
+            raise ProjectError(f"must be from {lo} to {hi} µs, is {v}", file,
+                               _line_of(text, "tgmotion", key), f"tgmotion.{key}")
+        periods.append(v)
+    ns = values.get("tgmotion.instruction_ns", T.TGM_DEFAULT_INSTRUCTION_NS)
+    if not 1 <= ns <= 1_000_000:
+        raise ProjectError(f"must be from 1 to 1000000 ns, is {ns}", file,
+                           _line_of(text, "tgmotion", "instruction_ns"), "tgmotion.instruction_ns")
     return Settings(name=values.get("name", default_name) or default_name, machine=machine,
                     limits=limits, controller_address=address,
-                    strict=values.get("build.strict", False), include=tuple(include))
+                    strict=values.get("build.strict", False), include=tuple(include),
+                    target=target, parameters=parameters, cycle_time_us=cycle,
+                    program_periods_us=tuple(periods), instruction_ns=ns)
 
 
 def _check(text: str, file, table: str, key: str, value) -> None:
@@ -191,7 +261,7 @@ def _check(text: str, file, table: str, key: str, value) -> None:
     if type(value) is not want:
         raise ProjectError(f"must be {_type_word(want)}, is {_type_word(type(value))} {value!r}",
                            file, _line_of(text, table, key), label)
-    if want is int and not 0 < value <= MAX_LIMIT:
+    if want is int and table == "limits" and not 0 < value <= MAX_LIMIT:
         raise ProjectError(f"must be from 1 to {MAX_LIMIT} bytes, is {value}", file,
                            _line_of(text, table, key), label)
 
@@ -283,7 +353,8 @@ class Project:
         dirs += [d for d in self.include_dirs() if d not in dirs]
         strict = self.settings.strict if strict is None else strict
         return CompileOptions(kind=kind, strict=strict, include_dirs=tuple(dirs),
-                              code_limit=self.limits.proc_limit(kind), root=self.root)
+                              code_limit=self.limits.proc_limit(kind), root=self.root,
+                              target=self.settings.target)
 
     # -------------------------------------------------------------- paths
     @property
@@ -321,6 +392,30 @@ class Project:
     @property
     def machine_path(self) -> Path:
         return self.root / self.settings.machine
+
+    @property
+    def parameters_path(self) -> Path:
+        """The Huazhong target's P registers file."""
+        return self.root / self.settings.parameters
+
+    @property
+    def target(self) -> str:
+        return self.settings.target
+
+    def target_settings(self) -> dict:
+        """What the controller needs to run this project's target (the keyword
+        arguments of controller.targets.TargetConfig); reads the Huazhong
+        parameters file (ProjectError naming its line when it is wrong)."""
+        from plcbuilder.project.parameters import load_parameters
+        st = self.settings
+        out = {"name": st.target}
+        if st.target == T.HUAZHONG:
+            out["parameters"] = tuple(load_parameters(self.parameters_path))
+        if st.target == T.TGMOTION:
+            out.update(cycle_time_us=st.cycle_time_us,
+                       program_periods_us=tuple(st.program_periods_us),
+                       instruction_ns=st.instruction_ns)
+        return out
 
     @property
     def limits(self) -> Limits:

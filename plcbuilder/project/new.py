@@ -25,6 +25,9 @@ from plcbuilder.project.model import (DEFAULT_MACHINE, INCLUDE_DIR, SETTINGS_FIL
                                       ProjectError, Settings)
 
 EXAMPLE = ("resources", "example_project")
+#: the example project of each target (docs/targets.md)
+EXAMPLES = {"mycnc": EXAMPLE, "huazhong": ("resources", "example_huazhong"),
+            "tgmotion": ("resources", "example_tgmotion")}
 PINS = ("resources", "include", "pins.h")
 MACHINE = ("resources", "machine", "default.toml")
 
@@ -47,10 +50,14 @@ def _copy_tree(src: Traversable, dest: Path) -> None:
             (dest / entry.name).write_bytes(entry.read_bytes())
 
 
-def create_project(dest: Union[str, Path], name: Optional[str] = None) -> Project:
-    """Create a project at dest (which must not exist, or be an empty folder).
+def create_project(dest: Union[str, Path], name: Optional[str] = None,
+                   target: str = "mycnc") -> Project:
+    """Create a project at dest (which must not exist, or be an empty folder)
+    for ``target`` (mycnc, huazhong or tgmotion: that target's example).
     Raises ProjectError when it cannot."""
     dest = Path(dest)
+    if target not in EXAMPLES:
+        raise ProjectError(f"unknown target {target!r} (one of {', '.join(EXAMPLES)})")
     if dest.exists():
         if not dest.is_dir():
             raise ProjectError("exists and is a file", dest)
@@ -59,7 +66,7 @@ def create_project(dest: Union[str, Path], name: Optional[str] = None) -> Projec
     parent = dest.parent
     if not parent.is_dir():
         raise ProjectError("no such folder", parent)
-    example, pins, machine = _resource(EXAMPLE), _resource(PINS), _resource(MACHINE)
+    example, pins, machine = _resource(EXAMPLES[target]), _resource(PINS), _resource(MACHINE)
     for ref, what in ((example, "the example project"), (pins, "the default pins.h"),
                       (machine, "the default machine")):
         if not (ref.is_dir() if ref is example else ref.is_file()):
@@ -71,7 +78,7 @@ def create_project(dest: Union[str, Path], name: Optional[str] = None) -> Projec
         (tmp / INCLUDE_DIR).mkdir(exist_ok=True)
         (tmp / INCLUDE_DIR / "pins.h").write_bytes(pins.read_bytes())
         (tmp / DEFAULT_MACHINE).write_bytes(machine.read_bytes())
-        (tmp / SETTINGS_FILE).write_text(Settings(name=project_name).to_toml(), encoding="utf-8")
+        (tmp / SETTINGS_FILE).write_text(Settings(name=project_name, target=target).to_toml(), encoding="utf-8")
         try:
             os.replace(tmp, dest)          # POSIX: also replaces an empty folder
         except OSError:

@@ -41,9 +41,11 @@ from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.coverage import CodeCoverage
 from plcbuilder.controller.events import Ended, Fault, Message, Print, Started
 from plcbuilder.controller.machine import Machine
+from plcbuilder.controller.io_dat import io_dat_of, load_io_dat, with_io_dat
 from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
 from plcbuilder.controller.scenario import STARTING, apply, drive
 from plcbuilder.controller.session import TraceWriter, UsageError, check_scenario
+from plcbuilder.controller.targets import TargetConfig
 from plcbuilder.controller.variables_xml import load_variables
 from plcbuilder.project.build import ProcedureBuild, compile_all
 from plcbuilder.project.model import DEFAULT_MACHINE, Project, ProjectError
@@ -133,15 +135,20 @@ class Env:
     backend: str = "fast"
     coverage: bool = False
     stop_early: bool = True
+    target: Optional[TargetConfig] = None  # the project's target profile (None: mycnc)
+    io_dat: Optional[str] = None         # the project's IO.DAT (softMC input presets)
 
 
-_MACHINES: dict[Optional[str], object] = {}
+_MACHINES: dict[tuple[Optional[str], Optional[str]], object] = {}
 
 
-def _machine(path: Optional[str]):
-    m = _MACHINES.get(path)
+def _machine(path: Optional[str], io_dat: Optional[str] = None):
+    m = _MACHINES.get((path, io_dat))
     if m is None:
-        m = _MACHINES[path] = load_machine(path) if path is not None else default_machine()
+        m = load_machine(path) if path is not None else default_machine()
+        if io_dat is not None:
+            m = with_io_dat(m, load_io_dat(io_dat))
+        _MACHINES[(path, io_dat)] = m
     return m
 
 
@@ -214,6 +221,12 @@ def prepare(root, select: Optional[str] = None, *, tests_dir: Optional[Path] = N
     if default is None and project.settings.machine != DEFAULT_MACHINE:
         raise SuiteError(f"{project.settings_path}: machine: no such file "
                          f"{project.machine_path}")
+    io_dat = io_dat_of(project.root)
+    if io_dat is not None:
+        try:
+            load_io_dat(io_dat)
+        except ConfigError as exc:
+            raise SuiteError(str(exc)) from None
     programs = suite.programs
     names = Names({p.name: set(p.slot_names().values()) for p in programs},
                   _pins(project))
@@ -235,7 +248,14 @@ def prepare(root, select: Optional[str] = None, *, tests_dir: Optional[Path] = N
             continue
         suite.machines[t.name] = path
         suite.tests.append(t)
-    suite.env = Env(programs, variables, default)
+    target = None
+    if project.target != "mycnc":
+        try:
+            target = TargetConfig(**project.target_settings())
+        except ProjectError as exc:
+            raise SuiteError(str(exc)) from None
+    suite.env = Env(programs, variables, default, target=target,
+                    io_dat=None if io_dat is None else str(io_dat))
     return suite
 
 
@@ -271,7 +291,8 @@ def run_suite(suite: Suite, *, coverage: bool = False, jobs: Optional[int] = Non
     if env is None:
         raise SuiteError("the project did not build; nothing to run")
     env = Env(env.programs, env.variables, env.machine, "reference" if coverage else "fast",
-              coverage, stop_early=not coverage)
+              coverage, stop_early=not coverage, target=env.target,
+              io_dat=env.io_dat)
     work = [(t, suite.machines.get(t.name, env.machine)) for t in todo]
     n = _jobs(jobs, todo)
     hits: dict[str, set[int]] = {}
@@ -555,9 +576,9 @@ def run_test(tc: TestCase, env: Env, machine: Optional[str] = None,
     t0 = time.perf_counter()
     result = TestResult(tc.name, tc.file, tc.line)
     try:
-        c = Controller(_machine(machine if machine is not None else env.machine),
+        c = Controller(_machine(machine if machine is not None else env.machine, env.io_dat),
                        backend=env.backend, variables=env.variables, record_samples=False,
-                       coverage=coverage)
+                       coverage=coverage, target=env.target)
         c.load(env.programs)
         check_scenario(tc.scenario, c)
         result.ended_at_ms, seen, watches = _drive(c, tc, env.stop_early)
@@ -589,8 +610,9 @@ def _last_failing_tick(result: TestResult) -> int:
 
 def _recording(env: Env, machine: Optional[str]) -> Controller:
     """A fresh controller for a rerun: the fast backend, a sample every tick."""
-    c = Controller(_machine(machine if machine is not None else env.machine),
-                   backend="fast", variables=env.variables, record_samples=True)
+    c = Controller(_machine(machine if machine is not None else env.machine, env.io_dat),
+                   backend="fast", variables=env.variables, record_samples=True,
+                   target=env.target)
     c.load(env.programs)
     return c
 

@@ -300,9 +300,9 @@ def test_manual_override_wins_over_wiring():
 def test_sample_fields_shape_and_caching():
     m = Machine()
     s = m.sample_fields()
-    assert set(s) == {"inputs", "outputs", "pwm", "dac", "adc", "axes", "velocities"}
-    assert [len(s[k]) for k in ("inputs", "outputs", "pwm", "dac", "adc", "axes", "velocities")] \
-        == [8, 8, 8, 8, 8, 9, 9]
+    keys = ("inputs", "outputs", "pwm", "dac", "adc", "axes", "velocities", "vio")
+    assert set(s) == set(keys)
+    assert [len(s[k]) for k in keys] == [8, 8, 8, 8, 8, 9, 9, 2]
     assert all(isinstance(v, tuple) and all(isinstance(x, int) for x in v) for v in s.values())
     m.advance()
     assert m.sample_fields() is s       # nothing changed: the same object

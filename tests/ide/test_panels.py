@@ -170,7 +170,7 @@ def test_pin_names_from_a_compiled_project_file():
 def test_docks_have_names_and_render(qtbot, panels, fake, tmp_path):
     docks = panels.docks()
     names = [d.objectName() for d in docks]
-    assert len(set(names)) == 7 and all(names)
+    assert len(set(names)) == len(panels.DOCKS) == 8 and all(names)
     assert [d.windowTitle() for d in docks][:2] == ["Proc / messages", "Outputs"]
     fake.sig_samples.emit([sample(t, proc=70, outputs=t & 1, pwm=(t,), axes=(t, 2 * t))
                            for t in range(500)])
@@ -475,7 +475,7 @@ def test_lanes_are_one_curve_that_keeps_every_edge(qtbot, panels, fake):
     assert lanes.lanes() == [("outputs", 0), ("outputs", 1), ("outputs", 5)]
     x, y = lanes.merged_data("outputs")
     items = [i for i in lanes.plot.listDataItems() if isinstance(i, type(lanes._items["outputs"]))]
-    assert len(items) == 2                             # outputs and inputs: one curve each
+    assert len(items) == 3                   # outputs, virtual outputs, inputs: one curve each
     t = np.arange(300) / 1000.0 - lanes.offset
     for pin, period in ((0, 1), (1, 2)):
         base = lanes._lane_y[("outputs", pin)]

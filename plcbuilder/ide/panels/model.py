@@ -159,6 +159,7 @@ class RunModel:
         self.scalars = RingBuffer(self.capacity, 2, np.float64)     # proc, message
         self.inputs = RingBuffer(self.capacity, WORDS, np.uint32)
         self.outputs = RingBuffer(self.capacity, WORDS, np.uint32)
+        self.vouts = RingBuffer(self.capacity, 1, np.uint32)        # softMC VOUT.1..32
         self.analog = RingBuffer(self.capacity, 24, np.float64)     # PWM0-7, DAC0-7, ADC0-7
         self.axes = RingBuffer(self.capacity, 2 * len(AXES), np.float64)  # pos mm, vel mm/s
         self.message_limit = int(messages)
@@ -174,9 +175,12 @@ class RunModel:
     # ------------------------------------------------------------------ state
     def clear(self) -> None:
         """Forget everything (a controller reset or restart)."""
-        for rb in (self.time, self.scalars, self.inputs, self.outputs, self.analog, self.axes):
+        for rb in (self.time, self.scalars, self.inputs, self.outputs, self.vouts, self.analog,
+                   self.axes):
             rb.clear()
         self._out_ever = np.zeros(WORDS, dtype=np.uint32)
+        self._vout_ever = 0
+        self.active_vouts: set[int] = set()        # bit n-1 for VOUT.n
         self._in_ever_set = np.zeros(WORDS, dtype=np.uint32)
         self._in_ever_clear = np.zeros(WORDS, dtype=np.uint32)
         self._analog_ever = np.zeros(24, dtype=bool)
@@ -195,6 +199,39 @@ class RunModel:
 
     def __len__(self) -> int:
         return len(self.time)
+
+    def resize(self, capacity: int) -> None:
+        """Keep up to ``capacity`` samples from now on (a long recorded trace
+        shown whole); forgets what it has. The live capacity comes back with
+        ``resize(live_capacity)``."""
+        capacity = max(1, int(capacity))
+        if capacity == self.capacity:
+            self.clear()
+            return
+        self.capacity = capacity
+        self.time = RingBuffer(capacity, 1, np.float64)
+        self.scalars = RingBuffer(capacity, 2, np.float64)
+        self.inputs = RingBuffer(capacity, WORDS, np.uint32)
+        self.outputs = RingBuffer(capacity, WORDS, np.uint32)
+        self.analog = RingBuffer(capacity, 24, np.float64)
+        self.axes = RingBuffer(capacity, 2 * len(AXES), np.float64)
+        self.clear()
+
+    def sample_at(self, t: float) -> Optional[dict]:
+        """Every value the model holds at time ``t`` (seconds): the newest kept
+        sample at or before it, as {"t", "proc", "message", "inputs", "outputs",
+        "analog", "positions"}; None before the first sample."""
+        times = self.time.view()
+        i = int(np.searchsorted(times, t + 1e-9, side="right")) - 1
+        if i < 0:
+            return None
+        na = len(AXES)
+        return {"t": float(times[i]),
+                "proc": int(self.scalars.view(0)[i]), "message": int(self.scalars.view(1)[i]),
+                "inputs": [int(self.inputs.view(w)[i]) for w in range(WORDS)],
+                "outputs": [int(self.outputs.view(w)[i]) for w in range(WORDS)],
+                "analog": [float(self.analog.view(c)[i]) for c in range(24)],
+                "positions": [float(self.axes.view(c)[i]) for c in range(na)]}
 
     @property
     def t_end(self) -> float:
@@ -224,6 +261,13 @@ class RunModel:
         outs = (table[:, _OUT] & _MASK32).astype(np.uint32)
         self.inputs.extend(ins)
         self.outputs.extend(outs)
+        vouts = np.fromiter((s.vio[1] if len(s.vio) > 1 else 0 for s in samples),
+                            dtype=np.int64, count=n)
+        self.vouts.extend((vouts & _MASK32).astype(np.uint32).reshape(n, 1))
+        vout_or = int(np.bitwise_or.reduce(vouts)) & _MASK32
+        if vout_or & ~self._vout_ever:
+            self._vout_ever |= vout_or
+            self.active_vouts = _bits_set(np.array([self._vout_ever], dtype=np.uint32))
         analog = table[:, _ANALOG].astype(np.float64)
         self.analog.extend(analog)
         motion = table[:, _MOTION] * 0.01            # 0.01 mm -> mm, 0.01 mm/s -> mm/s
@@ -293,9 +337,15 @@ class RunModel:
         n = len(t)
         return max(0, min(a, n)), max(0, min(b, n))
 
+    def words(self, which: str) -> RingBuffer:
+        """The ring buffer of ``which``: "outputs", "inputs" or "vouts" (VOUT.n is
+        bit n-1 of its one word)."""
+        return {"outputs": self.outputs, "inputs": self.inputs, "vouts": self.vouts}[which]
+
     def bit_series(self, which: str, pin: int, a: int = 0, b: Optional[int] = None) -> np.ndarray:
-        """Pin ``pin`` of the inputs or outputs (``which``) over samples [a, b), 0/1 as uint8."""
-        rb = self.outputs if which == "outputs" else self.inputs
+        """Pin ``pin`` of the inputs, outputs or virtual outputs (``which``; bit
+        n-1 for VOUT.n) over samples [a, b), 0/1 as uint8."""
+        rb = self.words(which)
         words = rb.view(pin // 32)[a:b]
         return ((words >> np.uint32(pin % 32)) & np.uint32(1)).astype(np.uint8)
 
@@ -304,7 +354,7 @@ class RunModel:
         s = self.last_sample
         if s is None:
             return None
-        words = s.outputs if which == "outputs" else s.inputs
+        words = {"outputs": s.outputs, "inputs": s.inputs, "vouts": s.vio[1:]}[which]
         if pin // 32 >= len(words):
             return 0
         return (int(words[pin // 32]) >> (pin % 32)) & 1

@@ -26,10 +26,13 @@ from plcbuilder.api import abi
 from plcbuilder.link.client import ControllerStatus
 from plcbuilder.api import events as ev
 from plcbuilder.ide.docks import RUN_DOCKS
+from plcbuilder.ide.panels.cursors import CursorTable, Cursors
 from plcbuilder.ide.panels.inputs import InputsPanel
 from plcbuilder.ide.panels.log import LogPanel
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.plots import AnalogPanel, AxesPanel, LanesPanel, ProcPanel, TimeBase
+from plcbuilder.ide.panels.registers import RegistersPanel, bit_names
+from plcbuilder.ide.panels.traces import TraceTools
 from plcbuilder.ide.panels.watch import WatchPanel
 from plcbuilder.lang import symbols as lang_symbols
 
@@ -79,6 +82,7 @@ class RunPanels(QtCore.QObject):
         super().__init__(main_window)
         self.connection = connection
         self.model = RunModel(capacity)
+        self.live_capacity = int(capacity)
         self.timebase = TimeBase(parent=self)
         clear = self.clear
         self.proc = ProcPanel(self.model, self.timebase, clear)
@@ -87,11 +91,21 @@ class RunPanels(QtCore.QObject):
         self.axes = AxesPanel(self.model, self.timebase, clear)
         self.inputs = InputsPanel(self.model)
         self.watch = WatchPanel()
+        #: a target's registers, under the watch (hidden on myCNC: docs/targets.md)
+        self.registers = RegistersPanel()
+        self.watch.layout().addWidget(self.registers)
+        self.target = "mycnc"
+        self._pin_names: tuple[dict, dict] = ({}, {})
         self.log = LogPanel()
         self.time_panels = (self.proc, self.lanes, self.analog, self.axes)
+        self.traces = TraceTools(self)
+        self.lanes.layout().insertWidget(1, self.traces.bar)
+        self.traces.sig_note.connect(lambda text: self.log.add_note(text, "link"))
+        self.cursors = Cursors(self)
+        self.cursor_table = CursorTable(self, self.cursors)
         widgets = {"proc": self.proc, "outputs": self.lanes, "analog": self.analog,
                    "axes": self.axes, "inputs": self.inputs, "watch": self.watch,
-                   "log": self.log}
+                   "log": self.log, "cursors": self.cursor_table}
         self._docks: dict[str, QtWidgets.QDockWidget] = {}
         for key, title, object_name in self.DOCKS:
             dock = docks.get(key) if docks else None
@@ -155,6 +169,8 @@ class RunPanels(QtCore.QObject):
             c.sig_note.connect(lambda text: self.log.add_note(text, "link"))
         if hasattr(c, "sig_variables"):
             c.sig_variables.connect(self._on_variables)
+        if hasattr(c, "sig_target_report"):
+            c.sig_target_report.connect(self._on_registers)
         if getattr(c, "connected", False):
             self._on_connected(getattr(c, "address", ""))
 
@@ -179,8 +195,13 @@ class RunPanels(QtCore.QObject):
         return self._docks[key]
 
     def set_pin_names(self, inputs: Mapping[int, str], outputs: Mapping[int, str]) -> None:
-        """Names for the lanes and toggles (from the project's pins.h)."""
+        """Names for the lanes and toggles (from the project's pins.h); on the
+        Huazhong target each is first the bank bit it is (X0.0, Y0.7)."""
         inputs, outputs = dict(inputs), dict(outputs)
+        self._pin_names = (inputs, outputs)
+        if self.target == "huazhong":
+            inputs = bit_names(max(64, max(inputs, default=0) + 1), "X", inputs)
+            outputs = bit_names(max(64, max(outputs, default=0) + 1), "Y", outputs)
         self.lanes.set_pin_names(inputs, outputs)
         self.inputs.set_pin_names(inputs)
 
@@ -203,6 +224,13 @@ class RunPanels(QtCore.QObject):
         for mode, text in (("keep", "keep the value"), ("restore", "restore the program's")):
             act = menu.addAction(f"Release {t} ({text})", lambda m=mode: c.release(t, m))
             act.setEnabled(lane in self.lanes.forced)
+    def set_target(self, target: str) -> None:
+        """The open project's target (docs/targets.md): the lanes' names, and
+        the registers under the watch (shown once the controller reports them)."""
+        self.target = target or "mycnc"
+        if self.target == "mycnc":
+            self.registers.set_report({})
+        self.set_pin_names(*self._pin_names)
 
     def clear(self) -> None:
         """Forget the recorded samples and messages (the log keeps its rows);
@@ -214,20 +242,22 @@ class RunPanels(QtCore.QObject):
         self._cleared()
 
     def show_recorded(self, name: str, samples: list, events: list,
-                      failing_ms: Optional[int] = None) -> None:
-        """Show a recorded test run instead of the live telemetry (which is not
-        shown until :meth:`back_to_live`): its samples and events, the Proc and
-        Outputs docks raised, not following, the failing tick in view with a
-        line at it."""
+                      failing_ms: Optional[int] = None, text: Optional[str] = None) -> None:
+        """Show a recorded test run (or a trace: ``text`` says what it is)
+        instead of the live telemetry (which is not shown until
+        :meth:`back_to_live`): its samples and events, the Proc and Outputs
+        docks raised, not following, the failing tick (or the trigger) in view
+        with a line at it."""
         self.recorded, self.failing_ms, self.held = name, failing_ms, 0
-        self.model.clear()
+        self.model.resize(max(self.live_capacity, 2 * len(samples) + 16))
         self.model.add_samples(samples)
         self._cleared()
         rows = self.model.add_events(events)
         if rows:
             self.proc.add_messages(rows)
-        at = f", failing at t = {failing_ms} ms" if failing_ms is not None else ""
-        text = f"showing test run '{name}' (recorded){at}"
+        if text is None:
+            at = f", failing at t = {failing_ms} ms" if failing_ms is not None else ""
+            text = f"showing test run '{name}' (recorded){at}"
         self.log.add_note(text, "link")
         self.log.add_events(events)
         for label in self.banners:
@@ -269,7 +299,7 @@ class RunPanels(QtCore.QObject):
         for label in self.banners:
             label.hide()
         self._remove_markers()
-        self.model.clear()
+        self.model.resize(self.live_capacity)
         self._cleared()
         self.timebase.set_follow(True)
         self.log.add_note("back to the live controller", "link")
@@ -299,6 +329,10 @@ class RunPanels(QtCore.QObject):
                 work |= panel.move_pending()
         if self._markers:
             self._place_markers()
+        if self.cursors.enabled:
+            self.cursors.place()
+            if work and self._shown(self.cursor_table):
+                self.cursor_table.refresh()
         self.proc.flush()
         self.log.flush()
         if self._shown(self.inputs):
@@ -347,6 +381,7 @@ class RunPanels(QtCore.QObject):
                     self.var_timer.start()
 
     def _on_samples(self, samples: list) -> None:
+        self.traces.feed(samples)           # the whole session, recorded or not
         if self.recorded is not None:       # a recorded run is shown: live waits
             self.held += len(samples)
             return
@@ -357,6 +392,7 @@ class RunPanels(QtCore.QObject):
         self.wake()
 
     def _on_events(self, events: list) -> None:
+        self.traces.feed([], events)
         rows = self.model.add_events(events) if self.recorded is None else []
         if rows:
             self.proc.add_messages(rows)
@@ -429,6 +465,10 @@ class RunPanels(QtCore.QObject):
             self._final_poll -= 1
         if hasattr(self.connection, "request_variables"):
             self.connection.request_variables()
+
+    def _on_registers(self, report: dict) -> None:
+        if self.target != "mycnc":
+            self.registers.set_report(report)
 
     def _on_variables(self, variables: dict) -> None:
         self.watch.set_variables(variables, self._running)

@@ -1,4 +1,5 @@
-"""The logic-analyser lanes: digital inputs and outputs over time."""
+"""The logic-analyser lanes: digital inputs and outputs over time, and the
+softMC virtual outputs (``VOUT n``; a PLS's output shows on its output's lane)."""
 
 from __future__ import annotations
 
@@ -40,7 +41,7 @@ class LanesPanel(TimePanel):
         self.widget.setToolTip("Right-click to add or remove lanes")
         self._empty = empty_text(self.plot, "No output has changed yet.\n"
                                   "Right-click to add a lane.")
-        self.names = {"inputs": {}, "outputs": {}}
+        self.names = {"inputs": {}, "outputs": {}, "vouts": {}}
         self.pinned: list[tuple[str, int]] = []
         self.hidden: set[tuple[str, int]] = set()
         # every lane of a kind is one curve (a path broken between lanes):
@@ -48,6 +49,7 @@ class LanesPanel(TimePanel):
         self._items: dict[str, pg.PlotDataItem] = {
             kind: _merged_curve(self.plot, colour)
             for kind, colour in (("outputs", style.OUTPUT_COLOUR),
+                                 ("vouts", style.OUTPUT_COLOUR),
                                  ("inputs", style.INPUT_COLOUR))}
         self._blocks: dict[str, pg.BarGraphItem] = {}     # dense runs, filled
         self._lanes: list[tuple[str, int]] = []
@@ -67,13 +69,17 @@ class LanesPanel(TimePanel):
 
     # ------------------------------------------------------------------ API
     def set_pin_names(self, inputs: dict[int, str], outputs: dict[int, str]) -> None:
-        self.names = {"inputs": dict(inputs), "outputs": dict(outputs)}
+        self.names = {"inputs": dict(inputs), "outputs": dict(outputs),
+                      "vouts": self.names.get("vouts", {})}
         self._lanes = []                 # relabel on the next draw
         self._mark_dirty()
 
     def lane_label(self, kind: str, pin: int) -> str:
         name = self.names[kind].get(pin)
-        tag = "OUT" if kind == "outputs" else "IN"
+        if kind == "vouts":                      # bit n-1 is VOUT.n
+            tag, pin = "VOUT", pin + 1
+        else:
+            tag = "OUT" if kind == "outputs" else "IN"
         label = f"{tag} {pin}  {name}" if name else f"{tag} {pin}"
         if (kind, pin) in self.forced:
             label += f"  [forced {self.forced[(kind, pin)]}]"
@@ -123,6 +129,8 @@ class LanesPanel(TimePanel):
         m = self.model
         outs = set(m.active_outputs) | {p for k, p in self.pinned if k == "outputs"}
         lanes = [("outputs", p) for p in sorted(outs)]
+        vouts = set(m.active_vouts) | {p for k, p in self.pinned if k == "vouts"}
+        lanes += [("vouts", p) for p in sorted(vouts)]
         if self.show_inputs.isChecked():
             ins = set(m.active_inputs) | {p for k, p in self.pinned if k == "inputs"}
             lanes += [("inputs", p) for p in sorted(ins)]
@@ -167,7 +175,7 @@ class LanesPanel(TimePanel):
                 item.setData([], [])
                 self._set_blocks(kind, (), (), ())
                 continue
-            rb = m.outputs if kind == "outputs" else m.inputs
+            rb = m.words(kind)
             x, y, connect, blocks = lane_path(rb.views()[:, a:b], [p for _, p in keys],
                                               [self._lane_y[k] for k in keys], t, end, left,
                                               per_px)
@@ -185,7 +193,7 @@ class LanesPanel(TimePanel):
                 item.hide()
             return
         if item is None:
-            colour = style.OUTPUT_COLOUR if kind == "outputs" else style.INPUT_COLOUR
+            colour = style.INPUT_COLOUR if kind == "inputs" else style.OUTPUT_COLOUR
             item = pg.BarGraphItem(x0=x0, x1=x1, y0=y0, height=1.0, pen=pg.mkPen(None),
                                    brush=pg.mkBrush(colour))
             self.plot.addItem(item)
@@ -202,7 +210,7 @@ class LanesPanel(TimePanel):
                 np.asarray(y) if y is not None else np.empty(0))
 
     def watched(self) -> list:
-        return [self.model.inputs, self.model.outputs]
+        return [self.model.inputs, self.model.outputs, self.model.vouts]
 
     def shift(self, dx: float) -> None:
         for item in (*self._items.values(), *self._blocks.values()):
@@ -229,7 +237,8 @@ class LanesPanel(TimePanel):
             act = menu.addAction(f"Remove lane {self.lane_label(*lane)}")
             act.triggered.connect(lambda: self.remove_lane(*lane))
             menu.addSeparator()
-        for kind, title in (("outputs", "Add output lane"), ("inputs", "Add input lane")):
+        for kind, title in (("outputs", "Add output lane"), ("vouts", "Add virtual output lane"),
+                            ("inputs", "Add input lane")):
             sub = menu.addMenu(title)
             shown = set(self._lanes)
             named = sorted(self.names[kind].items())
@@ -252,6 +261,12 @@ class LanesPanel(TimePanel):
         menu.exec(self.widget.mapToGlobal(pos))
 
     def _ask_pin(self, kind: str) -> None:
+        if kind == "vouts":
+            n, ok = QtWidgets.QInputDialog.getInt(self, "Add virtual output lane",
+                                                  "Virtual output (VOUT n):", 1, 1, 32)
+            if ok:
+                self.pin_lane(kind, n - 1)
+            return
         what = "output" if kind == "outputs" else "input"
         pin, ok = QtWidgets.QInputDialog.getInt(self, f"Add {what} lane", f"{what.title()} pin:",
                                                 0, 0, PINS - 1)

@@ -1,0 +1,82 @@
+"""The registers of a target's program (docs/targets.md), under the watch.
+
+On Huazhong the banks' elements that are not 0 (X, Y and R bytes; G, F, P and
+B words), on TG Motion the TGM_Data words that are not 0, then how many times
+each procedure was called and the budget overruns. The values come with the
+watch's poll of the controller (``sig_target_report``); the X and Y bits are also
+the input and output lanes, named X0.0 … and Y0.0 … (:func:`bit_names`).
+Hidden on myCNC.
+"""
+
+from __future__ import annotations
+
+from PySide6 import QtCore, QtWidgets
+
+Qt = QtCore.Qt
+
+#: banks shown as 16-bit words (the others are bytes)
+WORD_BANKS = frozenset({"G", "F", "P", "B"})
+
+
+def bit_names(pins: int, bank: str, names: dict[int, str]) -> dict[int, str]:
+    """Lane names of the Huazhong target: pin 8n+b is ``X<n>.<b>`` (the seed's
+    notation), followed by the pin's own name where it has one."""
+    out = {}
+    for pin in range(pins):
+        label = f"{bank}{pin // 8}.{pin % 8}"
+        own = names.get(pin)
+        out[pin] = f"{label} {own}" if own else label
+    return out
+
+
+class RegistersPanel(QtWidgets.QWidget):
+    """A table of the target's non-zero registers, and the calls."""
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.title = QtWidgets.QLabel()
+        self.table = QtWidgets.QTableWidget(0, 3)
+        self.table.setObjectName("registers")
+        self.table.setHorizontalHeaderLabels(["Register", "Value", "Hex"])
+        self.table.verticalHeader().hide()
+        self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
+        self.table.horizontalHeader().setStretchLastSection(True)
+        self.calls = QtWidgets.QLabel()
+        self.calls.setWordWrap(True)
+        self.calls.setObjectName("calls")
+        lay = QtWidgets.QVBoxLayout(self)
+        lay.setContentsMargins(0, 4, 0, 0)
+        lay.addWidget(self.title)
+        lay.addWidget(self.table, 1)
+        lay.addWidget(self.calls)
+        self.report: dict = {}
+        self.hide()
+
+    def set_report(self, report: dict) -> None:
+        """Show a target's report (``{}``: hide, as on myCNC)."""
+        self.report = dict(report)
+        if not report:
+            self.hide()
+            return
+        self.show()
+        self.title.setText(f"<b>{report.get('target_profile', '')}</b> registers (not 0)")
+        rows = []
+        for bank, values in report.get("registers", {}).items():
+            for index, value in values.items():
+                rows.append((f"{bank}[{index}]", int(value), bank in WORD_BANKS))
+        self.table.setRowCount(len(rows))
+        for r, (name, value, word) in enumerate(rows):
+            digits = 4 if word else (2 if value >= 0 and value < 256 else 8)
+            for c, text in enumerate((name, str(value), f"0x{value & 0xFFFFFFFF:0{digits}x}")):
+                item = self.table.item(r, c)
+                if item is None:
+                    item = QtWidgets.QTableWidgetItem()
+                    self.table.setItem(r, c, item)
+                item.setText(text)
+        calls = report.get("calls", {})
+        text = "calls: " + ", ".join(f"{n} {k}" for n, k in calls.items())
+        over = report.get("budget_overruns", {})
+        if over:
+            text += "<br><span style='color:#b35c00'>over budget: " + ", ".join(
+                f"{n} {k}×" for n, k in over.items()) + "</span>"
+        self.calls.setText(text)

@@ -1,0 +1,305 @@
+"""Traces in the IDE: the session's whole history, the trigger bar, trace files.
+
+:class:`TraceTools` belongs to the run panels. It keeps every change the live
+controller sends in a :class:`~plcbuilder.api.History` (the whole session, as
+changes), arms triggers on it from the :class:`TriggerBar` (single, normal or
+auto mode, or "trigger now") and shows each capture in the same panels when
+it completes, with a line at the trigger. It opens, saves, exports (CSV, VCD,
+PNG/SVG of a plot) and compares trace files; what it saves or exports is the
+trace on show, or else the whole session.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+from PySide6 import QtCore, QtWidgets
+import pyqtgraph as pg  # noqa: I001 - after PySide6 (it takes the loaded binding)
+import pyqtgraph.exporters  # noqa: F401,E402 - pg.exporters
+
+from plcbuilder import api
+from plcbuilder.ide.panels import style
+from plcbuilder.ide.panels.model import PINS
+from plcbuilder.trace.samples import events_of, to_samples
+
+Qt = QtCore.Qt
+Signal = QtCore.Signal
+
+MODES = (("Single", "single"), ("Normal", "normal"), ("Auto", "auto"))
+
+
+class TriggerBar(QtWidgets.QWidget):
+    """Trigger spec, pre/post, mode, Arm, Now and the trigger's state."""
+
+    sig_arm = Signal(str, int, int, str)
+    """Arm: spec, pre ms, post ms, mode."""
+    sig_disarm = Signal()
+    """Stop waiting for the trigger."""
+    sig_now = Signal()
+    """Trigger now."""
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        lay = QtWidgets.QHBoxLayout(self)
+        lay.setContentsMargins(4, 0, 4, 2)
+        lay.setSpacing(4)
+        lay.addWidget(QtWidgets.QLabel("Trigger"))
+        self.spec = QtWidgets.QLineEdit()
+        self.spec.setPlaceholderText("out 7 rise")
+        self.spec.setToolTip("What starts a capture: 'out 7 rise', 'in 3 fall', 'adc 0 up 1200', "
+                             "'proc = 33', 'message', 'print = 20001', 'M80.var03 bit 2 rise' "
+                             "(see the manual, Traces)")
+        self.spec.setMinimumWidth(90)
+        self.spec.returnPressed.connect(lambda: self.arm.setChecked(True))
+        lay.addWidget(self.spec, 2)
+        self.pre = self._ms("pre", 100, "Time kept before the trigger")
+        self.post = self._ms("post", 500, "Time kept after the trigger")
+        lay.addWidget(self.pre)
+        lay.addWidget(self.post)
+        self.mode = QtWidgets.QComboBox()
+        for text, mode in MODES:
+            self.mode.addItem(text, mode)
+        self.mode.setToolTip("Single: one capture; Normal: re-arm after each; Auto: also "
+                             "capture when no trigger came for pre + post")
+        lay.addWidget(self.mode)
+        self.arm = style.small_button("Arm", "Wait for the trigger (Enter in the spec too)",
+                                      True)
+        self.arm.toggled.connect(self._armed)
+        lay.addWidget(self.arm)
+        self.now = style.small_button("Now", "Trigger now: capture around this moment")
+        self.now.clicked.connect(self.sig_now)
+        lay.addWidget(self.now)
+        self.state = QtWidgets.QLabel()
+        self.state.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,
+                                 QtWidgets.QSizePolicy.Policy.Preferred)
+        self.state.setMinimumWidth(0)
+        lay.addWidget(self.state, 3)
+
+    @staticmethod
+    def _ms(prefix: str, value: int, tip: str) -> QtWidgets.QSpinBox:
+        box = QtWidgets.QSpinBox()
+        box.setRange(0, 3_600_000)
+        box.setSingleStep(50)
+        box.setValue(value)
+        box.setPrefix(f"{prefix} ")
+        box.setSuffix(" ms")
+        box.setToolTip(tip)
+        return box
+
+    def _armed(self, on: bool) -> None:
+        if on:
+            self.sig_arm.emit(self.spec.text(), self.pre.value(), self.post.value(),
+                              self.mode.currentData())
+        else:
+            self.sig_disarm.emit()
+
+    def set_state(self, text: str, error: bool = False, armed: Optional[bool] = None) -> None:
+        colour = "#c62828" if error else "#505050"
+        self.state.setText(f"<span style='color:{colour}'>{text}</span>")
+        self.state.setToolTip(text)
+        if armed is not None and armed != self.arm.isChecked():
+            self.arm.blockSignals(True)
+            self.arm.setChecked(armed)
+            self.arm.blockSignals(False)
+
+
+class TraceTools(QtCore.QObject):
+    """The session history, triggers and trace files of the run panels."""
+
+    sig_note = Signal(str)
+    """Something to tell the user (a capture made, a file written, a comparison)."""
+
+    def __init__(self, panels, parent=None):
+        super().__init__(parent)
+        self.panels = panels
+        self.session = self._new_history()
+        self.capturer: Optional[api.Capturer] = None
+        self.shown: Optional[api.Trace] = None       # a trace on show instead of live data
+        self.captures = 0
+        self.bar = TriggerBar()
+        self.bar.sig_arm.connect(self.arm)
+        self.bar.sig_disarm.connect(self.disarm)
+        self.bar.sig_now.connect(self.trigger_now)
+        self.bar.set_state("not armed")
+
+    @staticmethod
+    def _new_history() -> api.History:
+        return api.History(input_count=PINS, output_count=PINS, axes=api.abi.AXES)
+
+    # ------------------------------------------------------------ live data
+    def feed(self, samples: list, events: list = ()) -> None:
+        """Live telemetry (the panels pass on what the controller sends)."""
+        s = self.session
+        if samples and s.t_start is not None and samples[0].t_ms < s.t_end:
+            self.session = s = self._new_history()      # the controller started over
+            if self.capturer is not None:
+                self.capturer = api.Capturer(s, self.capturer.trigger, self.capturer.pre,
+                                             self.capturer.post, self.capturer.mode)
+        s.feed_samples(samples, events)
+        if self.capturer is not None:
+            for cap in self.capturer.update():
+                self._captured(cap)
+
+    # -------------------------------------------------------------- trigger
+    def arm(self, spec: str, pre: int, post: int, mode: str) -> bool:
+        """Wait for ``spec``; a spec that cannot be read says why and stays disarmed."""
+        try:
+            trig = api.parse_trigger(spec)
+            self.capturer = api.Capturer(self.session, trig, pre, post, mode)
+        except api.TriggerError as exc:
+            self.capturer = None
+            self.bar.set_state(str(exc), error=True, armed=False)
+            return False
+        if api.watched_variables(trig):
+            self.capturer = None
+            self.bar.set_state("a variable's trigger runs headless: plcbuilder run --trigger "
+                               "(the IDE records inputs, outputs and numbers)", error=True,
+                               armed=False)
+            return False
+        self.bar.set_state(f"armed: waiting for {spec} ({mode})", armed=True)
+        return True
+
+    def disarm(self) -> None:
+        self.capturer = None
+        self.bar.set_state("not armed", armed=False)
+
+    def trigger_now(self) -> None:
+        if self.capturer is None:
+            spec = self.bar.spec.text().strip() or "in 0 edge"
+            self.capturer = api.Capturer(self.session, api.parse_trigger(spec)
+                                         if _readable(spec) else api.parse_trigger("in 0 edge"),
+                                         self.bar.pre.value(), self.bar.post.value(), "single")
+        self.capturer.trigger_now()
+        self.bar.set_state("triggered now: capturing…", armed=True)
+        for cap in self.capturer.update():
+            self._captured(cap)
+
+    def _captured(self, cap: api.Trace) -> None:
+        self.captures += 1
+        t = cap.meta["trigger"]["t_ms"]
+        mode = self.capturer.mode if self.capturer is not None else "single"
+        if self.capturer is not None and self.capturer.done:
+            self.capturer = None
+        armed = self.capturer is not None
+        self.bar.set_state(f"captured at t = {t / 1000:.3f} s"
+                           + (f" (capture {self.captures}, re-armed)" if armed else ""),
+                           armed=armed)
+        self.show(cap, f"capture at {t / 1000:.3f} s ({mode})")
+        self.sig_note.emit(f"trigger {cap.meta['trigger']['spec']}: captured "
+                           f"{cap.t_start}..{cap.t_end} ms")
+
+    # ---------------------------------------------------------------- show
+    def show(self, trace: api.Trace, title: str) -> None:
+        """Show a trace in the run panels instead of the live data."""
+        samples = to_samples(trace)
+        marker = (trace.meta.get("trigger") or {}).get("t_ms")
+        self.shown = trace
+        self.panels.show_recorded(title, samples, events_of(trace), marker,
+                                  text=f"showing {title}")
+
+    def current(self) -> api.Trace:
+        """The trace on show, or the whole session so far."""
+        if self.shown is not None and self.panels.recorded is not None:
+            return self.shown
+        return self.session_trace()
+
+    def session_trace(self) -> api.Trace:
+        """The session's history as a trace, without the pins and channels that
+        never changed from 0."""
+        tr = self.session.snapshot(meta={"source": "PLC Builder IDE session"})
+        for name in list(tr.signals):
+            kind, changes = tr.signals[name]
+            if name not in ("proc", "message", "running") and \
+                    all(v == 0 for _t, v in changes) and len(changes) <= 1:
+                del tr.signals[name]
+        return tr
+
+    # --------------------------------------------------------------- files
+    def open(self, path) -> api.Trace:
+        """Open a trace file and show it; raises api.TraceFileError."""
+        trace = api.load_trace(path)
+        self.show(trace, f"trace {Path(path).name}")
+        self.sig_note.emit(f"opened {path}: {trace.t_start}..{trace.t_end} ms, "
+                           f"{len(trace.signals)} signals")
+        return trace
+
+    def save(self, path) -> None:
+        """Save what is on show (or the session); raises api.TraceFileError."""
+        api.save_trace(self.current(), path)
+        self.sig_note.emit(f"saved {path}")
+
+    def export(self, path, per_tick: bool = False) -> str:
+        """Export as CSV or VCD (by suffix); raises api.ExportError."""
+        fmt = api.export_trace(self.current(), path, per_tick=per_tick)
+        self.sig_note.emit(f"exported {path} ({fmt})")
+        return fmt
+
+    def export_image(self, path, panel=None) -> None:
+        """The plots of one panel (default: the first visible) as PNG or SVG."""
+        path = Path(path)
+        if panel is None:
+            shown = [p for p in self.panels.time_panels if p.isVisible()]
+            panel = shown[0] if shown else self.panels.lanes
+        scene = panel._time_plots[0].scene()
+        suffix = path.suffix.lower()
+        if suffix not in (".svg", ".png"):
+            raise api.ExportError(f"{path}: export a plot as .png or .svg")
+        if not path.parent.is_dir():
+            raise api.ExportError(f"{path}: cannot write: no such folder {path.parent}")
+        tmp = path.with_name(f".{path.name}.tmp{path.suffix}")
+        try:
+            if suffix == ".png":
+                pg.exporters.ImageExporter(scene).export(str(tmp))
+            else:
+                _svg(scene, tmp, panel)
+            tmp.replace(path)
+        except OSError as exc:
+            tmp.unlink(missing_ok=True)
+            raise api.ExportError(f"{path}: cannot write: {exc.strerror or exc}") from None
+        self.sig_note.emit(f"exported {path}")
+
+    def compare_with(self, path) -> "api.trace_compare.Difference":
+        """Compare what is on show (or the session) with a trace file; the
+        panels show it with a line at the first difference."""
+        base = self.current()
+        other = api.load_trace(path)
+        diff = api.compare_traces(base, other)
+        if diff.t_ms is not None:
+            base.meta = dict(base.meta, trigger={"spec": f"first difference from "
+                                                          f"{Path(path).name}",
+                                                  "t_ms": diff.t_ms, "pre_ms": 0, "post_ms": 0,
+                                                  "mode": "compare"})
+            self.show(base, f"comparison with {Path(path).name}: first difference at "
+                            f"{diff.t_ms / 1000:.3f} s")
+        self.sig_note.emit(diff.text().replace("\n", "; "))
+        return diff
+
+
+def _svg(scene, path: Path, panel) -> None:
+    """The scene drawn into an SVG file by Qt's own SVG generator (pyqtgraph's
+    SVG exporter cannot read the paths this Qt writes)."""
+    from PySide6.QtCore import QRectF, QSize
+    from PySide6.QtGui import QPainter
+    from PySide6.QtSvg import QSvgGenerator
+    rect = scene.sceneRect()
+    gen = QSvgGenerator()
+    gen.setFileName(str(path))
+    gen.setSize(QSize(int(rect.width()), int(rect.height())))
+    gen.setViewBox(QRectF(0, 0, rect.width(), rect.height()))
+    gen.setTitle("PLC Builder plot")
+    painter = QPainter(gen)
+    try:
+        scene.render(painter, QRectF(0, 0, rect.width(), rect.height()), rect)
+    finally:
+        painter.end()
+    if not path.is_file():
+        raise OSError(f"the SVG generator wrote nothing to {path}")
+
+
+def _readable(spec: str) -> bool:
+    try:
+        api.parse_trigger(spec)
+        return True
+    except api.TriggerError:
+        return False

@@ -1,0 +1,47 @@
+"""plcbuilder new --target, run and test on the targets of SPEC §9 (docs/targets.md)."""
+
+from __future__ import annotations
+
+import json
+
+from plcbuilder.cli.main import main
+
+
+def test_new_huazhong_run_json_and_test(tmp_path, capsys):
+    dest = tmp_path / "mill"
+    assert main(["new", "--target", "huazhong", str(dest)]) == 0
+    assert "target: huazhong, program: plc" in capsys.readouterr().out
+    assert main(["run", str(dest), "--ms", "200", "--input", "0=0@0", "--input", "0=1@100",
+                 "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["target_profile"] == "huazhong" and 7 in rep["outputs"]
+    assert rep["registers"]["Y"]["0"] & 0x80 and rep["registers"]["P"] == {"0": 5}
+    assert rep["registers"]["F"] == {}                     # only the non-zero ones
+    assert rep["calls"]["init"] == 1 and rep["calls"]["plc1"] == 13
+    assert main(["test", str(dest)]) == 0
+    assert "4 passed, 0 failed" in capsys.readouterr().out
+
+
+def test_new_tgmotion_run_reports_calls_and_budget(tmp_path, capsys):
+    dest = tmp_path / "tg"
+    assert main(["new", "--target", "tgmotion", str(dest)]) == 0
+    capsys.readouterr()
+    assert main(["run", str(dest), "--ms", "10", "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["calls"]["Program_05"] == 10 * 2 * 5 and rep["calls"]["Program_04"] == 20
+    assert rep["budget"] == [] and rep["registers"]["TGM_Data"]["0"] == 250
+    assert main(["run", str(dest), "--ms", "3"]) == 0
+    assert "calls: Program_01" in capsys.readouterr().out
+    assert main(["test", str(dest)]) == 0
+
+
+def test_unknown_target_refused_naming_the_line(tmp_path, capsys):
+    dest = tmp_path / "p"
+    assert main(["new", str(dest)]) == 0
+    text = (dest / "plcbuilder.toml").read_text()
+    (dest / "plcbuilder.toml").write_text(text.replace('machine = "machine.toml"',
+                                                       'machine = "machine.toml"\ntarget = "s7"'))
+    capsys.readouterr()
+    assert main(["build", str(dest)]) != 0
+    err = capsys.readouterr().err
+    assert "plcbuilder.toml:4:" in err and "unknown target 's7'" in err

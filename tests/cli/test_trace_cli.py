@@ -1,0 +1,97 @@
+"""``plcbuilder run --trigger/--capture/--history/--watch`` and ``plcbuilder trace``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from vcdvcd import VCDVCD
+
+from plcbuilder.cli.main import main
+
+PULSE = ("main(){ timer=20; do{timer--;}while(timer>0); portset(3);"
+         " timer=10; do{timer--;}while(timer>0); portclear(3); exit(99); };\n")
+
+
+def run_cli(capsys, *argv):
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture
+def pulse(tmp_path) -> Path:
+    f = tmp_path / "M90.plc"
+    f.write_text(PULSE)
+    return f
+
+
+def test_trigger_writes_a_capture_around_the_trigger(tmp_path, capsys, pulse):
+    """SPEC §7: 'Headless: plcbuilder run … --trigger SPEC --pre MS --post MS --capture FILE.'"""
+    cap = tmp_path / "cap.plctrace"
+    code, out, err = run_cli(capsys, "run", pulse, "--trigger", "out 3 rise", "--pre", "5",
+                             "--post", "3", "--capture", cap, "--json")
+    assert code == 0, err
+    rep = json.loads(out)
+    assert rep["capture"]["t_ms"] == 20
+    assert (rep["capture"]["from_ms"], rep["capture"]["to_ms"]) == (15, 23)
+    code, out, err = run_cli(capsys, "trace", "info", cap, "--json")
+    assert code == 0, err
+    info = json.loads(out)
+    assert (info["t_start"], info["t_end"]) == (15, 23)
+    assert info["meta"]["trigger"]["spec"] == "out 3 rise"
+
+
+def test_trigger_that_never_fires_reports_null(tmp_path, capsys, pulse):
+    cap = tmp_path / "cap.plctrace"
+    code, out, _ = run_cli(capsys, "run", pulse, "--trigger", "out 4 rise", "--capture", cap,
+                           "--json")
+    assert code == 0 and json.loads(out)["capture"] is None and not cap.exists()
+
+
+def test_capture_straight_to_vcd_and_history_of_the_session(tmp_path, capsys, pulse):
+    code, out, err = run_cli(capsys, "run", pulse, "--trigger", "out 3 fall", "--pre", "2",
+                             "--capture", tmp_path / "c.vcd", "--history", tmp_path / "all.plctrace",
+                             "--watch", "M90.timer", "--json")
+    assert code == 0, err
+    v = VCDVCD(str(tmp_path / "c.vcd"))
+    assert [(t, x) for t, x in v["outputs.out3"].tv] == [(28, "1"), (30, "0")]
+    code, out, err = run_cli(capsys, "trace", "export", tmp_path / "all.plctrace",
+                             tmp_path / "all.csv", "--per-tick")
+    assert code == 0, err
+    lines = (tmp_path / "all.csv").read_text().splitlines()
+    assert "M90.timer" in lines[0].split(",") and len(lines) == 1 + 31
+
+
+def test_compare_exit_status_says_whether_traces_differ(tmp_path, capsys, pulse):
+    a, b, c = (tmp_path / f"{n}.plctrace" for n in "abc")
+    assert run_cli(capsys, "run", pulse, "--history", a)[0] == 0
+    assert run_cli(capsys, "run", pulse, "--history", b)[0] == 0
+    assert run_cli(capsys, "run", pulse, "--eparam", "1", "--ms", "5", "--history", c)[0] == 0
+    code, out, _ = run_cli(capsys, "trace", "compare", a, b)
+    assert code == 0 and "the same" in out
+    code, out, _ = run_cli(capsys, "trace", "compare", a, c, "--json")
+    d = json.loads(out)
+    assert code == 1 and not d["same"] and d["t_ms"] == 0
+
+
+@pytest.mark.parametrize("args,why", [
+    (["--trigger", "out 3 rise"], "--trigger needs --capture"),
+    (["--capture", "x.plctrace"], "--capture needs --trigger"),
+    (["--trigger", "out 3 wobble", "--capture", "x.plctrace"], "unknown condition"),
+    (["--watch", "M90"], "PROC.var"), (["--watch", "M91.timer"], "no procedure named M91"),
+    (["--watch", "M90.nosuch"], "no variable named nosuch")])
+def test_bad_trace_options_are_usage_errors(tmp_path, capsys, pulse, args, why):
+    code, _out, err = run_cli(capsys, "run", pulse, *args)
+    assert code == 2 and why in err
+
+
+def test_trace_of_a_bad_file_is_a_clear_error(tmp_path, capsys):
+    bad = tmp_path / "bad.plctrace"
+    bad.write_text("nope")
+    code, _out, err = run_cli(capsys, "trace", "info", bad)
+    assert code == 2 and "not a trace file" in err

@@ -1,0 +1,145 @@
+"""Fixtures for the tests of the workbench's features (navigation, build
+insight, registers, help): a small project with a header of its own, a main
+window on it, and a fake controller connection that records requests."""
+
+from pathlib import Path
+
+import pytest
+from PySide6.QtCore import QObject, Signal
+from PySide6.QtWidgets import QMessageBox
+
+from plcbuilder.ide.main_window import MainWindow
+from plcbuilder.ide.settings import Settings
+
+SB = QMessageBox.StandardButton
+
+M03 = """// M03: spindle on
+#include pins.h
+#include mine.h
+
+main()
+{
+  speed = eparam;
+  pwm01 = speed;
+  portset(MY_PIN);
+  exit(99);
+};
+"""
+M05 = """// M05: spindle off (MY_PIN in a comment is no reference)
+#include mine.h
+
+main()
+{
+  portclear(MY_PIN);
+  exit(99);
+};
+"""
+LONE = """#define MY_PIN 4
+main()
+{
+  portset(MY_PIN);
+  exit(99);
+};
+"""
+MINE = "// mine.h: my pins\n#define MY_PIN 3\n"
+
+
+def make_project(root: Path) -> Path:
+    for d in ("hardware", "software", "include"):
+        (root / d).mkdir(parents=True)
+    (root / "hardware" / "M03.plc").write_text(M03)
+    (root / "hardware" / "M05.plc").write_text(M05)
+    (root / "hardware" / "LONE.plc").write_text(LONE)
+    (root / "include" / "mine.h").write_text(MINE)
+    return root
+
+
+class Prompts:
+    """QMessageBox's static functions, recorded and answered with a default."""
+
+    def __init__(self, monkeypatch):
+        self.calls = []
+        for name, default in (("warning", SB.Discard), ("question", SB.No),
+                              ("critical", SB.Ok), ("information", SB.Ok)):
+            monkeypatch.setattr(QMessageBox, name, self._make(name, default))
+
+    def _make(self, name, default):
+        def prompt(parent, title, text, *args, **kw):
+            self.calls.append((name, title, text))
+            return default
+        return prompt
+
+
+class FakeConnection(QObject):
+    """A controller connection that records what it is asked."""
+    sig_connected = Signal(str)
+    sig_disconnected = Signal(str)
+    sig_state = Signal(object, int)
+    sig_events = Signal(list)
+    sig_samples = Signal(list)
+    sig_error = Signal(str)
+    sig_registers = Signal(object)
+
+    def __init__(self):
+        super().__init__()
+        self.calls = []
+        self.connected = False
+        self.embedded = True
+
+    def __getattr__(self, name):
+        if name in ("start_embedded", "connect_to", "upload", "start", "stop", "set_input",
+                    "set_adc", "set_speed", "reset", "shutdown", "request_registers"):
+            return lambda *a: self.calls.append((name,) + a)
+        raise AttributeError(name)
+
+
+@pytest.fixture
+def prompts(monkeypatch):
+    return Prompts(monkeypatch)
+
+
+@pytest.fixture
+def project(tmp_path):
+    return make_project(tmp_path / "proj")
+
+
+@pytest.fixture
+def make_window(qtbot, tmp_path, prompts):
+    made = []
+
+    def make(**kw):
+        kw.setdefault("start_controller", False)
+        kw.setdefault("debounce_ms", 20)
+        w = MainWindow(Settings(str(tmp_path / "config" / "settings.ini")), **kw)
+        qtbot.addWidget(w)
+        w.resize(1300, 850)
+        w.show()
+        made.append(w)
+        return w
+    yield make
+    for w in made:
+        w.shutdown()
+
+
+@pytest.fixture
+def win(make_window, project, qtbot):
+    w = make_window()
+    w.open_project(project)
+    settle(qtbot, w)
+    return w
+
+
+def settle(qtbot, w):
+    qtbot.waitUntil(lambda: not w.busy(), timeout=10000)
+    qtbot.wait(10)
+
+
+def caret_on(ed, word: str, nth: int = 0) -> None:
+    """Put the editor's caret inside the nth ``word`` of its text."""
+    text = ed.text()
+    i = -1
+    for _ in range(nth + 1):
+        i = text.index(word, i + 1)
+    line = text.count("\n", 0, i) + 1
+    col = i - (text.rfind("\n", 0, i) + 1) + 2
+    ed.goto_line(line, col)

@@ -1,0 +1,100 @@
+"""Help: the manual from docs/ in its own window (found from a checkout, or
+where PLCBUILDER_DOCS says), links between chapters, and the keyboard
+shortcuts list made from the window's real actions."""
+
+from pathlib import Path
+
+from PySide6.QtCore import QUrl
+from PySide6.QtGui import QKeySequence
+
+from plcbuilder.ide import help as ide_help
+from plcbuilder.ide.actions import Act
+from tests.ide import _workbench
+
+# the fixtures
+make_window, project, prompts, win = (_workbench.make_window, _workbench.project,
+                                      _workbench.prompts, _workbench.win)
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+
+
+def test_the_manual_is_found_in_a_checkout_and_where_the_environment_says(monkeypatch,
+                                                                          tmp_path):
+    assert ide_help.find_docs() == DOCS
+    (tmp_path / "ide.md").write_text("# Elsewhere\n")
+    monkeypatch.setenv("PLCBUILDER_DOCS", str(tmp_path))
+    assert ide_help.find_docs() == tmp_path
+
+
+def test_f1_opens_the_manual_at_the_ide_chapter(win, qtbot):
+    win.action(Act.MANUAL).trigger()
+    hw = win.workbench.help_window
+    qtbot.waitUntil(hw.isVisible)
+    assert hw.current == DOCS / "ide.md"
+    assert hw.headings()[0] == "The IDE"
+    titles = [hw.list.item(i).text() for i in range(hw.list.count())]
+    assert titles[0] == "The IDE" and len(titles) == len(list(DOCS.glob("*.md")))
+    assert all("`" not in t for t in titles)
+    assert win.action(Act.MANUAL) in win.menuBar().actions()[-1].menu().actions()
+
+
+def test_links_open_chapters_at_their_headings(qtbot):
+    hw = ide_help.HelpWindow(folder=DOCS)
+    qtbot.addWidget(hw)
+    hw.show()
+    hw.open_named("ide")
+    target = DOCS / "language.md"
+    heading = hw_heading = None
+    for line in target.read_text().splitlines():
+        if line.startswith("## "):
+            heading = line[3:].strip()
+            break
+    hw._on_link(QUrl(f"language.md#{ide_help.slug(heading)}"))
+    assert hw.current == target
+    hw_heading = hw.browser.textCursor().block().text()
+    assert hw_heading == heading.replace("`", "")
+    hw._on_link(QUrl("#the-ide"))
+    assert hw.current == target                          # an anchor of the same chapter
+
+
+def test_pictures_fit_the_window(qtbot):
+    hw = ide_help.HelpWindow(folder=DOCS)
+    qtbot.addWidget(hw)
+    hw.resize(700, 500)
+    hw.show()
+    hw.open_named("ide")
+    assert hw.fit_images() >= 1                         # ide.md has screenshots wider than 700
+
+
+def test_a_missing_manual_says_where_it_looked(qtbot, tmp_path, monkeypatch):
+    monkeypatch.setattr(ide_help, "find_docs", lambda: None)
+    hw = ide_help.HelpWindow()
+    qtbot.addWidget(hw)
+    assert "was not found" in hw.browser.toPlainText()
+
+
+def test_the_shortcuts_list_is_made_from_the_actions(win, qtbot):
+    dlg = win.workbench.show_shortcuts()
+    qtbot.addWidget(dlg)
+    keyed = [a for a in win._actions.values() if any(not k.isEmpty() for k in a.shortcuts())]
+    assert dlg.table.rowCount() == len(keyed)
+    by_action = {dlg.table.item(r, 0).text(): dlg.table.item(r, 1).text()
+                 for r in range(dlg.table.rowCount())}
+    native = QKeySequence.SequenceFormat.NativeText
+    assert by_action["Go Back"] == QKeySequence("Alt+Left").toString(native)
+    assert by_action["Find References"] == QKeySequence("Shift+F12").toString(native)
+    assert by_action["Rename Symbol"] == QKeySequence("F2").toString(native)
+    assert by_action["Build, Upload and Start"] == QKeySequence("Ctrl+R").toString(native)
+    assert by_action["Build All"] == QKeySequence("Ctrl+B").toString(native)
+    dlg.search.setText("rename")
+    shown = [r for r in range(dlg.table.rowCount()) if not dlg.table.isRowHidden(r)]
+    assert [dlg.table.item(r, 0).text() for r in shown] == ["Rename Symbol"]
+
+
+def test_no_two_actions_share_a_key(win):
+    seen = {}
+    for name, act in win._actions.items():
+        for k in act.shortcuts():
+            if not k.isEmpty():
+                assert k.toString() not in seen, (name, seen.get(k.toString()))
+                seen[k.toString()] = name

@@ -1,0 +1,129 @@
+"""The IDE on a target project (docs/targets.md): the project tree shows the
+target's procedures with when they run; the run panels show its registers
+(X/Y bits as named lanes, the non-zero G/F/… words in a table under the watch)."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+pytest.importorskip("PySide6")
+
+from PySide6 import QtCore, QtWidgets  # noqa: E402
+
+from plcbuilder import api  # noqa: E402
+from plcbuilder.ide.connection import ControllerConnection  # noqa: E402
+from plcbuilder.ide.main_window import MainWindow  # noqa: E402
+from plcbuilder.ide.panels import RunPanels  # noqa: E402
+from plcbuilder.ide.project_tree import ROLE_DESCRIPTION  # noqa: E402
+from plcbuilder.ide.settings import Settings  # noqa: E402
+from tests.controller._targets import compiled  # noqa: E402
+from tests.link.linkkit import image_of  # noqa: E402
+
+Qt = QtCore.Qt
+WAIT = 15_000
+
+
+@pytest.fixture
+def window(qtbot, tmp_path):
+    w = MainWindow(Settings(str(tmp_path / "cfg" / "s.ini")), start_controller=False,
+                   debounce_ms=20)
+    qtbot.addWidget(w)
+    w.show()
+    yield w
+    w.shutdown()
+
+
+def _children(item) -> list[tuple[str, str]]:
+    return [(item.child(i).text(0), item.child(i).data(0, ROLE_DESCRIPTION))
+            for i in range(item.childCount())]
+
+
+def test_tree_shows_huazhong_structure(window, tmp_path):
+    project = api.create_project(tmp_path / "mill", target="huazhong")
+    assert window.open_project(project.root, offer_recovery=False)
+    tree = window.tree
+    program = tree.find_item("plc")
+    assert program.parent().text(0) == "Huazhong PLC"
+    assert _children(program) == [("init()", "once, at the start"),
+                                  ("plc1()", "every plc1_time ms (16 until set)"),
+                                  ("plc2()", "every plc2_time ms (32 until set)")]
+    sw = next(tree.tree.topLevelItem(0).child(i) for i in range(tree.tree.topLevelItem(0).childCount())
+              if tree.tree.topLevelItem(0).child(i).text(0) == "Software PLC")
+    assert sw.isHidden()
+    assert tree.find_item(str(project.root / "parameters.toml")) is not None
+    tree._activated(program.child(1))
+    assert window.current_editor().path.endswith("plc.plc")
+
+
+def test_tree_shows_tgmotion_periods(window, tmp_path):
+    project = api.create_project(tmp_path / "tg", target="tgmotion")
+    text = project.settings_path.read_text().replace("cycle_time_program_02_us = 1000",
+                                                     "cycle_time_program_02_us = 2500")
+    project.settings_path.write_text(text)
+    src = project.root / "hardware" / "Program.plc"
+    src.write_text(src.read_text().replace("Program_03()", "Program_3()"))
+    assert window.open_project(project.root, offer_recovery=False)
+    program = window.tree.find_item("Program")
+    kids = dict(_children(program))
+    assert kids["Program_02()"] == "every 2500 µs"
+    assert kids["Program_04()"] == "every cycle (500 µs), in the fourth slot"
+    assert kids["Program_05()"] == "every slot (100 µs)"
+    missing = next(program.child(i) for i in range(program.childCount())
+                   if program.child(i).text(0) == "Program_03()")
+    assert "not in the program yet" in missing.toolTip(0)
+
+
+@pytest.fixture
+def live(qtbot):
+    win = QtWidgets.QMainWindow()
+    qtbot.addWidget(win)
+    conn = ControllerConnection()
+    panels = RunPanels(win, conn)
+    for d in panels.docks():
+        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
+    win.resize(1400, 900)
+    win.show()
+    conn.start_embedded()
+    try:
+        qtbot.waitUntil(lambda: conn.connected, timeout=WAIT)
+        yield win, conn, panels
+    finally:
+        pid = conn.child_pid
+        conn.shutdown()
+        panels.shutdown()
+        if pid:
+            qtbot.waitUntil(lambda: _gone(pid), timeout=5000)
+
+
+def _gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+def test_run_panels_show_huazhong_registers(qtbot, live):
+    win, conn, panels = live
+    panels.set_target("huazhong")
+    panels.set_pin_names({0: "INPUT_HOME_X"}, {7: "OUTPUT_ALARM_LAMP"})
+    assert panels.lanes.names["outputs"][7] == "Y0.7 OUTPUT_ALARM_LAMP"
+    assert panels.lanes.names["inputs"][9] == "X1.1"
+    src = """
+        init() { G[2] = 0x1234; }
+        plc1() { if (X[1] & 2) Y[0] |= 0x80; else Y[0] &= ~0x80; }
+        plc2() { }"""
+    conn.upload(image_of([compiled(src, "huazhong")]), {"name": "huazhong"})
+    panels.dock("watch").show()
+    panels.dock("watch").raise_()
+    conn.set_input(9, 1)
+    qtbot.waitUntil(lambda: panels.registers.isVisible() and panels.registers.report.get(
+        "registers", {}).get("Y") == {"0": 128}, timeout=WAIT)
+    table = panels.registers.table
+    rows = {table.item(r, 0).text(): table.item(r, 2).text() for r in range(table.rowCount())}
+    assert rows["G[2]"] == "0x1234" and rows["Y[0]"] == "0x80"
+    assert "plc1" in panels.registers.calls.text()
+    panels.set_target("mycnc")
+    assert not panels.registers.isVisible()

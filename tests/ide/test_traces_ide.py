@@ -1,0 +1,161 @@
+"""Traces in the IDE: the session history, the trigger bar, cursors, and
+File › Open/Save/Export Trace, Export Plot Image and Compare with Trace."""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("PySide6")
+
+from PySide6 import QtCore, QtWidgets  # noqa: E402
+from vcdvcd import VCDVCD  # noqa: E402
+
+from plcbuilder import api  # noqa: E402
+from plcbuilder.ide.panels import RunPanels  # noqa: E402
+from tests.ide.test_panels import FakeConnection, sample  # noqa: E402
+
+Qt = QtCore.Qt
+
+
+@pytest.fixture
+def fake():
+    return FakeConnection()
+
+
+@pytest.fixture
+def panels(qtbot, fake):
+    win = QtWidgets.QMainWindow()
+    qtbot.addWidget(win)
+    p = RunPanels(win, fake, capacity=500)
+    for d in p.docks():
+        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
+    win.resize(1400, 900)
+    win.show()
+    yield p
+    p.shutdown()
+
+
+def _toggle(fake, t0: int, t1: int, pin: int = 3, period: int = 10) -> None:
+    """Output ``pin`` on for ``period`` ms, off for ``period`` ms, from t0 to t1."""
+    batch = []
+    for t in range(t0, t1, period):
+        on = (t // period) % 2
+        batch.append(sample(t, outputs=(1 << pin) if on else 0, proc=33 if on else 0,
+                            pwm=(t,)))
+    fake.sig_samples.emit(batch)
+
+
+def test_the_session_keeps_every_change_beyond_the_panels_window(panels, fake):
+    """SPEC §7: 'A session keeps the whole history of what changed …, not a fixed window'."""
+    _toggle(fake, 0, 20_000)                      # 2,000 changes, more than the 500 kept
+    assert len(panels.model) <= 500
+    ch = panels.traces.session.signals["out 3"].changes()
+    assert len(ch) == 2000 and ch[0] == (0, 0) and ch[1] == (10, 1)
+    tr = panels.traces.session_trace()
+    assert "out 3" in tr.signals and "out 4" not in tr.signals     # never changed: left out
+
+
+def test_the_trigger_bar_captures_and_shows_the_capture(qtbot, panels, fake):
+    """SPEC §7: 'Trigger … with a pre-trigger and a post-trigger duration' — in the
+    IDE: a trigger bar on the run panels, the capture shown when it completes."""
+    _toggle(fake, 900, 1005)                       # before arming: rises that do not count
+    bar = panels.traces.bar
+    bar.spec.setText("out 3 rise")
+    bar.pre.setValue(15)
+    bar.post.setValue(25)
+    qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+    assert bar.arm.isChecked() and "armed" in bar.state.text()
+    assert panels.recorded is None
+    _toggle(fake, 1010, 1100)                      # rises at 1010; complete by 1035
+    assert panels.recorded is not None and "capture at 1.010 s" in panels.recorded
+    cap = panels.traces.shown
+    assert (cap.t_start, cap.t_end) == (995, 1035)
+    assert panels.failing_ms == 1010               # the line at the trigger
+    assert not bar.arm.isChecked()                 # single: done
+    assert "captured at t = 1.010 s" in bar.state.text()
+
+
+def test_a_bad_trigger_spec_says_why_and_stays_disarmed(qtbot, panels):
+    bar = panels.traces.bar
+    bar.spec.setText("out 3 wobble")
+    qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+    assert not bar.arm.isChecked()
+    assert "unknown condition" in bar.state.text()
+
+
+def test_cursors_show_values_and_delta(qtbot, panels, fake):
+    """SPEC §7: 'two time cursors on the plots show Δt and every signal's value at each'."""
+    _toggle(fake, 0, 200)
+    panels.dock("cursors").show()
+    panels.cursor_table.toggle.setChecked(True)
+    assert panels.cursors.enabled
+    lines = [ln for _p, _plot, _w, ln in panels.cursors._lines]
+    assert len(lines) == 2 * sum(len(p._time_plots) for p in panels.time_panels)
+    panels.cursors.set_times(0.015, 0.025)          # out 3 on at 10..19, off at 20..29
+    rows = {r[0]: r for r in panels.cursor_table.rows()}
+    assert rows["t"][3] == "10 ms"
+    out3 = next(k for k in rows if k.startswith("OUT 3"))
+    assert rows[out3][1:3] == ("1", "0")
+    assert rows["PWM0"][1:] == ("10", "20", "+10")
+    assert "plc_proc_probing" in rows["proc"][1]
+    # dragging a line on one plot moves that cursor on every plot
+    p, _plot, which, line = panels.cursors._lines[0]
+    line.setValue(0.05 - p.offset)
+    assert panels.cursors.a == pytest.approx(0.05)
+    panels.cursor_table.toggle.setChecked(False)
+    assert panels.cursors._lines == []
+
+
+def test_save_open_export_and_compare(qtbot, panels, fake, tmp_path):
+    """SPEC §7: saved traces reopen in the same panels; export to CSV and VCD; compare."""
+    _toggle(fake, 0, 300)
+    tools = panels.traces
+    saved = tmp_path / "session.plctrace"
+    tools.save(saved)
+    tools.export(tmp_path / "session.vcd")
+    v = VCDVCD(str(tmp_path / "session.vcd"))
+    assert [(t, x) for t, x in v["outputs.out3"].tv][:3] == [(0, "0"), (10, "1"), (20, "0")]
+    tools.export(tmp_path / "ticks.csv", per_tick=True)
+    assert (tmp_path / "ticks.csv").read_text().count("\n") == 1 + 291
+    tools.export_image(tmp_path / "plot.png", panels.lanes)
+    tools.export_image(tmp_path / "plot.svg", panels.lanes)
+    assert (tmp_path / "plot.png").stat().st_size > 1000
+    assert (tmp_path / "plot.svg").read_text().lstrip().startswith("<?xml")
+    with pytest.raises(api.ExportError):
+        tools.export_image(tmp_path / "plot.bmp", panels.lanes)
+
+    tools.open(saved)
+    assert panels.recorded == "trace session.plctrace"
+    assert panels.model.t_end == pytest.approx(0.29)
+    assert panels.model.pin_state("outputs", 3) == 1          # on from 290 ms
+
+    # a second run that differs from 140 ms on (out 3 stays on)
+    other = api.load_trace(saved)
+    kind, ch = other.signals["out 3"]
+    other.signals["out 3"] = (kind, [c for c in ch if c[0] < 140] + [(140, 1)])
+    api.save_trace(other, tmp_path / "other.plctrace")
+    diff = tools.compare_with(tmp_path / "other.plctrace")
+    assert diff.t_ms == 140 and ("out 3", "0", "1") in diff.signals
+    assert panels.failing_ms == 140
+
+
+def test_a_bad_trace_file_is_refused_and_the_panels_stay(panels, fake, tmp_path):
+    _toggle(fake, 0, 100)
+    bad = tmp_path / "bad.plctrace"
+    bad.write_text("not a trace")
+    with pytest.raises(api.TraceFileError, match="not a trace file"):
+        panels.traces.open(bad)
+    assert panels.recorded is None and len(panels.model) > 0
+
+
+def test_file_menu_has_the_trace_actions(qtbot, tmp_path, monkeypatch):
+    from plcbuilder.ide.actions import Act
+    from plcbuilder.ide.main_window import MainWindow
+    from plcbuilder.ide.settings import Settings
+    win = MainWindow(Settings(str(tmp_path / "s.ini")), start_controller=False)
+    qtbot.addWidget(win)
+    names = [a.objectName() for a in win.menuBar().actions()[0].menu().actions()]
+    for act in (Act.OPEN_TRACE, Act.SAVE_TRACE, Act.EXPORT_TRACE, Act.EXPORT_PLOT,
+                Act.COMPARE_TRACE):
+        assert act in names
+    win.close()

@@ -1,0 +1,97 @@
+"""The served controller runs a target's program when the upload names the
+target (docs/targets.md), and the variables request carries its registers."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from plcbuilder.link.client import Client, RefusedError
+from plcbuilder.link.server import ControllerServer
+from tests.controller._targets import compiled
+from tests.link.linkkit import image_of
+
+HZ = """
+init() { B[0] += 1; }
+plc1() { plc1_time = 1; if (X[0] & 1) Y[0] |= 0x80; else Y[0] &= ~0x80; }
+plc2() { }
+"""
+
+
+@pytest.fixture
+def served():
+    srv = ControllerServer(port=0, speed="factor", factor=50.0, frame_timeout=0.2,
+                           hello_timeout=1.0)
+    srv.sim.batch = 0.001
+    srv.start()
+    c = Client.connect(*srv.address, srv.token, timeout=10.0)
+    yield srv, c
+    c.close()
+    srv.close()
+
+
+def _wait(pred, seconds=20.0):
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        if pred():
+            return True
+        time.sleep(0.02)
+    return False
+
+
+def test_upload_with_a_target_runs_its_schedule_and_reports_registers(served):
+    srv, c = served
+    image = image_of([compiled(HZ, "huazhong")])
+    c.upload(image, target={"name": "huazhong", "parameters": [7]})
+    assert srv.sim.controller.target.name == "huazhong"
+    c.set_input(0, 1)
+    assert _wait(lambda: 7 in c.state().outputs)
+    variables, report = c.variables_and_target()
+    assert report["target_profile"] == "huazhong" and report["registers"]["P"] == {"0": 7}
+    assert report["registers"]["B"] == {"0": 1} and "plc" in variables
+    # a restart of the controller keeps B (reset: a new controller, the image loaded again)
+    c.reset()
+    assert _wait(lambda: c.variables_and_target()[1].get("registers", {}).get("B") == {"0": 2})
+
+
+def test_upload_without_a_target_goes_back_to_mycnc(served):
+    srv, c = served
+    c.upload(image_of([compiled(HZ, "huazhong")]), target={"name": "huazhong"})
+    with pytest.raises(RefusedError):                  # a huazhong program is not a myCNC image
+        c.upload(image_of([compiled(HZ, "huazhong")]),
+                 target={"name": "tgmotion", "cycle_time_us": 300})
+    assert srv.sim.controller.target.name == "huazhong"
+    from tests.link.linkkit import compile_programs
+    c.upload(image_of(compile_programs(["M03"])))
+    assert srv.sim.controller.target is None
+    assert c.variables_and_target()[1] == {}
+
+
+def test_b_kept_across_a_restart_of_the_server(tmp_path):
+    """`B[n]` (100 16-bit words kept across controller restarts): the server's
+    state file (plcbuilder controller --state FILE)."""
+    state = tmp_path / "state.json"
+    image = image_of([compiled(HZ, "huazhong")])
+    seen = []
+    for _ in range(2):
+        srv = ControllerServer(port=0, speed="factor", factor=50.0, frame_timeout=0.2,
+                               hello_timeout=1.0)
+        srv.service.load_state(state)
+        srv.sim.batch = 0.001
+        srv.start()
+        c = Client.connect(*srv.address, srv.token, timeout=10.0)
+        try:
+            c.upload(image, target={"name": "huazhong"})
+            assert _wait(lambda: c.variables_and_target()[1].get("registers", {}).get("B"))
+            seen.append(c.variables_and_target()[1]["registers"]["B"])
+        finally:
+            c.close()
+            srv.close()
+    assert seen == [{"0": 1}, {"0": 2}]
+    state.write_text("[1, 2")
+    srv = ControllerServer(port=0)
+    with pytest.raises(ValueError):
+        srv.service.load_state(state)
+    srv.close(shutdown=False)
+    assert state.read_text() == "[1, 2"            # a file it could not read is left alone
