@@ -76,6 +76,8 @@ class Act:
     EXPORT_TRACE = "export_trace"
     EXPORT_PLOT = "export_plot"
     COMPARE_TRACE = "compare_trace"
+    SAVE_RECORDING = "save_recording"
+    REPLAY_SESSION = "replay_session"
     # navigation, build insight, registers and help (made by plcbuilder.ide.workbench)
     BACK = "back"
     FORWARD = "forward"
@@ -204,6 +206,11 @@ def build_actions(win) -> dict[str, QAction]:
       "Save the plots of the first visible run dock as PNG or SVG")
     A(Act.COMPARE_TRACE, "Compare with Trace…", lambda: ta.compare_trace(win), None, None,
       "The first tick where the trace on show (or the session) differs from a trace file")
+    A(Act.SAVE_RECORDING, "Save Session &Recording…", lambda: ta.save_recording(win), None, None,
+      "Save everything done to the controller since it started, as a scenario file that "
+      "replays the session")
+    A(Act.REPLAY_SESSION, "Re&play Session…", lambda: ta.replay_session(win), None, None,
+      "Run a session recording on the project's image and show its trace")
     context = [actions[a] for a in (Act.TOGGLE_COMMENT, Act.GOTO_DEFINITION)] + \
         [None] + [actions[a] for a in (Act.FIND, Act.GOTO_LINE)]
     win.editor_stack.context_actions = context
@@ -234,7 +241,7 @@ def build_menus(win) -> None:
         m.addAction(a(name))
     m = mb.addMenu("&Run")
     for name in (Act.START, Act.START_CURRENT, Act.BUILD_UPLOAD_START, Act.STOP, None,
-                 Act.RUN_TESTS):
+                 Act.RUN_TESTS, None, Act.SAVE_RECORDING, Act.REPLAY_SESSION):
         m.addAction(a(name)) if name else m.addSeparator()
     m.addSeparator()
     speed = m.addMenu(icon("speed"), "Simulation &Speed")

@@ -529,6 +529,11 @@ class ControllerConnection(QtCore.QObject):
         """Start ``__HANDLER_GCODE_START`` or ``__HANDLER_GCODE_STOP``."""
         self._send("event", handler)
 
+    def request_recording(self) -> None:
+        """Ask for the session's recording; the answer comes as sig_result
+        ("recording", {text, t_ms, actions})."""
+        self._send("recording", {})
+
     def request_variables(self) -> None:
         """Ask for every procedure's variables; the answer comes as sig_variables.
         A request still waiting is not repeated."""

@@ -69,6 +69,12 @@ class MainWindow(QMainWindow):
     sig_diagnostics_updated = Signal(str)
     """New diagnostics of a procedure arrived (its file key)."""
 
+    sig_recording_saved = Signal(str)
+    """Run › Save Session Recording wrote the session's recording (its path)."""
+
+    sig_replayed = Signal(object)
+    """Run › Replay Session finished: the replay's trace (shown in the run panels)."""
+
     def __init__(self, settings: Optional[Settings] = None, *, start_controller: bool = True,
                  connection=None, debounce_ms: Optional[int] = None):
         super().__init__()

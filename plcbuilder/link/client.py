@@ -335,6 +335,11 @@ class Client:
     def ping(self) -> dict:
         return self.request("ping")
 
+    def recording(self) -> dict:
+        """The session's recording: ``{text, t_ms, actions}`` (a scenario file
+        that replays the session: docs/traces.md)."""
+        return self.request("recording")
+
     # ------------------------------------------------------------ debugger
     def set_breakpoints(self, file: str, breakpoints: list[dict]) -> list[dict]:
         """Replace the breakpoints of ``file``: dicts {line, enabled?, condition?,

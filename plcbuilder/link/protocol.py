@@ -20,6 +20,7 @@ Messages
         input {pin, value}              adc {channel, value}
         state {}                        variables {}
         registers {addresses: [int]}    (read global registers, at most MAX_REGISTERS)
+        recording {}                    (the session as a scenario file: {text, t_ms, actions})
         subscribe {samples?, events?}   unsubscribe {}
         speed {mode, factor?}           step {ms}
         reset {}                        event {handler}
@@ -98,7 +99,7 @@ _MAX_ID_TEXT = 64
 #: only ever looks a type up in these sets.
 REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state", "variables",
                       "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping",
-                      "registers"}
+                      "registers", "recording"}
                      | {"set_breakpoints", "debug_continue", "debug_pause", "debug_step",
                         "debug_run_to", "debug_state"})
 #: Events that travel as notifications of their own (not inside telemetry).

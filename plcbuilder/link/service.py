@@ -310,6 +310,19 @@ class Service(DebugVerbs):
         values = self._on_sim(lambda: [gvarget(a) for a in addresses])
         return {"addresses": addresses, "values": values}
 
+    def handle_recording(self, msg: dict, session: Session) -> dict:
+        """The session's recording: every outside action since the controller
+        started (or was reset), as a scenario file (docs/traces.md)."""
+        def read():
+            c = self.sim.controller
+            end = max(0, c.t_ms - 1)
+            head = [f"controller: {c.machine.config.name if hasattr(c.machine.config, 'name') else 'simulated'}"]
+            if self.image_crc32 is not None:
+                head.append(f"last image uploaded: eeprom.rom CRC-32 {self.image_crc32:08x}")
+            return {"text": c.recorder.text(end, head), "t_ms": end,
+                    "actions": len(c.recorder.actions)}
+        return self._on_sim(read)
+
     # ---------------------------------------------------------------- time
     def handle_speed(self, msg: dict, session: Session) -> dict:
         mode = protocol.field_str(msg, "mode", max_len=16)

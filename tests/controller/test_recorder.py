@@ -76,7 +76,8 @@ def test_a_replayed_recording_gives_the_identical_trace(tmp_path, seed):
     (image uploads, starts, stops, input and ADC changes, writes, forces, host
     events) with their ticks, as a scenario file … Replaying it with the same image
     and machine gives the identical trace, tick for tick.'"""
-    project = create_project(tmp_path / "p")
+    create_project(tmp_path / "p")
+    project = tmp_path / "p"
     c, live, end = _live_session(project, random.Random(seed))
     text = c.recorder.text(end, [f"image {image_id(c.programs.values())}"])
     rec = tmp_path / "rec.txt"
@@ -94,7 +95,8 @@ def test_a_replayed_recording_gives_the_identical_trace(tmp_path, seed):
 
 
 def test_a_recording_names_what_was_done(tmp_path):
-    project = create_project(tmp_path / "p")
+    create_project(tmp_path / "p")
+    project = tmp_path / "p"
     proj = api.Project.open(project)
     programs = [p for p in (pb.program() for pb in api.compile_all(proj)) if p is not None]
     c = api.Controller(api.default_machine())
@@ -112,13 +114,14 @@ def test_a_recording_names_what_was_done(tmp_path):
     lines = [ln for ln in c.recorder.text(c.t_ms).splitlines() if not ln.startswith("#")]
     assert lines == [f"upload {image_id(programs)} @ 5", "start M03:12000 @ 15", "input 4=1 @ 15",
                      "adc 1=900 @ 15", "force in 2=1 @ 15", "write pwm 0=500 @ 15",
-                     "release in 2 keep @ 15", "stop @ 15", "event GCODE_STOP @ 15"]
+                     "release in 2 keep @ 15", "stop @ 15"]     # (no GCODE_STOP handler: nothing)
     back = Scenario.parse("\n".join(lines))
     assert [a.describe() for a in back.actions] == lines
 
 
 def test_a_replay_with_another_image_says_so(tmp_path):
-    project = create_project(tmp_path / "p")
+    create_project(tmp_path / "p")
+    project = tmp_path / "p"
     rec = tmp_path / "rec.txt"
     rec.write_text("upload 0badc0de @ 3\nstart M03:100 @ 10\n")
     r = api.run(project, api.RunOptions(scenario=rec, ms=50))
