@@ -28,6 +28,7 @@ from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.debugger import DebugError
 from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
+from plcbuilder.controller.recorder import image_id
 from plcbuilder.controller.history import History, Trace
 from plcbuilder.controller.io_dat import io_dat_of, load_io_dat, with_io_dat
 from plcbuilder.controller.session import UsageError, build_scenario, run_session
@@ -132,6 +133,8 @@ class RunOptions:
     starts: Sequence[str] = ()           # "NAME[:EPARAM]@MS"
     inputs: Sequence[str] = ()           # "PIN=0|1@MS"
     adcs: Sequence[str] = ()             # "CH=VALUE@MS"
+    writes: Sequence[str] = ()           # "NAME=VALUE@MS" (SPEC §6 names)
+    forces: Sequence[str] = ()           # "NAME=VALUE@MS"
     scenario: Optional[Path] = None
     machine: Optional[Path] = None
     software: bool = False
@@ -191,7 +194,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     if not 0 <= limit <= MAX_MS:
         raise UsageError(f"--ms must be from 0 to {MAX_MS}, not {limit}")
     target = Path(target)
-    sc = build_scenario(opts.scenario, opts.starts, opts.inputs, opts.adcs)
+    sc = build_scenario(opts.scenario, opts.starts, opts.inputs, opts.adcs, opts.writes,
+                        opts.forces)
     tg = _compile_target(target, opts)
     if any(not r.ok for r in tg.compiled):
         return RunResult(tg.compiled, None)
@@ -209,7 +213,9 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
         c = Controller(mconf, backend=opts.backend, variables=tg.variables,
                        gvarget_latency_ms=opts.gvarget_latency_ms,
                        record_samples=opts.trace is not None, target=config)
-        c.load(tg.programs, autostart=tg.single is None or config is not None)
+        replay = _replay_image(c, tg.programs, sc)
+        if replay is None:
+            c.load(tg.programs, autostart=tg.single is None or config is not None)
     except ControllerError as exc:
         raise UsageError(str(exc)) from None
     if tg.single is not None and config is None:
@@ -232,6 +238,9 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     _set_breaks(c, opts.breaks, target)
     report = run_session(c, sc, limit, trace=opts.trace, target=str(target), history=history,
                          capturer=capturer, watch=watch)
+    if replay:
+        report["notes"].insert(0, {"t_ms": 0, "level": "warning", "text": replay})
+    forces = report.pop("forces", None)          # (the forces stay last)
     report["halted"] = _halted_report(c.debugger.halted_state()) if opts.breaks else None
     if history is not None:
         report["capture"] = _save_capture(capturer, opts) if capturer is not None else None
@@ -240,6 +249,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
             report["history"] = {"file": str(opts.history), "bytes": history.nbytes()}
     if opts.state is not None and c.retained() is not None:
         _write_state(opts.state, config.name, c.retained())
+    if forces is not None:
+        report["forces"] = forces
     return RunResult(tg.compiled, report)
 
 
@@ -398,6 +409,22 @@ def _halted_report(state: Optional[dict]) -> Optional[dict]:
             "vars": mine["vars"] if mine else {},
             "fault": state["fault"], "breakpoint": state["breakpoint"],
             "procedures": state["procedures"], "machine": state["machine"]}
+
+
+def _replay_image(c: Controller, programs: list, sc) -> Optional[str]:
+    """A scenario with ``upload`` lines (a recorded session) loads the image
+    there, not at 0: None when it has none (load now), else '' or a warning
+    that the image recorded is not the one this target builds."""
+    uploads = [a for a in sc.actions if a.kind == "upload"]
+    if not uploads:
+        return None
+    c.replay_image = list(programs)
+    have = image_id(programs)
+    other = sorted({a.name for a in uploads if a.name and a.name != have})
+    if not other:
+        return ""
+    return (f"the recording loaded image {', '.join(other)}; this project builds image {have}: "
+            f"the replay runs the project's image and may differ from the session")
 
 
 def _compile_target(target: Path, opts: RunOptions) -> _Target:

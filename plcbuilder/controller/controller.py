@@ -25,12 +25,20 @@ from plcbuilder.bytecode.opcodes import DecodeError, validate
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.controller.debugger import Debugger
 from plcbuilder.controller.events import ControllerStatus, Event, Note, Sample
+from plcbuilder.controller.forces import MODES as _MODES, ForceError, Forces
 from plcbuilder.controller.plc import BACKENDS, PLC, mcode_names
+from plcbuilder.controller.recorder import Recorder, image_id
+from plcbuilder.controller.scenario import Action
 from plcbuilder.controller.targets import TargetConfig, TargetConfigError, make_plc
 
 HANDLER_INIT = "__HANDLER_INIT"
 HANDLER_EXIT = "__HANDLER_EXIT"
 SHUTDOWN_LIMIT_MS = 10_000
+
+
+def _as_int(value) -> int:
+    """A written or forced value as the recording writes it (it was accepted)."""
+    return to_int32(int(value, 0) if isinstance(value, str) else int(value))
 
 
 class ControllerError(Exception):
@@ -72,6 +80,12 @@ class Controller:
         self._loaded_once = False
         self._stop_presses = 0
         self._crc: dict[str, int] = {}
+        #: write, force and release (controller/forces.py); forces() lists them
+        self.forces = Forces(self._plc, machine)
+        #: everything done to this controller from outside (controller/recorder.py)
+        self.recorder = Recorder()
+        #: what a replayed ``upload`` line loads (None: the procedures loaded now)
+        self.replay_image: Optional[list[Program]] = None
 
     # ------------------------------------------------------------ basics
     @property
@@ -152,6 +166,8 @@ class Controller:
         first, self._loaded_once = not self._loaded_once, True
         if first:
             plc.grid = plc.t               # the software grid starts at the first load
+        self.forces.on_load()              # forces survive the build
+        self.recorder.add(Action(plc.t, "upload", image_id(progs)))
         if self.target is not None:        # a target's one program: it starts now
             try:
                 plc.program_of(by_name)
@@ -169,6 +185,13 @@ class Controller:
         if first and init is not None and init.kind is Kind.SOFTWARE:
             plc.start_software(HANDLER_INIT)
 
+    def reload(self) -> None:
+        """Load the replay image (a recorded session's ``upload`` line), or the
+        procedures loaded now again."""
+        image = self.replay_image if self.replay_image is not None else \
+            list(self._plc.programs.values())
+        self.load(image)
+
     # ------------------------------------------------------------- starts
     def start(self, name: str, eparam: int = 0) -> None:
         """Start a procedure by name. A hardware procedure begins in tick
@@ -179,6 +202,7 @@ class Controller:
             raise ControllerError(self._unknown(name))
         eparam = self._eparam(eparam)
         self._stop_presses = 0
+        self.recorder.add(Action(self._plc.t, "start", name, eparam))
         if program.kind is Kind.HARDWARE:
             self._plc.start_hardware(name, eparam)
         else:
@@ -202,6 +226,7 @@ class Controller:
         self._stop_presses += 1
         name = "M02" if self._stop_presses % 2 == 1 else "OFF"
         plc = self._plc
+        self.recorder.add(Action(plc.t, "stop"))
         p = plc.programs.get(name)
         if p is not None and p.kind is Kind.HARDWARE:
             plc.start_hardware(name, 0)
@@ -223,7 +248,9 @@ class Controller:
         if pin < 0 or (n is not None and pin >= n):
             raise ControllerError(f"no input {pin}" + (f" (the machine has inputs 0..{n - 1})"
                                                        if n else ""))
-        self._plc.bind_input(pin, name, self._eparam(eparam))
+        eparam = self._eparam(eparam)
+        self._plc.bind_input(pin, name, eparam)
+        self.recorder.add(Action(self._plc.t, "bind", name, pin, eparam))
 
     @property
     def bindings(self) -> dict[int, tuple[str, int]]:
@@ -245,6 +272,7 @@ class Controller:
         if p is None or p.kind is not Kind.SOFTWARE:
             return False
         self._plc.start_software(name)
+        self.recorder.add(Action(self._plc.t, "event", key.removeprefix("HANDLER_")))
         return True
 
     def shutdown(self, limit_ms: int = SHUTDOWN_LIMIT_MS) -> None:
@@ -266,16 +294,53 @@ class Controller:
     def set_input(self, pin: int, value: int) -> None:
         """Set input ``pin`` by hand from now on (overrides the machine's wiring)."""
         pin = self._int(pin, "input pin")
+        value = 1 if self._int(value, "input value") else 0
         try:
-            self.machine.set_input(pin, 1 if self._int(value, "input value") else 0)
+            self.machine.set_input(pin, value)
         except ValueError as exc:
             raise ControllerError(str(exc)) from None
+        self.recorder.add(Action(self._plc.t, "input", "", pin, value))
 
     def set_adc(self, ch: int, value: int) -> None:
         ch = self._int(ch, "ADC channel")
+        value = self._ranged(value, "ADC value", *INT32)
         try:
-            self.machine.set_adc(ch, self._ranged(value, "ADC value", *INT32))
+            self.machine.set_adc(ch, value)
         except ValueError as exc:
+            raise ControllerError(str(exc)) from None
+        self.recorder.add(Action(self._plc.t, "adc", "", ch, value))
+
+    # ------------------------------------------------------ write and force
+    def write(self, target: str, value) -> str:
+        """Set a target (``M03.x``, ``in 4``, ``out 0``, ``adc 1``, ``pwm 0``,
+        ``dac 1``, ``gvar 5000``) to ``value`` once. Returns its canonical name."""
+        name = self._forcing(self.forces.write, target, value)
+        self.recorder.add(Action(self._plc.t, "write", name, _as_int(value)))
+        return name
+
+    def force(self, target: str, value) -> str:
+        """Hold a target at ``value`` until released (SPEC §6)."""
+        name = self._forcing(self.forces.force, target, value)
+        self.recorder.add(Action(self._plc.t, "force", name, _as_int(value)))
+        return name
+
+    def release(self, target: str, mode: str = "restore") -> str:
+        """Release a target: ``keep`` its value or ``restore`` the program's."""
+        name = self._forcing(self.forces.release, target, mode)
+        self.recorder.add(Action(self._plc.t, "release", name, 0, _MODES.index(mode)))
+        return name
+
+    def release_all(self, mode: str = "restore") -> list[str]:
+        """Release everything forced; returns the names released."""
+        names = self._forcing(self.forces.release_all, mode)
+        self.recorder.add(Action(self._plc.t, "release", "all", 0, _MODES.index(mode)))
+        return names
+
+    @staticmethod
+    def _forcing(fn, *args):
+        try:
+            return fn(*args)
+        except ForceError as exc:
             raise ControllerError(str(exc)) from None
 
     # --------------------------------------------------------------- time
@@ -284,6 +349,8 @@ class Controller:
         ms = self._int(ms, "ms")
         if ms < 0:
             raise ControllerError(f"cannot step {ms} ms")
+        if self.forces.pending:
+            self.forces.retry_pending()
         self._plc.run(ms)
         self.debugger.settle()
 
@@ -293,6 +360,8 @@ class Controller:
         ms = self._int(ms, "ms")
         if ms < 0:
             raise ControllerError(f"cannot step {ms} ms")
+        if self.forces.pending:
+            self.forces.retry_pending()
         ran = self._plc.run(ms, until_idle=True)
         self.debugger.settle()
         return ran

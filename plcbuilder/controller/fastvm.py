@@ -24,6 +24,9 @@ How the code is translated:
   outside hands the procedure to the reference interpreter where it is.
 - Tick ends: a plain ``yield`` whose answer is tested against None (SYNC);
   a loop's condition is taken before the tick ends, and each way ends it.
+  ``HANDOVER`` (after a SYNC, where the tick end answers SYNC) raises
+  :class:`~plcbuilder.controller.vm.Handoff` there, so that the reference
+  interpreter goes on from that point (a debugger forcing a variable).
 - A constant pin's ``portget`` reads ``io.in_bits`` where the value is used,
   and ``portset``/``portclr`` test ``io.out_bits`` before calling.
 - Control flow: a block with exactly one predecessor is written inline at its
@@ -84,8 +87,14 @@ _UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT
                        abi.SLOT_VAR00 + 1})
 #: What the controller sends a suspended procedure to have its variables written back.
 SYNC = object()
+#: What the controller sends a procedure suspended at a tick end to have it raise
+#: Handoff there (the reference interpreter then runs it: vm.HANDOVER); the
+#: debugger throws vm.Migrate in for the same
+HANDOVER = vm.HANDOVER
 #: How a tick end that answers SYNC begins (then the offset it yields).
 _SYNC_ANSWER = "if (yield "
+#: How it waits, answering SYNC, for the tick to go on (or HANDOVER): only there.
+_SYNC_WAIT = "while (_m := (yield "
 #: A pseudo slot that values read from the host's ``io`` depend on: any call
 #: out (which may change the pins) first writes them to temporaries.
 _IO = -1
@@ -859,27 +868,31 @@ class _Gen:
     def tick_end(self, ind: int, resume: Optional[int] = None, depth: int = 0,
                  at: int = 0) -> None:
         """A tick end: yields ``at`` (the offset of the instruction ending the
-        tick); a Migrate thrown in while suspended hands the exact state over."""
+        tick); a Migrate thrown in, or HANDOVER sent, while suspended hands the
+        exact state over (the variables written back first)."""
         self.emit(ind, "try:")
         if self.syncs:
             # between ticks the controller may ask for the variables (send(SYNC)):
             # they go back to the slots, and are read again when the tick goes on
-            self.emit(ind + 1, f"if (yield {at}) is not None:")
+            self.emit(ind + 1, f"{_SYNC_ANSWER}{at}) is not None:")
             if self.cached:
                 self.emit(ind + 2, self._store_cached())
-            self.emit(ind + 2, f"while (yield {at}) is not None:")
-            self.emit(ind + 3, "pass")
+            self.emit(ind + 2, f"{_SYNC_WAIT}{at})) is not None:")
+            self.emit(ind + 3, "if _m is HANDOVER:")
+            self.emit(ind + 4, "raise Migrate")
             if self.cached:
                 self.emit(ind + 2, self._load_cached())
                 self._check_ranges(ind + 2, resume, depth)
         else:
-            self.emit(ind + 1, f"yield {at}")
+            self.emit(ind + 1, f"if (yield {at}) is HANDOVER:")
+            self.emit(ind + 2, "raise Migrate")
         self.emit(ind, "except Migrate:")
         stack = ", ".join(f"_{k}" for k in range(depth))
         self.emit(ind + 1, f"raise Handoff({resume}, [{stack}], {self.rets()}, 0) from None")
         if self.budget:
             self.emit(ind, "n = 0")
-        self.known.pop(abi.SLOT_MESSAGE, None)    # the controller clears message at a tick end
+        # the controller clears message at a tick end, and a debugger may write any slot
+        self.known = {}
 
     def _check_ranges(self, ind: int, resume: Optional[int], depth: int) -> None:
         """After a SYNC: the variables read back must be in the ranges the code
@@ -1225,8 +1238,9 @@ class _Gen:
             if self.latency:
                 self.emit(ind, f"if lat and plain({addr}):")
                 self.emit(ind + 1, "for _ in range(lat):")
-                self.emit(ind + 2, "try:")
-                self.emit(ind + 3, f"yield {i.offset}")
+                self.emit(ind + 2, "try:")                   # no handover while waiting
+                self.emit(ind + 3, f"while (yield {i.offset}) is not None:")
+                self.emit(ind + 4, "pass")
                 self.emit(ind + 2, "except Migrate:")        # the wait starts again there
                 items = "".join(f"_{k}, " for k in range(len(stack)))
                 self.emit(ind + 3, f"raise Handoff({i.offset}, [{items}{addr}], {self.rets()}, 0)"
@@ -1257,7 +1271,7 @@ class _Gen:
 # ------------------------------------------------------------------ runtime
 
 _NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff, "Halted": Halted,
-              "Migrate": Migrate, "tuple": tuple,
+              "Migrate": Migrate, "HANDOVER": HANDOVER, "tuple": tuple,
               "__builtins__": {"len": len, "range": range}}
 #: (code, make or None, why not translated, whether its tick ends answer SYNC)
 _CACHE: dict[tuple, tuple[bytes, Optional[Callable], str, bool]] = {}
@@ -1297,7 +1311,7 @@ def factory(program: Program, latency: bool = False,
     exec(compile(src, filename, "exec"), ns)
     if len(_CACHE) > 256:
         _CACHE.clear()
-    _CACHE[key] = (program.code, ns["make"], "", _SYNC_ANSWER in src)
+    _CACHE[key] = (program.code, ns["make"], "", _SYNC_WAIT in src)
     return ns["make"]
 
 

@@ -37,6 +37,7 @@ from plcbuilder.bytecode.abi import AXES
 from plcbuilder.bytecode.semantics import wrap
 
 from .machine_config import ADC_CHANNELS, MachineConfig, default_machine
+from .machine_forces import MachineForces
 from .motion import N_AXES, Motion, fmt_mm
 from .pls import PlsBank
 from .sensors import Sensors
@@ -50,8 +51,9 @@ _M32 = 0xFFFFFFFF
 _WORD_SHIFTS = tuple(range(0, 256, 32))
 
 
-class Machine:
-    """The simulated machine. ``Machine()`` is the default machine."""
+class Machine(MachineForces):
+    """The simulated machine. ``Machine()`` is the default machine. What a
+    debugger forces is held by the methods of :class:`MachineForces`."""
 
     def __init__(self, config: Optional[MachineConfig] = None):
         self.config = config if config is not None else default_machine()
@@ -80,8 +82,9 @@ class Machine:
         self._get: dict[int, Callable[[int], int]] = {}
         self._set: dict[int, Callable[[int, int], None]] = {}
         self._build_register_map()
-        #: each pin's state as a list, kept equal to in_bits/out_bits and changed in
-        #: place (the fast backend reads them: Host.io)
+        #: each pin's state as a list, changed in place (the fast backend reads them:
+        #: Host.io): in_levels equals in_bits; out_on is the outputs as the program
+        #: last set them (prog_out), equal to out_bits unless an output is forced
         self.in_levels = [0] * cfg.input_count
         self.out_on = [False] * cfg.output_count
         self.reset()
@@ -94,14 +97,25 @@ class Machine:
     def reset(self) -> None:
         """Power-on state: start positions, outputs off, no overrides, registers
         cleared, t_ms = 0."""
+        for addr in list(getattr(self, "_held", ())):
+            self.release_register(addr, True)     # its own functions back in the tables
         self.quiet = False
         self.t_ms = 0
         self._notes.clear()
         self.motion.reset()
         self.out_bits = 0
+        self.prog_out = 0                  # the outputs as the program set them
         self.out_on[:] = [False] * self.output_count
         self._ov_mask = 0
         self._ov_val = 0
+        # forces (controller/forces.py): pins and channels held by the debugger
+        self._fin_mask = self._fin_val = 0
+        self._fout_mask = self._fout_val = 0
+        self._adc_force: dict[int, int] = {}
+        #: forced register address -> [held value, the program's last write]
+        self._held: dict[int, list[int]] = {}
+        self._plain_held: set[int] = set()
+        self._unheld: dict[int, tuple] = {}     # address -> its own (get, set) functions
         self.sensors.reset(self.motion.ipos, 0)
         self.in_bits = 0
         self.in_levels[:] = [0] * self.input_count
@@ -172,8 +186,8 @@ class Machine:
         """Turn output ``pin`` on (at once). Writing the value an output already
         has changes nothing, and costs little: the machine stays quiet."""
         if 0 <= pin < self.output_count:
-            new = self.out_bits | (1 << pin)
-            if new != self.out_bits:
+            new = self.prog_out | (1 << pin)
+            if new != self.prog_out:
                 self._set_outputs(new)
         else:
             self._bad_pin("portset", pin, self.output_count, "outputs")
@@ -181,8 +195,8 @@ class Machine:
     def portclear(self, pin: int) -> None:
         """Turn output ``pin`` off (at once)."""
         if 0 <= pin < self.output_count:
-            new = self.out_bits & ~(1 << pin)
-            if new != self.out_bits:
+            new = self.prog_out & ~(1 << pin)
+            if new != self.prog_out:
                 self._set_outputs(new)
         else:
             self._bad_pin("portclear", pin, self.output_count, "outputs")
@@ -210,7 +224,7 @@ class Machine:
 
     def is_plain_register(self, addr: int) -> bool:
         """True when gvarget(addr) reads the plain global register store."""
-        return addr not in self._get
+        return addr not in self._get or addr in self._plain_held
 
     def g0move(self, flags: int, mask: int, distance: int) -> None:
         """g0moveA(flags, mask, distance): bit 0 absolute, bit 1 machine coordinates,
@@ -360,6 +374,9 @@ class Machine:
     def _recompute_inputs(self) -> None:
         m = self._ov_mask
         v = (((self.sensors.wired | self._preset) & ~m) | (self._ov_val & m)) & self._in_mask
+        fm = self._fin_mask
+        if fm:
+            v = (v & ~fm) | (self._fin_val & fm)
         if v != self.in_bits:
             changed = v ^ self.in_bits
             self.in_bits = v
@@ -372,16 +389,25 @@ class Machine:
             self._sample = None
 
     def _set_outputs(self, new: int) -> None:
-        old = self.out_bits
+        """The program sets the outputs to ``new``; forced ones keep their value."""
+        old = self.prog_out
         if new == old:
             return
-        self.out_bits = new
+        self.prog_out = new
         on = self.out_on
         changed = old ^ new
         while changed:
             low = changed & -changed
             on[low.bit_length() - 1] = bool(new & low)
             changed ^= low
+        fm = self._fout_mask
+        self._set_physical((new & ~fm) | (self._fout_val & fm) if fm else new)
+
+    def _set_physical(self, new: int) -> None:
+        old = self.out_bits
+        if new == old:
+            return
+        self.out_bits = new
         self._sample = None
         if (old ^ new) & self.sensors.followed_mask:
             self.quiet = False             # a wired input may follow after a delay
@@ -390,7 +416,7 @@ class Machine:
 
     def _set_output_word(self, k: int, value: int) -> None:
         shift = 32 * k
-        new = (self.out_bits & ~(_M32 << shift)) | ((value & _M32) << shift)
+        new = (self.prog_out & ~(_M32 << shift)) | ((value & _M32) << shift)
         self._set_outputs(new & self._out_mask)
 
     def _forget_sample(self) -> None:
@@ -415,6 +441,8 @@ class Machine:
     def _refresh_adc(self) -> None:
         adc = list(self.sensors.adc)
         for ch, v in self._adc_override.items():
+            adc[ch] = v
+        for ch, v in self._adc_force.items():
             adc[ch] = v
         if adc != self._adc:
             self._adc = adc

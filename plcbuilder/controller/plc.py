@@ -33,6 +33,7 @@ from plcbuilder.bytecode.semantics import wrap
 from plcbuilder.controller import fastvm, vm
 from plcbuilder.controller.events import (Ended, Fault, Message, Note, Print, Sample,
                                           Started)
+from plcbuilder.controller.forces import ForcedSlots
 from plcbuilder.controller.vm import HALT, Halted, Handoff, Host, Migrate, ProcExit, VMFault
 
 SOFTWARE_PERIOD_MS = 100
@@ -73,6 +74,11 @@ class Process:
         self.fault = None
         #: runs code that asks the debugger (the reference interpreter, or watched fast code)
         self.watched = False
+
+    @property
+    def runner(self):
+        """The generator that runs it (either backend; forces.py's name for ``gen``)."""
+        return self.gen
 
     def set_gen(self, gen) -> None:
         self.gen = gen
@@ -134,6 +140,9 @@ class PLC:
         self.watching = False
         #: the rest of a tick halted by the debugger: (t, procedures still to run, ran)
         self._rest = None
+        #: procedure name -> {slot: value} of its forced variables (controller/forces.py):
+        #: such a procedure runs on the reference interpreter over ForcedSlots
+        self.var_forces: dict[str, dict[int, int]] = {}
         self.events: deque = deque(maxlen=EVENT_BUFFER)
         self.samples: deque = deque(maxlen=SAMPLE_BUFFER)
         self.programs: dict[str, Program] = {}
@@ -221,11 +230,19 @@ class PLC:
         if program.kind is Kind.SOFTWARE:
             slots[abi.SLOT_PARAM] = eparam
         host = self._host(program.name, program.kind)
+        forced = self.var_forces.get(program.name) if self.var_forces else None
+        if forced:
+            slots = ForcedSlots(slots)
+            for slot, value in forced.items():
+                slots.hold(slot, value)
         p = Process(program, slots, eparam, self.t, host)
         dbg = self.debugger
         if dbg is not None:
             host.debug = dbg.watch(p)
-        if self.backend == "fast":
+        if forced:
+            gen = vm.run_reference(program, slots, host, cover=self.coverage)
+            p.watched = True
+        elif self.backend == "fast":
             p.watched = dbg is not None and dbg.watched(program)
             gen = fastvm.make_runner(program, slots, host, watched=p.watched)
             if not p.watched and fastvm.answers_sync(program, host):

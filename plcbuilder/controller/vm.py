@@ -93,6 +93,14 @@ class Migrate(Exception):
     can go on from there (the debugger does this to watch or step it)."""
 
 
+#: Sent to a procedure suspended at a tick end (``gen.send(HANDOVER)``): it raises
+#: :class:`Handoff` with its state there, so that a new reference interpreter
+#: (over other slots: a debugger's forces) goes on from that point. A fast-backend
+#: procedure that keeps variables in locals takes it after a SYNC; one waiting for
+#: a gvarget's latency ignores it (it stays suspended).
+HANDOVER = object()
+
+
 class Host:
     """What a running procedure reaches outside itself.
 
@@ -275,7 +283,8 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                     kinds[pending] = K_BREAK if marks[pending] else base[pending]
                     pending = -1
                 passed = -1
-                yield at
+                if (yield at) is not None:
+                    raise Handoff(pc, stack, tuple(calls), 0)
                 count = 0
                 continue
             elif k == K_INC:
@@ -308,7 +317,8 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                     if len(stack) > STACK_LIMIT:
                         raise VMFault(pc, FAULT_OVERFLOW)
                     for _ in range(lat):
-                        yield pc
+                        while (yield pc) is not None:
+                            pass
                     count = 0
                 push(gvarget(a))
             elif k == K_PORTGET:
@@ -327,7 +337,8 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                     kinds[pending] = K_BREAK if marks[pending] else base[pending]
                     pending = -1
                 passed = -1
-                yield at
+                if (yield at) is not None:
+                    raise Handoff(pc, stack, tuple(calls), 0)
                 count = 0
                 continue
             elif k == K_CALL:

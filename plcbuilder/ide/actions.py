@@ -59,11 +59,25 @@ class Act:
     CONNECT = "connect"
     EMBEDDED = "embedded"
     ABOUT = "about"
+    BUILD_UPLOAD_START = "build_upload_start"
+    # the debugger (plcbuilder.ide.debug.actions makes these)
+    PAUSE = "pause"
+    STEP_OVER = "step_over"
+    STEP_INTO = "step_into"
+    STEP_OUT = "step_out"
+    STEP_TICK = "step_tick"
+    RUN_TO_CURSOR = "run_to_cursor"
+    TOGGLE_BREAKPOINT = "toggle_breakpoint"
+    TOGGLE_ALL_BREAKPOINTS = "toggle_all_breakpoints"
+    REMOVE_ALL_BREAKPOINTS = "remove_all_breakpoints"
+    RELEASE_ALL = "release_all"
     OPEN_TRACE = "open_trace"
     SAVE_TRACE = "save_trace"
     EXPORT_TRACE = "export_trace"
     EXPORT_PLOT = "export_plot"
     COMPARE_TRACE = "compare_trace"
+    SAVE_RECORDING = "save_recording"
+    REPLAY_SESSION = "replay_session"
     # navigation, build insight, registers and help (made by plcbuilder.ide.workbench)
     BACK = "back"
     FORWARD = "forward"
@@ -73,7 +87,6 @@ class Act:
     RENAME_SYMBOL = "rename_symbol"
     SHOW_DISASSEMBLY = "show_disassembly"
     CODE_BYTES = "code_bytes"
-    BUILD_UPLOAD_START = "build_upload_start"
     REGISTERS = "registers"
     MANUAL = "manual"
     SHORTCUTS = "shortcuts"
@@ -164,8 +177,10 @@ def build_actions(win) -> dict[str, QAction]:
       "Compile every procedure and write build/eeprom.rom")
     A(Act.UPLOAD, "&Upload", win.upload, "Ctrl+U", "upload",
       "Upload build/eeprom.rom to the controller")
-    A(Act.START, "&Start…", win.start_procedure, "F5", "start",
+    A(Act.START, "&Start…", win.start_or_continue, "F5", "start",
       "Start a procedure on the controller (by name or M-code, with eparam)")
+    A(Act.BUILD_UPLOAD_START, "Build, Upload and Start", win.run_actions.build_upload_start,
+      None, None, "Build All, upload the image and start the current editor's procedure")
     A(Act.START_CURRENT, "Start &This Procedure", win.run_actions.start_current, "Ctrl+F5", None,
       "Start the procedure of the current editor with the last eparam")
     A(Act.STOP, "S&top", win.stop, "Shift+F5", "stop",
@@ -191,6 +206,11 @@ def build_actions(win) -> dict[str, QAction]:
       "Save the plots of the first visible run dock as PNG or SVG")
     A(Act.COMPARE_TRACE, "Compare with Trace…", lambda: ta.compare_trace(win), None, None,
       "The first tick where the trace on show (or the session) differs from a trace file")
+    A(Act.SAVE_RECORDING, "Save Session &Recording…", lambda: ta.save_recording(win), None, None,
+      "Save everything done to the controller since it started, as a scenario file that "
+      "replays the session")
+    A(Act.REPLAY_SESSION, "Re&play Session…", lambda: ta.replay_session(win), None, None,
+      "Run a session recording on the project's image and show its trace")
     context = [actions[a] for a in (Act.TOGGLE_COMMENT, Act.GOTO_DEFINITION)] + \
         [None] + [actions[a] for a in (Act.FIND, Act.GOTO_LINE)]
     win.editor_stack.context_actions = context
@@ -220,7 +240,8 @@ def build_menus(win) -> None:
     for name in (Act.BUILD_ALL, Act.UPLOAD):
         m.addAction(a(name))
     m = mb.addMenu("&Run")
-    for name in (Act.START, Act.START_CURRENT, Act.STOP, None, Act.RUN_TESTS):
+    for name in (Act.START, Act.START_CURRENT, Act.BUILD_UPLOAD_START, Act.STOP, None,
+                 Act.RUN_TESTS, None, Act.SAVE_RECORDING, Act.REPLAY_SESSION):
         m.addAction(a(name)) if name else m.addSeparator()
     m.addSeparator()
     speed = m.addMenu(icon("speed"), "Simulation &Speed")
@@ -243,6 +264,8 @@ def fill_view_menu(win) -> None:
             m.addAction(dock.toggleViewAction())
     m.addSeparator()
     m.addAction(win.toolbar.toggleViewAction())
+    if getattr(win, "debug_toolbar", None) is not None:
+        m.addAction(win.debug_toolbar.toggleViewAction())
     m.addSeparator()
     for name in (Act.ZOOM_IN, Act.ZOOM_OUT, Act.ZOOM_RESET, None, Act.NEXT_TAB,
                  Act.PREVIOUS_TAB, None, Act.RESET_LAYOUT):
@@ -317,7 +340,8 @@ def update_actions(win) -> None:
         win.action(Act.SAVE).setEnabled(False)
         win.action(Act.TOGGLE_COMMENT).setEnabled(False)
     run = win.connection is not None and has_project
-    for name in (Act.UPLOAD, Act.START, Act.START_CURRENT, Act.STOP, Act.RESET_CONTROLLER):
+    for name in (Act.UPLOAD, Act.START, Act.START_CURRENT, Act.STOP, Act.RESET_CONTROLLER,
+                 Act.BUILD_UPLOAD_START):
         win.action(name).setEnabled(run)
     if Act.BUILD_UPLOAD_START in win._actions:          # the workbench's actions
         win.action(Act.BUILD_UPLOAD_START).setEnabled(run)

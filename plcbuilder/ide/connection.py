@@ -14,7 +14,16 @@ it learns goes into a queue that a GUI-thread timer drains every ~15 ms,
 emitting the signals below (samples and events merged into one emission per
 drain). If the connection breaks or the child dies, ``sig_disconnected``
 says why, and the worker connects again (restarting the child) with backoff;
-after a restart it uploads the last image again.
+after a restart it uploads the last image again (and the debug session sends
+the breakpoints again on ``sig_connected``).
+
+Debugging (SPEC §6): the request methods of the debugger contract
+(:meth:`ControllerConnection.set_breakpoints`, :meth:`~ControllerConnection.debug_step`,
+:meth:`~ControllerConnection.force`, ...) queue like the others. The
+controller's ``halted``/``resumed`` notifications, and the ``debug_state``
+the worker asks for after every debug verb and with each state poll while
+debugging, become ``sig_halted`` / ``sig_resumed`` (each halt once); log and
+forces events become ``sig_log`` / ``sig_forces_changed``.
 """
 
 from __future__ import annotations
@@ -22,6 +31,7 @@ from __future__ import annotations
 import queue
 import threading
 import time
+import zlib
 from typing import Optional, Sequence
 
 from PySide6 import QtCore
@@ -44,6 +54,11 @@ SPAWN_TIMEOUT = 20.0          # seconds a child gets to write its runtime file
 BACKOFF = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 STABLE_AFTER = 10.0           # a connection up this long resets the backoff
 MAX_SAMPLES_PER_EMIT = 60000  # samples in one sig_samples emission at most
+#: The debugger's requests (SPEC §6); after each the worker asks for the halted state.
+DEBUG_VERBS = frozenset({"debug_continue", "debug_pause", "debug_step", "debug_run_to",
+                         "debug_state", "write", "force", "release", "release_all", "forces"})
+#: ... and after these for the list of forces too.
+FORCE_VERBS = frozenset({"write", "force", "release", "release_all", "forces"})
 #: Sample changes the controller keeps for this IDE between two telemetry frames
 #: (20 ms). The controller sends only the ticks where something changed, in
 #: MessagePack, and the IDE subscribes ``lossless``: at Max speed the controller
@@ -101,6 +116,9 @@ class _Worker(threading.Thread):
         self.registers_pending = False
         self.restarts = 0
         self.steps = StepSamples()
+        self.breakpoints: dict[str, list] = {}  # file -> specs the controller has
+        self.debugging = False                  # a debug verb was used: follow the halts
+        self.notified = False                   # the client passes halted/resumed on
 
     # ----------------------------------------------------------------- plumbing
     def post(self, kind: str, payload=None) -> None:
@@ -160,6 +178,8 @@ class _Worker(threading.Thread):
                 self.speed = (args[0], args[1])
             elif verb == "variables":
                 self.variables_pending = False
+            elif verb == "set_breakpoints":
+                pass                        # the session sends them all when connected
             elif verb == "registers":
                 self.registers_pending = False
             else:
@@ -202,7 +222,21 @@ class _Worker(threading.Thread):
                 client.speed(mode, factor)
             except RefusedError as exc:
                 self.post("error", f"speed: {exc.reason}")
+        self._hook_notifications(client)
+        try:                                   # does this controller have the debugger?
+            forces = client.request("forces").get("forces", [])
+            self.post("debugger", True)
+            self.post("forces", forces)
+        except RefusedError:
+            self.post("debugger", False)
         self.post("connected", (f"{host}:{port}", client.welcome))
+
+    def _hook_notifications(self, client: Client) -> None:
+        """The controller's own ``halted``/``resumed`` messages, when the client
+        passes them on (on its reader thread: only queue them)."""
+        self.notified = hasattr(client, "notification_callback")
+        if self.notified:
+            client.notification_callback = lambda msg: self.post(str(msg.get("type")), msg)
 
     def _wait_endpoint(self, child: ControllerProcess) -> runtime.Endpoint:
         ep = child.wait_endpoint(SPAWN_TIMEOUT, cancel=self.stopping)
@@ -225,6 +259,8 @@ class _Worker(threading.Thread):
             if now >= next_state:
                 next_state = now + STATE_INTERVAL
                 self.post("state", client.state())
+                if self.debugging and not self.notified:    # no halted/resumed messages
+                    self._debug_state(client)
             try:
                 cmd = self.commands.get(timeout=max(0.0, min(0.05, next_state - now)))
             except queue.Empty:
@@ -264,15 +300,52 @@ class _Worker(threading.Thread):
                 self.registers_pending = False
                 self.post("registers", client.registers(args[0]))
                 return
+            elif verb == "set_breakpoints":
+                fields = args[0]
+                if fields["breakpoints"]:
+                    self.breakpoints[fields["file"]] = fields["breakpoints"]
+                else:
+                    self.breakpoints.pop(fields["file"], None)
+                self.debugging = self.debugging or bool(self.breakpoints)
+                result = client.request(verb, **fields)
+                self.post("breakpoints", (fields["file"], result.get("breakpoints", [])))
+            elif verb in DEBUG_VERBS:
+                self.debugging = self.debugging or verb not in FORCE_VERBS
+                if verb == "debug_state":
+                    self._debug_state(client)
+                    return
+                if verb == "forces":
+                    self.post("forces", client.request("forces").get("forces", []))
+                    return
+                result = client.request(verb, **(args[0] if args else {}))
+                self.post("result", (verb, result))
+                self._debug_state(client)
+                if verb in FORCE_VERBS:
+                    self.post("forces", client.request("forces").get("forces", []))
+                return
             else:
                 result = client.request(verb, **(args[0] if args else {}))
         except ConnectionLost:
             raise
         except RefusedError as exc:
+            if verb == "set_breakpoints":       # the Breakpoints panel says why
+                self.post("breakpoints_refused", (args[0]["file"], exc.reason))
+                return
             self.post("error", f"{verb}: {exc.reason}")
             self.post("refused", (verb, exc.reason))
             return
         self.post("result", (verb, result))
+        if verb in ("upload", "reset", "start", "stop") and self.debugging:
+            self._debug_state(client)
+
+    def _debug_state(self, client: Client) -> None:
+        try:
+            halted = client.request("debug_state").get("halted")
+        except RefusedError as exc:     # a controller without the debugger
+            self.debugging = False
+            self.post("error", f"debug_state: {exc.reason}")
+            return
+        self.post("debug_state", halted if isinstance(halted, dict) else None)
 
     def _close(self) -> None:
         c, self.client = self.client, None
@@ -331,6 +404,28 @@ class ControllerConnection(QtCore.QObject):
     """Something worth a line in the log that is not an error (an image uploaded
     again after a restart)."""
 
+    sig_halted = Signal(object)
+    """The controller halted (SPEC §6): the halted state dict (``reason``,
+    ``t_ms``, ``procedure``, ``file``, ``line``, ``procedures`` with each one's
+    line, stack and variables, ``machine``, ``fault``, ``breakpoint``). Emitted
+    once per halt (a step halts again: a new emission)."""
+
+    sig_resumed = Signal(int)
+    """The controller runs again after a halt (its ``t_ms``)."""
+
+    sig_breakpoints = Signal(str, list)
+    """The controller's answer to :meth:`set_breakpoints`: the file and, per
+    breakpoint, ``{id, file, line, verified, reason}``."""
+
+    sig_breakpoints_refused = Signal(str, str)
+    """A file's breakpoints were refused (the file, the reason)."""
+
+    sig_forces_changed = Signal(list)
+    """What is forced now: ``[{target, value, since_ms}]``."""
+
+    sig_log = Signal(object)
+    """A logpoint wrote a line: the event (``t_ms``, the procedure, ``text``)."""
+
     def __init__(self, parent: Optional[QtCore.QObject] = None):
         super().__init__(parent)
         self._inbox: "queue.SimpleQueue" = queue.SimpleQueue()
@@ -344,6 +439,13 @@ class ControllerConnection(QtCore.QObject):
         self.last_state = ControllerStatus()
         self.missed = 0
         self.welcome: dict = {}
+        self.halted: Optional[dict] = None      # the last halted state (None: running)
+        self.debugger = False                   # the controller answers the debug requests
+        #: CRC-32 (hex) of an image this connection is uploading: what the controller
+        #: runs once the upload (queued in order) is done, until a state says so
+        self.uploaded_crc: Optional[str] = None
+        self._upload_done = False
+        self.forces: list = []                  # the last list of forces
 
     # -------------------------------------------------------------- lifecycle
     @property
@@ -385,6 +487,7 @@ class ControllerConnection(QtCore.QObject):
         self._inbox = worker.inbox = queue.SimpleQueue()
         self._worker = worker
         self.missed = 0
+        self.uploaded_crc = None
         worker.start()
         self._pump.start()
 
@@ -392,7 +495,9 @@ class ControllerConnection(QtCore.QObject):
     def upload(self, image_bytes: bytes, target: Optional[dict] = None) -> None:
         """Upload an eeprom.rom image (kept, and uploaded again after a restart);
         ``target``: the project's target profile (None: myCNC)."""
-        self._send("upload", bytes(image_bytes), target)
+        data = bytes(image_bytes)
+        self.uploaded_crc = f"{zlib.crc32(data):08x}"
+        self._send("upload", data, target)
 
     def start(self, name: str, eparam: int = 0) -> None:
         self._send("start", name, int(eparam))
@@ -424,6 +529,11 @@ class ControllerConnection(QtCore.QObject):
         """Start ``__HANDLER_GCODE_START`` or ``__HANDLER_GCODE_STOP``."""
         self._send("event", handler)
 
+    def request_recording(self) -> None:
+        """Ask for the session's recording; the answer comes as sig_result
+        ("recording", {text, t_ms, actions})."""
+        self._send("recording", {})
+
     def request_variables(self) -> None:
         """Ask for every procedure's variables; the answer comes as sig_variables.
         A request still waiting is not repeated."""
@@ -433,6 +543,56 @@ class ControllerConnection(QtCore.QObject):
         w.variables_pending = True
         self._send("variables")
 
+    # --------------------------------------------------------------- debugging
+    def set_breakpoints(self, file: str, breakpoints: list) -> None:
+        """Replace the breakpoints of one file (its name as the line table has
+        it, ``M80.plc``) with these specs (the contract's dicts; a condition
+        as ``{text, code}``). Kept, and sent again after a restart; the answer
+        comes as sig_breakpoints."""
+        self._send("set_breakpoints", {"file": str(file), "breakpoints": list(breakpoints)})
+
+    def debug_continue(self) -> None:
+        self._send("debug_continue", {})
+
+    def debug_pause(self) -> None:
+        """Halt at the end of the current tick."""
+        self._send("debug_pause", {})
+
+    def debug_step(self, kind: str, procedure: Optional[str] = None) -> None:
+        """``tick`` (one 1 ms tick), ``into``, ``over`` or ``out`` (statements of
+        ``procedure``, by default the one that halted)."""
+        fields = {"kind": kind}
+        if procedure:
+            fields["procedure"] = procedure
+        self._send("debug_step", fields)
+
+    def debug_run_to(self, file: str, line: int) -> None:
+        self._send("debug_run_to", {"file": str(file), "line": int(line)})
+
+    def request_debug_state(self) -> None:
+        """Ask whether the controller is halted (the answer: sig_halted or sig_resumed)."""
+        self._send("debug_state", {})
+
+    def write(self, target: str, value: int) -> None:
+        """Set once: ``PROC.var``, ``in N``, ``out N``, ``adc N``, ``pwm N``,
+        ``dac N`` or ``gvar N``."""
+        self._send("write", {"target": str(target), "value": int(value)})
+
+    def force(self, target: str, value: int) -> None:
+        """Hold a target at a value until released (the list follows as
+        sig_forces_changed)."""
+        self._send("force", {"target": str(target), "value": int(value)})
+
+    def release(self, target: str, mode: str = "keep") -> None:
+        """End a force: ``keep`` the value it has, or ``restore`` what the
+        program (or the wiring) would have now."""
+        self._send("release", {"target": str(target), "mode": mode})
+
+    def release_all(self, mode: str = "keep") -> None:
+        self._send("release_all", {"mode": mode})
+
+    def request_forces(self) -> None:
+        self._send("forces", {})
     def request_registers(self, addresses) -> None:
         """Ask for the values of global registers; the answer comes as
         sig_registers. A request still waiting is not repeated."""
@@ -473,16 +633,28 @@ class ControllerConnection(QtCore.QObject):
                 break
             if kind == "telemetry":
                 samples.extend(payload.samples)
-                events.extend(payload.events)
+                for e in payload.events:
+                    etype = getattr(e, "type", None)
+                    if etype == "log":
+                        self.sig_log.emit(e)
+                    elif etype == "forces":
+                        self._on_forces(getattr(e, "forces", []))
+                        continue
+                    events.append(e)
                 self.missed += payload.missed
                 continue
             flush()                     # keep the order of telemetry and the rest
             if kind == "state":
                 self.last_state = payload
+                if self._upload_done:           # this state knows the uploaded image
+                    self.uploaded_crc, self._upload_done = None, False
                 self.sig_state.emit(payload, self.missed)
             elif kind == "connected":
                 self.address, self.welcome = payload
                 self.connected = True
+                if self.halted is not None:     # a new controller runs
+                    self.halted = None
+                    self.sig_resumed.emit(0)
                 self.sig_connected.emit(self.address)
             elif kind == "disconnected":
                 was = self.connected
@@ -501,9 +673,45 @@ class ControllerConnection(QtCore.QObject):
                 self.sig_target_report.emit(dict(payload))
             elif kind == "result":
                 verb, result = payload
+                if verb == "upload":
+                    self._upload_done = True
                 self.sig_result.emit(verb, dict(result) if isinstance(result, dict) else {})
             elif kind == "note":
                 self.sig_note.emit(str(payload))
+            elif kind in ("debug_state", "halted", "resumed"):
+                self._on_debug_state(kind, payload)
+            elif kind == "refused":
+                if payload[0] == "upload":
+                    self.uploaded_crc = None
+            elif kind == "breakpoints":
+                self.sig_breakpoints.emit(*payload)
+            elif kind == "breakpoints_refused":
+                self.sig_breakpoints_refused.emit(*payload)
+            elif kind == "forces":
+                self._on_forces(payload)
+            elif kind == "debugger":
+                self.debugger = bool(payload)
             elif kind == "stopped":
                 pass
         flush()
+
+    def _on_debug_state(self, kind: str, payload) -> None:
+        """A halted state (from debug_state or a ``halted`` message) or a
+        ``resumed`` message: each halt is emitted once."""
+        if kind == "halted" and isinstance(payload, dict) and "state" in payload:
+            payload = payload["state"]
+        if kind == "resumed":
+            payload = None
+        if isinstance(payload, dict):
+            if payload != self.halted:
+                self.halted = payload
+                self.sig_halted.emit(payload)
+        elif self.halted is not None:
+            self.halted = None
+            self.sig_resumed.emit(int(self.last_state.t_ms))
+
+    def _on_forces(self, forces) -> None:
+        forces = [f for f in (forces or []) if isinstance(f, dict)]
+        if forces != self.forces:
+            self.forces = forces
+            self.sig_forces_changed.emit(list(forces))

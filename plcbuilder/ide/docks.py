@@ -114,6 +114,10 @@ def default_dock_sizes(win) -> None:
                              Qt.Orientation.Vertical)
     win.resizeDocks([win.problems_dock], [max(190, int(win.height() * 0.24))],
                      Qt.Orientation.Vertical)
+    if getattr(win, "callstack_dock", None) is not None:     # the tree keeps most of the left
+        h = max(win.height() - 260, 400)
+        win.resizeDocks([win.project_dock, win.callstack_dock], [int(h * 0.62), int(h * 0.38)],
+                         Qt.Orientation.Vertical)
 
 
 def reset_layout(win) -> None:

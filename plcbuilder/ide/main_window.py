@@ -32,8 +32,9 @@ from PySide6.QtGui import QAction
 from PySide6.QtWidgets import QApplication, QFileDialog, QMainWindow, QMessageBox
 
 from plcbuilder.api import Kind
-from plcbuilder.ide import actions, dialogs, docks, workbench
+from plcbuilder.ide import actions, debug, dialogs, docks, workbench
 from plcbuilder.ide.actions import Act
+from plcbuilder.ide.debug import actions as debug_actions
 from plcbuilder.ide.build_panel import BuildPanel
 from plcbuilder.ide.editor import CodeEditor, file_key
 from plcbuilder.ide.editor_stack import EditorStack
@@ -67,6 +68,12 @@ class MainWindow(QMainWindow):
 
     sig_diagnostics_updated = Signal(str)
     """New diagnostics of a procedure arrived (its file key)."""
+
+    sig_recording_saved = Signal(str)
+    """Run › Save Session Recording wrote the session's recording (its path)."""
+
+    sig_replayed = Signal(object)
+    """Run › Replay Session finished: the replay's trace (shown in the run panels)."""
 
     def __init__(self, settings: Optional[Settings] = None, *, start_controller: bool = True,
                  connection=None, debounce_ms: Optional[int] = None):
@@ -104,6 +111,7 @@ class MainWindow(QMainWindow):
                                       connection=connection, start_controller=start_controller)
         self.status = StatusBar(self)
         self.setStatusBar(self.status)
+        self.debug = debug.DebugSession(self)
         # the parts' widgets, by the names the window always had
         es = self.editor_stack
         self.tabs, self.stack, self.find_bar = es.tabs, es.stack, es.find_bar
@@ -111,9 +119,13 @@ class MainWindow(QMainWindow):
         self.recovery, self.store = es.recovery, self.lint.store
 
         docks.build_docks(self)
+        debug.build_docks(self)
         self._actions = actions.build_actions(self)
+        debug_actions.build_debug_actions(self, self._actions)
         actions.build_menus(self)
+        debug_actions.build_debug_menu(self, self.menuBar().actions()[-1])
         actions.build_toolbar(self)
+        debug_actions.build_debug_toolbar(self)
         self._wire()
         self._setup_run_side()
         workbench.install(self)             # navigation, disassembly, registers, help
@@ -230,6 +242,13 @@ class MainWindow(QMainWindow):
         """Start a procedure on the controller (asking which, when not given)."""
         return self.run_actions.start_procedure(name, eparam)
 
+    def start_or_continue(self) -> bool:
+        """F5: continue when the controller is halted, else Start…"""
+        if self.debug.is_halted():
+            self.debug.continue_()
+            return True
+        return self.start_procedure()
+
     def stop(self) -> None:
         self.run_actions.stop()
 
@@ -287,6 +306,7 @@ class MainWindow(QMainWindow):
         if not self.editor_stack.confirm_discard_all("Close Project"):
             return False
         self._save_session()
+        self.debug.project_closed()
         self.editor_stack.close_all(force=True)
         self.project = None
         self.lint.clear(sizes=False)
@@ -382,7 +402,7 @@ class MainWindow(QMainWindow):
         """Connect the parts' signals."""
         msg = self.statusBar().showMessage
         es, lint, run, tree = self.editor_stack, self.lint, self.run_actions, self.tree
-        for part in (es, lint, run):
+        for part in (es, lint, run, self.debug):
             part.sig_message.connect(lambda text, ms: msg(text, ms) if ms else msg(text))
         # the editors
         es.can_reveal = lambda path: tree.find_item(path) is not None
@@ -431,6 +451,9 @@ class MainWindow(QMainWindow):
             lambda: self.action(Act.BUILD_ALL).setEnabled(self.project is not None))
         run.sig_build_result.connect(self._on_build_result)
         run.sig_build_finished.connect(self.sig_build_finished)
+        # the debugger
+        self.debug.sig_state_changed.connect(self._update_actions)
+        self.sig_project_opened.connect(self.debug.project_opened)
 
     def _setup_run_side(self) -> None:
         """The controller connection and the run docks, empty: the run panels
@@ -448,6 +471,12 @@ class MainWindow(QMainWindow):
             c.sig_error.connect(lambda t: self.statusBar().showMessage(t, 6000))
             self.run_docks = docks.empty_run_docks(self)
             docks.place_run_docks(self, list(self.run_docks.values()))
+            lower = self.run_docks.get("watch")
+            if lower is not None:
+                self.tabifyDockWidget(lower, self.forces_dock)
+                self.run_docks["inputs"].raise_()
+        self.debug.wire_connection()
+        run.wire_connection()
         actions.fill_view_menu(self)
 
     def ensure_run_panels(self):
@@ -466,6 +495,7 @@ class MainWindow(QMainWindow):
             self.statusBar().showMessage(f"The run panels are not available: {exc}")
             return None
         self.run_panels.sig_open_location.connect(lambda f, ln: self.open_location(f, ln))
+        self.run_panels.set_forces(self.debug.forces)
         if self._project is not None:
             self.run_panels.set_target(self._project.target)
         if self._pin_defines is not None:
@@ -599,6 +629,7 @@ class MainWindow(QMainWindow):
 
     def _update_actions(self) -> None:
         actions.update_actions(self)
+        debug_actions.update_debug_actions(self)
 
     def _update_title(self) -> None:
         ed = self.current_editor()
@@ -639,6 +670,7 @@ class MainWindow(QMainWindow):
             return
         self._closing = self.editor_stack.closing = True
         self._save_session()
+        self.debug.save()
         self.settings.save_window_state(self.saveGeometry(), self.saveState())
         self.settings.sync()
         self.shutdown()

@@ -4,6 +4,13 @@ and the controller connection the IDE talks to.
 Upload may need a build first; that sequence is a small state machine
 (:class:`Step`): Upload starts a build in the step ``BUILD_THEN_UPLOAD`` and the
 finished build uploads the image only from that step, and only when it succeeded.
+"Build, Upload and Start" is the step ``BUILD_UPLOAD_START``: after a
+successful build it uploads, then starts (the link runs requests in order).
+
+Start warns first when it would run something other than what the editors
+show (:mod:`plcbuilder.ide.image_state`: unsaved, unbuilt or not uploaded)
+and offers "Build, Upload and Start". When a controller connects with nothing
+loaded and the project has a ``build/eeprom.rom``, that image is uploaded.
 """
 
 from __future__ import annotations
@@ -31,7 +38,7 @@ class Step(enum.Enum):
     IDLE = "idle"                            # no build running
     BUILD = "build"                          # Build All alone
     BUILD_THEN_UPLOAD = "build then upload"  # Upload asked for a build first
-    BUILD_UPLOAD_START = "build, upload, start"  # Build, Upload and Start
+    BUILD_UPLOAD_START = "build, upload and start"
 
 
 class RunActions(QObject):
@@ -64,7 +71,8 @@ class RunActions(QObject):
         self.step = Step.IDLE
         self.last_eparam = 0
         self.last_start = ""
-        self.start_after_upload: Optional[str] = None   # Build, Upload and Start: what to start
+        self.pending_start: Optional[tuple[str, int]] = None   # after BUILD_UPLOAD_START
+        self._image_check_due = False
         self.build_runner = BuildRunner(self)
         self.build_runner.sig_progress.connect(self._on_build_progress)
         self.build_runner.sig_finished.connect(self._on_build_finished)
@@ -106,25 +114,6 @@ class RunActions(QObject):
         if self.prefs.build_before_upload or stale:
             return self._build(Step.BUILD_THEN_UPLOAD)
         return self.upload_image()
-
-    def build_upload_start(self, name: Optional[str] = None) -> bool:
-        """Build All, upload the image and start ``name`` (default: the current
-        editor's procedure, else the last one started) with the last eparam —
-        each step only when the one before it succeeded."""
-        if self.project is None or self.connection is None:
-            self.sig_message.emit("No controller to start a procedure on", 4000)
-            return False
-        if name is None:
-            ed = self.editors.current_editor()
-            name = Path(ed.path).stem if ed is not None and ed.kind is not None else \
-                self.last_start
-        if not name:
-            return self.start_procedure()          # asks which
-        self.start_after_upload = name
-        if not self._build(Step.BUILD_UPLOAD_START):
-            self.start_after_upload = None
-            return False
-        return True
 
     def upload_image(self) -> bool:
         """Upload the image Build All wrote."""
@@ -173,8 +162,66 @@ class RunActions(QObject):
             name, eparam = res
         eparam = self.last_eparam if eparam is None else int(eparam)
         self.last_start, self.last_eparam = name, eparam
+        reasons = self.stale_reasons()
+        if reasons:
+            answer = self.ask_stale_start(name, reasons)
+            if answer is None:
+                return False
+            if answer == "build":
+                return self.build_upload_start(name, eparam)
         self.connection.start(name, eparam)
         self.sig_message.emit(f"Start {name} (eparam {eparam})", 4000)
+        return True
+
+    def stale_reasons(self) -> list[str]:
+        """Why Start would not run what the editors show (empty: it would, or
+        no controller is connected to tell)."""
+        if self.project is None or not self.connected():
+            return []
+        from plcbuilder.ide.image_state import stale_reasons
+        unsaved = [ed.path for ed in self.editors.modified_editors()]
+        st = getattr(self.connection, "last_state", None)
+        loaded = getattr(self.connection, "uploaded_crc", None) or getattr(st, "image_crc32", None)
+        return stale_reasons(self.project, unsaved, loaded)
+
+    def ask_stale_start(self, name: str, reasons: list[str]) -> Optional[str]:
+        """Ask before starting old code: ``"build"`` (Build, Upload and Start),
+        ``"start"`` (start anyway) or None (cancel)."""
+        box = QMessageBox(QMessageBox.Icon.Warning, "Start",
+                          "The controller would not run what the editors show:\n\n"
+                          + "\n".join(f"  • {r}" for r in reasons)
+                          + f"\n\nBuild All, upload the image and start {name}?",
+                          parent=self.parent())
+        build = box.addButton("Build, Upload and Start", QMessageBox.ButtonRole.AcceptRole)
+        anyway = box.addButton("Start Anyway", QMessageBox.ButtonRole.DestructiveRole)
+        box.addButton(QMessageBox.StandardButton.Cancel)
+        box.setDefaultButton(build)
+        box.setObjectName("staleStartBox")
+        self.stale_box = box
+        box.exec()
+        clicked = box.clickedButton()
+        self.stale_box = None
+        return "build" if clicked is build else "start" if clicked is anyway else None
+
+    def build_upload_start(self, name: Optional[str] = None,
+                           eparam: Optional[int] = None) -> bool:
+        """Build All, upload the image, then start a procedure (the current
+        editor's, or the last one started)."""
+        if self.connection is None or self.project is None:
+            self.sig_message.emit("No controller to start a procedure on", 4000)
+            return False
+        if name is None:
+            ed = self.editors.current_editor()
+            name = Path(ed.path).stem if ed is not None and ed.kind is not None \
+                else self.last_start
+            if not name:
+                return self.start_procedure()
+        eparam = self.last_eparam if eparam is None else int(eparam)
+        self.last_start, self.last_eparam = name, eparam
+        self.pending_start = (name, eparam)
+        if not self._build(Step.BUILD_UPLOAD_START):
+            self.pending_start = None
+            return False
         return True
 
     def start_current(self) -> None:
@@ -267,6 +314,47 @@ class RunActions(QObject):
     def connected(self) -> bool:
         return bool(getattr(self.connection, "connected", False))
 
+    def wire_connection(self) -> None:
+        """Follow the connection: a controller that connects with nothing
+        loaded gets the project's image (issue 13.3)."""
+        c = self.connection
+        if c is None or not hasattr(c, "sig_connected"):
+            return
+        c.sig_connected.connect(self._on_connected)
+        c.sig_state.connect(self._on_state)
+
+    def _on_connected(self, _address: str) -> None:
+        self._image_check_due = True
+
+    def _on_state(self, st, _missed: int = 0) -> None:
+        if not self._image_check_due or self.project is None:
+            return
+        self._image_check_due = False
+        self.check_loaded_image(st)
+
+    def check_loaded_image(self, st) -> Optional[str]:
+        """Upload build/eeprom.rom when the controller has no image; say so
+        when it runs another one. Returns what was done: ``"uploaded"``,
+        ``"differs"`` or None."""
+        from plcbuilder.ide.image_state import image_crc, newer_sources
+        p = self.project
+        if p is None or self.connection is None or not p.image_path.is_file():
+            return None
+        loaded = getattr(st, "image_crc32", None)
+        if loaded is None:
+            if not self.upload_image():
+                return None
+            note = " — it is older than the sources: Build All (Ctrl+B) to update it" \
+                if newer_sources(p) else ""
+            self.sig_message.emit(f"The controller had no image: loaded the project's "
+                                  f"build/eeprom.rom{note}", 10000)
+            return "uploaded"
+        if loaded != image_crc(p.image_path):
+            self.sig_message.emit("The controller runs another image than the project's "
+                                  "build/eeprom.rom: Upload (Ctrl+U) loads it", 10000)
+            return "differs"
+        return None
+
     # ============================================================== private
     def _build(self, then: Step) -> bool:
         if self.project is None:
@@ -294,8 +382,8 @@ class RunActions(QObject):
         self.build_panel.show_result(result, self.build_runner.elapsed)
         self.sig_build_ended.emit()
         upload = self.step in (Step.BUILD_THEN_UPLOAD, Step.BUILD_UPLOAD_START)
-        start, self.start_after_upload = (self.start_after_upload
-                                          if self.step is Step.BUILD_UPLOAD_START else None), None
+        start, self.pending_start = (self.pending_start if self.step is Step.BUILD_UPLOAD_START
+                                     else None), None
         self.step = Step.IDLE
         if isinstance(result, BaseException):
             self.sig_message.emit(f"Build failed: {result}", 8000)
@@ -309,9 +397,10 @@ class RunActions(QObject):
             self.sig_message.emit(f"Build failed: {e} error{'s' * (e != 1)}, "
                                   f"{w} warning{'s' * (w != 1)}", 8000)
         self.sig_build_finished.emit(result)
-        if upload and result.ok and self.upload_image() and start:
-            # the link runs requests in order: the start follows the upload
-            self.start_procedure(start, self.last_eparam)
+        if upload and result.ok and self.upload_image() and start is not None:
+            self.connection.start(*start)       # the link uploads first: requests run in order
+            self.sig_message.emit(f"Built, uploaded and started {start[0]} "
+                                  f"(eparam {start[1]})", 5000)
 
     def _connect_to_address(self, address: str) -> None:
         host, _, port = address.rpartition(":")

@@ -7,6 +7,7 @@ test run never touches the user's settings.
 
 from __future__ import annotations
 
+import json
 import os
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
@@ -98,6 +99,18 @@ class Settings:
     def save_session(self, project, files: list[str], current: str) -> None:
         self.qs.setValue(f"session/{_key(project)}/files", list(files))
         self.qs.setValue(f"session/{_key(project)}/current", current or "")
+
+    def breakpoints(self, project) -> list:
+        """The project's breakpoints as saved (dicts, paths relative to the project)."""
+        raw = self.qs.value(f"session/{_key(project)}/breakpoints", "")
+        try:
+            value = json.loads(str(raw)) if raw else []
+        except ValueError:
+            return []
+        return value if isinstance(value, list) else []
+
+    def save_breakpoints(self, project, items: list) -> None:
+        self.qs.setValue(f"session/{_key(project)}/breakpoints", json.dumps(items))
 
     # ------------------------------------------------------- preferences
     def preferences(self) -> Preferences:

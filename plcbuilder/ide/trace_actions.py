@@ -128,3 +128,104 @@ def compare_trace(win, path: Optional[str] = None):
         return None
     QMessageBox.information(win, "Compare with Trace", diff.text())
     return diff
+
+
+# ------------------------------------------------------- record and replay
+
+RECORDING_FILTER = "Session recordings (*.txt *.scenario);;All files (*)"
+
+
+def save_recording(win, path: Optional[str] = None) -> bool:
+    """Run › Save Session Recording…: ask the controller for the session's
+    recording and write it (a scenario file) when it comes."""
+    conn = getattr(win, "connection", None)
+    if conn is None or not getattr(conn, "connected", False):
+        QMessageBox.warning(win, "Save Session Recording", "Not connected to a controller.")
+        return False
+    if path is None:
+        path, _ = QFileDialog.getSaveFileName(win, "Save Session Recording",
+                                              str(Path(_folder(win)) / "session.txt"),
+                                              RECORDING_FILTER)
+        if not path:
+            return False
+
+    def got(verb: str, result: dict) -> None:
+        if verb != "recording":
+            return
+        conn.sig_result.disconnect(got)
+        try:
+            api.atomic_write(path, str(result.get("text", "")))
+        except OSError as exc:
+            QMessageBox.warning(win, "Save Session Recording",
+                                f"{path}: cannot write: {exc.strerror or exc}")
+            return
+        win.statusBar().showMessage(f"Saved the session recording ({result.get('actions', 0)} "
+                                    f"actions, to {result.get('t_ms', 0)} ms) to {path}", 6000)
+        win.sig_recording_saved.emit(path)
+
+    conn.sig_result.connect(got)
+    conn.request_recording()
+    return True
+
+
+def replay_session(win, path: Optional[str] = None, *, wait: bool = False) -> bool:
+    """Run › Replay Session…: run a recording on the project's image, headless
+    (in a thread), and show the replay's trace in the run panels."""
+    project = getattr(win, "project", None)
+    if project is None:
+        QMessageBox.warning(win, "Replay Session", "Open a project first.")
+        return False
+    tools = _tools(win)
+    if tools is None:
+        return False
+    if path is None:
+        path, _ = QFileDialog.getOpenFileName(win, "Replay Session", str(project.root),
+                                              RECORDING_FILTER)
+        if not path:
+            return False
+    import tempfile
+    import threading
+    from PySide6.QtCore import QObject, Signal
+
+    class _Done(QObject):
+        sig = Signal(object)
+
+    done = _Done(win)
+    out = Path(tempfile.mkdtemp(prefix="plcbuilder-replay-")) / "replay.plctrace"
+
+    def work() -> None:
+        try:
+            ms = _recorded_end(path)
+            r = api.run(project.root, api.RunOptions(scenario=Path(path), ms=ms, history=out))
+            done.sig.emit(r if r.ok else RuntimeError("the project does not compile"))
+        except Exception as exc:  # noqa: BLE001 - shown to the user
+            done.sig.emit(exc)
+
+    def finished(r) -> None:
+        if isinstance(r, Exception):
+            QMessageBox.warning(win, "Replay Session", f"{path}: {r}")
+            return
+        trace = api.load_trace(out)
+        tools.show(trace, f"replay of {Path(path).name}")
+        for note in r.report.get("notes", []):
+            if note.get("level") == "warning":
+                tools.panels.log.add_note(note["text"], "error")
+        win.statusBar().showMessage(f"Replayed {Path(path).name}: {trace.t_start}..{trace.t_end} ms",
+                                    6000)
+        win.sig_replayed.emit(trace)
+
+    done.sig.connect(finished)
+    win.statusBar().showMessage(f"Replaying {Path(path).name}…")
+    t = threading.Thread(target=work, name="plcbuilder-replay", daemon=True)
+    t.start()
+    if wait:
+        t.join()
+    return True
+
+
+def _recorded_end(path) -> Optional[int]:
+    """The ``recorded to t = N ms`` of a recording's header (None: run as usual)."""
+    import re
+    text = Path(path).read_text(encoding="utf-8", errors="replace")[:4096]
+    m = re.search(r"recorded to t = (\d+) ms", text)
+    return int(m.group(1)) + 1 if m else None

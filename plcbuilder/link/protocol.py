@@ -20,12 +20,16 @@ Messages
         input {pin, value}              adc {channel, value}
         state {}                        variables {}
         registers {addresses: [int]}    (read global registers, at most MAX_REGISTERS)
+        recording {}                    (the session as a scenario file: {text, t_ms, actions})
         subscribe {samples?, events?}   unsubscribe {}
         speed {mode, factor?}           step {ms}
         reset {}                        event {handler}
         ping {}
         set_breakpoints {file, breakpoints}   debug_state {}      (docs/protocol.md, "Debugging")
         debug_continue {}  debug_pause {}  debug_step {kind, procedure?}  debug_run_to {file, line}
+        write {target, value}           force {target, value}
+        release {target, mode}          release_all {mode}
+        forces {}                       (write and force: SPEC §6)
 
     server -> client:
         welcome {id, version, server, pid, t_ms, speed}   the answer to hello
@@ -95,12 +99,17 @@ _MAX_ID_TEXT = 64
 #: only ever looks a type up in these sets.
 REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state", "variables",
                       "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping",
-                      "registers"}
+                      "registers", "recording"}
                      | {"set_breakpoints", "debug_continue", "debug_pause", "debug_step",
                         "debug_run_to", "debug_state"})
 #: Events that travel as notifications of their own (not inside telemetry).
 NOTIFICATIONS = frozenset({"halted", "resumed"})
 REPLIES = frozenset({"welcome", "result", "error", "telemetry", "bye"}) | NOTIFICATIONS
+#: Write and force (controller/forces.py); their changes also travel as "forces" events.
+FORCE_REQUESTS = frozenset({"write", "force", "release", "release_all", "forces"})
+REQUESTS = REQUESTS | FORCE_REQUESTS
+#: How a release leaves its target: its current value, or the program's (the wiring).
+RELEASE_MODES = ("keep", "restore")
 
 #: Addresses one ``registers`` request may read at most.
 MAX_REGISTERS = 256

@@ -239,6 +239,48 @@ class Service(DebugVerbs):
                                   self.sim.controller.t_ms)[1])
         return {"channel": ch, "value": value, "t_ms": t}
 
+    # ---------------------------------------------------------------- write and force
+    def _forcing(self, fn: Callable) -> dict:
+        """Run fn(controller) on the simulation thread; the answer adds t_ms and
+        the forces now."""
+        def go():
+            c = self.sim.controller
+            out = fn(c)
+            return {**out, "t_ms": c.t_ms, "forces": c.forces()}
+        return self._on_sim(go)
+
+    @staticmethod
+    def _target(msg: dict) -> str:
+        return protocol.field_str(msg, "target", max_len=128)
+
+    @staticmethod
+    def _mode(msg: dict) -> str:
+        mode = protocol.field_str(msg, "mode", "restore", max_len=16)
+        if mode not in protocol.RELEASE_MODES:
+            raise BadRequest(f"mode must be one of {', '.join(protocol.RELEASE_MODES)}")
+        return mode
+
+    def handle_write(self, msg: dict, session: Session) -> dict:
+        target = self._target(msg)
+        value = protocol.field_int(msg, "value", lo=-(1 << 31), hi=(1 << 32) - 1)
+        return self._forcing(lambda c: {"target": c.write(target, value), "value": value})
+
+    def handle_force(self, msg: dict, session: Session) -> dict:
+        target = self._target(msg)
+        value = protocol.field_int(msg, "value", lo=-(1 << 31), hi=(1 << 32) - 1)
+        return self._forcing(lambda c: {"target": c.force(target, value), "value": value})
+
+    def handle_release(self, msg: dict, session: Session) -> dict:
+        target, mode = self._target(msg), self._mode(msg)
+        return self._forcing(lambda c: {"target": c.release(target, mode), "mode": mode})
+
+    def handle_release_all(self, msg: dict, session: Session) -> dict:
+        mode = self._mode(msg)
+        return self._forcing(lambda c: {"released": c.release_all(mode), "mode": mode})
+
+    def handle_forces(self, msg: dict, session: Session) -> dict:
+        return {"forces": self._on_sim(lambda: self.sim.controller.forces())}
+
     # ---------------------------------------------------------------- state
     def state(self) -> ControllerStatus:
         st = self._on_sim(self.sim.controller.state)
@@ -267,6 +309,19 @@ class Service(DebugVerbs):
         gvarget = self.sim.controller.machine.gvarget
         values = self._on_sim(lambda: [gvarget(a) for a in addresses])
         return {"addresses": addresses, "values": values}
+
+    def handle_recording(self, msg: dict, session: Session) -> dict:
+        """The session's recording: every outside action since the controller
+        started (or was reset), as a scenario file (docs/traces.md)."""
+        def read():
+            c = self.sim.controller
+            end = max(0, c.t_ms - 1)
+            head = [f"controller: {c.machine.config.name if hasattr(c.machine.config, 'name') else 'simulated'}"]
+            if self.image_crc32 is not None:
+                head.append(f"last image uploaded: eeprom.rom CRC-32 {self.image_crc32:08x}")
+            return {"text": c.recorder.text(end, head), "t_ms": end,
+                    "actions": len(c.recorder.actions)}
+        return self._on_sim(read)
 
     # ---------------------------------------------------------------- time
     def handle_speed(self, msg: dict, session: Session) -> dict:

@@ -2,8 +2,10 @@
 
 Signals are compared by name over the time both traces cover; a signal that
 only one trace has is listed apart (``only_in_a``/``only_in_b``) and does not
-make them differ. Events (messages, prints, starts and ends, faults) are
-compared too: the first tick where the two traces' events differ counts.
+make them differ. The procedures' events (starts and ends, messages, prints,
+faults) are compared too: the first tick where they differ counts. Notes,
+logpoint lines and the forces list are the tools' remarks, not what the
+procedures did, and are left out.
 """
 
 from __future__ import annotations
@@ -13,6 +15,10 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 from plcbuilder.controller.history import Trace
+
+
+#: The events compare() compares: what the procedures did.
+COMPARED_EVENTS = frozenset({"started", "ended", "message", "print", "fault"})
 
 
 @dataclass
@@ -111,6 +117,6 @@ def _events_by_tick(trace: Trace, lo: int, hi: int) -> dict[int, list[str]]:
     out: dict[int, list[str]] = {}
     for e in trace.events:
         t = int(e.get("t_ms", 0))
-        if lo <= t <= hi:
+        if lo <= t <= hi and e.get("type") in COMPARED_EVENTS:
             out.setdefault(t, []).append(json.dumps(e, sort_keys=True))
     return out

@@ -115,5 +115,5 @@ def test_build_upload_and_start_runs_the_steps_in_order(make_window, project, qt
     with qtbot.waitSignal(w.sig_build_finished, timeout=20000):
         w.run_actions.build_upload_start()
     assert not [c for c in conn.calls if c[0] in ("upload", "start")]
-    assert w.run_actions.start_after_upload is None and w.run_actions.step is Step.IDLE
+    assert w.run_actions.pending_start is None and w.run_actions.step is Step.IDLE
     assert file_key(w.current_editor().path) == file_key(ed.path)

@@ -22,10 +22,17 @@ from plcbuilder.ide.editor.style import (IND_ERROR, IND_FIND, IND_OCCURRENCE, IN
                                          KIND_PREDEFINED, KIND_PROCEDURE, KIND_VARIABLE,
                                          MK_COVERED, MK_CURRENT, MK_ERROR, MK_UNCOVERED,
                                          MK_WARNING, EditorPrefs,
+                                         MK_BREAKPOINT, MK_BREAKPOINT_CONDITIONAL,
+                                         MK_BREAKPOINT_DISABLED, MK_BREAKPOINT_UNVERIFIED,
+                                         MK_EXEC, MK_EXEC_LINE, MK_FRAME_LINE, MK_LOGPOINT,
+                                         MK_WAIT, MK_WAIT_LINE,
                                          default_font_family)
 from plcbuilder.ide.editor.widget import CodeEditor
 
 __all__ = ["CodeEditor", "EditorPrefs", "default_font_family", "file_key", "normalise_newlines",
            "same_file", "IND_ERROR", "IND_FIND", "IND_OCCURRENCE", "IND_WARNING", "KIND_CONSTANT",
            "KIND_DEFINE", "KIND_FUNCTION", "KIND_KEYWORD", "KIND_PREDEFINED", "KIND_PROCEDURE",
-           "KIND_VARIABLE", "MK_COVERED", "MK_CURRENT", "MK_ERROR", "MK_UNCOVERED", "MK_WARNING"]
+           "KIND_VARIABLE", "MK_COVERED", "MK_CURRENT", "MK_ERROR", "MK_UNCOVERED", "MK_WARNING",
+           "MK_BREAKPOINT", "MK_BREAKPOINT_CONDITIONAL", "MK_BREAKPOINT_DISABLED",
+           "MK_BREAKPOINT_UNVERIFIED", "MK_EXEC", "MK_EXEC_LINE", "MK_FRAME_LINE", "MK_LOGPOINT",
+           "MK_WAIT", "MK_WAIT_LINE"]

@@ -23,6 +23,20 @@ MK_WARNING = 1
 MK_CURRENT = 2          # a line being jumped to (briefly)
 MK_COVERED = 3          # test coverage: a line that ran
 MK_UNCOVERED = 4        # ... a line with code that did not
+# the debugger's markers (plcbuilder.ide.debug.markers draws them); a higher
+# number is drawn over a lower one
+MK_BREAKPOINT = 5
+MK_BREAKPOINT_DISABLED = 6
+MK_BREAKPOINT_CONDITIONAL = 7
+MK_LOGPOINT = 8
+MK_BREAKPOINT_UNVERIFIED = 9
+MK_EXEC_LINE = 10       # background of the line a halted procedure is at
+MK_WAIT_LINE = 11       # ... of a loop's end where a procedure waits for the next tick
+MK_FRAME_LINE = 12      # ... of a caller's line (a call stack frame picked)
+MK_EXEC = 13            # the arrow of the line a halted procedure is at
+MK_WAIT = 14            # the arrow of a loop's end it waits at
+MK_DEBUG_MASK = sum(1 << m for m in range(MK_BREAKPOINT, MK_WAIT + 1))
+MK_BACKGROUNDS = (1 << MK_EXEC_LINE) | (1 << MK_WAIT_LINE) | (1 << MK_FRAME_LINE)
 # margins
 MARGIN_NUMBERS = 0
 MARGIN_SYMBOLS = 1

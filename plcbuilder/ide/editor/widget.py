@@ -29,7 +29,8 @@ from plcbuilder.ide.editor.keys import KeysMixin
 from plcbuilder.ide.editor.search import SearchMixin
 from plcbuilder.ide.editor.style import (BRACE_BYTES, IND_ERROR, IND_FIND, IND_OCCURRENCE,
                                          IND_WARNING, KIND_LOOK, MARGIN_FOLD, MARGIN_NUMBERS,
-                                         MARGIN_SYMBOLS, MK_CURRENT, MK_ERROR, MK_WARNING,
+                                         MARGIN_SYMBOLS, MK_BACKGROUNDS, MK_CURRENT,
+                                         MK_DEBUG_MASK, MK_ERROR, MK_WARNING,
                                          SC_MASK_FOLDERS, SC_MOD_DELETETEXT, SC_MOD_INSERTTEXT,
                                          SC_UPDATE_CONTENT, SC_UPDATE_SELECTION, WORD_RE,
                                          EditorPrefs, M, default_font_family, marker_image,
@@ -51,6 +52,10 @@ class CodeEditor(SearchMixin, DiagnosticsMixin, KeysMixin, ScintillaEdit):
     sig_goto_definition = Signal(str)
     """Go to the definition of this name (F12 / Ctrl+click)."""
 
+    sig_margin_clicked = Signal(int, int)
+    """A click in the symbol margin (the breakpoint margin): the 1-based line
+    and the keyboard modifiers (Qt flags as an int)."""
+
     def __init__(self, parent=None, prefs: Optional[EditorPrefs] = None):
         super().__init__(parent)
         self.prefs = prefs or EditorPrefs()
@@ -64,6 +69,8 @@ class CodeEditor(SearchMixin, DiagnosticsMixin, KeysMixin, ScintillaEdit):
         self.hover_provider: Optional[Callable[["CodeEditor", int], Optional[str]]] = None
         #: function name -> call tip text or None
         self.signature_provider: Optional[Callable[[str], Optional[str]]] = None
+        #: (editor, 1-based line) -> the menu of a right-click in the symbol margin, or None
+        self.margin_menu_provider: Optional[Callable[["CodeEditor", int], Optional[QMenu]]] = None
         self._occurrence_timer = QTimer(self)
         self._occurrence_timer.setSingleShot(True)
         self._occurrence_timer.setInterval(250)
@@ -71,6 +78,7 @@ class CodeEditor(SearchMixin, DiagnosticsMixin, KeysMixin, ScintillaEdit):
         self._line_digits = 0
         self._setup()
         self.apply_prefs(self.prefs)
+        self.marginClicked.connect(self._on_margin_clicked)
         self.updateUi.connect(self._on_update_ui)
         self.modified.connect(self._on_modified)
         self.savePointChanged.connect(self.sig_modified_changed.emit)
@@ -177,9 +185,11 @@ class CodeEditor(SearchMixin, DiagnosticsMixin, KeysMixin, ScintillaEdit):
         # margins
         self.setMarginTypeN(MARGIN_NUMBERS, 1)         # SC_MARGIN_NUMBER
         self.setMarginTypeN(MARGIN_SYMBOLS, 0)         # SC_MARGIN_SYMBOL
-        self.setMarginMaskN(MARGIN_SYMBOLS, (1 << MK_ERROR) | (1 << MK_WARNING) | (1 << MK_CURRENT))
-        self.setMarginWidthN(MARGIN_SYMBOLS, 16)
-        self.setMarginSensitiveN(MARGIN_SYMBOLS, False)
+        self.setMarginMaskN(MARGIN_SYMBOLS, (1 << MK_ERROR) | (1 << MK_WARNING) | (1 << MK_CURRENT)
+                            | (MK_DEBUG_MASK & ~MK_BACKGROUNDS))
+        self.setMarginWidthN(MARGIN_SYMBOLS, 18)
+        self.setMarginSensitiveN(MARGIN_SYMBOLS, True)         # a click toggles a breakpoint
+        self.setMarginCursorN(MARGIN_SYMBOLS, 2)               # SC_CURSORARROW
         self.setMarginTypeN(MARGIN_FOLD, 0)
         self.setMarginMaskN(MARGIN_FOLD, SC_MASK_FOLDERS)
         self.setMarginWidthN(MARGIN_FOLD, 14)
@@ -403,7 +413,26 @@ class CodeEditor(SearchMixin, DiagnosticsMixin, KeysMixin, ScintillaEdit):
         """Extra actions for the right-click menu (None is a separator)."""
         self._context_actions = list(actions)
 
+    def margin_line_at(self, x: int, y: int) -> Optional[int]:
+        """The 1-based line beside point (x, y) when it is in the margins, else None."""
+        width = sum(self.marginWidthN(m) for m in range(MARGIN_FOLD + 1))
+        if x < 0 or x >= width:
+            return None
+        pos = self.positionFromPoint(width + 1, y)
+        return self.lineFromPosition(pos) + 1 if pos >= 0 else None
+
+    def _on_margin_clicked(self, position: int, modifiers: int, margin: int) -> None:
+        if margin == MARGIN_SYMBOLS:
+            self.sig_margin_clicked.emit(self.lineFromPosition(position) + 1, int(modifiers))
+
     def contextMenuEvent(self, event) -> None:  # noqa: N802 - Qt override
+        if self.margin_menu_provider is not None:
+            line = self.margin_line_at(event.pos().x(), event.pos().y())
+            if line is not None:
+                margin_menu = self.margin_menu_provider(self, line)
+                if margin_menu is not None:
+                    margin_menu.exec(event.globalPos())
+                    return
         menu = QMenu(self)
         ro = self.readOnly()
         has_sel = self.selectionStart() != self.selectionEnd()

@@ -3,13 +3,18 @@
 A toggle shows the input as the controller last reported it; clicking it asks
 the controller to set the pin by hand (which overrides the machine's own wiring
 of that pin from then on). Sliders send their value when they stop moving.
+
+With a controller that forces (SPEC §6: ``force_by_hand``), a click or a slider
+*forces* the input or ADC channel: it shows as forced (the force icon and an
+orange frame, the reading in orange) until released from the right-click menu
+or the Forces panel, which gives the machine's wiring back.
 """
 
 from __future__ import annotations
 
 import time
 
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from plcbuilder.ide.panels.model import RunModel
 
@@ -25,7 +30,9 @@ QToolButton { border: 1px solid #b8b8b8; border-radius: 3px; padding: 3px 6px;
 QToolButton:hover { border-color: #6a9bd1; }
 QToolButton:checked { background: #3c9d4b; border-color: #2f7d3b; color: #ffffff; }
 QToolButton:disabled { color: #9a9a9a; background: #efefef; }
+QToolButton[forced="true"] { border: 2px solid #c75a00; }
 """
+FORCED_STYLE = "color: #c75a00; font-weight: bold;"
 
 
 class InputsPanel(QtWidgets.QWidget):
@@ -37,6 +44,12 @@ class InputsPanel(QtWidgets.QWidget):
     sig_set_adc = Signal(int, int)
     """A slider asks for ADC channel (int) to read value (int)."""
 
+    sig_force = Signal(str, int)
+    """Force a target (``in N`` or ``adc N``) to a value."""
+
+    sig_release = Signal(str, str)
+    """Release a target (``in N`` or ``adc N``): ``keep`` or ``restore``."""
+
     COLUMNS = 2
 
     def __init__(self, model: RunModel, pins: int = 64, adc_channels: int = 8, parent=None):
@@ -47,6 +60,9 @@ class InputsPanel(QtWidgets.QWidget):
         self.buttons: dict[int, QtWidgets.QToolButton] = {}
         self._pending: dict[int, tuple[int, float]] = {}
         self._drawn = -1
+        self.force_by_hand = False          # clicks and sliders force (the controller can)
+        self.forced_pins: dict[int, int] = {}
+        self.forced_adc: dict[int, int] = {}
 
         top = QtWidgets.QHBoxLayout()
         top.setContentsMargins(4, 2, 4, 2)
@@ -71,6 +87,10 @@ class InputsPanel(QtWidgets.QWidget):
             b.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding,
                             QtWidgets.QSizePolicy.Policy.Fixed)
             b.clicked.connect(lambda checked, p=pin: self._clicked(p, checked))
+            b.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextBesideIcon)
+            b.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
+            b.customContextMenuRequested.connect(
+                lambda pos, p=pin, btn=b: self.pin_menu(p).exec(btn.mapToGlobal(pos)))
             self.buttons[pin] = b
         pins_box = QtWidgets.QGroupBox("Input pins")
         pl = QtWidgets.QVBoxLayout(pins_box)
@@ -101,7 +121,11 @@ class InputsPanel(QtWidgets.QWidget):
             reading.setToolTip(f"What ADC{ch} reads now")
             s.valueChanged.connect(lambda v, sp=spin: (sp.blockSignals(True), sp.setValue(v),
                                                        sp.blockSignals(False)))
-            s.sliderReleased.connect(lambda ch=ch, sl=s: self.sig_set_adc.emit(ch, sl.value()))
+            s.sliderReleased.connect(lambda ch=ch, sl=s: self._adc(ch, sl.value()))
+            for w in (s, reading, label):
+                w.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
+                w.customContextMenuRequested.connect(
+                    lambda pos, ch=ch, w=w: self.adc_menu(ch).exec(w.mapToGlobal(pos)))
             s.actionTriggered.connect(
                 lambda action, ch=ch, sl=s: self._slider_action(ch, sl, action))
             spin.valueChanged.connect(lambda v, ch=ch: self._spin_changed(ch, v))
@@ -145,6 +169,63 @@ class InputsPanel(QtWidgets.QWidget):
     def button(self, pin: int) -> QtWidgets.QToolButton:
         return self.buttons[pin]
 
+    def set_forces(self, forces: list) -> None:
+        """What is forced (``[{target, value}]``): forced pins and channels are marked."""
+        pins, adc = {}, {}
+        for f in forces:
+            kind, _, n = str(f.get("target", "")).partition(" ")
+            if n.isdigit() and kind in ("in", "adc"):
+                (pins if kind == "in" else adc)[int(n)] = int(f.get("value") or 0)
+        self.forced_pins, self.forced_adc = pins, adc
+        from plcbuilder.ide.icons import icon
+        for pin, b in self.buttons.items():
+            forced = pin in pins
+            if (b.property("forced") == "true") != forced:
+                b.setProperty("forced", "true" if forced else "false")
+                b.setIcon(icon("debug-force") if forced else QtGui.QIcon())
+                b.style().unpolish(b)
+                b.style().polish(b)
+        for ch, lab in enumerate(self.readings):
+            lab.setStyleSheet(FORCED_STYLE if ch in adc else "")
+            lab.setToolTip(f"ADC{ch} is forced at {adc[ch]} (right-click to release)"
+                           if ch in adc else f"What ADC{ch} reads now")
+        self._drawn = -1
+        self.refresh()
+
+    def pin_menu(self, pin: int) -> QtWidgets.QMenu:
+        """The right-click menu of an input pin (built, not shown: tests use it)."""
+        menu = QtWidgets.QMenu(self)
+        t = f"in {pin}"
+        forced = pin in self.forced_pins
+        for text, obj, slot, on in (
+                ("Force On (1)", "force_on", lambda: self.sig_force.emit(t, 1), True),
+                ("Force Off (0)", "force_off", lambda: self.sig_force.emit(t, 0), True),
+                ("Release (keep the value)", "release_keep",
+                 lambda: self.sig_release.emit(t, "keep"), forced),
+                ("Release (back to the machine's wiring)", "release_restore",
+                 lambda: self.sig_release.emit(t, "restore"), forced)):
+            act = menu.addAction(text, slot)
+            act.setObjectName(obj)
+            act.setEnabled(on and self.grid_host.isEnabled())
+        return menu
+
+    def adc_menu(self, ch: int) -> QtWidgets.QMenu:
+        """The right-click menu of an ADC channel."""
+        menu = QtWidgets.QMenu(self)
+        t = f"adc {ch}"
+        forced = ch in self.forced_adc
+        for text, obj, slot, on in (
+                (f"Force ADC{ch} at {self.spins[ch].value()}", "force",
+                 lambda: self.sig_force.emit(t, self.spins[ch].value()), True),
+                ("Release (keep the value)", "release_keep",
+                 lambda: self.sig_release.emit(t, "keep"), forced),
+                ("Release (back to the machine's wiring)", "release_restore",
+                 lambda: self.sig_release.emit(t, "restore"), forced)):
+            act = menu.addAction(text, slot)
+            act.setObjectName(obj)
+            act.setEnabled(on and self.spins[ch].isEnabled())
+        return menu
+
     def set_enabled(self, on: bool) -> None:
         self.grid_host.setEnabled(on)
         for w in self.sliders + self.spins:
@@ -162,6 +243,8 @@ class InputsPanel(QtWidgets.QWidget):
         for pin, b in self.buttons.items():
             w = pin // 32
             v = (int(s.inputs[w]) >> (pin % 32)) & 1 if w < len(s.inputs) else 0
+            if pin in self.forced_pins:       # what the program reads (also while halted)
+                v = 1 if self.forced_pins[pin] else 0
             pend = self._pending.get(pin)
             if pend is not None:
                 if pend[0] == v or now > pend[1]:
@@ -172,7 +255,7 @@ class InputsPanel(QtWidgets.QWidget):
                 b.setChecked(bool(v))
         for ch, lab in enumerate(self.readings):
             if ch < len(s.adc):
-                text = str(s.adc[ch])
+                text = (f"{self.forced_adc[ch]} F" if ch in self.forced_adc else str(s.adc[ch]))
                 if lab.text() != text:
                     lab.setText(text)
 
@@ -191,23 +274,34 @@ class InputsPanel(QtWidgets.QWidget):
             b = self.buttons[pin]
             b.setText(self._label(pin))
             b.setToolTip(f"Input {pin}" + (f" ({self.names[pin]})" if pin in self.names else "")
-                         + ": click to set it by hand (overrides the machine's wiring)")
+                         + (": click to force it (right-click to release it)"
+                            if self.force_by_hand else
+                            ": click to set it by hand (overrides the machine's wiring)"))
             self.grid.addWidget(b, i // self.COLUMNS, i % self.COLUMNS)
             b.show()
 
     def _clicked(self, pin: int, checked: bool) -> None:
         value = 1 if checked else 0
         self._pending[pin] = (value, time.monotonic() + PENDING_S)
-        self.sig_set_input.emit(pin, value)
+        if self.force_by_hand:
+            self.sig_force.emit(f"in {pin}", value)
+        else:
+            self.sig_set_input.emit(pin, value)
+
+    def _adc(self, ch: int, value: int) -> None:
+        if self.force_by_hand:
+            self.sig_force.emit(f"adc {ch}", int(value))
+        else:
+            self.sig_set_adc.emit(ch, int(value))
 
     def _slider_action(self, ch: int, slider: QtWidgets.QSlider, action: int) -> None:
         # keyboard / page clicks (not drags) send at once; drags send on release
         if not slider.isSliderDown():
-            QtCore.QTimer.singleShot(0, lambda: self.sig_set_adc.emit(ch, slider.value()))
+            QtCore.QTimer.singleShot(0, lambda: self._adc(ch, slider.value()))
 
     def _spin_changed(self, ch: int, value: int) -> None:
         s = self.sliders[ch]
         s.blockSignals(True)
         s.setValue(max(0, min(ADC_MAX, value)))
         s.blockSignals(False)
-        self.sig_set_adc.emit(ch, value)
+        self._adc(ch, value)

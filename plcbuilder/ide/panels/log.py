@@ -21,9 +21,9 @@ Signal = QtCore.Signal
 T, SRC, KIND_LABEL, TEXT, CATEGORY, COLOUR, FILE, LINE = range(8)
 
 KINDS = (("print", "Prints"), ("message", "Messages"), ("procedure", "Procedures"),
-         ("fault", "Faults"), ("note", "Notes"))
+         ("fault", "Faults"), ("log", "Logpoints"), ("note", "Notes"))
 _COLOURS = {"fault": style.FAULT_COLOUR, "error": style.FAULT_COLOUR, "warning": "#b35c00",
-            "print": "#1a4f8b", "link": "#6a6a6a", "message": "#5b2c83"}
+            "print": "#1a4f8b", "link": "#6a6a6a", "message": "#5b2c83", "log": "#00695c"}
 
 
 def _fmt_t(t_ms: Optional[int]) -> str:
@@ -61,6 +61,8 @@ def event_row(e) -> Optional[tuple]:
     if isinstance(e, ev.Note):
         colour = e.level if e.level in ("warning", "error") else "note"
         return (_fmt_t(e.t_ms), "controller", e.level, e.text, "note", colour, None, None)
+    if getattr(e, "type", None) == "log":   # a logpoint's message (the debugger)
+        return (_fmt_t(e.t_ms), e.source, "log", e.text, "log", "log", None, None)
     if isinstance(e, dict):                 # an event kind this IDE does not know
         return (_fmt_t(e.get("t_ms")), str(e.get("source", "")), str(e.get("type", "?")),
                 str(e), "note", "note", None, None)

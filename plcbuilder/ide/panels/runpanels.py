@@ -116,6 +116,7 @@ class RunPanels(QtCore.QObject):
             dock.setAllowedAreas(Qt.DockWidgetArea.AllDockWidgetAreas)
             dock.visibilityChanged.connect(self._on_visibility)
             self._docks[key] = dock
+        self.forces: list = []
         self._stopped = True          # until the timers exist
         self._state = ControllerStatus()
         self._missed = 0
@@ -149,6 +150,14 @@ class RunPanels(QtCore.QObject):
         self.inputs.sig_set_input.connect(lambda pin, v: self.connection.set_input(pin, v))
         self.inputs.sig_set_input.connect(self.wake)
         self.inputs.sig_set_adc.connect(lambda ch, v: self.connection.set_adc(ch, v))
+        if hasattr(connection, "force"):          # the debugger's write/force/release
+            c = connection
+            self.watch.sig_write.connect(lambda t, v: c.write(t, v))
+            self.watch.sig_force.connect(lambda t, v: c.force(t, v))
+            self.watch.sig_release.connect(lambda t, m: c.release(t, m))
+            self.inputs.sig_force.connect(lambda t, v: c.force(t, v))
+            self.inputs.sig_force.connect(self.wake)
+            self.inputs.sig_release.connect(lambda t, m: c.release(t, m))
         c = connection
         c.sig_samples.connect(self._on_samples)
         c.sig_events.connect(self._on_events)
@@ -196,6 +205,25 @@ class RunPanels(QtCore.QObject):
         self.lanes.set_pin_names(inputs, outputs)
         self.inputs.set_pin_names(inputs)
 
+    def set_forces(self, forces: list) -> None:
+        """What is forced: the watch, the inputs and the lanes mark it."""
+        forces = list(forces or [])
+        self.forces = forces
+        self.watch.set_forces(forces)
+        self.inputs.set_forces(forces)
+        self.lanes.set_forces(forces)
+        self.wake()
+
+    def _lane_force_menu(self, menu: QtWidgets.QMenu, lane: tuple) -> None:
+        kind, pin = lane
+        t = f"{'out' if kind == 'outputs' else 'in'} {pin}"
+        c = self.connection
+        for text, slot in ((f"Force {t} On (1)", lambda: c.force(t, 1)),
+                           (f"Force {t} Off (0)", lambda: c.force(t, 0))):
+            menu.addAction(text, slot)
+        for mode, text in (("keep", "keep the value"), ("restore", "restore the program's")):
+            act = menu.addAction(f"Release {t} ({text})", lambda m=mode: c.release(t, m))
+            act.setEnabled(lane in self.lanes.forced)
     def set_target(self, target: str) -> None:
         """The open project's target (docs/targets.md): the lanes' names, and
         the registers under the watch (shown once the controller reports them)."""
@@ -412,6 +440,9 @@ class RunPanels(QtCore.QObject):
 
     def _on_connected(self, address: str) -> None:
         self.inputs.set_enabled(True)
+        debugger = bool(getattr(self.connection, "debugger", False))
+        self.watch.editable = self.inputs.force_by_hand = debugger
+        self.lanes.force_menu = self._lane_force_menu if debugger else None
         self.log.add_note(f"connected to the controller at {address}", "link")
 
     def _on_disconnected(self, reason: str) -> None:

@@ -1,8 +1,13 @@
 """The watch panel: the variables of the running (or last run) procedure.
 
 Values come from the controller's ``variables`` verb, which the panels poll a
-few times a second while something runs (see :class:`RunPanels`). A value that
-changed since the previous poll is shown highlighted.
+few times a second while something runs (see :class:`RunPanels`), or from the
+halted state while the controller is halted. A value that changed since the
+previous poll is shown highlighted.
+
+Values are editable (SPEC §6): typing a value and Enter writes it once; the
+Force column's checkbox (or the context menu) holds it; a forced value is shown
+bold in orange with the force icon.
 """
 
 from __future__ import annotations
@@ -19,6 +24,17 @@ Qt = QtCore.Qt
 HIGHLIGHT_S = 1.0
 _PREDEFINED = ("eparam", "proc", "timer", "vexit", "message", "Param")
 _CHANGED = QtGui.QColor("#fff2b3")
+FORCED_COLOUR = QtGui.QColor("#c75a00")
+COL_NAME, COL_VALUE, COL_HEX, COL_FORCE = range(4)
+
+
+def parse_value(text: str) -> Optional[int]:
+    """A value typed into the watch: decimal, 0x hex, 0b binary; None if not a number."""
+    try:
+        v = int(text.strip().replace("_", ""), 0)
+    except ValueError:
+        return None
+    return v if -(1 << 31) <= v < (1 << 32) else None
 
 
 def _order(names: list[str]) -> list[str]:
@@ -33,6 +49,15 @@ def _order(names: list[str]) -> list[str]:
 
 class WatchPanel(QtWidgets.QWidget):
     """A table of one procedure's variables, refreshed from polls."""
+
+    sig_write = QtCore.Signal(str, int)
+    """Write a variable once: the target (``PROC.var``) and the value."""
+
+    sig_force = QtCore.Signal(str, int)
+    """Force a variable: the target and the value it is held at."""
+
+    sig_release = QtCore.Signal(str, str)
+    """Release a forced variable: the target and ``keep`` or ``restore``."""
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -57,17 +82,26 @@ class WatchPanel(QtWidgets.QWidget):
         top.addWidget(self.show_regs)
         top.addWidget(self.hex)
 
-        self.table = QtWidgets.QTableWidget(0, 3)
-        self.table.setHorizontalHeaderLabels(["Variable", "Value", "Hex"])
+        self.table = QtWidgets.QTableWidget(0, 4)
+        self.table.setHorizontalHeaderLabels(["Variable", "Value", "Hex", "Force"])
+        self.table.horizontalHeaderItem(COL_FORCE).setToolTip(
+            "Checked: the value is forced (held whatever the program writes)")
+        self.table.horizontalHeaderItem(COL_VALUE).setToolTip(
+            "Double-click (or type) a value and press Enter to write it")
         self.table.verticalHeader().setVisible(False)
         self.table.verticalHeader().setDefaultSectionSize(20)
-        self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
+        Trig = QtWidgets.QAbstractItemView.EditTrigger
+        self.table.setEditTriggers(Trig.DoubleClicked | Trig.EditKeyPressed | Trig.AnyKeyPressed)
+        self.table.itemChanged.connect(self._item_changed)
+        self.table.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
+        self.table.customContextMenuRequested.connect(self._menu)
         self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectionBehavior.SelectRows)
         self.table.setAlternatingRowColors(True)
         hh = self.table.horizontalHeader()
         hh.setSectionResizeMode(0, QtWidgets.QHeaderView.ResizeMode.Stretch)
         hh.setSectionResizeMode(1, QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
         hh.setSectionResizeMode(2, QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
+        hh.setSectionResizeMode(3, QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
         self.hint = QtWidgets.QLabel("Variables appear while a procedure runs.")
         self.hint.setStyleSheet("color: #6a6a6a; padding: 2px 6px;")
 
@@ -81,6 +115,10 @@ class WatchPanel(QtWidgets.QWidget):
         self.variables: dict[str, dict[str, int]] = {}
         self._changed: dict[tuple[str, str], float] = {}
         self.current: Optional[str] = None
+        self.forced: dict[str, int] = {}        # target (PROC.var) -> forced value
+        self.editable = False                   # a controller that writes and forces
+        self._filling = False
+        self._rows: list[str] = []              # the variable of each row
 
     # ------------------------------------------------------------------ API
     def set_variables(self, variables: dict, running: Optional[str] = None) -> None:
@@ -116,13 +154,91 @@ class WatchPanel(QtWidgets.QWidget):
     def value(self, name: str, procedure: Optional[str] = None) -> Optional[int]:
         return self.variables.get(procedure or self.current or "", {}).get(name)
 
+    def set_forces(self, forces: list) -> None:
+        """What the controller has forced (``[{target, value}]``): the rows of
+        forced variables are marked."""
+        self.forced = {str(f.get("target")): f.get("value") for f in forces
+                       if "." in str(f.get("target", ""))}
+        self._fill()
+
+    def row_of(self, name: str) -> int:
+        return self._rows.index(name) if name in self._rows else -1
+
+    def target(self, name: str) -> str:
+        return f"{self.current}.{name}"
+
+    def write_value(self, name: str, value: int) -> None:
+        """Write (or, when forced, force) a variable of the shown procedure."""
+        t = self.target(name)
+        (self.sig_force if t in self.forced else self.sig_write).emit(t, int(value))
+
+    def menu_for(self, name: str) -> QtWidgets.QMenu:
+        """The context menu of a variable's row (built, not shown: tests use it)."""
+        menu = QtWidgets.QMenu(self)
+        t = self.target(name)
+        v = self.value(name) or 0
+
+        def add(text, obj, slot, enabled=True):
+            act = menu.addAction(text, slot)
+            act.setObjectName(obj)
+            act.setEnabled(enabled and self.editable)
+        add(f"Write {name}…", "write", lambda: self._ask(name, force=False))
+        add(f"Force {name} at {v}", "force", lambda: self.sig_force.emit(t, int(v)),
+            t not in self.forced)
+        add(f"Force {name} at…", "force_at", lambda: self._ask(name, force=True))
+        add("Release (keep the value)", "release_keep",
+            lambda: self.sig_release.emit(t, "keep"), t in self.forced)
+        add("Release (restore the program's value)", "release_restore",
+            lambda: self.sig_release.emit(t, "restore"), t in self.forced)
+        return menu
+
     # -------------------------------------------------------------- private
     def _picked(self, index: int) -> None:
         self.current = self.procedure.itemText(index)
         self.follow.setChecked(False)
         self._fill()
 
-    def _fill(self) -> None:
+    def _ask(self, name: str, force: bool) -> None:
+        v, ok = QtWidgets.QInputDialog.getInt(
+            self, "Force" if force else "Write", f"{'Force' if force else 'Write'} "
+            f"{self.target(name)} =", int(self.value(name) or 0), -(1 << 31), (1 << 31) - 1)
+        if ok:
+            (self.sig_force if force else self.sig_write).emit(self.target(name), v)
+
+    def _menu(self, pos) -> None:
+        item = self.table.itemAt(pos)
+        if item is not None and 0 <= item.row() < len(self._rows):
+            self.menu_for(self._rows[item.row()]).exec(self.table.viewport().mapToGlobal(pos))
+
+    def _item_changed(self, item: QtWidgets.QTableWidgetItem) -> None:
+        if self._filling or not 0 <= item.row() < len(self._rows):
+            return
+        name = self._rows[item.row()]
+        t = self.target(name)
+        if item.column() == COL_VALUE:
+            v = parse_value(item.text())
+            if v is None or not self.editable:
+                self._fill(force=True)           # not a number: show the value again
+                return
+            self.write_value(name, v)
+        elif item.column() == COL_FORCE and self.editable:
+            on = item.checkState() == Qt.CheckState.Checked
+            if on and t not in self.forced:
+                self.sig_force.emit(t, int(self.value(name) or 0))
+            elif not on and t in self.forced:
+                self.sig_release.emit(t, "keep")
+
+    def _fill(self, force: bool = False) -> None:
+        if not force and self.table.state() == \
+                QtWidgets.QAbstractItemView.State.EditingState:
+            return                               # the user is typing a value
+        self._filling = True
+        try:
+            self._fill_rows()
+        finally:
+            self._filling = False
+
+    def _fill_rows(self) -> None:
         vals = self.variables.get(self.current or "", {})
         names = _order(list(vals))
         if not self.show_regs.isChecked():
@@ -133,9 +249,13 @@ class WatchPanel(QtWidgets.QWidget):
             self.table.setRowCount(len(names))
         bold = QtGui.QFont()
         bold.setBold(True)
+        self._rows = list(names)
+        self.table.setColumnHidden(COL_FORCE, not self.editable)
+        from plcbuilder.ide.icons import icon
         for r, name in enumerate(names):
             v = int(vals[name])
-            cells = (name, str(v), f"0x{v & 0xFFFFFFFF:08x}")
+            forced = self.target(name) in self.forced
+            cells = (name, str(v), f"0x{v & 0xFFFFFFFF:08x}", "")
             hot = self._changed.get((self.current, name), 0) > now
             for c, text in enumerate(cells):
                 item = self.table.item(r, c)
@@ -144,11 +264,27 @@ class WatchPanel(QtWidgets.QWidget):
                     if c:
                         item.setTextAlignment(Qt.AlignmentFlag.AlignRight
                                               | Qt.AlignmentFlag.AlignVCenter)
+                    flags = Qt.ItemFlag.ItemIsEnabled | Qt.ItemFlag.ItemIsSelectable
+                    if c == COL_VALUE:
+                        flags |= Qt.ItemFlag.ItemIsEditable
+                    elif c == COL_FORCE:
+                        flags |= Qt.ItemFlag.ItemIsUserCheckable
+                        item.setCheckState(Qt.CheckState.Unchecked)   # (draws the box)
+                    item.setFlags(flags)
                     self.table.setItem(r, c, item)
                 if item.text() != text:
                     item.setText(text)
                 item.setBackground(_CHANGED if hot else QtGui.QBrush())
-                if c == 0:
+                if c == COL_NAME:
                     item.setFont(bold if name not in abi.SLOT_NAMES and name not in _PREDEFINED
                                  else QtGui.QFont())
+                    item.setIcon(icon("debug-force") if forced else QtGui.QIcon())
+                    item.setToolTip(f"{self.target(name)} is forced" if forced else "")
+                elif c == COL_VALUE:
+                    item.setFont(bold if forced else QtGui.QFont())
+                    item.setForeground(FORCED_COLOUR if forced else QtGui.QBrush())
+                elif c == COL_FORCE:
+                    state = Qt.CheckState.Checked if forced else Qt.CheckState.Unchecked
+                    if item.checkState() != state:
+                        item.setCheckState(state)
         self.hint.setVisible(not names)

@@ -56,6 +56,10 @@ class LanesPanel(TimePanel):
         self._lane_y: dict[tuple[str, int], float] = {}
         self._bands: Optional[pg.BarGraphItem] = None
         self.pin_count = 64
+        #: (kind, pin) -> forced value: the lane's label says so
+        self.forced: dict[tuple[str, int], int] = {}
+        #: (menu, (kind, pin)) -> None: adds force/release items to a lane's menu
+        self.force_menu = None
 
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
@@ -76,7 +80,24 @@ class LanesPanel(TimePanel):
             tag, pin = "VOUT", pin + 1
         else:
             tag = "OUT" if kind == "outputs" else "IN"
-        return f"{tag} {pin}  {name}" if name else f"{tag} {pin}"
+        label = f"{tag} {pin}  {name}" if name else f"{tag} {pin}"
+        if (kind, pin) in self.forced:
+            label += f"  [forced {self.forced[(kind, pin)]}]"
+        return label
+
+    def set_forces(self, forces: list) -> None:
+        """Mark the lanes of forced inputs and outputs (``[{target, value}]``)."""
+        forced = {}
+        for f in forces:
+            kind, _, n = str(f.get("target", "")).partition(" ")
+            if n.isdigit() and kind in ("in", "out"):
+                forced[("inputs" if kind == "in" else "outputs", int(n))] = f.get("value")
+        if forced != self.forced:
+            self.forced = forced
+            for key in forced:
+                self.pin_lane(*key)       # a forced pin always has its lane
+            self._lanes = []              # relabel on the next draw
+            self._mark_dirty()
 
     def pin_lane(self, kind: str, pin: int) -> None:
         """Always show this pin's lane."""
@@ -210,6 +231,9 @@ class LanesPanel(TimePanel):
     def build_menu(self, lane: Optional[tuple[str, int]] = None) -> QtWidgets.QMenu:
         menu = QtWidgets.QMenu(self)
         if lane is not None:
+            if self.force_menu is not None:
+                self.force_menu(menu, lane)
+                menu.addSeparator()
             act = menu.addAction(f"Remove lane {self.lane_label(*lane)}")
             act.triggered.connect(lambda: self.remove_lane(*lane))
             menu.addSeparator()

@@ -1,0 +1,141 @@
+"""The Breakpoints panel: every breakpoint of the project, one row each, with
+a checkbox to enable it; double-click goes to its line; Remove and Remove All."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import (QHBoxLayout, QMenu, QToolButton, QTreeWidget, QTreeWidgetItem,
+                               QVBoxLayout, QWidget)
+
+from plcbuilder.ide.debug.breakpoints import Breakpoint, BreakpointStore
+from plcbuilder.ide.icons import icon
+
+ROLE_BP = Qt.ItemDataRole.UserRole + 1
+
+
+class BreakpointsPanel(QWidget):
+    """A list of the store's breakpoints."""
+
+    sig_open_location = Signal(str, int)
+    """Go to a breakpoint's line (its file, 1-based line)."""
+
+    sig_edit = Signal(object)
+    """Edit a breakpoint's condition, hit count or log message (the Breakpoint)."""
+
+    def __init__(self, store: BreakpointStore, parent: Optional[QWidget] = None):
+        super().__init__(parent)
+        self.store = store
+        self.tree = QTreeWidget(self)
+        self.tree.setObjectName("breakpointsList")
+        self.tree.setColumnCount(3)
+        self.tree.setHeaderLabels(["Breakpoint", "Line", "Details"])
+        self.tree.setRootIsDecorated(False)
+        self.tree.setUniformRowHeights(True)
+        self.tree.setAlternatingRowColors(True)
+        self.tree.setSelectionMode(QTreeWidget.SelectionMode.ExtendedSelection)
+        self.tree.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
+        self.tree.customContextMenuRequested.connect(self._menu)
+        self.tree.itemDoubleClicked.connect(self._activated)
+        self.tree.itemChanged.connect(self._item_changed)
+        self.remove_button = _tool(self, "delete", "Remove the selected breakpoints (Delete)",
+                                   self.remove_selected)
+        self.remove_all_button = _tool(self, "clear", "Remove every breakpoint",
+                                       self.store.clear)
+        self.toggle_all_button = _tool(self, "disconnected", "Enable or disable every breakpoint",
+                                       self.toggle_all)
+        top = QHBoxLayout()
+        top.setContentsMargins(2, 2, 2, 2)
+        top.addStretch(1)
+        for b in (self.toggle_all_button, self.remove_button, self.remove_all_button):
+            top.addWidget(b)
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.setSpacing(0)
+        lay.addLayout(top)
+        lay.addWidget(self.tree, 1)
+        self._filling = False
+        store.sig_changed.connect(lambda _p: self.refresh())
+        self.refresh()
+
+    # ------------------------------------------------------------------ API
+    def refresh(self) -> None:
+        self._filling = True
+        self.tree.clear()
+        for bp in self.store.all():
+            item = QTreeWidgetItem(self.tree)
+            item.setData(0, ROLE_BP, bp)
+            item.setFlags(item.flags() | Qt.ItemFlag.ItemIsUserCheckable)
+            item.setCheckState(0, Qt.CheckState.Checked if bp.enabled else Qt.CheckState.Unchecked)
+            item.setText(0, Path(bp.path).name)
+            item.setToolTip(0, bp.path)
+            line = str(bp.line)
+            if bp.actual_line and bp.actual_line != bp.line:
+                line += f" → {bp.actual_line}"
+            item.setText(1, line)
+            details = bp.describe()
+            if bp.verified is False and bp.reason:
+                details = f"not set: {bp.reason}" + (f" ({details})" if details else "")
+            item.setText(2, details)
+            item.setToolTip(2, details)
+            item.setIcon(0, icon("error") if bp.verified is False else icon("debug-breakpoint"))
+        for c in range(2):
+            self.tree.resizeColumnToContents(c)
+        self._filling = False
+        self.remove_all_button.setEnabled(len(self.store) > 0)
+
+    def breakpoint_items(self) -> list[QTreeWidgetItem]:
+        return [self.tree.topLevelItem(i) for i in range(self.tree.topLevelItemCount())]
+
+    def remove_selected(self) -> None:
+        for item in self.tree.selectedItems():
+            self.store.remove(item.data(0, ROLE_BP))
+
+    def toggle_all(self) -> None:
+        bps = self.store.all()
+        self.store.set_all_enabled(not all(bp.enabled for bp in bps))
+
+    def keyPressEvent(self, event) -> None:  # noqa: N802 - Qt override
+        if event.key() == Qt.Key.Key_Delete:
+            self.remove_selected()
+            return
+        super().keyPressEvent(event)
+
+    # -------------------------------------------------------------- private
+    def _item_changed(self, item: QTreeWidgetItem, column: int) -> None:
+        if self._filling or column != 0:
+            return
+        bp: Breakpoint = item.data(0, ROLE_BP)
+        on = item.checkState(0) == Qt.CheckState.Checked
+        if bp.enabled != on:
+            self.store.update(bp, enabled=on)
+
+    def _activated(self, item: QTreeWidgetItem, _column: int = 0) -> None:
+        bp: Breakpoint = item.data(0, ROLE_BP)
+        self.sig_open_location.emit(bp.path, bp.actual_line or bp.line)
+
+    def _menu(self, pos) -> None:
+        item = self.tree.itemAt(pos)
+        menu = QMenu(self)
+        if item is not None:
+            bp: Breakpoint = item.data(0, ROLE_BP)
+            menu.addAction("Go to Line", lambda: self._activated(item))
+            menu.addAction("Edit Condition, Hit Count or Log…", lambda: self.sig_edit.emit(bp))
+            menu.addAction("Disable" if bp.enabled else "Enable",
+                           lambda: self.store.update(bp, enabled=not bp.enabled))
+            menu.addAction("Remove", lambda: self.store.remove(bp))
+            menu.addSeparator()
+        menu.addAction("Enable or Disable All", self.toggle_all)
+        menu.addAction("Remove All", self.store.clear)
+        menu.exec(self.tree.viewport().mapToGlobal(pos))
+
+
+def _tool(parent, ic: str, tip: str, slot) -> QToolButton:
+    b = QToolButton(parent)
+    b.setIcon(icon(ic))
+    b.setToolTip(tip)
+    b.setAutoRaise(True)
+    b.clicked.connect(lambda _c=False: slot())
+    return b

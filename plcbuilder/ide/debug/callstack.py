@@ -1,0 +1,148 @@
+"""The Call Stack panel: while halted, every running procedure with its calls,
+innermost first; clicking a frame goes to its line.
+
+The halted state gives, per procedure, the line it is at and its ``stack``
+(the calls that lead there). :func:`frames_of` turns one procedure's entry
+into frames, innermost first, whichever order the stack came in.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import QBrush, QColor, QFont
+from PySide6.QtWidgets import QLabel, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget
+
+from plcbuilder.ide.icons import icon
+
+ROLE_FRAME = Qt.ItemDataRole.UserRole + 1
+ROLE_TEXTS = Qt.ItemDataRole.UserRole + 2
+REASONS = {"breakpoint": "halted at a breakpoint", "step": "halted after a step",
+           "pause": "paused", "fault": "halted at a fault"}
+
+
+def frames_of(proc: dict) -> list[dict]:
+    """One halted procedure's frames, innermost first: ``{procedure, file,
+    line, index}`` (index 0: where it is now)."""
+    here = {"procedure": proc.get("name"), "file": proc.get("file"), "line": proc.get("line")}
+    stack = [dict(f) for f in proc.get("stack") or () if isinstance(f, dict)]
+    if stack:
+        first, last = stack[0], stack[-1]
+        same = lambda f: f.get("line") == here["line"] and f.get("file") == here["file"]  # noqa: E731
+        if same(last) and not same(first):
+            stack.reverse()                  # outermost first: make it innermost first
+        if not same(stack[0]):
+            stack.insert(0, here)
+    else:
+        stack = [here]
+    for i, f in enumerate(stack):
+        f["index"] = i
+        f.setdefault("procedure", here["procedure"])
+    return stack
+
+
+def halted_text(state: dict) -> str:
+    """One line about why and where the controller halted."""
+    reason = REASONS.get(state.get("reason"), f"halted ({state.get('reason')})")
+    where = ""
+    if state.get("procedure"):
+        where = f" in {state['procedure']}"
+        if state.get("file") and state.get("line"):
+            where += f" at {Path(str(state['file'])).name}:{state['line']}"
+    text = f"{reason.capitalize()}{where}, t = {int(state.get('t_ms') or 0)} ms"
+    fault = state.get("fault")
+    if isinstance(fault, dict) and fault.get("text"):
+        text += f": {fault['text']}"
+    return text
+
+
+class CallStackPanel(QWidget):
+    """The procedures of a halted controller and their frames."""
+
+    sig_frame_selected = Signal(str, int, str, int)
+    """A frame was picked: procedure, frame index (0: innermost), file, line."""
+
+    def __init__(self, parent: Optional[QWidget] = None):
+        super().__init__(parent)
+        self.header = QLabel("Not halted.")
+        self.header.setWordWrap(True)
+        self.header.setStyleSheet("padding: 3px 6px;")
+        self.tree = QTreeWidget(self)
+        self.tree.setObjectName("callStack")
+        self.tree.setColumnCount(1)
+        self.tree.setHeaderHidden(True)         # one column: a narrow dock shows it all
+        self.tree.setUniformRowHeights(True)
+        self.tree.itemClicked.connect(self._clicked)
+        self.tree.itemActivated.connect(self._clicked)
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.setSpacing(0)
+        lay.addWidget(self.header)
+        lay.addWidget(self.tree, 1)
+        self.state: Optional[dict] = None
+
+    # ------------------------------------------------------------------ API
+    def show_state(self, state: Optional[dict]) -> None:
+        """The halted state (None: running; the panel empties)."""
+        self.state = state
+        self.tree.clear()
+        if state is None:
+            self.header.setText("Running — the call stack shows while the controller is halted.")
+            return
+        self.header.setText(halted_text(state))
+        bold = QFont()
+        bold.setBold(True)
+        halting = state.get("procedure")
+        for proc in state.get("procedures") or ():
+            name = str(proc.get("name"))
+            top = QTreeWidgetItem(self.tree)
+            waiting = bool(proc.get("at_loop_end"))
+            state = "waiting at its loop's end" if waiting else (
+                "halted here" if name == halting else "at its line")
+            top.setText(0, f"{name} — {state}")
+            top.setToolTip(0, f"{name} ({proc.get('kind', '')}): {state}"
+                           + (" (for the next tick)" if waiting else ""))
+            top.setIcon(0, icon("file-plc-sw" if proc.get("kind") == "software" else "file-plc"))
+            if name == halting:
+                top.setFont(0, bold)
+            for f in frames_of(proc):
+                item = QTreeWidgetItem(top)
+                callee = f.get("procedure") or name
+                where = f"{Path(str(f.get('file') or '?')).name}:{f.get('line')}"
+                call = f"{callee}()" if f["index"] else f"{callee}()  ◀"
+                item.setText(0, f"{call}   {where}")
+                item.setData(0, ROLE_TEXTS, (call, where))
+                item.setData(0, ROLE_FRAME, (name, f["index"], str(f.get("file") or ""),
+                                             int(f.get("line") or 0)))
+                if f["index"] == 0:
+                    item.setForeground(0, QBrush(QColor("#8a6d00" if not waiting else "#1f5fa8")))
+            top.setExpanded(True)
+        first = self.tree.topLevelItem(0)
+        if first is not None and first.childCount():
+            for i in range(self.tree.topLevelItemCount()):
+                it = self.tree.topLevelItem(i)
+                if it.font(0).bold() and it.childCount():
+                    first = it
+                    break
+            self.tree.setCurrentItem(first.child(0))
+
+    def frame_items(self) -> list[QTreeWidgetItem]:
+        out = []
+        for i in range(self.tree.topLevelItemCount()):
+            top = self.tree.topLevelItem(i)
+            out.extend(top.child(j) for j in range(top.childCount()))
+        return out
+
+    def frame_texts(self) -> list[tuple[str, str]]:
+        """(call, where) of each frame shown: ``("find_home_z()  ◀", "M80.plc:31")``."""
+        return [tuple(it.data(0, ROLE_TEXTS)) for it in self.frame_items()]
+
+    # -------------------------------------------------------------- private
+    def _clicked(self, item: QTreeWidgetItem, _column: int = 0) -> None:
+        data = item.data(0, ROLE_FRAME)
+        if data is None and item.childCount():
+            data = item.child(0).data(0, ROLE_FRAME)
+        if data is not None:
+            self.sig_frame_selected.emit(*data)
