@@ -23,6 +23,18 @@ MK_WARNING = 1
 MK_CURRENT = 2          # a line being jumped to (briefly)
 MK_COVERED = 3          # test coverage: a line that ran
 MK_UNCOVERED = 4        # ... a line with code that did not
+# elements (SCI_SETELEMENTCOLOUR): the selection's text colours are left unset, so
+# selected text keeps its syntax colours over the selection background
+EL_SELECTION_TEXT = 10
+EL_SELECTION_BACK = 11
+EL_SELECTION_ADDITIONAL_TEXT = 12
+EL_SELECTION_ADDITIONAL_BACK = 13
+EL_SELECTION_SECONDARY_TEXT = 14
+EL_SELECTION_SECONDARY_BACK = 15
+EL_SELECTION_INACTIVE_TEXT = 16
+EL_SELECTION_INACTIVE_BACK = 17
+SELECTION_TEXT_ELEMENTS = (EL_SELECTION_TEXT, EL_SELECTION_ADDITIONAL_TEXT,
+                           EL_SELECTION_SECONDARY_TEXT, EL_SELECTION_INACTIVE_TEXT)
 # margins
 MARGIN_NUMBERS = 0
 MARGIN_SYMBOLS = 1
