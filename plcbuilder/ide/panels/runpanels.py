@@ -26,6 +26,7 @@ from plcbuilder.api import abi
 from plcbuilder.link.client import ControllerStatus
 from plcbuilder.api import events as ev
 from plcbuilder.ide.docks import RUN_DOCKS
+from plcbuilder.ide.elided_label import ElidedLabel
 from plcbuilder.ide.panels.inputs import InputsPanel
 from plcbuilder.ide.panels.log import LogPanel
 from plcbuilder.ide.panels.model import RunModel
@@ -117,18 +118,19 @@ class RunPanels(QtCore.QObject):
         self.failing_ms: Optional[int] = None
         self.held = 0                 # live samples not shown while a recorded run is
         self._markers: list = []      # (panel, plot, InfiniteLine) at the failing tick
-        self.banners: list[QtWidgets.QLabel] = []   # "showing test run …  Back to Live"
+        self.banners: list[ElidedLabel] = []        # "showing test run …" beside
+        self.banner_links: list[QtWidgets.QLabel] = []   # "Back to Live"
         for panel in self.time_panels:
-            label = QtWidgets.QLabel()
-            label.setTextFormat(Qt.TextFormat.RichText)
-            # a long test name must never widen the dock (and the window): the
-            # label takes the room there is, the link first, the whole text in its tooltip
-            label.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,
-                                QtWidgets.QSizePolicy.Policy.Preferred)
-            label.setMinimumWidth(0)
-            label.linkActivated.connect(lambda _link: self.back_to_live())
+            # a long test name must never widen the dock (and the window), nor
+            # vanish in a narrow one: the link keeps its room, the text elides
+            back = QtWidgets.QLabel("<a href='live'>Back to Live</a>")
+            back.linkActivated.connect(lambda _link: self.back_to_live())
+            back.hide()
+            label = ElidedLabel(min_chars=8)
             label.hide()
-            panel.toolbar.extra.addWidget(label)
+            panel.toolbar.extra.addWidget(back)
+            panel.toolbar.extra.addWidget(label, 1)
+            self.banner_links.append(back)
             self.banners.append(label)
 
         self.log.sig_open_location.connect(self.sig_open_location)
@@ -201,11 +203,12 @@ class RunPanels(QtCore.QObject):
         text = f"showing test run '{name}' (recorded){at}"
         self.log.add_note(text, "link")
         self.log.add_events(events)
-        for label in self.banners:
-            label.setText(f"<a href='live'>Back to Live</a> &nbsp;"
-                          f"<span style='color:{MARKER_COLOUR}'>{html.escape(text, quote=False)}</span>")
+        for link, label in zip(self.banner_links, self.banners):
+            label.setText(f"<span style='color:{MARKER_COLOUR}'>"
+                          f"{html.escape(text, quote=False)}</span>")
             label.setToolTip(f"{text}; the live telemetry is not shown until Back to Live "
                              f"(or Clear)")
+            link.show()
             label.show()
         self._remove_markers()
         if failing_ms is not None:
@@ -237,7 +240,7 @@ class RunPanels(QtCore.QObject):
         if self.recorded is None:
             return
         self.recorded, self.failing_ms = None, None
-        for label in self.banners:
+        for label in self.banners + self.banner_links:
             label.hide()
         self._remove_markers()
         self.model.clear()

@@ -9,6 +9,7 @@ from PySide6 import QtCore, QtGui, QtWidgets  # before pyqtgraph (it takes the l
 import pyqtgraph as pg  # noqa: E402,I001
 
 from plcbuilder.api import abi
+from plcbuilder.ide.elided_label import ElidedLabel
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.tables import RowsModel
@@ -25,10 +26,11 @@ class ProcPanel(TimePanel):
 
     def __init__(self, model: RunModel, timebase: TimeBase, on_clear=None, parent=None):
         super().__init__(model, timebase, on_clear, parent)
-        self.status = QtWidgets.QLabel("No controller")
-        self.status.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        # a long status (running, software, speed, a disconnect reason) elides:
+        # it must never widen the dock
+        self.status = ElidedLabel("No controller")
         self.toolbar.extra.addSpacing(12)
-        self.toolbar.extra.addWidget(self.status)
+        self.toolbar.extra.addWidget(self.status, 1)
 
         self.widget = style.plot_widget(style.time_axis())
         self.plot = self.widget.getPlotItem()
