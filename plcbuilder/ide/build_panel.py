@@ -27,7 +27,7 @@ from plcbuilder.ide.icons import icon
 _LOCATION_RE = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): (error|warning|note)")
 
 COLOURS = {"error": "#d1242f", "warning": "#9a6700", "ok": "#1a7f37", "dim": "#6e7781",
-           "head": "#0550ae", "text": None, "note": "#6e7781"}
+           "head": "#3a74c9", "text": None, "note": "#6e7781"}
 
 
 class BuildRunner(QObject):

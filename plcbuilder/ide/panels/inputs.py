@@ -20,11 +20,11 @@ ADC_MAX = 4095
 PENDING_S = 0.6        # a clicked pin shows the asked state this long before a sample wins
 
 _TOGGLE_STYLE = """
-QToolButton { border: 1px solid #b8b8b8; border-radius: 3px; padding: 3px 6px;
-              background: #f4f4f4; color: #202020; text-align: left; }
+QToolButton { border: 1px solid palette(mid); border-radius: 3px; padding: 3px 6px;
+              background: palette(button); color: palette(button-text); text-align: left; }
 QToolButton:hover { border-color: #6a9bd1; }
 QToolButton:checked { background: #3c9d4b; border-color: #2f7d3b; color: #ffffff; }
-QToolButton:disabled { color: #9a9a9a; background: #efefef; }
+QToolButton:disabled { color: palette(mid); background: palette(window); }
 """
 
 

@@ -23,7 +23,7 @@ T, SRC, KIND_LABEL, TEXT, CATEGORY, COLOUR, FILE, LINE = range(8)
 KINDS = (("print", "Prints"), ("message", "Messages"), ("procedure", "Procedures"),
          ("fault", "Faults"), ("note", "Notes"))
 _COLOURS = {"fault": style.FAULT_COLOUR, "error": style.FAULT_COLOUR, "warning": "#b35c00",
-            "print": "#1a4f8b", "link": "#6a6a6a", "message": "#5b2c83"}
+            "print": "#2f6db5", "link": "#808080", "message": "#8a52b8"}
 
 
 def _fmt_t(t_ms: Optional[int]) -> str:
