@@ -116,7 +116,9 @@ class Lint(QObject):
                 self.schedule_compile(ed, immediate=True)
 
     def lint_project(self) -> None:
-        """Check every procedure of the project in the background (Problems)."""
+        """Check every procedure of the project in the background (Problems);
+        first forget the problems of files that are gone."""
+        self.forget_missing()
         if self.project is None:
             return
         try:
@@ -126,11 +128,35 @@ class Lint(QObject):
         for proc in procs:
             if self.editors.editor_for(proc.path) is None:
                 self.relint_from_disk(str(proc.path))
+        self.relint_open_procedures()           # a header they include may be gone
 
     def on_changes_discarded(self, path: str) -> None:
-        """An editor closed without saving: check the file on disk instead."""
+        """An editor closed without saving: check the file on disk instead
+        (or, when it is gone, forget its problems)."""
         self.worker.cancel(file_key(path))
         self.relint_from_disk(path)
+        self.forget_missing()
+
+    def forget_missing(self) -> None:
+        """Drop the problems of files deleted from disk (no editor holds them):
+        a procedure's own, and those Build All reported in them."""
+        changed = False
+        for src in self.store.sources():
+            if src.startswith("proc:"):
+                key = src[5:]
+                if not Path(key).exists() and self.editors.editor_for(key) is None:
+                    self.store.remove(src)
+                    self.results.pop(key, None)
+                    self.sizes.pop(key, None)
+                    changed = True
+        kept = [d for d in self.store.for_source("project")
+                if d.span is None or not d.span.file or Path(d.span.file).exists()
+                or self.editors.editor_for(d.span.file) is not None]
+        if len(kept) != len(self.store.for_source("project")):
+            self.store.set("project", kept)
+            changed = True
+        if changed:
+            self.refresh_problems()
 
     def on_file_saved(self, path: str) -> None:
         if path.endswith(".h"):

@@ -44,6 +44,10 @@ class ProblemStore:
     def sources(self) -> list[str]:
         return list(self._sources)
 
+    def for_source(self, source: str) -> list[Diagnostic]:
+        """The diagnostics one source set (none: an empty list)."""
+        return list(self._sources.get(source, ()))
+
     def all(self) -> list[Diagnostic]:
         """Every diagnostic once, sorted by file, line, column, severity."""
         seen = set()
