@@ -35,6 +35,7 @@ from plcbuilder.api import Kind
 from plcbuilder.ide import actions, dialogs, docks
 from plcbuilder.ide.actions import Act
 from plcbuilder.ide.build_panel import BuildPanel
+from plcbuilder.ide.dialogs.not_a_project import project_or_offer
 from plcbuilder.ide.editor import CodeEditor, file_key
 from plcbuilder.ide.editor_stack import EditorStack
 from plcbuilder.ide.icons import icon
@@ -244,8 +245,11 @@ class MainWindow(QMainWindow):
         """Open a project folder (asking about unsaved changes first)."""
         if not self.editor_stack.confirm_discard_all("Open Project"):
             return False
+        folder = project_or_offer(self, Path(path).expanduser().resolve())
+        if folder is None:                       # not a project, and not made one
+            return False
         try:
-            project = Project.open(Path(path).expanduser().resolve())
+            project = Project.open(folder)
         except ProjectError as exc:
             QMessageBox.critical(self, "Open Project", f"Cannot open the project:\n\n{exc}")
             self.settings.remove_recent_project(str(Path(path).expanduser().resolve()))
