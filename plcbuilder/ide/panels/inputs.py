@@ -46,6 +46,7 @@ class InputsPanel(QtWidgets.QWidget):
         self.names: dict[int, str] = {}
         self.buttons: dict[int, QtWidgets.QToolButton] = {}
         self._pending: dict[int, tuple[int, float]] = {}
+        self._adc_pending: dict[int, tuple[int, float]] = {}   # ADC values asked, not yet read
         self._drawn = -1
 
         top = QtWidgets.QHBoxLayout()
@@ -113,6 +114,8 @@ class InputsPanel(QtWidgets.QWidget):
             self.spins.append(spin)
             self.readings.append(reading)
         ag.setColumnStretch(1, 1)
+        self.sig_set_adc.connect(
+            lambda ch, v: self._adc_pending.__setitem__(ch, (v, time.monotonic() + PENDING_S)))
 
         body = QtWidgets.QWidget()
         bl = QtWidgets.QVBoxLayout(body)
@@ -152,7 +155,7 @@ class InputsPanel(QtWidgets.QWidget):
 
     def refresh(self) -> None:
         """Show the newest sample's input and ADC values."""
-        if self.model.version == self._drawn and not self._pending:
+        if self.model.version == self._drawn and not self._pending and not self._adc_pending:
             return
         self._drawn = self.model.version
         s = self.model.last_sample
@@ -172,11 +175,35 @@ class InputsPanel(QtWidgets.QWidget):
                 b.setChecked(bool(v))
         for ch, lab in enumerate(self.readings):
             if ch < len(s.adc):
-                text = str(s.adc[ch])
+                value = int(s.adc[ch])
+                text = str(value)
                 if lab.text() != text:
                     lab.setText(text)
+                self._show_adc(ch, value, now)
 
     # -------------------------------------------------------------- private
+    def _show_adc(self, ch: int, value: int, now: float) -> None:
+        """The slider and the box follow what the channel reads (the machine
+        may drive it), except while the user is at them or a value they set is
+        on its way."""
+        pend = self._adc_pending.get(ch)
+        if pend is not None:
+            if pend[0] != value and now <= pend[1]:
+                return
+            del self._adc_pending[ch]
+        slider, spin = self.sliders[ch], self.spins[ch]
+        if slider.isSliderDown() or spin.hasFocus():
+            return
+        if spin.value() != value:
+            spin.blockSignals(True)
+            spin.setValue(value)
+            spin.blockSignals(False)
+        clamped = max(0, min(ADC_MAX, value))
+        if slider.value() != clamped:
+            slider.blockSignals(True)
+            slider.setValue(clamped)
+            slider.blockSignals(False)
+
     def _label(self, pin: int) -> str:
         name = self.names.get(pin)
         return f"{pin:>2}  {name}" if name else f"{pin:>2}  input {pin}"

@@ -33,9 +33,8 @@ def _fmt_t(t_ms: Optional[int]) -> str:
 def event_row(e) -> Optional[tuple]:
     """The log row of an event, or None for events the log does not show."""
     if isinstance(e, ev.Print):
-        reg = "" if e.register == abi.PRINT_FIRST else f"  [register {e.register}]"
-        return (_fmt_t(e.t_ms), e.source, "print", f"{e.value}{reg}", "print", "print",
-                None, None)
+        return (_fmt_t(e.t_ms), e.source, "print", f"register {e.register} = {e.value}",
+                "print", "print", None, None)
     if isinstance(e, ev.Message):
         name = e.name or abi.message_name(e.message)
         label = f"{name} ({e.message})" if name else f"message {e.message}"
