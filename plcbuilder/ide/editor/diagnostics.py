@@ -122,6 +122,8 @@ class DiagnosticsMixin:
             label = "error" if d.severity == Severity.ERROR else d.severity.label
             parts.append(f"{label}: {d.message}")
             parts.extend(f"  hint: {h}" for h in d.hints)
+            parts.extend(f"  note: {r.span.file.rsplit('/', 1)[-1]}:{r.span.line}: {r.message}"
+                         for r in d.related)
         if self.hover_provider is not None and self.prefs.hover:
             try:
                 extra = self.hover_provider(self, pos)
