@@ -125,6 +125,11 @@ class BuildPanel(QWidget):
         self.text.clear()
         self._locations.clear()
 
+    def forget(self) -> None:
+        """Another project (or none): its build is not this one's."""
+        self.clear()
+        self.status.setText("No build yet")
+
     def plain_text(self) -> str:
         return self.text.toPlainText()
 

@@ -6,7 +6,7 @@ right: the plots (tabbed) over inputs and watch (tabbed).
 
 from __future__ import annotations
 
-from PySide6.QtCore import Qt
+from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import QDockWidget
 
 
@@ -121,3 +121,13 @@ def reset_layout(win) -> None:
             dock.show()
     win.problems_dock.raise_()
     default_dock_sizes(win)
+    QTimer.singleShot(0, lambda: scroll_editors_home(win))
+
+
+def scroll_editors_home(win) -> None:
+    """Editors scrolled sideways while they were narrow start at the left
+    again, the caret kept in view."""
+    for ed in win.editors():
+        if ed.xOffset():
+            ed.setXOffset(0)
+            ed.scrollCaret()

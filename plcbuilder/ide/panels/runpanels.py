@@ -25,6 +25,7 @@ import pyqtgraph as pg  # noqa: I001 - after PySide6 (it takes the loaded bindin
 from plcbuilder.api import abi
 from plcbuilder.link.client import ControllerStatus
 from plcbuilder.api import events as ev
+from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
 from plcbuilder.ide.docks import RUN_DOCKS
 from plcbuilder.ide.elided_label import ElidedLabel
 from plcbuilder.ide.panels.inputs import InputsPanel
@@ -378,10 +379,15 @@ class RunPanels(QtCore.QObject):
 
     def _on_connected(self, address: str) -> None:
         self.inputs.set_enabled(True)
+        self.proc.set_status(f"Connected to {address}")     # not "Disconnected" any more
         self.log.add_note(f"connected to the controller at {address}", "link")
 
     def _on_disconnected(self, reason: str) -> None:
         self.inputs.set_enabled(False)
+        if reason == CLOSED_BY_IDE:          # another project, quitting: not an error
+            self.proc.set_status("No controller")
+            self.log.add_note("disconnected from the controller (the IDE closed it)", "link")
+            return
         self.proc.set_status(f"<span style='color:#c62828'>Disconnected</span>: {reason}")
         self.log.add_note(f"controller disconnected: {reason}", "error")
 
