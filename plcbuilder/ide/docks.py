@@ -103,14 +103,18 @@ def restore_layout(win) -> None:
 def default_dock_sizes(win) -> None:
     """Sizes for the default layout (they only apply once the window is shown)."""
     w = max(win.width(), 800)
-    win.resizeDocks([win.project_dock], [230], Qt.Orientation.Horizontal)
+    # the tree shows the procedures' descriptions beside their names: room for
+    # "M09  coolant off (mist and flood)" at the default window size
+    win.resizeDocks([win.project_dock], [max(230, min(360, int(w * 0.22)))],
+                    Qt.Orientation.Horizontal)
     if win.right_docks:
-        win.resizeDocks(win.right_docks[:1], [int(w * 0.32)], Qt.Orientation.Horizontal)
+        win.resizeDocks(win.right_docks[:1], [int(w * 0.30)], Qt.Orientation.Horizontal)
         if len(win.right_docks) > 1:
             h = max(win.height() - 200, 400)
             win.resizeDocks(win.right_docks, [int(h * 0.62), int(h * 0.38)],
                              Qt.Orientation.Vertical)
-    win.resizeDocks([win.problems_dock], [max(190, int(win.height() * 0.24))],
+    # about ten rows of Problems, Build Output or the run log
+    win.resizeDocks([win.problems_dock], [max(230, int(win.height() * 0.3))],
                      Qt.Orientation.Vertical)
 
 

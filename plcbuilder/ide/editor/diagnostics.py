@@ -65,8 +65,17 @@ class DiagnosticsMixin:
         end = self.position_of(s.end_line, s.end_col) if (s.end_line, s.end_col) > (s.line, s.col) \
             else start
         if end <= start:
+            # a point: the whole word there, or the one it follows ("expected ';'
+            # after '1'"), not one character (nor an invisible space)
             line_end = self.lineEndPosition(self.lineFromPosition(start))
-            if start < line_end:
+            word_start = self.wordStartPosition(start, True)
+            word_end = self.wordEndPosition(start, True)
+            if word_end > start:
+                start, end = word_start, word_end
+            elif word_start < start:
+                end = start
+                start = word_start
+            elif start < line_end:
                 end = self.positionAfter(start)
             elif start > self.positionFromLine(self.lineFromPosition(start)):
                 start = self.positionBefore(start)      # at a line end: the char before
