@@ -110,3 +110,20 @@ def test_the_speed_list_drops_below_its_box(runwin, qtbot):  # noqa: F811
     bottom_of_box = combo.mapToGlobal(combo.rect().bottomLeft()).y()
     combo.hidePopup()
     assert top >= bottom_of_box - 1
+
+
+def test_main_is_highlighted_once_its_brace_is_typed_below_it(qtbot):
+    """``main()`` under a comment line, its ``{`` typed on the next line: the
+    definition's colour comes at once, not at the next full restyle."""
+    from plcbuilder.ide import highlighter as hl
+    ed = CodeEditor()
+    qtbot.addWidget(ed)
+    ed.resize(600, 300)
+    ed.show()
+    qtbot.waitExposed(ed)
+    ed.set_text("// a comment\nmain()\n")
+    ed.highlighter.style_to(ed.length())
+    assert ed.styleAt(ed.position_of(2, 1)) != hl.S_FUNCTION       # no brace yet
+    ed.insertText(ed.length(), "{\n  exit(99);\n};\n")
+    ed.highlighter.style_to(ed.length())                            # what Scintilla asks
+    assert ed.styleAt(ed.position_of(2, 1)) == hl.S_FUNCTION
