@@ -6,7 +6,6 @@ hands the GIL back to the window often."""
 import sys
 import time
 
-from PySide6.QtCore import Qt
 
 from plcbuilder.ide import completion
 from plcbuilder.ide.diagnostics_worker import GIL_SWITCH_S

@@ -5,7 +5,6 @@ __HANDLER_INIT whole, squiggles cover a whole word, the speed list drops
 below its box."""
 
 import numpy as np
-from PySide6 import QtWidgets
 from PySide6.QtCore import Qt
 
 from plcbuilder.api import Diagnostic, Severity, Span
