@@ -21,6 +21,15 @@ def _has_display() -> bool:
                 or sys.platform in ("win32", "darwin"))
 
 
+def _uses_xcb() -> bool:
+    """Qt will load its X11 platform plugin (Linux, an X display, no other platform asked)."""
+    platform = os.environ.get("QT_QPA_PLATFORM", "")
+    if platform:
+        return platform.startswith("xcb")
+    return sys.platform.startswith("linux") and bool(os.environ.get("DISPLAY")) \
+        and not os.environ.get("WAYLAND_DISPLAY")
+
+
 def add_parser(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "gui", help="the IDE (the default command)",
@@ -60,6 +69,12 @@ def run(args: argparse.Namespace) -> int:
         else:
             print("plcbuilder gui: no display (DISPLAY is not set); run it on a desktop, or "
                   "use --screenshot FILE, or set QT_QPA_PLATFORM=offscreen", file=sys.stderr)
+            return 1
+    if _uses_xcb():
+        from plcbuilder.cli import qt_libs
+        missing = qt_libs.missing_libraries()
+        if missing:                     # Qt would stop with "could not load ... xcb"
+            print("plcbuilder gui: " + qt_libs.report(missing), file=sys.stderr)
             return 1
     try:
         from plcbuilder.ide.app import main

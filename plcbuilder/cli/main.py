@@ -31,9 +31,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: options of the parser itself; any other leading option is the IDE's
+TOP_LEVEL_OPTIONS = ("-h", "--help", "--version")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and argv[0].startswith("-") and argv[0].split("=", 1)[0] not in TOP_LEVEL_OPTIONS:
+        argv.insert(0, "gui")           # `plcbuilder --settings F`: the default command's options
+    args = parser.parse_args(argv)
     if getattr(args, "_run", None) is None:
         try:
             mod = importlib.import_module("plcbuilder.cli.cmd_gui")

@@ -69,6 +69,12 @@ def apply_theme(app: QApplication, theme: str) -> None:
         app.setPalette(pal)
     else:
         app.setPalette(app.style().standardPalette())
+    # widgets the style sheet has polished keep the palette they were polished
+    # with: setting the sheet again polishes every widget with the new one
+    sheet = app.styleSheet()
+    if sheet:
+        app.setStyleSheet("")
+        app.setStyleSheet(sheet)
 
 
 def main(project: Optional[str] = None, *, screenshot: Optional[str] = None,

@@ -27,7 +27,7 @@ from plcbuilder.ide.icons import icon
 _LOCATION_RE = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): (error|warning|note)")
 
 COLOURS = {"error": "#d1242f", "warning": "#9a6700", "ok": "#1a7f37", "dim": "#6e7781",
-           "head": "#0550ae", "text": None, "note": "#6e7781"}
+           "head": "#3a74c9", "text": None, "note": "#6e7781"}
 
 
 class BuildRunner(QObject):
@@ -124,6 +124,11 @@ class BuildPanel(QWidget):
     def clear(self) -> None:
         self.text.clear()
         self._locations.clear()
+
+    def forget(self) -> None:
+        """Another project (or none): its build is not this one's."""
+        self.clear()
+        self.status.setText("No build yet")
 
     def plain_text(self) -> str:
         return self.text.toPlainText()

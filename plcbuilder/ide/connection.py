@@ -36,6 +36,7 @@ from typing import Optional, Sequence
 
 from PySide6 import QtCore
 
+from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
 from plcbuilder.ide.panels.model import StepSamples
 from plcbuilder.link import runtime
 from plcbuilder.link.process import ControllerProcess
@@ -479,7 +480,7 @@ class ControllerConnection(QtCore.QObject):
         self._pump.stop()
         if self.connected:
             self.connected = False
-            self.sig_disconnected.emit("disconnected")
+            self.sig_disconnected.emit(CLOSED_BY_IDE)
         self.child_pid = None
 
     def _begin(self, worker: _Worker) -> None:

@@ -6,7 +6,7 @@ right: the plots (tabbed) over inputs and watch (tabbed).
 
 from __future__ import annotations
 
-from PySide6.QtCore import Qt
+from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import QDockWidget
 
 
@@ -105,14 +105,18 @@ def restore_layout(win) -> None:
 def default_dock_sizes(win) -> None:
     """Sizes for the default layout (they only apply once the window is shown)."""
     w = max(win.width(), 800)
-    win.resizeDocks([win.project_dock], [230], Qt.Orientation.Horizontal)
+    # the tree shows the procedures' descriptions beside their names: room for
+    # "M09  coolant off (mist and flood)" at the default window size
+    win.resizeDocks([win.project_dock], [max(230, min(360, int(w * 0.22)))],
+                    Qt.Orientation.Horizontal)
     if win.right_docks:
-        win.resizeDocks(win.right_docks[:1], [int(w * 0.32)], Qt.Orientation.Horizontal)
+        win.resizeDocks(win.right_docks[:1], [int(w * 0.30)], Qt.Orientation.Horizontal)
         if len(win.right_docks) > 1:
             h = max(win.height() - 200, 400)
             win.resizeDocks(win.right_docks, [int(h * 0.62), int(h * 0.38)],
                              Qt.Orientation.Vertical)
-    win.resizeDocks([win.problems_dock], [max(190, int(win.height() * 0.24))],
+    # about ten rows of Problems, Build Output or the run log
+    win.resizeDocks([win.problems_dock], [max(230, int(win.height() * 0.3))],
                      Qt.Orientation.Vertical)
     if getattr(win, "callstack_dock", None) is not None:     # the tree keeps most of the left
         h = max(win.height() - 260, 400)
@@ -127,3 +131,13 @@ def reset_layout(win) -> None:
             dock.show()
     win.problems_dock.raise_()
     default_dock_sizes(win)
+    QTimer.singleShot(0, lambda: scroll_editors_home(win))
+
+
+def scroll_editors_home(win) -> None:
+    """Editors scrolled sideways while they were narrow start at the left
+    again, the caret kept in view."""
+    for ed in win.editors():
+        if ed.xOffset():
+            ed.setXOffset(0)
+            ed.scrollCaret()

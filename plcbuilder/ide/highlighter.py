@@ -198,6 +198,8 @@ def colour(hex_colour: str) -> int:
 
 # ------------------------------------------------------------------ lexing
 IN_COMMENT = 1
+#: lines styled past the one asked for (a definition's ``{`` may be below it)
+LOOKAHEAD_LINES = 2
 
 
 def pack_state(depth: int, in_comment: bool) -> int:
@@ -308,10 +310,13 @@ class Highlighter:
         if self.lexer is not None:
             self._style_whole()
             return
-        start_line = ed.lineFromPosition(ed.endStyled())
+        # one line back and two ahead: ``main()`` is a definition only when a
+        # ``{`` follows on a later line, so the line above an edit may change
+        # style, and a range must not stop between the two
+        start_line = max(0, ed.lineFromPosition(ed.endStyled()) - 1)
         start = ed.positionFromLine(start_line)
-        end_line = ed.lineFromPosition(max(pos, start))
         line_count = ed.lineCount()
+        end_line = min(ed.lineFromPosition(max(pos, start)) + LOOKAHEAD_LINES, line_count - 1)
         end = ed.positionFromLine(end_line + 1) if end_line + 1 < line_count else ed.length()
         state = ed.lineState(start_line - 1) if start_line > 0 else 0
         data = bytes(ed.textRange(start, end)) if end > start else b""

@@ -74,6 +74,13 @@ class Lint(QObject):
         if sizes:
             self.sizes.clear()
 
+    def defer_ms(self, ed: CodeEditor) -> Optional[int]:
+        """How long after the last keystroke a large file is compiled: one
+        second a megabyte (a compile of it would hold up typing), None
+        (the debounce) for the others."""
+        n = ed.length()
+        return None if n < LARGE_TEXT else 1000 + n // 1000
+
     def attach(self, ed: CodeEditor) -> None:
         """A new editor: completion, hover and diagnostics for it."""
         ed.completion_provider = self.complete
@@ -83,7 +90,8 @@ class Lint(QObject):
         self.apply_defines(ed)
         ed.set_diagnostics(self.store.for_file(ed.path))
         if ed.kind is not None and not ed.builtin:
-            self.schedule_compile(ed, immediate=True)
+            # a large file is checked once it is open and typing has paused
+            self.schedule_compile(ed, immediate=ed.length() < LARGE_TEXT)
 
     def options_for(self, path: str) -> api.CompileOptions:
         if self.project is None:
@@ -104,7 +112,8 @@ class Lint(QObject):
         if immediate:
             self.worker.submit(key, ed.path, ed.text(), self.options_for(ed.path))
         else:
-            self.worker.schedule(key, lambda e=ed: (e.path, e.text(), self.options_for(e.path)))
+            self.worker.schedule(key, lambda e=ed: (e.path, e.text(), self.options_for(e.path)),
+                                 self.defer_ms(ed))
 
     def relint_from_disk(self, path: str) -> None:
         if path.endswith(".plc") and Path(path).exists():
@@ -116,7 +125,9 @@ class Lint(QObject):
                 self.schedule_compile(ed, immediate=True)
 
     def lint_project(self) -> None:
-        """Check every procedure of the project in the background (Problems)."""
+        """Check every procedure of the project in the background (Problems);
+        first forget the problems of files that are gone."""
+        self.forget_missing()
         if self.project is None:
             return
         try:
@@ -126,11 +137,35 @@ class Lint(QObject):
         for proc in procs:
             if self.editors.editor_for(proc.path) is None:
                 self.relint_from_disk(str(proc.path))
+        self.relint_open_procedures()           # a header they include may be gone
 
     def on_changes_discarded(self, path: str) -> None:
-        """An editor closed without saving: check the file on disk instead."""
+        """An editor closed without saving: check the file on disk instead
+        (or, when it is gone, forget its problems)."""
         self.worker.cancel(file_key(path))
         self.relint_from_disk(path)
+        self.forget_missing()
+
+    def forget_missing(self) -> None:
+        """Drop the problems of files deleted from disk (no editor holds them):
+        a procedure's own, and those Build All reported in them."""
+        changed = False
+        for src in self.store.sources():
+            if src.startswith("proc:"):
+                key = src[5:]
+                if not Path(key).exists() and self.editors.editor_for(key) is None:
+                    self.store.remove(src)
+                    self.results.pop(key, None)
+                    self.sizes.pop(key, None)
+                    changed = True
+        kept = [d for d in self.store.for_source("project")
+                if d.span is None or not d.span.file or Path(d.span.file).exists()
+                or self.editors.editor_for(d.span.file) is not None]
+        if len(kept) != len(self.store.for_source("project")):
+            self.store.set("project", kept)
+            changed = True
+        if changed:
+            self.refresh_problems()
 
     def on_file_saved(self, path: str) -> None:
         if path.endswith(".h"):
@@ -178,7 +213,7 @@ class Lint(QObject):
         names = set(self.header_defines)
         if result is not None and getattr(result, "symbols", None) is not None:
             names |= set(result.symbols.defines or {})
-        names |= set(completion.scan_defines(ed.text()) if ed.length() < 200_000 else ())
+        names |= set(completion.scan_defines(ed.text()) if ed.length() < LARGE_TEXT else ())
         ed.highlighter.set_defines(names)
 
     def refresh_problems(self) -> None:
@@ -203,7 +238,7 @@ class Lint(QObject):
     # ------------------------------------------------ completion, hover, goto
     def complete(self, ed: CodeEditor, prefix: str) -> list:
         result = self.results.get(file_key(ed.path))
-        return completion.completions(prefix, kind=ed.kind or Kind.HARDWARE, text=ed.text(),
+        return completion.completions(prefix, kind=ed.kind or Kind.HARDWARE, text=_near_caret(ed),
                                       symbols=getattr(result, "symbols", None),
                                       defines=self.header_defines)
 
@@ -214,7 +249,7 @@ class Lint(QObject):
         line0 = ed.lineFromPosition(start)
         before = ed.byte_range_text(ed.positionFromLine(line0), start)
         result = self.results.get(file_key(ed.path))
-        text = ed.text()
+        text = _near_caret(ed, pos)
         return hover.hover_text(word, before, kind=ed.kind or Kind.HARDWARE,
                                 symbols=getattr(result, "symbols", None),
                                 header_defines=self.header_defines,
@@ -252,3 +287,28 @@ class Lint(QObject):
             if ed is not None and ed is self.editors.current_editor():
                 self.sig_current_size.emit()
             self.sig_diagnostics_updated.emit(key)
+
+
+#: characters from which a file is large: what completion and hover read of it
+#: is the lines around the caret (the last compile gives the rest), and its
+#: compile waits until typing pauses
+LARGE_TEXT = 200_000
+#: lines either side of the caret that completion and hover read in a large file
+NEAR_LINES = 400
+
+
+def _near_caret(ed: CodeEditor, pos: Optional[int] = None) -> str:
+    """The editor's text, or for a large file the lines around ``pos`` (the
+    caret), its own line left out when ``pos`` is None (completion: what is
+    typed there changes at every key, the rest does not, so the index of the
+    rest is reused): indexing 3 MB at every keystroke would freeze typing."""
+    if ed.length() < LARGE_TEXT:
+        return ed.text()
+    line = ed.lineFromPosition(ed.currentPos() if pos is None else pos)
+    first = max(0, line - NEAR_LINES)
+    last = min(ed.lineCount() - 1, line + NEAR_LINES)
+    if pos is not None:
+        return ed.byte_range_text(ed.positionFromLine(first), ed.lineEndPosition(last))
+    before = ed.byte_range_text(ed.positionFromLine(first), ed.positionFromLine(line))
+    after = ed.byte_range_text(ed.lineEndPosition(line), ed.lineEndPosition(last))
+    return before + after

@@ -36,6 +36,8 @@ from plcbuilder.ide import actions, debug, dialogs, docks, workbench
 from plcbuilder.ide.actions import Act
 from plcbuilder.ide.debug import actions as debug_actions
 from plcbuilder.ide.build_panel import BuildPanel
+from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
+from plcbuilder.ide.dialogs.not_a_project import project_or_offer
 from plcbuilder.ide.editor import CodeEditor, file_key
 from plcbuilder.ide.editor_stack import EditorStack
 from plcbuilder.ide.icons import icon
@@ -269,8 +271,11 @@ class MainWindow(QMainWindow):
         """Open a project folder (asking about unsaved changes first)."""
         if not self.editor_stack.confirm_discard_all("Open Project"):
             return False
+        folder = project_or_offer(self, Path(path).expanduser().resolve())
+        if folder is None:                       # not a project, and not made one
+            return False
         try:
-            project = Project.open(Path(path).expanduser().resolve())
+            project = Project.open(folder)
         except ProjectError as exc:
             QMessageBox.critical(self, "Open Project", f"Cannot open the project:\n\n{exc}")
             self.settings.remove_recent_project(str(Path(path).expanduser().resolve()))
@@ -278,6 +283,7 @@ class MainWindow(QMainWindow):
             return False
         self.editor_stack.close_all(force=True)
         self.project = project
+        self.build_panel.forget()                # not the previous project's build
         self.lint.clear()
         self.problems.set_root(project.root)
         self.tree.set_project(project)
@@ -309,6 +315,7 @@ class MainWindow(QMainWindow):
         self.debug.project_closed()
         self.editor_stack.close_all(force=True)
         self.project = None
+        self.build_panel.forget()
         self.lint.clear(sizes=False)
         self.tree.set_project(None)
         self.problems.set_root(None)
@@ -469,6 +476,8 @@ class MainWindow(QMainWindow):
             c.sig_disconnected.connect(self._on_disconnected)
             c.sig_state.connect(self._on_state)
             c.sig_error.connect(lambda t: self.statusBar().showMessage(t, 6000))
+            if hasattr(c, "sig_result"):
+                c.sig_result.connect(self._on_request_done)
             self.run_docks = docks.empty_run_docks(self)
             docks.place_run_docks(self, list(self.run_docks.values()))
             lower = self.run_docks.get("watch")
@@ -575,6 +584,8 @@ class MainWindow(QMainWindow):
         self.tree.select_path(path)
 
     def _on_current_changed(self, ed: Optional[CodeEditor]) -> None:
+        if ed is not None:
+            self.tree.select_path(ed.path)       # the tree follows the active tab
         self.status.show_editor(ed)
         self._update_size_label()
         self._update_title()
@@ -610,11 +621,20 @@ class MainWindow(QMainWindow):
 
     def _on_connected(self, address: str) -> None:
         self.status.show_connected(address, getattr(self.connection, "embedded", False))
+        if self.statusBar().currentMessage().startswith("Controller: "):
+            self.statusBar().clearMessage()        # the disconnect it told of is over
         self._update_actions()
+
+    def _on_request_done(self, verb: str, result: dict) -> None:
+        """The controller did a request: "Uploading …" becomes what it did."""
+        if verb == "upload" and self.statusBar().currentMessage().startswith("Uploading"):
+            n = result.get("procedures")
+            what = f": {len(n)} procedures" if isinstance(n, (list, tuple)) else ""
+            self.statusBar().showMessage(f"Uploaded the image to the controller{what}", 4000)
 
     def _on_disconnected(self, reason: str) -> None:
         self.status.show_disconnected(reason)
-        if reason and not self._closing:
+        if reason and reason != CLOSED_BY_IDE and not self._closing:
             self.statusBar().showMessage(f"Controller: {reason}", 6000)
         self._update_actions()
 

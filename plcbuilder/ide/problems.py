@@ -44,6 +44,10 @@ class ProblemStore:
     def sources(self) -> list[str]:
         return list(self._sources)
 
+    def for_source(self, source: str) -> list[Diagnostic]:
+        """The diagnostics one source set (none: an empty list)."""
+        return list(self._sources.get(source, ()))
+
     def all(self) -> list[Diagnostic]:
         """Every diagnostic once, sorted by file, line, column, severity."""
         seen = set()
@@ -221,7 +225,9 @@ class ProblemsPanel(QWidget):
                 groups[file] = group
             item = QTreeWidgetItem(group)
             item.setIcon(0, icon("error" if d.severity == Severity.ERROR else "warning"))
-            item.setText(0, d.message)
+            # a related note (a macro's define, a previous definition) is part of the row
+            item.setText(0, d.message + "".join(
+                f" — {r.message} ({Path(r.span.file).name}:{r.span.line})" for r in d.related))
             item.setText(1, d.code)
             if d.span is not None:
                 item.setText(2, f"Ln {d.span.line}, Col {d.span.col}")

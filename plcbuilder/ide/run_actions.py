@@ -94,6 +94,10 @@ class RunActions(QObject):
                                     "possible, or paused")
         for label, mode in SPEEDS:
             self.speed_combo.addItem(label, mode)
+        # a list that drops down below the box: the style's own popup is laid
+        # over the box around the current item, and in a toolbar at the top of
+        # the screen its first items were above the screen's edge
+        self.speed_combo.setStyleSheet("QComboBox { combobox-popup: 0; }")
         self.speed_combo.currentIndexChanged.connect(
             lambda i: self.set_speed(self.speed_combo.itemData(i)))
         return self.speed_combo

@@ -67,10 +67,14 @@ class StatusBar(QStatusBar):
 
     def show_connected(self, address: str, embedded: bool) -> None:
         self.set_connection_text(f"{'embedded ' if embedded else ''}controller {address}", True)
+        self.connection_label.setToolTip("The controller the IDE talks to")   # not the old reason
 
     def show_disconnected(self, reason: str) -> None:
         self.set_connection_text("disconnected", False)
-        self.connection_label.setToolTip(reason)
+        self.connection_label.setToolTip(f"Disconnected: {reason}")
+        self.running_label.setText("–")         # nothing is known to run any more
+        self.running_label.setStyleSheet("")
+        self.proc_label.setText("")
 
     def show_state(self, st: ControllerStatus) -> None:
         # while nothing runs, whole seconds: the label repaints once a second, not five times

@@ -361,7 +361,7 @@ class _Run:
         toks, builder = self.toks, self.builder
         builder.toks, builder.depth, builder.items = toks, {}, []
         builder.diags, builder.too_deep = [], False
-        rec = self.rec = _Recovery(toks)
+        rec = self.rec = _Recovery(toks, self.list_state)
         state_stack = [self.conf.start_state]
         value_stack: list = []
         pos = 0
@@ -565,8 +565,16 @@ class _Reads:
         return self.toks[i]
 
 
+#: what the parser accepts between procedures and in a procedure's header
+TOP_LEVEL = frozenset(("NAME", "SEMI", "$END", "LPAR", "RPAR", "LBRACE"))
+#: the deepest parser stack there is outside every procedure's body (start, the
+#: item list, NAME LPAR RPAR)
+TOP_LEVEL_DEPTH = 5
+
+
 class _Recovery:
-    def __init__(self, toks: list[Tok]):
+    def __init__(self, toks: list[Tok], list_state: Optional[int] = None):
+        self.list_state = list_state
         self.toks = _Reads(toks)
         self.diags: list[Diagnostic] = []
         self.stream: Optional[_Stream] = None
@@ -612,6 +620,8 @@ class _Recovery:
                 return False
             self.diags.append(syntax_error(self.toks, idx, set(ip.accepts())))
         self.last_error_idx = idx
+        if tok.type not in ("LBRACE", "$END") and self._between_procedures(ip):
+            return self._skip_to_procedure(ip, idx)
         header_end = c_statement_header(self.toks, idx)
         # find a synchronising token at or after the error
         j = idx
@@ -628,6 +638,38 @@ class _Recovery:
                 return False
             j += 1
         return False
+
+    def _between_procedures(self, ip) -> bool:
+        """The error is outside every procedure's body (a stray token before a
+        procedure, a statement outside one, a bad header)."""
+        return (len(ip.parser_state.state_stack) <= TOP_LEVEL_DEPTH
+                and set(ip.accepts()) <= TOP_LEVEL)
+
+    def _skip_to_procedure(self, ip, idx: int) -> bool:
+        """Recover outside procedures: drop the partial item and go on at the
+        next ``NAME (`` outside braces (a procedure's start), or at the end;
+        what lies between is not checked (one error, not one per line)."""
+        state = ip.parser_state
+        while len(state.state_stack) > 1 and state.state_stack[-1] != self.list_state:
+            state.state_stack.pop()
+            state.value_stack.pop()
+        self.min_stack = min(self.min_stack, len(state.state_stack))
+        toks = self.toks
+        n = len(toks)
+        depth = 0
+        k = idx
+        while k < n:
+            kind = toks[k].kind
+            if kind == "LBRACE":
+                depth += 1
+            elif kind == "RBRACE":
+                depth = max(0, depth - 1)
+            elif depth == 0 and kind == "NAME" and k + 1 < n and toks[k + 1].kind == "LPAR":
+                break
+            k += 1
+        self.stream.pos = k
+        self.quiet_until = max(self.quiet_until, k - 1)
+        return True
 
     def _fixup(self, ip, target: str, at: int) -> bool:
         """Bring the parser to a state that accepts ``target``: feed made-up tokens

@@ -23,6 +23,7 @@ from plcbuilder.lang import ast as A
 from plcbuilder.lang.checker import Checker, Symbols
 from plcbuilder.lang.codegen import ADDRESS_LIMIT, JUMP_LIMIT, generate
 from plcbuilder.lang.incremental import Incremental
+from plcbuilder.lang.macro_notes import add_macro_notes
 from plcbuilder.lang.parser import parse_tokens
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocessor
 from plcbuilder.lang.source import SourceSet, decode_source, read_source
@@ -224,6 +225,7 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
                    "offset reaches")
             diags.append(error("size-limit", f"procedure {name} is {size} bytes of code; {why}", at,
                                "split it into procedures started one after another"))
+    diags = add_macro_notes(diags, pre)
     diags.sort(key=lambda d: (d.sort_key(), d.severity))
     return CompileResult(name, path, options.kind, program, diags, pre.sources, size, options.limit,
                          symbols, module, list(pre.includes))

@@ -81,6 +81,12 @@ def syntax_error(toks: list[Tok], i: int, expected: set[str]) -> Diagnostic:
         return error("syntax", f"unexpected '{tok.value}' after '{prev.value}'", prev.span,
                      "variables need no declaration: write the name and assign it "
                      f"(e.g. {tok.value}=0;)", "procedures are written name() { ... }")
+    if prev is not None and prev.kind == "NAME" and tok is not None and tok.kind == "NAME" \
+            and expected == {"LPAR"} and i + 1 < len(toks) and toks[i + 1].kind == "LPAR":
+        # a stray word before a procedure: `Z` above `main()`
+        return error("syntax", f"unexpected '{prev.value}' before the procedure {tok.value}()",
+                     prev.span, "delete it: outside procedures there are only "
+                     "procedures, name() { ... }")
     start = statement_start(toks, i)
     first = toks[start] if start < len(toks) else None
     if first is not None and first.kind == "NAME" and first.value in ("for", "switch") \

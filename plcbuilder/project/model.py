@@ -74,6 +74,14 @@ SOURCE_SUFFIX = ".plc"
 MAX_SETTINGS_BYTES = 1 << 20
 
 
+def looks_like_project(path: Union[str, Path]) -> bool:
+    """True for a folder with a settings file or a hardware/ or software/ folder:
+    what a project has. (Project.open accepts any folder, with the defaults.)"""
+    p = Path(path)
+    return p.is_dir() and ((p / SETTINGS_FILE).is_file() or (p / HARDWARE_DIR).is_dir()
+                           or (p / SOFTWARE_DIR).is_dir())
+
+
 class ProjectError(ValueError):
     """A project that cannot be opened or used; ``str()`` reads ``FILE:LINE: what``."""
 

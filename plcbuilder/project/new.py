@@ -21,8 +21,9 @@ from importlib.resources.abc import Traversable
 from pathlib import Path
 from typing import Optional, Union
 
-from plcbuilder.project.model import (DEFAULT_MACHINE, INCLUDE_DIR, SETTINGS_FILE, Project,
-                                      ProjectError, Settings)
+from plcbuilder._support.files import atomic_write
+from plcbuilder.project.model import (DEFAULT_MACHINE, HARDWARE_DIR, INCLUDE_DIR, SETTINGS_FILE,
+                                      SOFTWARE_DIR, Project, ProjectError, Settings)
 
 EXAMPLE = ("resources", "example_project")
 #: the example project of each target (docs/targets.md)
@@ -93,4 +94,26 @@ def create_project(dest: Union[str, Path], name: Optional[str] = None,
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    return Project.open(dest)
+
+
+def init_project(dest: Union[str, Path], name: Optional[str] = None) -> Project:
+    """Make the folder dest (which holds other files) a project: add what is
+    missing of hardware/, software/, include/pins.h, machine.toml and
+    plcbuilder.toml, and change nothing that is there. Raises ProjectError."""
+    dest = Path(dest)
+    if not dest.is_dir():
+        raise ProjectError("no such folder", dest)
+    pins, machine = _resource(PINS), _resource(MACHINE)
+    try:
+        for sub in (HARDWARE_DIR, SOFTWARE_DIR, INCLUDE_DIR):
+            (dest / sub).mkdir(exist_ok=True)
+        for target, ref in ((dest / INCLUDE_DIR / "pins.h", pins), (dest / DEFAULT_MACHINE, machine)):
+            if not target.exists():
+                atomic_write(target, ref.read_bytes())
+        settings = dest / SETTINGS_FILE
+        if not settings.exists():
+            atomic_write(settings, Settings(name=name or dest.resolve().name).to_toml())
+    except OSError as exc:
+        raise ProjectError(f"cannot make it a project: {exc.strerror or exc}", dest) from None
     return Project.open(dest)

@@ -273,7 +273,8 @@ def test_log_rows_and_fault_click(qtbot, panels, fake):
     fake.sig_error.emit("start: no procedure named 'X'")
     panels.tick()
     texts = [r[TEXT] for r in panels.log.rows.rows()]
-    assert "42" in texts and "-1  [register 20007]" in texts
+    # the register is in every print row (issue 13, defect 9), the first one's too
+    assert "register 20000 = 42" in texts and "register 20007 = -1" in texts
     assert "PLC_MESSAGE_ERR_PROBING (-15)  command=0 parameter=0" in texts
     assert any(t.startswith("M88 ended: exit plc_exit_probe_error (7)") and "probe" in t
                for t in texts)
@@ -324,7 +325,7 @@ def test_log_is_bounded(qtbot, panels, fake):
     panels.tick()
     n = panels.log.rows.rowCount()
     assert 0 < n <= 1000
-    assert panels.log.rows.row(n - 1)[TEXT] == "2499"
+    assert panels.log.rows.row(n - 1)[TEXT] == "register 20000 = 2499"
 
 
 def test_inputs_panel_sends_and_shows(qtbot, panels, fake):
@@ -341,6 +342,11 @@ def test_inputs_panel_sends_and_shows(qtbot, panels, fake):
     fake.sig_samples.emit([sample(1, inputs=1 << 3, adc=(0, 0, 512))])
     panels.tick()
     assert inputs.button(3).isChecked() and inputs.readings[2].text() == "512"
+    # the slider and the box show what the channel reads, not 0 (issue 13, defect 9)
+    assert inputs.sliders[2].value() == 512 and inputs.spins[2].value() == 512
+    fake.sig_samples.emit([sample(2, inputs=1 << 3, adc=(0, 0, 1200))])
+    panels.tick()
+    assert inputs.sliders[2].value() == 1200 and inputs.spins[2].value() == 1200
     inputs.show_all.setChecked(True)
     assert len(inputs.shown_pins()) == 64
     inputs.filter.setText("probe")

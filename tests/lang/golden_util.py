@@ -3,8 +3,9 @@ scripts/regen_goldens.py.
 
 In a golden program:
 - ``// options: --strict --software --code-limit=N`` (first lines) sets compile options;
-- ``// error: TEXT`` / ``// warning: TEXT`` on a line expects exactly one such
-  diagnostic on that line whose message (or hint) contains TEXT; every other
+- ``// error: TEXT`` / ``// warning: TEXT`` / ``// note: TEXT`` on a line expects
+  exactly one such diagnostic on that line whose message (or a hint, or a
+  related note such as "expanded from NAME: #define ...") contains TEXT; every other
   diagnostic in the file is a failure (so cascades fail the test);
 - ``// expect: ...`` states what a run of the compiled procedure does:
   ``exit N``, ``ends_at MS``, ``VAR == N``, ``vexit N``, ``message M CMD PARAM``,
@@ -23,7 +24,7 @@ from pathlib import Path
 from plcbuilder.api import CompileOptions, Kind, compile_file, disassemble
 
 GOLDEN = Path(__file__).parent / "golden"
-_DIAG = re.compile(r"//\s*(error|warning):\s*(.+?)\s*$")
+_DIAG = re.compile(r"//\s*(error|warning|note):\s*(.+?)\s*$")
 _EXPECT = re.compile(r"//\s*expect:\s*(.+?)\s*$")
 _OPTIONS = re.compile(r"//\s*options:\s*(.+?)\s*$")
 _CODE_LIMIT = re.compile(r"--code-limit=(\d+)")
@@ -91,7 +92,8 @@ def check_diagnostics(g: Golden, r) -> None:
     unmatched = list(actual)
     for line, sev, text in g.diags:
         hits = [d for d in unmatched if d.span and d.span.line == line and d.severity.label == sev
-                and (text in d.message or any(text in h for h in d.hints))]
+                and (text in d.message or any(text in h for h in d.hints)
+                     or any(text in rel.message for rel in d.related))]
         assert hits, f"{g.id}:{line}: expected {sev} containing {text!r}; got " + \
             "; ".join(f"{d.span.line if d.span else '-'}: {d.severity.label}: {d.message}" for d in actual)
         assert len(hits) == 1, f"{g.id}:{line}: {sev} {text!r} reported {len(hits)} times"

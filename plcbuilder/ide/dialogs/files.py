@@ -5,12 +5,14 @@ from __future__ import annotations
 import re
 from typing import Iterable, Optional
 
+from PySide6.QtCore import Qt
+from PySide6.QtGui import QPalette
 from PySide6.QtWidgets import (QComboBox, QDialog, QDialogButtonBox, QFormLayout, QLabel,
                                QLineEdit, QVBoxLayout)
 
 from plcbuilder.api import Kind
 from plcbuilder.ide.icons import icon
-from plcbuilder.ide.dialogs.common import error_label, ok_cancel
+from plcbuilder.ide.dialogs.common import error_label, fit_height, ok_cancel
 
 NAME_RE = re.compile(r"[A-Za-z0-9_\-]{1,64}")
 HEADER_RE = re.compile(r"[A-Za-z0-9_\-.]{1,64}\.h")
@@ -49,7 +51,8 @@ class ProcedureNameDialog(QDialog):
         lay.addLayout(form)
         self.hint = QLabel(self)
         self.hint.setWordWrap(True)
-        self.hint.setStyleSheet("color: palette(mid);")
+        self.hint.setTextFormat(Qt.TextFormat.PlainText)
+        self.hint.setForegroundRole(QPalette.ColorRole.PlaceholderText)   # dim in both themes
         lay.addWidget(self.hint)
         self.error = error_label(self)
         lay.addWidget(self.error)
@@ -83,6 +86,8 @@ class ProcedureNameDialog(QDialog):
             else:
                 self.hint.setText("Software procedures start with the controller and run "
                                   "side by side in 100 ms ticks.")
+        fit_height(self)
+
 
     def accept(self) -> None:
         if check_procedure_name(self.name(), self.existing) is None:

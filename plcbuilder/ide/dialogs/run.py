@@ -84,6 +84,13 @@ class StartDialog(QDialog):
                 self.mcode_spin.blockSignals(False)
         self.by_name.setChecked(True)
         self._validate()
+        # typing goes to the list at once (M8 jumps to M80), not to a radio button
+        self.list.setFocus(Qt.FocusReason.OtherFocusReason)
+
+    def showEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().showEvent(event)
+        self.activateWindow()
+        self.list.setFocus(Qt.FocusReason.ActiveWindowFocusReason)
 
     def _pick_name(self) -> None:
         self.by_name.setChecked(True)

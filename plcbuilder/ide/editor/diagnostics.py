@@ -65,8 +65,17 @@ class DiagnosticsMixin:
         end = self.position_of(s.end_line, s.end_col) if (s.end_line, s.end_col) > (s.line, s.col) \
             else start
         if end <= start:
+            # a point: the whole word there, or the one it follows ("expected ';'
+            # after '1'"), not one character (nor an invisible space)
             line_end = self.lineEndPosition(self.lineFromPosition(start))
-            if start < line_end:
+            word_start = self.wordStartPosition(start, True)
+            word_end = self.wordEndPosition(start, True)
+            if word_end > start:
+                start, end = word_start, word_end
+            elif word_start < start:
+                end = start
+                start = word_start
+            elif start < line_end:
                 end = self.positionAfter(start)
             elif start > self.positionFromLine(self.lineFromPosition(start)):
                 start = self.positionBefore(start)      # at a line end: the char before
@@ -122,6 +131,8 @@ class DiagnosticsMixin:
             label = "error" if d.severity == Severity.ERROR else d.severity.label
             parts.append(f"{label}: {d.message}")
             parts.extend(f"  hint: {h}" for h in d.hints)
+            parts.extend(f"  note: {r.span.file.rsplit('/', 1)[-1]}:{r.span.line}: {r.message}"
+                         for r in d.related)
         if self.hover_provider is not None and self.prefs.hover:
             try:
                 extra = self.hover_provider(self, pos)

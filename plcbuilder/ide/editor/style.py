@@ -37,6 +37,18 @@ MK_EXEC = 13            # the arrow of the line a halted procedure is at
 MK_WAIT = 14            # the arrow of a loop's end it waits at
 MK_DEBUG_MASK = sum(1 << m for m in range(MK_BREAKPOINT, MK_WAIT + 1))
 MK_BACKGROUNDS = (1 << MK_EXEC_LINE) | (1 << MK_WAIT_LINE) | (1 << MK_FRAME_LINE)
+# elements (SCI_SETELEMENTCOLOUR): the selection's text colours are left unset, so
+# selected text keeps its syntax colours over the selection background
+EL_SELECTION_TEXT = 10
+EL_SELECTION_BACK = 11
+EL_SELECTION_ADDITIONAL_TEXT = 12
+EL_SELECTION_ADDITIONAL_BACK = 13
+EL_SELECTION_SECONDARY_TEXT = 14
+EL_SELECTION_SECONDARY_BACK = 15
+EL_SELECTION_INACTIVE_TEXT = 16
+EL_SELECTION_INACTIVE_BACK = 17
+SELECTION_TEXT_ELEMENTS = (EL_SELECTION_TEXT, EL_SELECTION_ADDITIONAL_TEXT,
+                           EL_SELECTION_SECONDARY_TEXT, EL_SELECTION_INACTIVE_TEXT)
 # margins
 MARGIN_NUMBERS = 0
 MARGIN_SYMBOLS = 1

@@ -27,7 +27,9 @@ from plcbuilder.ide.offsets import byte_to_char, char_to_byte, utf8_len
 from plcbuilder.ide.editor.diagnostics import DiagnosticsMixin
 from plcbuilder.ide.editor.keys import KeysMixin
 from plcbuilder.ide.editor.search import SearchMixin
-from plcbuilder.ide.editor.style import (BRACE_BYTES, IND_ERROR, IND_FIND, IND_OCCURRENCE,
+from plcbuilder.ide.editor.style import (BRACE_BYTES, EL_SELECTION_ADDITIONAL_BACK, EL_SELECTION_BACK,
+                                         EL_SELECTION_INACTIVE_BACK, EL_SELECTION_SECONDARY_BACK,
+                                         SELECTION_TEXT_ELEMENTS, IND_ERROR, IND_FIND, IND_OCCURRENCE,
                                          IND_WARNING, KIND_LOOK, MARGIN_FOLD, MARGIN_NUMBERS,
                                          MARGIN_SYMBOLS, MK_BACKGROUNDS, MK_CURRENT,
                                          MK_DEBUG_MASK, MK_ERROR, MK_WARNING,
@@ -299,10 +301,13 @@ class CodeEditor(SearchMixin, DiagnosticsMixin, KeysMixin, ScintillaEdit):
         self.setCaretLineVisible(True)
         self.setCaretLineVisibleAlways(True)
         self.setCaretLineBack(c(theme.caret_line))
-        self.setSelBack(True, c(theme.selection))
         self.setSelectionLayer(1)                          # under the text
-        self.setElementColour(10, c(theme.selection) | 0xFF000000)    # SC_ELEMENT_SELECTION_BACK
-        self.setElementColour(17, c(theme.selection) | 0x80000000)    # inactive selection
+        for element in SELECTION_TEXT_ELEMENTS:            # text keeps its own colours
+            self.resetElementColour(element)
+        opaque = c(theme.selection) | 0xFF000000
+        for element in (EL_SELECTION_BACK, EL_SELECTION_ADDITIONAL_BACK, EL_SELECTION_SECONDARY_BACK):
+            self.setElementColour(element, opaque)
+        self.setElementColour(EL_SELECTION_INACTIVE_BACK, c(theme.selection) | 0x80000000)
         self.indicSetFore(IND_ERROR, c(theme.error))
         self.indicSetFore(IND_WARNING, c(theme.warning))
         self.indicSetFore(IND_FIND, c(theme.find))

@@ -25,11 +25,11 @@ ADC_MAX = 4095
 PENDING_S = 0.6        # a clicked pin shows the asked state this long before a sample wins
 
 _TOGGLE_STYLE = """
-QToolButton { border: 1px solid #b8b8b8; border-radius: 3px; padding: 3px 6px;
-              background: #f4f4f4; color: #202020; text-align: left; }
+QToolButton { border: 1px solid palette(mid); border-radius: 3px; padding: 3px 6px;
+              background: palette(button); color: palette(button-text); text-align: left; }
 QToolButton:hover { border-color: #6a9bd1; }
 QToolButton:checked { background: #3c9d4b; border-color: #2f7d3b; color: #ffffff; }
-QToolButton:disabled { color: #9a9a9a; background: #efefef; }
+QToolButton:disabled { color: palette(mid); background: palette(window); }
 QToolButton[forced="true"] { border: 2px solid #c75a00; }
 """
 FORCED_STYLE = "color: #c75a00; font-weight: bold;"
@@ -59,6 +59,7 @@ class InputsPanel(QtWidgets.QWidget):
         self.names: dict[int, str] = {}
         self.buttons: dict[int, QtWidgets.QToolButton] = {}
         self._pending: dict[int, tuple[int, float]] = {}
+        self._adc_pending: dict[int, tuple[int, float]] = {}   # ADC values asked, not yet read
         self._drawn = -1
         self.force_by_hand = False          # clicks and sliders force (the controller can)
         self.forced_pins: dict[int, int] = {}
@@ -137,6 +138,8 @@ class InputsPanel(QtWidgets.QWidget):
             self.spins.append(spin)
             self.readings.append(reading)
         ag.setColumnStretch(1, 1)
+        self.sig_set_adc.connect(
+            lambda ch, v: self._adc_pending.__setitem__(ch, (v, time.monotonic() + PENDING_S)))
 
         body = QtWidgets.QWidget()
         bl = QtWidgets.QVBoxLayout(body)
@@ -233,7 +236,7 @@ class InputsPanel(QtWidgets.QWidget):
 
     def refresh(self) -> None:
         """Show the newest sample's input and ADC values."""
-        if self.model.version == self._drawn and not self._pending:
+        if self.model.version == self._drawn and not self._pending and not self._adc_pending:
             return
         self._drawn = self.model.version
         s = self.model.last_sample
@@ -255,11 +258,36 @@ class InputsPanel(QtWidgets.QWidget):
                 b.setChecked(bool(v))
         for ch, lab in enumerate(self.readings):
             if ch < len(s.adc):
-                text = (f"{self.forced_adc[ch]} F" if ch in self.forced_adc else str(s.adc[ch]))
+                forced = ch in self.forced_adc
+                value = int(self.forced_adc[ch]) if forced else int(s.adc[ch])
+                text = f"{value} F" if forced else str(value)
                 if lab.text() != text:
                     lab.setText(text)
+                self._show_adc(ch, value, now)
 
     # -------------------------------------------------------------- private
+    def _show_adc(self, ch: int, value: int, now: float) -> None:
+        """The slider and the box follow what the channel reads (the machine
+        may drive it), except while the user is at them or a value they set is
+        on its way."""
+        pend = self._adc_pending.get(ch)
+        if pend is not None:
+            if pend[0] != value and now <= pend[1]:
+                return
+            del self._adc_pending[ch]
+        slider, spin = self.sliders[ch], self.spins[ch]
+        if slider.isSliderDown() or spin.hasFocus():
+            return
+        if spin.value() != value:
+            spin.blockSignals(True)
+            spin.setValue(value)
+            spin.blockSignals(False)
+        clamped = max(0, min(ADC_MAX, value))
+        if slider.value() != clamped:
+            slider.blockSignals(True)
+            slider.setValue(clamped)
+            slider.blockSignals(False)
+
     def _label(self, pin: int) -> str:
         name = self.names.get(pin)
         return f"{pin:>2}  {name}" if name else f"{pin:>2}  input {pin}"

@@ -23,7 +23,8 @@ T, SRC, KIND_LABEL, TEXT, CATEGORY, COLOUR, FILE, LINE = range(8)
 KINDS = (("print", "Prints"), ("message", "Messages"), ("procedure", "Procedures"),
          ("fault", "Faults"), ("log", "Logpoints"), ("note", "Notes"))
 _COLOURS = {"fault": style.FAULT_COLOUR, "error": style.FAULT_COLOUR, "warning": "#b35c00",
-            "print": "#1a4f8b", "link": "#6a6a6a", "message": "#5b2c83", "log": "#00695c"}
+            "print": "#2f6db5", "link": "#808080", "message": "#8a52b8",
+            "log": "#2e8b7a"}
 
 
 def _fmt_t(t_ms: Optional[int]) -> str:
@@ -33,9 +34,8 @@ def _fmt_t(t_ms: Optional[int]) -> str:
 def event_row(e) -> Optional[tuple]:
     """The log row of an event, or None for events the log does not show."""
     if isinstance(e, ev.Print):
-        reg = "" if e.register == abi.PRINT_FIRST else f"  [register {e.register}]"
-        return (_fmt_t(e.t_ms), e.source, "print", f"{e.value}{reg}", "print", "print",
-                None, None)
+        return (_fmt_t(e.t_ms), e.source, "print", f"register {e.register} = {e.value}",
+                "print", "print", None, None)
     if isinstance(e, ev.Message):
         name = e.name or abi.message_name(e.message)
         label = f"{name} ({e.message})" if name else f"message {e.message}"

@@ -25,8 +25,10 @@ import pyqtgraph as pg  # noqa: I001 - after PySide6 (it takes the loaded bindin
 from plcbuilder.api import abi
 from plcbuilder.link.client import ControllerStatus
 from plcbuilder.api import events as ev
+from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
 from plcbuilder.ide.docks import RUN_DOCKS
 from plcbuilder.ide.panels.cursors import CursorTable, Cursors
+from plcbuilder.ide.elided_label import ElidedLabel
 from plcbuilder.ide.panels.inputs import InputsPanel
 from plcbuilder.ide.panels.log import LogPanel
 from plcbuilder.ide.panels.model import RunModel
@@ -132,18 +134,19 @@ class RunPanels(QtCore.QObject):
         self.failing_ms: Optional[int] = None
         self.held = 0                 # live samples not shown while a recorded run is
         self._markers: list = []      # (panel, plot, InfiniteLine) at the failing tick
-        self.banners: list[QtWidgets.QLabel] = []   # "showing test run …  Back to Live"
+        self.banners: list[ElidedLabel] = []        # "showing test run …" beside
+        self.banner_links: list[QtWidgets.QLabel] = []   # "Back to Live"
         for panel in self.time_panels:
-            label = QtWidgets.QLabel()
-            label.setTextFormat(Qt.TextFormat.RichText)
-            # a long test name must never widen the dock (and the window): the
-            # label takes the room there is, the link first, the whole text in its tooltip
-            label.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,
-                                QtWidgets.QSizePolicy.Policy.Preferred)
-            label.setMinimumWidth(0)
-            label.linkActivated.connect(lambda _link: self.back_to_live())
+            # a long test name must never widen the dock (and the window), nor
+            # vanish in a narrow one: the link keeps its room, the text elides
+            back = QtWidgets.QLabel("<a href='live'>Back to Live</a>")
+            back.linkActivated.connect(lambda _link: self.back_to_live())
+            back.hide()
+            label = ElidedLabel(min_chars=8)
             label.hide()
-            panel.toolbar.extra.addWidget(label)
+            panel.toolbar.extra.addWidget(back)
+            panel.toolbar.extra.addWidget(label, 1)
+            self.banner_links.append(back)
             self.banners.append(label)
 
         self.log.sig_open_location.connect(self.sig_open_location)
@@ -260,11 +263,12 @@ class RunPanels(QtCore.QObject):
             text = f"showing test run '{name}' (recorded){at}"
         self.log.add_note(text, "link")
         self.log.add_events(events)
-        for label in self.banners:
-            label.setText(f"<a href='live'>Back to Live</a> &nbsp;"
-                          f"<span style='color:{MARKER_COLOUR}'>{html.escape(text, quote=False)}</span>")
+        for link, label in zip(self.banner_links, self.banners):
+            label.setText(f"<span style='color:{MARKER_COLOUR}'>"
+                          f"{html.escape(text, quote=False)}</span>")
             label.setToolTip(f"{text}; the live telemetry is not shown until Back to Live "
                              f"(or Clear)")
+            link.show()
             label.show()
         self._remove_markers()
         if failing_ms is not None:
@@ -296,7 +300,7 @@ class RunPanels(QtCore.QObject):
         if self.recorded is None:
             return
         self.recorded, self.failing_ms = None, None
-        for label in self.banners:
+        for label in self.banners + self.banner_links:
             label.hide()
         self._remove_markers()
         self.model.resize(self.live_capacity)
@@ -443,10 +447,15 @@ class RunPanels(QtCore.QObject):
         debugger = bool(getattr(self.connection, "debugger", False))
         self.watch.editable = self.inputs.force_by_hand = debugger
         self.lanes.force_menu = self._lane_force_menu if debugger else None
+        self.proc.set_status(f"Connected to {address}")     # not "Disconnected" any more
         self.log.add_note(f"connected to the controller at {address}", "link")
 
     def _on_disconnected(self, reason: str) -> None:
         self.inputs.set_enabled(False)
+        if reason == CLOSED_BY_IDE:          # another project, quitting: not an error
+            self.proc.set_status("No controller")
+            self.log.add_note("disconnected from the controller (the IDE closed it)", "link")
+            return
         self.proc.set_status(f"<span style='color:#c62828'>Disconnected</span>: {reason}")
         self.log.add_note(f"controller disconnected: {reason}", "error")
 

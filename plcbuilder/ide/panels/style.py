@@ -6,9 +6,13 @@ nothing else in the IDE changes look because the panels were imported.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import PySide6  # noqa: F401  (pyqtgraph picks the binding imported first)
 import pyqtgraph as pg
 from PySide6 import QtCore, QtGui, QtWidgets
+
+Qt = QtCore.Qt
 
 BACKGROUND = "#ffffff"
 AXIS = "#5a5a5a"
@@ -20,7 +24,7 @@ PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf",
            "#8c6d31", "#843c39", "#7b4173", "#3182bd")
 OUTPUT_COLOUR = "#1f77b4"
 INPUT_COLOUR = "#2ca02c"
-PROC_COLOUR = "#393b79"
+PROC_COLOUR = "#5a5fc8"     # reads on the light and the dark plot background
 MESSAGE_COLOUR = "#d62728"
 FAULT_COLOUR = "#c62828"
 LANE_BANDS = ("#f3f6fa", "#fafbfc")   # alternating logic-analyser lane backgrounds
@@ -76,24 +80,25 @@ def style_plot(plot: pg.PlotItem, title: str | None = None, left: str | None = N
                bottom: str | None = "time", left_units: str | None = None,
                bottom_units: str | None = "s", grid: tuple[bool, bool] = (True, True)
                ) -> pg.PlotItem:
-    """Dark axes and labels, a light grid, a title."""
+    """Axes, labels and a grid in the theme's colours, a title."""
+    c = plot_colours()
     for name in ("left", "bottom", "right", "top"):
         ax = plot.getAxis(name)
-        ax.setPen(pg.mkPen(AXIS))
-        ax.setTextPen(pg.mkPen(TEXT))
+        ax.setPen(pg.mkPen(c.axis))
+        ax.setTextPen(pg.mkPen(c.text))
         ax.enableAutoSIPrefix(False)
         # an opaque, light grid on the major ticks only: lines with alpha
         # make every frame several times slower to paint
-        ax.setTickPen(pg.mkPen(GRID))
+        ax.setTickPen(pg.mkPen(c.grid))
         ax.setStyle(tickFont=_tick_font(), maxTickLevel=0, tickAlpha=255)
         ax.setTickDensity(1.6)
         ax.setZValue(-1000)     # grid lines under the curves (the ViewBox is at -100)
     if title:
-        plot.setTitle(title, color=TEXT, size="10pt", bold=True)
+        plot.setTitle(title, color=c.text, size="10pt", bold=True)
     if left:
-        plot.setLabel("left", left, units=left_units, color=TEXT)
+        plot.setLabel("left", left, units=left_units, color=c.text)
     if bottom:
-        plot.setLabel("bottom", bottom, units=bottom_units, color=TEXT)
+        plot.setLabel("bottom", bottom, units=bottom_units, color=c.text)
     plot.getAxis("bottom").setGrid(255 if grid[0] else False)
     plot.getAxis("left").setGrid(255 if grid[1] else False)
     return plot
@@ -106,8 +111,9 @@ def _tick_font() -> QtGui.QFont:
 
 
 def legend(plot: pg.PlotItem, columns: int = 1) -> pg.LegendItem:
-    lg = plot.addLegend(offset=(8, 8), labelTextColor=TEXT, labelTextSize="8pt",
-                        brush=pg.mkBrush(255, 255, 255, 215), pen=pg.mkPen("#c8c8c8"),
+    c = plot_colours()
+    lg = plot.addLegend(offset=(8, 8), labelTextColor=c.text, labelTextSize="8pt",
+                        brush=pg.mkBrush(*c.legend_back), pen=pg.mkPen(c.legend_border),
                         colCount=columns)
     return lg
 
@@ -129,16 +135,102 @@ def new_curve(plot: pg.PlotItem, c: str, name: str | None = None, width: float =
 
 
 def plot_widget(axisItems: dict | None = None) -> pg.PlotWidget:  # noqa: N803
-    w = pg.PlotWidget(background=BACKGROUND, axisItems=axisItems)
+    w = ThemedPlotWidget(background=plot_colours().background, axisItems=axisItems)
     w.setMinimumSize(160, 120)
     return w
 
 
 def layout_widget() -> pg.GraphicsLayoutWidget:
-    w = pg.GraphicsLayoutWidget()
-    w.setBackground(BACKGROUND)
+    w = ThemedLayoutWidget()
+    w.setBackground(plot_colours().background)
     w.setMinimumSize(160, 120)
     return w
+
+
+# ------------------------------------------------------------ the theme
+@dataclass(frozen=True)
+class PlotColours:
+    """The colours a plot takes from the window's theme."""
+    background: str
+    axis: str
+    text: str
+    grid: str
+    lane_bands: tuple[str, str]
+    legend_back: tuple[int, int, int, int]
+    legend_border: str
+    label_fill: tuple[int, int, int, int]
+
+
+LIGHT_PLOTS = PlotColours(BACKGROUND, AXIS, TEXT, GRID, LANE_BANDS, (255, 255, 255, 215),
+                          "#c8c8c8", (255, 255, 255, 200))
+DARK_PLOTS = PlotColours("#1e1f22", "#9da0a6", "#dfe1e5", "#34363a", ("#26292e", "#212327"),
+                         (43, 45, 48, 215), "#4a4d52", (30, 31, 34, 200))
+
+
+def is_dark() -> bool:
+    """True when the application's palette is a dark one (the dark theme)."""
+    app = QtWidgets.QApplication.instance()
+    if app is None:
+        return False
+    return QtWidgets.QApplication.palette().color(QtGui.QPalette.ColorRole.Base).lightness() < 128
+
+
+def plot_colours() -> PlotColours:
+    return DARK_PLOTS if is_dark() else LIGHT_PLOTS
+
+
+def restyle(widget) -> None:
+    """Give a plot widget and its plots the current theme's colours."""
+    c = plot_colours()
+    widget.setBackground(c.background)
+    scene = widget.scene() if hasattr(widget, "scene") else None
+    if scene is None:
+        return
+    for item in scene.items():
+        if isinstance(item, pg.PlotItem):
+            _restyle_plot(item, c)
+        elif isinstance(item, pg.LegendItem):
+            item.setBrush(pg.mkBrush(*c.legend_back))
+            item.setPen(pg.mkPen(c.legend_border))
+            item.setLabelTextColor(c.text)
+        elif isinstance(item, pg.TextItem) and item.fill.style() != Qt.BrushStyle.NoBrush:
+            item.fill = pg.mkBrush(*c.label_fill)
+            item.update()
+
+
+def _restyle_plot(plot: pg.PlotItem, c: PlotColours) -> None:
+    for name in ("left", "bottom", "right", "top"):
+        ax = plot.getAxis(name)
+        ax.setPen(pg.mkPen(c.axis))
+        ax.setTextPen(pg.mkPen(c.text))
+        ax.setTickPen(pg.mkPen(c.grid))
+        if ax.labelText or ax.labelUnits:
+            ax.setLabel(ax.labelText, ax.labelUnits, ax.labelUnitPrefix,
+                        **dict(ax.labelStyle, color=c.text))
+            if not ax.label.isVisible():
+                ax.showLabel(False)
+    title = plot.titleLabel
+    if title.text:
+        title.setText(title.text, **dict(title.opts, color=c.text))
+
+
+class _Themed:
+    """Follows the application's theme: on a palette change, restyle."""
+
+    def changeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().changeEvent(event)
+        if event.type() == QtCore.QEvent.Type.PaletteChange:
+            restyle(self)
+            for hook in getattr(self, "theme_hooks", ()):
+                hook()
+
+
+class ThemedPlotWidget(_Themed, pg.PlotWidget):
+    """A PlotWidget in the window's theme."""
+
+
+class ThemedLayoutWidget(_Themed, pg.GraphicsLayoutWidget):
+    """A GraphicsLayoutWidget in the window's theme."""
 
 
 def small_button(text: str, tip: str = "", checkable: bool = False) -> QtWidgets.QToolButton:

@@ -20,6 +20,7 @@ from typing import Optional
 
 from PySide6 import QtCore, QtWidgets
 
+from plcbuilder.ide.elided_label import ElidedLabel
 from plcbuilder.testing.runner import SuiteError, prepare, record_run, run_suite
 from plcbuilder.testing.spec import TESTS_DIR, load_dir
 
@@ -129,9 +130,7 @@ class TestsPanel(QtWidgets.QWidget):
         self.open_run_button = QtWidgets.QPushButton("Open Failing Run")
         self.open_run_button.setToolTip("Run the selected failing test again and show its "
                                         "run in the run panels, at the failing tick")
-        self.summary = QtWidgets.QLabel("")
-        self.summary.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,    # never widens the dock
-                                   QtWidgets.QSizePolicy.Policy.Preferred)
+        self.summary = ElidedLabel("")                  # never widens the dock: it elides
         bar = QtWidgets.QHBoxLayout()
         for w in (self.run_all_button, self.run_one_button, self.open_run_button,
                   self.coverage_box):
@@ -145,17 +144,21 @@ class TestsPanel(QtWidgets.QWidget):
         self.tree.setUniformRowHeights(True)
         self.tree.setAlternatingRowColors(True)
         self.tree.header().setStretchLastSection(True)
-        self.tree.setColumnWidth(NAME, 320)
-        self.tree.setColumnWidth(STATUS, 320)
+        self.tree.setColumnWidth(NAME, 360)
+        self.tree.setColumnWidth(STATUS, 160)
         self.detail = QtWidgets.QPlainTextEdit()
         self.detail.setReadOnly(True)
         self.detail.setPlaceholderText("Select a failing test to see its failing conditions")
         self.detail.setMaximumBlockCount(2000)
-        split = QtWidgets.QSplitter(Qt.Orientation.Vertical)
+        # the details beside the list, not under it: in a bottom dock a few rows
+        # high, the list keeps every row the dock has
+        split = QtWidgets.QSplitter(Qt.Orientation.Horizontal)
         split.addWidget(self.tree)
         split.addWidget(self.detail)
         split.setStretchFactor(0, 3)
-        split.setStretchFactor(1, 1)
+        split.setStretchFactor(1, 2)
+        split.setSizes([600, 400])
+        self.split = split
 
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(2, 2, 2, 2)

@@ -34,6 +34,7 @@ class AxesPanel(TimePanel):
         self._fit = (YFit(self.pos_plot, minimum=10.0), YFit(self.vel_plot, minimum=10.0))
         self.pos_legend = style.legend(self.pos_plot, columns=3)
         self.vel_legend = style.legend(self.vel_plot, columns=3)
+        self._fit[0].legend, self._fit[1].legend = self.pos_legend, self.vel_legend
 
         self.xy_widget = style.plot_widget()
         self.xy = self.xy_widget.getPlotItem()

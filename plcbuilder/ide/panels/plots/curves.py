@@ -33,6 +33,7 @@ class AnalogPanel(TimePanel):
         self.widget.ci.layout.setRowStretchFactor(1, 2)
         self.out_legend = style.legend(self.out_plot, columns=2)
         self.in_legend = style.legend(self.in_plot, columns=2)
+        self._fit[0].legend, self._fit[1].legend = self.out_legend, self.in_legend
         self._curves: dict[int, pg.PlotDataItem] = {}
         self._empty_out = empty_text(self.out_plot, "No PWM or DAC output yet")
         self._empty_in = empty_text(self.in_plot, "All ADC channels read 0")

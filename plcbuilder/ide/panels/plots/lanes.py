@@ -39,6 +39,7 @@ class LanesPanel(TimePanel):
         self.widget.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
         self.widget.customContextMenuRequested.connect(self._context_menu)
         self.widget.setToolTip("Right-click to add or remove lanes")
+        self.widget.theme_hooks = [lambda: self._relayout(self._lanes)]   # the lane bands
         self._empty = empty_text(self.plot, "No output has changed yet.\n"
                                   "Right-click to add a lane.")
         self.names = {"inputs": {}, "outputs": {}, "vouts": {}}
@@ -149,7 +150,7 @@ class LanesPanel(TimePanel):
         if n:
             self._bands = pg.BarGraphItem(
                 x0=-1e9, width=2e9, y0=ys - 0.2, height=1.4, pen=pg.mkPen(None),
-                brushes=[pg.mkBrush(style.LANE_BANDS[i % 2]) for i in range(n)])
+                brushes=[pg.mkBrush(style.plot_colours().lane_bands[i % 2]) for i in range(n)])
             self._bands.setZValue(-50)
             self.plot.addItem(self._bands, ignoreBounds=True)
         self._lane_y = {key: float(y) for key, y in zip(lanes, ys)}

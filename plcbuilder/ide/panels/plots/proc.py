@@ -9,6 +9,7 @@ from PySide6 import QtCore, QtGui, QtWidgets  # before pyqtgraph (it takes the l
 import pyqtgraph as pg  # noqa: E402,I001
 
 from plcbuilder.api import abi
+from plcbuilder.ide.elided_label import ElidedLabel
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.tables import RowsModel
@@ -25,10 +26,11 @@ class ProcPanel(TimePanel):
 
     def __init__(self, model: RunModel, timebase: TimeBase, on_clear=None, parent=None):
         super().__init__(model, timebase, on_clear, parent)
-        self.status = QtWidgets.QLabel("No controller")
-        self.status.setTextInteractionFlags(Qt.TextInteractionFlag.TextSelectableByMouse)
+        # a long status (running, software, speed, a disconnect reason) elides:
+        # it must never widen the dock
+        self.status = ElidedLabel("No controller")
         self.toolbar.extra.addSpacing(12)
-        self.toolbar.extra.addWidget(self.status)
+        self.toolbar.extra.addWidget(self.status, 1)
 
         self.widget = style.plot_widget(style.time_axis())
         self.plot = self.widget.getPlotItem()
@@ -56,19 +58,25 @@ class ProcPanel(TimePanel):
         self._drawn_messages = -1                   # the model's message_version drawn
         self._label_pos: list[tuple[float, float]] = []   # where the shown labels are
         self._tick_labels: list[tuple[int, str]] = []
+        self._shown_ticks: list[tuple[int, str]] | None = None
         self._empty = empty_text(self.plot, "No samples yet: start a procedure")
 
-        self.messages = RowsModel(["Time (s)", "From", "Message", "Code", "command",
-                                   "parameter", "Meaning"], limit=5000,
-                                  colour=lambda r: style.FAULT_COLOUR if r[3] < 0 else None,
-                                  align_right=(0, 3, 4, 5))
+        # what a message means comes right after its name: at the end of the
+        # row it was beyond the dock's edge
+        self.messages = RowsModel(["Time (s)", "From", "Message", "Meaning", "Code", "command",
+                                   "parameter"], limit=5000,
+                                  colour=lambda r: style.FAULT_COLOUR if r[4] < 0 else None,
+                                  align_right=(0, 4, 5, 6),
+                                  tooltip=lambda r: f"{r[2]} ({r[4]}): {r[3]}" if r[3] else None)
         self.table = QtWidgets.QTableView()
         self.table.setModel(self.messages)
         _setup_log_view(self.table)
         self.table.setToolTip("Messages the procedures sent (the message variable), by name, "
                               "with command (var00) and parameter (var01) at the time")
-        for col, width in enumerate((70, 90, 250, 55, 75, 75)):
+        for col, width in enumerate((60, 60, 230, 260, 55, 70)):
             self.table.setColumnWidth(col, width)
+        self.table.setWordWrap(False)
+        self.table.setTextElideMode(Qt.TextElideMode.ElideRight)
 
         split = QtWidgets.QSplitter(Qt.Orientation.Vertical)
         split.addWidget(self.widget)
@@ -97,8 +105,8 @@ class ProcPanel(TimePanel):
 
     def add_messages(self, rows) -> None:
         for m in rows:
-            self.messages.queue((f"{m.t_ms / 1000:.3f}", m.source, m.label, m.code, m.command,
-                                 m.parameter, m.meaning))
+            self.messages.queue((f"{m.t_ms / 1000:.3f}", m.source, m.label, m.meaning, m.code,
+                                 m.command, m.parameter))
 
     def flush(self) -> None:
         if self.messages.flush():
@@ -114,6 +122,28 @@ class ProcPanel(TimePanel):
         """The state names on the y axis, lowest value first."""
         return [label for _, label in self._tick_labels]
 
+    def shown_y_labels(self) -> list[str]:
+        """The state names the axis draws: those that do not overlap."""
+        return [label for _, label in (self._shown_ticks or ())]
+
+    def _thin_ticks(self, px_per_y: float) -> None:
+        """Name the states on the axis whose labels do not overlap (with
+        plc_proc_probing (33) and proc_zeroing (32) a few pixels apart, the
+        newest state's name wins, then the others from the top)."""
+        labels = self._tick_labels
+        gap = QtGui.QFontMetrics(self.plot.getAxis("left").style.get("tickFont")
+                                 or QtGui.QFont()).height() + 1
+        current = int(self.model.scalars.view(0)[-1]) if len(self.model) else None
+        order = sorted(labels, key=lambda vl: (vl[0] != current, -vl[0]))
+        kept: list[tuple[int, str]] = []
+        for v, text in order:
+            if all(abs(v - k) * px_per_y >= gap for k, _ in kept):
+                kept.append((v, text))
+        kept.sort()
+        if kept != self._shown_ticks:
+            self._shown_ticks = kept
+            self.plot.getAxis("left").setTicks([kept, []])
+
     def _update_ticks(self) -> None:
         values = tuple(sorted(self.model.proc_values))
         if values == self._ticks:
@@ -124,7 +154,7 @@ class ProcPanel(TimePanel):
             name = abi.proc_name(v)
             labels.append((v, f"{name} ({v})" if name else str(v)))
         self._tick_labels = labels
-        self.plot.getAxis("left").setTicks([labels, []])
+        self._shown_ticks = None                     # thinned for the height at the next draw
         lo, hi = min(values), max(values)
         pad = max(1.0, (hi - lo) * 0.12)
         # room above the highest state for two rows of message names
@@ -159,6 +189,7 @@ class ProcPanel(TimePanel):
         px_per_s = width_px / max(t1 - t0, 1e-9)
         (_, _), (y_lo, y_hi) = vb.viewRange()
         px_per_y = height_px / max(y_hi - y_lo, 1e-9)
+        self._thin_ticks(px_per_y)
         left_edge = t0 - self.offset
         line_h = 16.0
         placed_rects: list[tuple[float, float, float, float]] = []

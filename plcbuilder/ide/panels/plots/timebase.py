@@ -114,6 +114,20 @@ class YFit:
         self.pad = pad
         self.minimum = minimum
         self.range: Optional[tuple[float, float]] = None
+        #: a legend in the plot's top corner: the range leaves room above the
+        #: data for it, so it never covers a curve
+        self.legend: Optional[pg.LegendItem] = None
+        self._share = 0.0
+
+    def legend_share(self) -> float:
+        """The part of the plot's height the legend takes (0 without one)."""
+        lg = self.legend
+        if lg is None or not lg.isVisible() or not lg.items:
+            return 0.0
+        h = self.plot.getViewBox().height()
+        if h <= 1:
+            return 0.0
+        return min(0.6, (lg.boundingRect().height() + 10) / h)
 
     def fit(self, arrays) -> None:
         lo, hi = np.inf, -np.inf
@@ -127,15 +141,21 @@ class YFit:
             mid = (hi + lo) / 2
             lo, hi = mid - self.minimum / 2, mid + self.minimum / 2
         cur = self.range
-        if cur is not None and cur[0] <= lo and hi <= cur[1] and \
-                (hi - lo) >= 0.5 * (cur[1] - cur[0]) / (1 + 2 * self.pad):
+        share = self.legend_share()
+        if cur is not None and abs(share - self._share) < 0.02 and cur[0] <= lo and \
+                hi <= cur[1] - (cur[1] - cur[0]) * self._share and \
+                (hi - lo) >= 0.5 * (cur[1] - cur[0]) * (1 - self._share) / (1 + 2 * self.pad):
             return
         pad = (hi - lo) * self.pad
-        self.range = (lo - pad, hi + pad)
+        lo, hi = lo - pad, hi + pad
+        hi += (hi - lo) * share / (1 - share)          # the legend's room above the data
+        self._share = share
+        self.range = (lo, hi)
         self.plot.setYRange(*self.range, padding=0)
 
     def reset(self) -> None:
         self.range = None
+        self._share = 0.0
 
 
 class TimePanel(QtWidgets.QWidget):

@@ -1,0 +1,91 @@
+"""A label for status text that never widens its dock: it asks for the room its
+text needs, takes what the layout gives, and elides ("…") what does not fit,
+the whole text in its tooltip."""
+
+from __future__ import annotations
+
+from PySide6.QtCore import QSize, Qt
+from PySide6.QtGui import QPainter, QTextDocument
+from PySide6.QtGui import Qt as QtGuiNs
+from PySide6.QtWidgets import QLabel, QSizePolicy, QStyleOption
+
+#: the least a status label shrinks to, in average characters ("Idle · …")
+MIN_CHARS = 6
+
+
+class ElidedLabel(QLabel):
+    """A one-line QLabel (plain or rich text) whose minimum width is a few
+    characters: when the text is wider than the label it is drawn as plain
+    text, elided at the right, and the full text is the tooltip."""
+
+    def __init__(self, text: str = "", parent=None, *, min_chars: int = MIN_CHARS):
+        super().__init__(parent)
+        self._full = ""
+        self._plain = ""
+        self._min_chars = min_chars
+        self._own_tip = ""
+        self.setSizePolicy(QSizePolicy.Policy.Preferred, QSizePolicy.Policy.Preferred)
+        self.setWordWrap(False)
+        self.setText(text)
+
+    # QLabel API -----------------------------------------------------------
+    def setText(self, text: str) -> None:  # noqa: N802 - Qt override
+        self._full = text or ""
+        if QtGuiNs.mightBeRichText(self._full):
+            doc = QTextDocument()
+            doc.setHtml(self._full)
+            self._plain = doc.toPlainText()
+        else:
+            self._plain = self._full
+        super().setText(self._full)
+        self._update_tip()
+
+    def setToolTip(self, tip: str) -> None:  # noqa: N802 - Qt override
+        self._own_tip = tip or ""
+        self._update_tip()
+
+    def full_text(self) -> str:
+        """The text as set (rich or plain)."""
+        return self._full
+
+    def plain_text(self) -> str:
+        """The text without markup."""
+        return self._plain
+
+    def is_elided(self) -> bool:
+        """True when the label is too narrow for its text."""
+        return self._text_width() > self.contentsRect().width()
+
+    def minimumSizeHint(self) -> QSize:  # noqa: N802 - Qt override
+        hint = super().minimumSizeHint()
+        w = self.fontMetrics().averageCharWidth() * self._min_chars
+        m = self.contentsMargins()
+        return QSize(min(hint.width(), w + m.left() + m.right()), hint.height())
+
+    def paintEvent(self, event) -> None:  # noqa: N802 - Qt override
+        if not self.is_elided():
+            super().paintEvent(event)
+            return
+        p = QPainter(self)
+        opt = QStyleOption()
+        opt.initFrom(self)
+        rect = self.contentsRect()
+        text = self.fontMetrics().elidedText(self._plain, Qt.TextElideMode.ElideRight,
+                                             rect.width())
+        self.style().drawItemText(p, rect, int(self.alignment() | Qt.AlignmentFlag.AlignVCenter),
+                                  opt.palette, self.isEnabled(), text, self.foregroundRole())
+        p.end()
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        self._update_tip()
+
+    # ------------------------------------------------------------ helpers
+    def _text_width(self) -> int:
+        return self.fontMetrics().horizontalAdvance(self._plain)
+
+    def _update_tip(self) -> None:
+        tip = self._own_tip
+        if not tip and self._plain and self.is_elided():
+            tip = self._plain
+        QLabel.setToolTip(self, tip)

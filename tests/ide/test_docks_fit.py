@@ -1,0 +1,100 @@
+"""Docks never grow by themselves (issue 13, defect 2): status text in a dock's
+toolbar elides instead of setting the dock's minimum width, and the recorded-run
+banner keeps some room when the dock is narrow."""
+
+import pytest
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import QApplication
+
+from plcbuilder.ide.main_window import MainWindow
+from plcbuilder.link.client import ControllerStatus
+from tests.ide.test_main_window import FakeConnection, make_project
+
+
+@pytest.fixture
+def runwin(qtbot, tmp_path, prompts_off):
+    from plcbuilder.ide.settings import Settings
+    conn = FakeConnection()
+    w = MainWindow(Settings(str(tmp_path / "cfg" / "settings.ini")), connection=conn,
+                   start_controller=True, debounce_ms=20)
+    qtbot.addWidget(w)
+    w.resize(1200, 800)
+    w.show()
+    qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
+    w.open_project(make_project(tmp_path / "proj"))
+    yield w, conn
+    w.shutdown()
+
+
+@pytest.fixture
+def prompts_off(monkeypatch):
+    from PySide6.QtWidgets import QMessageBox
+    for name in ("warning", "question", "critical", "information"):
+        monkeypatch.setattr(QMessageBox, name, lambda *a, **k: QMessageBox.StandardButton.No)
+
+
+def _settle(qtbot):
+    for _ in range(5):
+        QApplication.processEvents()
+    qtbot.wait(20)
+
+
+def test_a_long_status_never_widens_the_proc_dock(runwin, qtbot):
+    w, conn = runwin
+    rp = w.run_panels
+    proc_dock = w.run_docks["proc"]
+    proc_dock.show()
+    proc_dock.raise_()
+    _settle(qtbot)
+    before = (proc_dock.width(), w.width(), w.centralWidget().width())
+    conn.connected = True
+    conn.sig_connected.emit("127.0.0.1:5555")
+    # upload, start M03, a looping software procedure, Max speed: the longest status
+    conn.sig_state.emit(ControllerStatus(t_ms=123456789, running="M03_WITH_A_LONG_NAME",
+                                         proc=70, proc_name="plc_proc_spindle",
+                                         software=["LUBE", "__HANDLER_INIT", "LOOP", "WATCHDOG",
+                                                   "MORE"],
+                                         speed={"mode": "max"}), 0)
+    _settle(qtbot)
+    assert "plots thinned" in rp.proc.status.plain_text()
+    assert (proc_dock.width(), w.width(), w.centralWidget().width()) == before
+    assert proc_dock.minimumSizeHint().width() < proc_dock.width()
+    assert rp.proc.status.is_elided()
+    assert "plc_proc_spindle" in rp.proc.status.toolTip()       # the whole text is there
+    # then kill the controller: the reason is long too
+    conn.connected = False
+    conn.sig_disconnected.emit("the controller process ended (killed by SIGKILL) while "
+                               "running M03_WITH_A_LONG_NAME at t = 123456.789 s " * 3)
+    _settle(qtbot)
+    assert (proc_dock.width(), w.width(), w.centralWidget().width()) == before
+    assert proc_dock.minimumSizeHint().width() < 400
+
+
+def test_the_recorded_run_banner_keeps_room_in_a_narrow_dock(runwin, qtbot):
+    w, _conn = runwin
+    rp = w.run_panels
+    outputs = w.run_docks["outputs"]
+    outputs.show()
+    outputs.raise_()
+    w.resizeDocks([outputs], [300], Qt.Orientation.Horizontal)     # as narrow as it goes
+    _settle(qtbot)
+    narrow = outputs.width()
+    rp.show_recorded("pulse too long", [], [], 8)
+    _settle(qtbot)
+    link, banner = rp.banner_links[1], rp.banners[1]
+    assert link.isVisible() and link.width() >= link.sizeHint().width()    # Back to Live
+    assert banner.isVisible() and banner.width() > 30                      # not 0 px
+    assert outputs.width() == narrow                                  # not widened
+    rp.back_to_live()
+    assert banner.isHidden() and link.isHidden()
+
+
+def test_the_tests_list_keeps_the_docks_height(runwin, qtbot):
+    """The Tests dock's list is not squeezed under its details: they sit beside it."""
+    w, _conn = runwin
+    w.tests_dock.show()
+    w.tests_dock.raise_()
+    _settle(qtbot)
+    panel = w.tests_panel
+    assert panel.tree.height() >= panel.height() - 60
+    assert panel.detail.height() >= panel.height() - 60

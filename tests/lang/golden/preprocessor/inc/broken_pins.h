@@ -1,0 +1,2 @@
+// a header with a broken define
+#define OUTPUT_LAMP 5 *
