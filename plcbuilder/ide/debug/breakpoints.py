@@ -15,7 +15,7 @@ with paths relative to the project, so a project folder that moves keeps them.
 from __future__ import annotations
 
 import os
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Iterable, Optional
 
@@ -243,9 +243,6 @@ class BreakpointStore(QObject):
             n += 1
         self.sig_changed.emit("")
         return n
-
-    def copy(self, bp: Breakpoint, **changes) -> Breakpoint:
-        return replace(bp, **changes)
 
 
 def _relative(path: str, root) -> str:

@@ -59,12 +59,6 @@ def names_on_lines(text: str) -> dict[int, list[str]]:
     return out
 
 
-def format_value(v) -> str:
-    if isinstance(v, bool) or not isinstance(v, int):
-        return str(v)
-    return str(v)
-
-
 def inline_values(text: str, values: Mapping[str, int], *, forced: frozenset = frozenset(),
                   lines: Optional[range] = None) -> dict[int, str]:
     """``{line: "a = 1 · b = 2"}`` for the lines (1-based, all or ``lines``) that
@@ -77,7 +71,7 @@ def inline_values(text: str, values: Mapping[str, int], *, forced: frozenset = f
         for name in names:
             if name in values:
                 mark = " (forced)" if name in forced else ""
-                parts.append(f"{name} = {format_value(values[name])}{mark}")
+                parts.append(f"{name} = {values[name]}{mark}")
         if parts:
             more = len(parts) - MAX_PER_LINE
             text_ = " · ".join(parts[:MAX_PER_LINE]) + (f" · +{more}" if more > 0 else "")
