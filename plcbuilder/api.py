@@ -4,6 +4,7 @@
     binaries            load_program, disassemble (text), instructions (records)
     projects            Project, create_project, build_project, compile_all
     run                 run(target, RunOptions) -> RunResult: compile, load, simulate
+    debugging           compile_condition (a breakpoint's condition, compiled)
     test                test(project, TestOptions) -> TestRun: scenario tests (tests/*.toml)
     rendering           render_text, summary (diagnostics as text)
 
@@ -24,6 +25,7 @@ from plcbuilder.bytecode.abi import proc_name
 from plcbuilder.bytecode.program import MAGIC, MAX_FILE_SIZE, Kind, LoadError, Program
 from plcbuilder.controller import events
 from plcbuilder.controller.controller import Controller, ControllerError
+from plcbuilder.controller.debugger import DebugError
 from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
 from plcbuilder.controller.session import UsageError, build_scenario, run_session
@@ -50,7 +52,8 @@ __all__ = [
     "Kind", "LoadError", "MAGIC", "MAX_MS", "PlcLexer", "ProcedureBuild", "Program", "Project",
     "ProjectError", "Related", "RunOptions", "RunResult", "Severity", "Span", "UsageError", "abi",
     "atomic_write", "build_project", "builtin_header", "builtin_header_names", "compile_all",
-    "compile_bytes", "compile_file", "compile_source", "create_project", "default_machine",
+    "compile_bytes", "compile_condition", "compile_file", "compile_source", "create_project",
+    "default_machine",
     "disassemble", "error", "events", "image_of", "instructions", "kind_of", "load_machine", "load_program",
     "load_variables", "options_for", "proc_name", "read_image", "render_text", "run", "summary",
     "write_image", "TestFileError", "TestOptions", "TestRun", "junit_xml", "test", "write_junit",
@@ -127,6 +130,7 @@ class RunOptions:
     trace: Optional[Path] = None         # CSV, one row per tick (gzip when it ends in .gz)
     backend: str = "fast"
     gvarget_latency_ms: int = 0
+    breaks: Sequence[str] = ()           # "FILE:LINE[:CONDITION]": the run ends where one halts
 
 
 @dataclass
@@ -184,8 +188,117 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
         raise UsageError(str(exc)) from None
     if tg.single is not None:
         sc.actions.insert(0, Action(0, "start", tg.single.name, opts.eparam))
+    _set_breaks(c, opts.breaks, target)
     report = run_session(c, sc, limit, trace=opts.trace, target=str(target))
+    report["halted"] = _halted_report(c.debugger.halted_state()) if opts.breaks else None
     return RunResult(tg.compiled, report)
+
+
+# -------------------------------------------------------------- debugging
+
+_CONDITION_FILE = "<condition>"
+
+
+def compile_condition(text: str, context=None) -> "bytes | list[Diagnostic]":
+    """A breakpoint's condition (an expression of the PLC language) compiled
+    into a small procedure whose exit code is its value: the Program's bytes,
+    which the debugger binds by name to the variables of the procedure that
+    reaches the breakpoint. ``context``: the source file (or project folder)
+    whose ``#include`` and ``#define`` lines the condition may use. When it
+    does not compile: its error diagnostics, pointing into the condition's text
+    (file ``<condition>``, line 1)."""
+    if not isinstance(text, str) or not text.strip():
+        return [error("condition", "a condition needs an expression",
+                      Span.point(_CONDITION_FILE, 1, 1))]
+    if "\n" in text or "\r" in text:
+        return [error("condition", "a condition is one line", Span.point(_CONDITION_FILE, 1, 1))]
+    head: list[str] = []
+    path = Path(context) if context is not None else None
+    options = CompileOptions()
+    if path is not None and path.is_file():
+        try:
+            options = options_for(path)
+            lines = read_bounded(path, MAX_FILE_SIZE, "source").decode("utf-8", "replace")
+        except (ProjectError, OSError):
+            lines = ""
+        head = [ln for ln in lines.splitlines() if ln.lstrip().startswith(("#include", "#define"))]
+    elif path is not None and path.is_dir():
+        try:
+            options = Project.open(path).compile_options(path / "hardware" / "_.plc")
+        except (ProjectError, OSError):
+            pass
+    prefix = "  exit("
+    src = "\n".join([*head, "main()", "{", f"{prefix}{text});", "}"]) + "\n"
+    where = str(path.with_name("__condition__.plc")) if path is not None and path.is_file() \
+        else "<condition>"
+    r = compile_source(src, where, options)
+    at = len(head) + 3
+    errors = []
+    for d in r.diagnostics:
+        if not d.is_error:
+            continue
+        s = d.span
+        span = (Span(_CONDITION_FILE, 1, max(1, s.col - len(prefix)), 1,
+                     max(2, s.end_col - len(prefix))) if s is not None and s.line == at
+                else Span.point(_CONDITION_FILE, 1, 1))
+        errors.append(Diagnostic(d.severity, d.code, d.message, span, d.hints))
+    if errors or r.program is None:
+        return errors or [error("condition", "the condition does not compile",
+                                Span.point(_CONDITION_FILE, 1, 1))]
+    return r.program.to_bytes()
+
+
+def _set_breaks(c: Controller, breaks: Sequence[str], target: Path) -> None:
+    """``--break FILE:LINE[:CONDITION]`` options, set on the loaded controller
+    (a bad one raises UsageError naming it)."""
+    by_file: dict[str, list[dict]] = {}
+    for text in breaks:
+        parts = str(text).split(":", 2)
+        if len(parts) < 2 or not parts[0] or not parts[1].strip().isdigit():
+            raise UsageError(f"--break {text}: give FILE:LINE[:CONDITION], e.g. M80.plc:31")
+        file, line = parts[0], int(parts[1])
+        spec: dict = {"line": line}
+        if len(parts) == 3 and parts[2].strip():
+            code = compile_condition(parts[2], _source_of(target, file))
+            if not isinstance(code, bytes):
+                raise UsageError(f"--break {text}: the condition does not compile: "
+                                 + "; ".join(f"col {d.span.col}: {d.message}" if d.span
+                                             else d.message for d in code))
+            spec["condition"] = {"text": parts[2], "code": code}
+        by_file.setdefault(file, []).append(spec)
+    try:
+        for file, specs in by_file.items():
+            c.debugger.set_breakpoints(file, specs)
+    except DebugError as exc:
+        raise UsageError(f"--break: {exc}") from None
+
+
+def _source_of(target: Path, file: str) -> Optional[Path]:
+    """The source file named ``file`` of a run's target (a file, or a project's)."""
+    if target.is_file():
+        near = target.with_name(Path(file).name)
+        return near if near.is_file() else target
+    for sub in ("hardware", "software", "include", ""):
+        p = target / sub / file
+        if p.is_file():
+            return p
+    return None
+
+
+def _halted_report(state: Optional[dict]) -> Optional[dict]:
+    """SPEC §6's ``halted`` object of ``plcbuilder run --json``: the halt, its
+    procedure's call stack (innermost first) and variables; the whole halted
+    state's other procedures and machine too."""
+    if state is None:
+        return None
+    mine = next((p for p in state["procedures"] if p["name"] == state["procedure"]), None)
+    return {"reason": state["reason"], "t_ms": state["t_ms"], "procedure": state["procedure"],
+            "file": state["file"], "line": state["line"],
+            "stack": [{"procedure": f["procedure"], "line": f["line"], "file": f["file"]}
+                      for f in mine["stack"]] if mine else [],
+            "vars": mine["vars"] if mine else {},
+            "fault": state["fault"], "breakpoint": state["breakpoint"],
+            "procedures": state["procedures"], "machine": state["machine"]}
 
 
 def _compile_target(target: Path, opts: RunOptions) -> _Target:

@@ -61,6 +61,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    metavar="DIR", help="search DIR for #include files (repeatable)")
     p.add_argument("--trace", type=Path, metavar="FILE.csv",
                    help="write one CSV row per tick (streamed; gzip if it ends in .gz)")
+    p.add_argument("--break", dest="breaks", action="append", default=[],
+                   metavar="FILE:LINE[:COND]",
+                   help="halt before FILE's line LINE runs (or the next line with code), "
+                        "when COND (a PLC expression) is not 0; the run ends there and the "
+                        "JSON's 'halted' says where (repeatable; docs/debugging.md)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--backend", choices=("fast", "reference"), default="fast",
                    help=argparse.SUPPRESS)
@@ -96,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
                           adcs=args.adc, scenario=args.scenario, machine=args.machine,
                           software=args.software, strict=args.strict, include_dirs=tuple(args.include),
                           trace=args.trace, backend=args.backend,
-                          gvarget_latency_ms=args.gvarget_latency)
+                          gvarget_latency_ms=args.gvarget_latency, breaks=args.breaks)
         try:
             result = api.run(target, opts)
         except api.UsageError as exc:
@@ -166,5 +171,12 @@ def summary(rep: dict, out: term.Out) -> str:
         lines.append(f"{name}: " + ", ".join(f"{k}={v}" for k, v in own.items()))
     still = [p["name"] for p in rep["procedures"] if p["ended_at_ms"] is None]
     why = "time limit" if still else "nothing left to run"
+    h = rep.get("halted")
+    if h is not None:
+        where = " <- ".join(f"{f['procedure']}() line {f['line']}" for f in h["stack"])
+        lines.append(out.paint("bad", f"halted ({h['reason']}) at {h['t_ms']} ms in "
+                                      f"{h['procedure']}: {h['file']}:{h['line']}"
+                                      + (f" [{where}]" if where else "")))
+        why = "halted"
     lines.append(f"run ended at {rep['ended_at_ms']} ms ({why})")
     return "\n".join(lines)

@@ -23,6 +23,7 @@ from plcbuilder._support.numbers import INT32, WORD32, to_int32
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import DecodeError, validate
 from plcbuilder.bytecode.program import Kind, Program
+from plcbuilder.controller.debugger import Debugger
 from plcbuilder.controller.events import ControllerStatus, Event, Note, Sample
 from plcbuilder.controller.plc import BACKENDS, PLC, mcode_names
 
@@ -55,6 +56,9 @@ class Controller:
         except (TypeError, ValueError) as exc:
             raise ControllerError(str(exc)) from None
         self._plc.coverage = coverage            # a CodeCoverage (controller/coverage.py)
+        #: breakpoints, stepping, the halted state (controller/debugger.py)
+        self.debugger = Debugger(self._plc)
+        self._plc.debugger = self.debugger
         self._loaded_once = False
         self._stop_presses = 0
         self._crc: dict[str, int] = {}
@@ -126,8 +130,10 @@ class Controller:
                 raise ControllerError(f"{p.name}: entry point {p.entry} is outside the code")
             by_name[p.name] = p
         plc = self._plc
+        self._drop_halt()
         plc.end_all()
         plc.programs = by_name
+        self.debugger.rebind()                   # breakpoints stay on their lines
         for pin, (name, _e) in list(plc.bindings.items()):
             if name not in by_name:
                 plc.unbind_input(pin)
@@ -227,6 +233,8 @@ class Controller:
         """Run ``__HANDLER_EXIT`` to its end (at most ``limit_ms`` of simulated
         time), then end every procedure (100)."""
         plc = self._plc
+        self._drop_halt()
+        self.debugger.clear()
         if self.event("EXIT"):
             end = plc.t + max(0, int(limit_ms))
             while plc.t < end:
@@ -259,6 +267,7 @@ class Controller:
         if ms < 0:
             raise ControllerError(f"cannot step {ms} ms")
         self._plc.run(ms)
+        self.debugger.settle()
 
     def run_until_idle(self, ms: int) -> int:
         """Run at most ``ms`` ticks, stopping after the first tick that leaves
@@ -266,7 +275,9 @@ class Controller:
         ms = self._int(ms, "ms")
         if ms < 0:
             raise ControllerError(f"cannot step {ms} ms")
-        return self._plc.run(ms, until_idle=True)
+        ran = self._plc.run(ms, until_idle=True)
+        self.debugger.settle()
+        return ran
 
     def idle(self) -> bool:
         """No procedure runs and none is due to start."""
@@ -320,6 +331,15 @@ class Controller:
     def variables(self) -> dict[str, dict[str, int]]:
         """Each procedure that has run: its variables' latest values, by name."""
         return {name: p.variables() for name, p in sorted(self._plc.last.items())}
+
+    def _drop_halt(self) -> None:
+        """Not halted any more; the rest of a halted tick runs (its procedures
+        already ended or ending do nothing more)."""
+        dbg = self.debugger
+        if dbg.halt is not None:
+            dbg.halt = None
+            self._plc.end_all()
+            self._plc.resume_tick()
 
     # ------------------------------------------------------------ helpers
     def _unknown(self, name: str) -> str:

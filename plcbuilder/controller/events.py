@@ -74,7 +74,31 @@ class Note:
     type: str = "note"
 
 
-Event = Started | Ended | Message | Print | Fault | Note
+@dataclass(frozen=True)
+class Log:
+    """A logpoint's message (controller/debugger.py): its ``{name}`` placeholders filled in."""
+    t_ms: int
+    source: str                # procedure name
+    text: str
+    type: str = "log"
+
+
+@dataclass(frozen=True)
+class Halted:
+    """The debugger halted the controller; ``state`` is the halted state (docs/debugging.md)."""
+    t_ms: int
+    state: dict
+    type: str = "halted"
+
+
+@dataclass(frozen=True)
+class Resumed:
+    """The controller goes on after a halt."""
+    t_ms: int
+    type: str = "resumed"
+
+
+Event = Started | Ended | Message | Print | Fault | Note | Log | Halted | Resumed
 
 
 @dataclass
@@ -102,7 +126,7 @@ def to_dict(obj) -> dict:
 def from_dict(d: dict):
     """The inverse of :func:`to_dict` for events (by their ``type``) and samples."""
     kinds = {"started": Started, "ended": Ended, "message": Message, "print": Print,
-             "fault": Fault, "note": Note}
+             "fault": Fault, "note": Note, "log": Log, "halted": Halted, "resumed": Resumed}
     t = d.get("type")
     if t == "fault" and "calls" in d:
         d = dict(d, calls=tuple(tuple(c) for c in d["calls"]))

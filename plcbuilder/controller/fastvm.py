@@ -62,8 +62,8 @@ from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.bytecode.semantics import INT_MAX, INT_MIN, SHIFT_MASK, WRAP_SOURCE, Result
 from plcbuilder.controller import vm
 from plcbuilder.controller.vm import (FAULT_DEPTH, FAULT_DIV, FAULT_END, FAULT_MOD,
-                                      MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET, Handoff, Host,
-                                      ProcExit, VMFault)
+                                      MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET, Halted, Handoff,
+                                      Host, Migrate, ProcExit, VMFault)
 
 __all__ = ["Unsupported", "translate", "make_runner", "factory", "io_shape"]
 
@@ -84,8 +84,8 @@ _UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT
                        abi.SLOT_VAR00 + 1})
 #: What the controller sends a suspended procedure to have its variables written back.
 SYNC = object()
-#: How a tick end that answers SYNC begins.
-_SYNC_ANSWER = "if (yield) is not None:"
+#: How a tick end that answers SYNC begins (then the offset it yields).
+_SYNC_ANSWER = "if (yield "
 #: A pseudo slot that values read from the host's ``io`` depend on: any call
 #: out (which may change the pins) first writes them to temporaries.
 _IO = -1
@@ -123,7 +123,8 @@ class _Func:
     gen: bool = False
 
 
-def _analyze(code: bytes, entry: int) -> tuple[dict[int, _Func], int]:
+def _analyze(code: bytes, entry: int,
+             stops: frozenset = frozenset()) -> tuple[dict[int, _Func], int]:
     instrs = validate(code, entry)
     at = {i.offset: i for i in instrs}
     end = len(code)
@@ -133,16 +134,18 @@ def _analyze(code: bytes, entry: int) -> tuple[dict[int, _Func], int]:
         f = todo.pop()
         if f in funcs:
             continue
-        funcs[f] = func = _function(f, at, end)
+        funcs[f] = func = _function(f, at, end, stops)
         todo.extend(c for c in func.callees if c not in funcs)
     return funcs, end
 
 
-def _function(fstart: int, at: dict[int, Instruction], end: int) -> _Func:
+def _function(fstart: int, at: dict[int, Instruction], end: int,
+              stops: frozenset = frozenset()) -> _Func:
     depth = {fstart: 0}
     work = [fstart]
     callees: set[int] = set()
     leaders = {fstart}
+    leaders |= stops                      # a watched offset begins a block
     while work:
         pc = work.pop()
         if pc == end:
@@ -599,8 +602,12 @@ class _Ctx:
 
 
 class _Gen:
-    def __init__(self, program: Program, latency: bool, pins: Optional[tuple[int, int]] = None):
+    def __init__(self, program: Program, latency: bool, pins: Optional[tuple[int, int]] = None,
+                 debug: bool = False):
         self.program = program
+        #: watched: every statement start asks the debugger (``B[pc] and brk(pc, rets)``)
+        self.debug = debug
+        self.stops = frozenset(e.pc for e in program.lines) if debug else frozenset()
         self.latency = latency
         #: (input count, output count[, levels]) of a host whose ``io`` may be read directly
         self.pins = pins
@@ -609,8 +616,10 @@ class _Gen:
         #: slots the function being written keeps in locals (``v<slot>``)
         self.cached: frozenset[int] = frozenset()
         self.software = program.kind is Kind.SOFTWARE
-        self.funcs, self.end = _analyze(program.code, program.entry)
+        self.funcs, self.end = _analyze(program.code, program.entry, self.stops)
         self.tracked, self.budget = _plan(self.funcs, program.entry, latency)
+        if debug:
+            self.tracked = True            # a halt names the call stack
         self.out: list[str] = []
         self.ntemp = 0
         self.ranges = _Ranges(None, frozenset(), False, pins)
@@ -688,7 +697,7 @@ class _Gen:
         #: some function keeps variables in locals: every tick end answers SYNC
         self.syncs = any(self._cacheable(f) for f in self.funcs.values())
         self.emit(0, "def make(s, portset, portclr, portget, gvarget, gvarset, raw_gvarset, g0move,")
-        self.emit(0, "         pr, plain, lat, seteparam, starthw, softjog, io):")
+        self.emit(0, "         pr, plain, lat, seteparam, starthw, softjog, io, B, brk):")
         for start in sorted(self.funcs):
             self.function(self.funcs[start])
         entry = self.program.entry
@@ -757,7 +766,7 @@ class _Gen:
         waits for gvarget, keeps the variables that only it can see between
         tick ends (not those the controller reads every tick: message, proc,
         vexit, var00 and var01, which a message carries)."""
-        if self.budget or self.latency or not func.gen or func.callees:
+        if self.budget or self.latency or self.debug or not func.gen or func.callees:
             return frozenset()
         used = {i.arg for b in func.blocks.values() for i in b.ins
                 if i.op in (Op.LOAD, Op.STORE, Op.INC, Op.DEC)}
@@ -842,20 +851,32 @@ class _Gen:
         elif target <= ctx.label:
             self.emit(ind, "continue")
 
-    def tick_end(self, ind: int, resume: Optional[int] = None, depth: int = 0) -> None:
+    def rets(self) -> str:
+        """The return addresses where a Handoff is raised: tracked, or added by
+        each caller on its way out (see :meth:`terminator`, CALL)."""
+        return "rets" if self.tracked else "()"
+
+    def tick_end(self, ind: int, resume: Optional[int] = None, depth: int = 0,
+                 at: int = 0) -> None:
+        """A tick end: yields ``at`` (the offset of the instruction ending the
+        tick); a Migrate thrown in while suspended hands the exact state over."""
+        self.emit(ind, "try:")
         if self.syncs:
             # between ticks the controller may ask for the variables (send(SYNC)):
             # they go back to the slots, and are read again when the tick goes on
-            self.emit(ind, "if (yield) is not None:")
+            self.emit(ind + 1, f"if (yield {at}) is not None:")
             if self.cached:
-                self.emit(ind + 1, self._store_cached())
-            self.emit(ind + 1, "while (yield) is not None:")
-            self.emit(ind + 2, "pass")
+                self.emit(ind + 2, self._store_cached())
+            self.emit(ind + 2, f"while (yield {at}) is not None:")
+            self.emit(ind + 3, "pass")
             if self.cached:
-                self.emit(ind + 1, self._load_cached())
-                self._check_ranges(ind + 1, resume, depth)
+                self.emit(ind + 2, self._load_cached())
+                self._check_ranges(ind + 2, resume, depth)
         else:
-            self.emit(ind, "yield")
+            self.emit(ind + 1, f"yield {at}")
+        self.emit(ind, "except Migrate:")
+        stack = ", ".join(f"_{k}" for k in range(depth))
+        self.emit(ind + 1, f"raise Handoff({resume}, [{stack}], {self.rets()}, 0) from None")
         if self.budget:
             self.emit(ind, "n = 0")
         self.known.pop(abi.SLOT_MESSAGE, None)    # the controller clears message at a tick end
@@ -873,17 +894,18 @@ class _Gen:
         self.emit(ind + 1, f"raise Handoff({resume}, [{stack}], (), 0)")
 
     def branch(self, cond: str, on_true: int, on_false: int, stack: list[_V], ind: int,
-               ctx: _Ctx, tick_end: bool = False) -> None:
+               ctx: _Ctx, tick_end: Optional[int] = None) -> None:
+        """``tick_end``: the offset of the LOOP whose condition this is (each way ends the tick)."""
         known = self.known
         self.emit(ind, f"if {cond}:")
         self.known = dict(known)
-        if tick_end:
-            self.tick_end(ind + 1, on_true, len(stack))
+        if tick_end is not None:
+            self.tick_end(ind + 1, on_true, len(stack), tick_end)
         self.edge(on_true, stack, ind + 1, ctx)
         self.emit(ind, "else:")
         self.known = dict(known)
-        if tick_end:
-            self.tick_end(ind + 1, on_false, len(stack))
+        if tick_end is not None:
+            self.tick_end(ind + 1, on_false, len(stack), tick_end)
         self.edge(on_false, stack, ind + 1, ctx)
 
     # --------------------------------------------------------------- blocks
@@ -897,6 +919,11 @@ class _Gen:
             if blk.start == self.end:
                 self.emit(ind, f"raise VMFault({self.end}, {FAULT_END!r})")
                 return
+            if blk.start in self.stops:
+                items = ", ".join(self.as_int(v) for v in stack)
+                self.emit(ind, f"if B[{blk.start}] and brk({blk.start}, rets):")
+                self.emit(ind + 1, f"raise Halted({blk.start}, [{items}], rets, "
+                                   f"{'n' if self.budget else '0'})")
             if self.budget:
                 k = len(blk.ins)
                 self.emit(ind, f"n += {k}")
@@ -1154,7 +1181,7 @@ class _Gen:
             if c.const is not None:
                 stack = self.flush(stack, ind)
                 resume = i.target if c.const else i.end
-                self.tick_end(ind, resume, len(stack))
+                self.tick_end(ind, resume, len(stack), i.offset)
                 return resume, stack
             cond = self.as_cond(c)
             if c.temps & self.flushed_names(stack):
@@ -1162,11 +1189,11 @@ class _Gen:
                 self.emit(ind, f"{cond} = {self.as_cond(c)}")
             stack = self.flush(stack, ind)
             # the condition is taken before the tick ends; each way ends it
-            self.branch(cond, i.target, i.end, stack, ind, ctx, tick_end=True)
+            self.branch(cond, i.target, i.end, stack, ind, ctx, tick_end=i.offset)
             return None
         if op is Op.YIELD:
             stack = self.flush(stack, ind)
-            self.tick_end(ind, i.end, len(stack))
+            self.tick_end(ind, i.end, len(stack), i.offset)
             return i.end, stack
         if op is Op.CALL:
             callee = self.funcs[i.target]
@@ -1181,6 +1208,10 @@ class _Gen:
             self.emit(ind, "except VMFault as _e:")      # a fault names its callers
             self.emit(ind + 1, f"_e.callers.append({i.offset})")
             self.emit(ind + 1, "raise")
+            if not self.tracked and callee.gen:        # a handover names them too
+                self.emit(ind, "except Handoff as _h:")
+                self.emit(ind + 1, f"_h.rets = ({i.end},) + tuple(_h.rets)")
+                self.emit(ind + 1, "raise")
             self.known = {}
             return i.end, stack
         if op is Op.GVARGET:
@@ -1194,7 +1225,12 @@ class _Gen:
             if self.latency:
                 self.emit(ind, f"if lat and plain({addr}):")
                 self.emit(ind + 1, "for _ in range(lat):")
-                self.emit(ind + 2, "yield")
+                self.emit(ind + 2, "try:")
+                self.emit(ind + 3, f"yield {i.offset}")
+                self.emit(ind + 2, "except Migrate:")        # the wait starts again there
+                items = "".join(f"_{k}, " for k in range(len(stack)))
+                self.emit(ind + 3, f"raise Handoff({i.offset}, [{items}{addr}], {self.rets()}, 0)"
+                                   " from None")
                 if self.budget:
                     self.emit(ind + 1, "n = 0")
                 self.known.pop(abi.SLOT_MESSAGE, None)
@@ -1220,35 +1256,39 @@ class _Gen:
 
 # ------------------------------------------------------------------ runtime
 
-_NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff,
+_NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff, "Halted": Halted,
+              "Migrate": Migrate, "tuple": tuple,
               "__builtins__": {"len": len, "range": range}}
 #: (code, make or None, why not translated, whether its tick ends answer SYNC)
 _CACHE: dict[tuple, tuple[bytes, Optional[Callable], str, bool]] = {}
 
 
 def translate(program: Program, latency: bool = False,
-              pins: Optional[tuple] = None) -> str:
+              pins: Optional[tuple] = None, debug: bool = False) -> str:
     """The Python source the fast backend runs for ``program`` (raises Unsupported).
     With ``pins`` (input and output count of a host with ``io``, and whether it
     keeps a list per pin: :func:`io_shape`), constant-pin port calls read and
-    test ``io`` directly."""
-    return _Gen(program, latency, pins).generate()
+    test ``io`` directly. ``debug``: every statement start asks the debugger
+    whether it is watched and whether to halt there (then the procedure is
+    handed to the reference interpreter, :class:`~plcbuilder.controller.vm.Halted`)."""
+    return _Gen(program, latency, pins, debug).generate()
 
 
-def _key(program: Program, latency: bool, pins) -> tuple:
-    return (zlib.crc32(program.code), program.entry, int(program.kind), bool(latency), pins)
+def _key(program: Program, latency: bool, pins, debug: bool = False) -> tuple:
+    return (zlib.crc32(program.code), program.entry, int(program.kind), bool(latency), pins,
+            bool(debug), tuple(e.pc for e in program.lines) if debug else ())
 
 
 def factory(program: Program, latency: bool = False,
-            pins: Optional[tuple] = None) -> Optional[Callable]:
+            pins: Optional[tuple] = None, debug: bool = False) -> Optional[Callable]:
     """The compiled ``make(...)`` of ``program``, or None if it cannot be translated.
     Translated once per program (by CRC of its code, entry and kind) and host shape."""
-    key = _key(program, latency, pins)
+    key = _key(program, latency, pins, debug)
     hit = _CACHE.get(key)
     if hit is not None and hit[0] == program.code:
         return hit[1]
     try:
-        src = translate(program, latency, pins)
+        src = translate(program, latency, pins, debug)
     except Unsupported as exc:
         _CACHE[key] = (program.code, None, str(exc), False)
         return None
@@ -1290,12 +1330,18 @@ def answers_sync(program: Program, host: Host) -> bool:
     return _CACHE[_key(program, host.lat > 0, _pins(host))][3]
 
 
-def make_runner(program: Program, s: list[int], host: Host) -> Iterator[None]:
+def make_runner(program: Program, s: list[int], host: Host,
+                watched: bool = False) -> Iterator[None]:
     """A generator running ``program`` on the slots ``s``: translated code, or the
-    reference interpreter where the program cannot be translated."""
-    make = factory(program, host.lat > 0, _pins(host))
+    reference interpreter where the program cannot be translated. ``watched``
+    (with ``host.debug``): the translation that asks the debugger at every
+    statement start."""
+    debug = host.debug if watched else None
+    make = factory(program, host.lat > 0, _pins(host), debug is not None)
     if make is None:
         return vm.run_reference(program, s, host)
     return make(s, host.portset, host.portclr, host.portget, host.gvarget, host.gvarset,
                 host.raw_gvarset, host.g0move, host.pr, host.plain, host.lat, host.seteparam,
-                host.starthw, host.softjog, host.io)
+                host.starthw, host.softjog, host.io,
+                debug.marks if debug is not None else None,
+                debug.brk if debug is not None else None)

@@ -32,7 +32,7 @@ from plcbuilder.bytecode.semantics import wrap
 from plcbuilder.controller import fastvm, vm
 from plcbuilder.controller.events import (Ended, Fault, Message, Note, Print, Sample,
                                           Started)
-from plcbuilder.controller.vm import Handoff, Host, ProcExit, VMFault
+from plcbuilder.controller.vm import HALT, Halted, Handoff, Host, Migrate, ProcExit, VMFault
 
 SOFTWARE_PERIOD_MS = 100
 #: Exit code reported for a procedure that ended with a runtime fault (not in the seed's table).
@@ -49,7 +49,7 @@ class Process:
     """One run of a procedure."""
 
     __slots__ = ("name", "program", "kind", "slots", "eparam", "started_at", "resume",
-                 "host", "ended_at", "exit_code", "syncing")
+                 "host", "ended_at", "exit_code", "syncing", "gen", "at", "fault", "watched")
 
     def __init__(self, program: Program, slots: list[int], eparam: int, started_at: int,
                  host: Host):
@@ -65,6 +65,22 @@ class Process:
         self.exit_code: Optional[int] = None
         #: the fast backend's generator when it keeps variables in locals between ticks
         self.syncing = None
+        self.gen = None
+        #: the offset of the instruction that ended its last tick (None: none yet)
+        self.at: Optional[int] = None
+        #: (pc, text, callers) of a fault it is halted at (it ends when the debugger goes on)
+        self.fault = None
+        #: runs code that asks the debugger (the reference interpreter, or watched fast code)
+        self.watched = False
+
+    def set_gen(self, gen) -> None:
+        self.gen = gen
+        self.resume = gen.__next__
+
+    def on_reference(self) -> bool:
+        """Whether the reference interpreter runs it now."""
+        gen = self.gen
+        return gen is not None and gen.gi_code is vm.run_reference.__code__
 
     def sync(self) -> None:
         """Make ``slots`` hold every variable's value now (the fast backend keeps
@@ -108,6 +124,12 @@ class PLC:
         self._last_row: tuple = _NO_ROW
         #: a CodeCoverage recording the instructions that run (reference backend only)
         self.coverage = None
+        #: the Debugger (controller/debugger.py) when there is one
+        self.debugger = None
+        #: the debugger watches (a breakpoint, a step): every tick runs through _tick
+        self.watching = False
+        #: the rest of a tick halted by the debugger: (t, procedures still to run, ran)
+        self._rest = None
         self.events: deque = deque(maxlen=EVENT_BUFFER)
         self.samples: deque = deque(maxlen=SAMPLE_BUFFER)
         self.programs: dict[str, Program] = {}
@@ -196,13 +218,18 @@ class PLC:
             slots[abi.SLOT_PARAM] = eparam
         host = self._host(program.name, program.kind)
         p = Process(program, slots, eparam, self.t, host)
+        dbg = self.debugger
+        if dbg is not None:
+            host.debug = dbg.watch(p)
         if self.backend == "fast":
-            gen = fastvm.make_runner(program, slots, host)
-            if fastvm.answers_sync(program, host):
+            p.watched = dbg is not None and dbg.watched(program)
+            gen = fastvm.make_runner(program, slots, host, watched=p.watched)
+            if not p.watched and fastvm.answers_sync(program, host):
                 p.syncing = gen
         else:
             gen = vm.run_reference(program, slots, host, cover=self.coverage)
-        p.resume = gen.__next__
+            p.watched = True
+        p.set_gen(gen)
         self.last[program.name] = p
         self.events.append(Started(self.t, program.name, program.kind.label, eparam))
         return p
@@ -216,6 +243,9 @@ class PLC:
         p.ended_at = self.t
         p.exit_code = code
         p.resume = _finished
+        p.fault = None
+        if self.debugger is not None:
+            self.debugger.ended(p)
         self.events.append(Ended(self.t, p.name, p.kind.label, code, abi.exit_name(code),
                                  p.slots[abi.SLOT_VEXIT]))
         if p is self.hw:
@@ -225,10 +255,15 @@ class PLC:
             del self.sw[p.name]
             self._sw_order = [q for q in self._sw_order if q is not p]
 
-    def _fault(self, p: Process, pc: Optional[int], text: str, callers=()) -> None:
+    def _fault(self, p: Process, pc: Optional[int], text: str, callers=(),
+               halt: bool = True) -> None:
         """End p with a fault event and a PLC_MESSAGE_ERR_VM message. The event
         names main's statement (the outermost call) and lists the whole chain;
-        the text says where inside a called procedure it happened."""
+        the text says where inside a called procedure it happened. When the
+        debugger is on (``halt``), it halts there first: p ends when it goes on."""
+        if halt and self.debugger is not None and self.debugger.faulted(p, pc, text, callers):
+            p.fault = (pc, text, tuple(callers))
+            return
         prog = p.program
         chain = []
         for at in [*reversed(list(callers)), pc] if pc is not None else []:
@@ -254,12 +289,19 @@ class PLC:
                 self._fault(p, exc.pc, exc.text, exc.callers)
             elif isinstance(exc, StopIteration):
                 self._end(p, 0)
+            elif isinstance(exc, Halted):    # the debugger halted it: the reference goes on
+                p.set_gen(vm.run_reference(p.program, p.slots, p.host, pc=exc.pc,
+                                           stack=exc.stack, rets=exc.rets, count=exc.count,
+                                           passed=exc.pc))
+                p.syncing, p.watched = None, True
             elif isinstance(exc, Handoff):
-                gen = vm.run_reference(p.program, p.slots, p.host, pc=exc.pc, stack=exc.stack,
-                                       rets=exc.rets, count=exc.count)
-                p.resume = gen.__next__
+                p.set_gen(vm.run_reference(p.program, p.slots, p.host, pc=exc.pc,
+                                           stack=exc.stack, rets=exc.rets, count=exc.count))
+                p.syncing, p.watched = None, True
                 try:
-                    p.resume()
+                    at = p.resume()
+                    if at is not HALT:
+                        p.at = at
                     return
                 except Exception as again:  # noqa: BLE001 - handled by the next round
                     exc = again
@@ -350,15 +392,10 @@ class PLC:
             self._sw_order = sorted(self.sw.values(), key=lambda q: q.name)
 
     def _software_tick(self) -> list[Process]:
+        """The software procedures that run this tick, in order (pending ones begun)."""
         if self._pending_sw:
             self._begin_pending()
-        ran = list(self._sw_order)
-        for p in ran:
-            try:
-                p.resume()
-            except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
-                self._outcome(p, exc)
-        return ran
+        return list(self._sw_order)
 
     def _send(self, p: Process, code: int) -> None:
         s = p.slots
@@ -385,15 +422,23 @@ class PLC:
         end their ticks as :meth:`_after_tick` does. Samples are kept as raw
         rows ``(t, running, proc, message, machine fields)``;
         :meth:`take_samples` turns them into :class:`Sample` objects."""
+        dbg = self.debugger
+        if dbg is not None and dbg.halt is not None:
+            return 0                         # halted: time stands still
         t = start = self.t
         end = t + ms
         while t < end:
             next_sw = t + (self.grid - t) % SOFTWARE_PERIOD_MS
-            if t == next_sw or self._due_hw or self.bindings:
-                self._tick(t, software=t == next_sw)
+            if t == next_sw or self._due_hw or self.bindings or self.watching:
+                if not self._tick(t, software=t == next_sw):
+                    break                    # halted mid-tick: the rest waits
                 t += 1
+                if dbg is not None and dbg.halt is not None:
+                    break
             elif self.hw is not None:
                 t = self._hardware_alone(t, end)
+                if dbg is not None and dbg.halt is not None:
+                    break
             else:
                 stop = t + 1 if until_idle and self.idle() else min(end, next_sw)
                 t = self._machine_alone(t, stop)
@@ -402,24 +447,108 @@ class PLC:
         self.t = t
         return t - start
 
-    def _tick(self, t: int, software: bool) -> None:
+    def _tick(self, t: int, software: bool) -> bool:
         """Tick t in the order of the module's docstring: starts due, the
-        software tick (when ``software``), the hardware procedure, the end of the tick."""
+        software tick (when ``software``), the hardware procedure, the end of
+        the tick. False when the debugger halted it: :meth:`resume_tick` runs the rest."""
         self.t = t
         if self._due_hw:
             self._apply_due(t)
         if self.bindings:
             self._input_edges()
-        soft = self._software_tick() if software and (self.sw or self._pending_sw) else ()
+        soft = self._software_tick() if software and (self.sw or self._pending_sw) else []
         hw = self.hw
         if hw is not None:
-            try:
-                hw.resume()
-            except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
-                self._outcome(hw, exc)
-            self._after_tick(t, (hw, *soft))
+            return self._run_procedures(t, [*soft, hw], (hw, *soft))
+        return self._run_procedures(t, soft, soft)
+
+    def _run_procedures(self, t: int, todo: list, ran) -> bool:
+        """Run the procedures of ``todo`` in order (tick t), then the end of the
+        tick (``ran``: hardware first, then software). False when the debugger
+        halted one: the rest of the tick waits in ``_rest``, the halted one first."""
+        dbg = self.debugger
+        i = 0
+        while i < len(todo):
+            p = todo[i]
+            if p.ended_at is None:
+                if p.fault is not None:        # halted at its fault: now it ends
+                    pc, text, callers = p.fault
+                    p.fault = None
+                    self._fault(p, pc, text, callers, halt=False)
+                else:
+                    try:
+                        at = p.resume()
+                    except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                        self._outcome(p, exc)
+                    else:
+                        if at is not HALT:
+                            p.at = at
+                    if dbg is not None and dbg.halt is not None:
+                        self._rest = (t, todo[i:], ran)
+                        return False
+            i += 1
+        self._rest = None
+        self._after_tick(t, ran)
+        if self.watching and dbg is not None:
+            dbg.tick_ended()
+        return True
+
+    @property
+    def mid_tick(self) -> bool:
+        """The debugger halted a tick before its end."""
+        return self._rest is not None
+
+    def resume_tick(self) -> bool:
+        """Run the rest of a halted tick; False when it halts again. Then the
+        next tick is ``t + 1``."""
+        rest = self._rest
+        if rest is None:
+            return True
+        t, todo, ran = rest
+        self._rest = None
+        self.t = t
+        if not self._run_procedures(t, list(todo), ran):
+            return False
+        self.t = t + 1
+        return True
+
+    def running(self, include_faulted: bool = True) -> list[Process]:
+        """The procedures running: the hardware one, then software by name."""
+        out = [self.hw] if self.hw is not None else []
+        return out + list(self._sw_order)
+
+    def watch_process(self, p: Process) -> None:
+        """Make p run code that asks the debugger: a procedure running plain
+        fast code goes over to the reference interpreter, exactly where it is
+        (suspended at a tick end, or not started yet)."""
+        if not p.watched:
+            self.to_reference(p)
+
+    def to_reference(self, p: Process) -> None:
+        """Hand p (suspended at a tick end, or not started) to the reference
+        interpreter, exactly where it is."""
+        if p.ended_at is not None or p.gen is None:
+            return
+        if p.on_reference():
+            p.watched = True
+            return
+        gen = p.gen
+        if gen.gi_frame is None or gen.gi_frame.f_lasti < 0:     # not started yet
+            new = vm.run_reference(p.program, p.slots, p.host)
         else:
-            self._after_tick(t, soft)
+            try:
+                gen.throw(Migrate)
+            except Handoff as h:
+                new = vm.run_reference(p.program, p.slots, p.host, pc=h.pc, stack=h.stack,
+                                       rets=h.rets, count=h.count)
+            except Exception as exc:  # noqa: BLE001 - a bug must not bring the controller down
+                self._outcome(p, exc)
+                return
+            else:                            # pragma: no cover - every tick end answers
+                return
+        p.syncing = None
+        p.watched = True
+        p.set_gen(new)
 
     def _after_tick(self, t: int, ran) -> None:
         """The end of tick t: each procedure that ran (hardware first, then
@@ -469,15 +598,15 @@ class PLC:
         last_f, last_p, last_code = self._row_state(last, name)
         while True:
             stop = min(end, t + (grid - t) % SOFTWARE_PERIOD_MS)
+            at = hw.at
             while t < stop:
                 self.t = t
                 try:
-                    resume()
+                    at = resume()
                 except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
                     self._last_row = last
-                    self._outcome(hw, exc)
-                    self._after_tick(t, (hw,))
-                    return t + 1
+                    hw.at = at
+                    return t + 1 if self._run_after(t, hw, exc) else t
                 code = slots[message_slot]
                 if code:
                     send(hw, code)
@@ -499,14 +628,27 @@ class PLC:
                 else:
                     machine.t_ms += 1              # advance() would do only this
             self._last_row = last
+            hw.at = at
             if t == end:
                 return t
-            self._tick(t, software=True)
+            if not self._tick(t, software=True):
+                return t
             last = self._last_row
             last_f, last_p, last_code = self._row_state(last, name)
             t += 1
             if self.hw is not hw or hw.resume is not resume or self._due_hw or self.bindings:
                 return t
+
+    def _run_after(self, t: int, hw: Process, exc: BaseException) -> bool:
+        """The hardware procedure's tick t raised (the fast path): its outcome
+        and the end of the tick; False when the debugger halted it there."""
+        self._outcome(hw, exc)
+        dbg = self.debugger
+        if dbg is not None and dbg.halt is not None:
+            self._rest = (t, [hw], (hw,))
+            return False
+        self._after_tick(t, (hw,))
+        return True
 
     def _machine_alone(self, t: int, stop: int) -> int:
         """Ticks t..stop-1 with no procedure running and none due: only the

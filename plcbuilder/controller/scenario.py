@@ -278,5 +278,8 @@ def drive(controller, scenario: Scenario, limit_ms: int, *, until_idle: bool = T
             c.step(count)
         if on_chunk is not None:
             on_chunk()
+        dbg = getattr(c, "debugger", None)
+        if dbg is not None and dbg.halted:  # the debugger halted it: the run ends there
+            return c.t_ms
         if ran is not None and ran < count:
             return c.t_ms - 1

@@ -20,7 +20,7 @@ from typing import Optional, Sequence
 
 from plcbuilder.bytecode import abi
 from plcbuilder.controller.controller import Controller, ControllerError
-from plcbuilder.controller.events import Ended, Fault, Message, Note, Print, Started
+from plcbuilder.controller.events import Ended, Fault, Log, Message, Note, Print, Started
 from plcbuilder.controller.scenario import (Scenario, ScenarioError, drive, parse_adc,
                                             parse_input, parse_start)
 
@@ -153,6 +153,7 @@ class ReportCollector:
         self.prints: list[dict] = []
         self.faults: list[dict] = []
         self.notes: list[dict] = []
+        self.logs: list[dict] = []
 
     def take(self, events) -> None:
         for e in events:
@@ -181,6 +182,8 @@ class ReportCollector:
                                               for f, ln, pr in e.calls]})
             elif isinstance(e, Note):
                 self.notes.append({"t_ms": e.t_ms, "level": e.level, "text": e.text})
+            elif isinstance(e, Log):
+                self.logs.append({"t_ms": e.t_ms, "from": e.source, "text": e.text})
 
     def report(self, ended: int, target) -> dict:
         c = self.c
@@ -202,6 +205,7 @@ class ReportCollector:
             "prints": self.prints,
             "faults": self.faults,
             "notes": self.notes,
+            "logs": self.logs,
             "axes": m.axis_positions(),
             "proc": st.proc,
             "proc_name": st.proc_name,

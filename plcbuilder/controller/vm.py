@@ -81,6 +81,18 @@ class Handoff(Exception):
         self.count = count
 
 
+class Halted(Handoff):
+    """Raised by the fast backend where the debugger halts a procedure mid-tick:
+    the reference interpreter goes on from this state when it resumes, without
+    asking the debugger again at ``pc``."""
+
+
+class Migrate(Exception):
+    """Thrown into a fast-backend generator suspended at a tick end: it answers
+    with a :class:`Handoff` of its exact state, so that the reference interpreter
+    can go on from there (the debugger does this to watch or step it)."""
+
+
 class Host:
     """What a running procedure reaches outside itself.
 
@@ -103,7 +115,8 @@ class Host:
     """
 
     __slots__ = ("portset", "portclr", "portget", "gvarget", "gvarset", "g0move", "plain",
-                 "lat", "pr", "raw_gvarset", "starthw", "seteparam", "softjog", "software", "io")
+                 "lat", "pr", "raw_gvarset", "starthw", "seteparam", "softjog", "software", "io",
+                 "debug")
 
     def __init__(self, *, portset, portclr, portget, gvarget, gvarset, g0move,
                  plain=None, lat: int = 0, pr=None, raw_gvarset=None, starthw=None,
@@ -117,6 +130,10 @@ class Host:
         self.starthw, self.seteparam, self.softjog = starthw, seteparam, softjog
         self.software = software
         self.io = io
+        #: the debugger's view of this procedure (controller/debugger.py ``Watch``):
+        #: ``marks`` (per code offset, watched or not), ``brk(pc, rets)`` (True: halt
+        #: before pc), ``table(program, base)`` (the kinds with K_BREAK where marked)
+        self.debug = None
 
 
 # ------------------------------------------------------------- pre-decoding
@@ -125,8 +142,15 @@ class Host:
 
 (K_CONST, K_LOAD, K_STORE, K_INC, K_DEC, K_POP, K_NOP, K_BIN, K_DIV, K_MOD, K_UN,
  K_JMP, K_JZ, K_JNZ, K_LOOP, K_YIELD, K_CALL, K_RET, K_EXIT,
- K_PORTSET, K_PORTCLR, K_PORTGET, K_GVARGET, K_GVARSET, K_G0MOVE, K_END, K_COVER) = range(27)
+ K_PORTSET, K_PORTCLR, K_PORTGET, K_GVARGET, K_GVARSET, K_G0MOVE, K_END, K_COVER,
+ K_BREAK) = range(28)
 # K_COVER: an instruction not yet run while coverage is recorded (controller/coverage.py)
+# K_BREAK: an instruction the debugger watches (controller/debugger.py): its hook is
+#   asked first, and the instruction runs once it lets it (its own kind is in the base table)
+
+#: What a procedure's generator yields when the debugger halts it mid-tick (a tick
+#: end yields the code offset of the instruction that ended the tick).
+HALT = object()
 
 _KIND_OF: dict[Op, int] = {
     Op.LOAD: K_LOAD, Op.STORE: K_STORE, Op.INC: K_INC, Op.DEC: K_DEC, Op.POP: K_POP,
@@ -184,7 +208,7 @@ def decoded(program: Program) -> tuple[list, list, list]:
 
 def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[int] = None,
                   stack: Optional[list[int]] = None, rets: tuple[int, ...] | list[int] = (),
-                  count: int = 0, cover=None) -> Iterator[None]:
+                  count: int = 0, cover=None, passed: int = -1) -> Iterator[None]:
     """Run ``program`` over the variable slots ``s``; one ``next()`` per tick.
 
     The keyword arguments resume a procedure mid-tick from the state the fast
@@ -193,10 +217,24 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
     instructions run: its table marks each one K_COVER until it first runs
     (then the mark is replaced by the instruction's own kind), so recording
     costs one extra step per instruction once, and nothing when off.
+
+    The debugger (``host.debug``) works the same way: the offsets it watches
+    are K_BREAK in its table, changed in place while the procedure runs. At one,
+    its hook decides whether to halt (the generator then yields :data:`HALT`,
+    mid-tick); the instruction itself runs once (its mark lifted) and the mark
+    comes back at the next transfer of control, the only way back to it.
+    ``passed``: the offset where a halt already happened (not asked again).
+    Each tick end yields the offset of the instruction that ended the tick.
     """
     kinds, args, nexts = decoded(program)
     if cover is not None:
         kinds, cover_hit = cover.table(program, kinds)
+    debug = host.debug
+    base = kinds
+    pending = -1                           # a watched offset whose mark is lifted
+    if debug is not None:
+        kinds = debug.table(program, base)
+        marks, brk = debug.marks, debug.brk
     if pc is None:
         pc = program.entry
     stack = [] if stack is None else list(stack)
@@ -223,14 +261,21 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                 push(args[pc](pop(), b))
             elif k == K_JZ:
                 if not pop():
+                    if pending >= 0:
+                        kinds[pending] = K_BREAK if marks[pending] else base[pending]
+                        pending = -1
                     pc = args[pc]
                     continue
             elif k == K_LOOP:
                 cond = pop()
                 if len(stack) > STACK_LIMIT:
                     raise VMFault(pc, FAULT_OVERFLOW)
-                pc = args[pc] if cond else nexts[pc]
-                yield
+                at, pc = pc, args[pc] if cond else nexts[pc]
+                if pending >= 0:
+                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
+                    pending = -1
+                passed = -1
+                yield at
                 count = 0
                 continue
             elif k == K_INC:
@@ -240,10 +285,16 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                 i = args[pc]
                 s[i] = wrap(s[i] - 1)
             elif k == K_JMP:
+                if pending >= 0:
+                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
+                    pending = -1
                 pc = args[pc]
                 continue
             elif k == K_JNZ:
                 if pop():
+                    if pending >= 0:
+                        kinds[pending] = K_BREAK if marks[pending] else base[pending]
+                        pending = -1
                     pc = args[pc]
                     continue
             elif k == K_UN:
@@ -257,7 +308,7 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                     if len(stack) > STACK_LIMIT:
                         raise VMFault(pc, FAULT_OVERFLOW)
                     for _ in range(lat):
-                        yield
+                        yield pc
                     count = 0
                 push(gvarget(a))
             elif k == K_PORTGET:
@@ -271,8 +322,12 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
             elif k == K_YIELD:
                 if len(stack) > STACK_LIMIT:
                     raise VMFault(pc, FAULT_OVERFLOW)
-                pc = nexts[pc]
-                yield
+                at, pc = pc, nexts[pc]
+                if pending >= 0:
+                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
+                    pending = -1
+                passed = -1
+                yield at
                 count = 0
                 continue
             elif k == K_CALL:
@@ -280,12 +335,18 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                     raise VMFault(pc, FAULT_DEPTH)
                 if len(stack) > STACK_LIMIT:
                     raise VMFault(pc, FAULT_OVERFLOW)
+                if pending >= 0:
+                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
+                    pending = -1
                 calls.append(nexts[pc])
                 pc = args[pc]
                 continue
             elif k == K_RET:
                 if not calls:
                     raise ProcExit(0)
+                if pending >= 0:
+                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
+                    pending = -1
                 pc = calls.pop()
                 continue
             elif k == K_EXIT:
@@ -303,8 +364,24 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
             elif k == K_END:
                 raise VMFault(pc, FAULT_END)
             elif k == K_COVER:            # first run of this instruction: record it, then run it
-                kinds[pc] = cover_hit(pc)
+                real = cover_hit(pc)
+                base[pc] = real
+                if kinds[pc] == K_COVER:
+                    kinds[pc] = real
                 count -= 1
+                continue
+            elif k == K_BREAK:            # watched: ask the debugger, then run the instruction
+                count -= 1
+                if passed != pc:
+                    if brk(pc, calls):
+                        passed = pc
+                        yield HALT
+                        continue
+                passed = -1
+                if pending >= 0:
+                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
+                kinds[pc] = base[pc]
+                pending = pc
                 continue
             # K_NOP: nothing
             pc = nexts[pc]

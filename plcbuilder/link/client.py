@@ -23,6 +23,7 @@ Errors: :class:`LinkError` for anything about the connection,
 
 from __future__ import annotations
 
+import base64
 import itertools
 import socket
 import sys
@@ -122,6 +123,10 @@ class Client:
         self._changes = protocol.ChangeDecoder()
         self._reader: Optional[threading.Thread] = None
         self.address: tuple = ("", 0)
+        #: called on the reader thread with each ``halted``/``resumed`` notification
+        #: (the message as a dict); without one they queue for :meth:`next_notification`
+        self.notification_callback: Optional[Callable[[dict], None]] = None
+        self._notes: deque = deque(maxlen=1000)
 
     # ------------------------------------------------------------ connecting
     @classmethod
@@ -318,6 +323,55 @@ class Client:
     def ping(self) -> dict:
         return self.request("ping")
 
+    # ------------------------------------------------------------ debugger
+    def set_breakpoints(self, file: str, breakpoints: list[dict]) -> list[dict]:
+        """Replace the breakpoints of ``file``: dicts {line, enabled?, condition?,
+        hit?, log?}; a condition is ``{text, code}`` with ``code`` the compiled
+        condition's bytes (:func:`plcbuilder.api.compile_condition`) or base64.
+        Returns each one's {id, file, line, verified, reason}."""
+        out = []
+        for b in breakpoints:
+            b = dict(b)
+            cond = b.get("condition")
+            if isinstance(cond, dict) and isinstance(cond.get("code"), (bytes, bytearray)):
+                b["condition"] = {"text": cond.get("text", ""),
+                                  "code": base64.b64encode(bytes(cond["code"])).decode("ascii")}
+            out.append(b)
+        return self.request("set_breakpoints", file=file, breakpoints=out)["breakpoints"]
+
+    def debug_continue(self) -> dict:
+        return self.request("debug_continue")
+
+    def debug_pause(self) -> dict:
+        return self.request("debug_pause")
+
+    def debug_step(self, kind: str, procedure: Optional[str] = None) -> dict:
+        """kind: tick, into, over or out."""
+        fields = {"kind": kind}
+        if procedure is not None:
+            fields["procedure"] = procedure
+        return self.request("debug_step", **fields)
+
+    def debug_run_to(self, file: str, line: int) -> dict:
+        return self.request("debug_run_to", file=file, line=line)
+
+    def debug_state(self) -> Optional[dict]:
+        """The halted state, or None while running."""
+        return self.request("debug_state")["halted"]
+
+    def next_notification(self, timeout: Optional[float] = None) -> Optional[dict]:
+        """The next ``halted``/``resumed`` notification (without a callback), or None."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        with self._batch_ready:
+            while not self._notes:
+                if self._closed:
+                    return None
+                left = None if deadline is None else deadline - time.monotonic()
+                if left is not None and left <= 0:
+                    return None
+                self._batch_ready.wait(left if left is not None else 0.5)
+            return self._notes.popleft()
+
     # ------------------------------------------------------------ telemetry
     def subscribe(self, callback: Optional[Callable[[Telemetry], None]] = None, *,
                   samples: bool = True, events: bool = True, queue: int = 1000,
@@ -421,6 +475,24 @@ class Client:
 
     def on_bye(self, msg: dict) -> None:
         self.close_reason = str(msg.get("reason", "the controller said bye"))
+
+    def _notify(self, msg: dict) -> None:
+        cb = self.notification_callback
+        if cb is not None:
+            try:
+                cb(msg)
+            except Exception:  # noqa: BLE001 - a callback bug must not stop the reader
+                traceback.print_exc(file=sys.stderr)
+            return
+        with self._batch_ready:
+            self._notes.append(msg)
+            self._batch_ready.notify_all()
+
+    def on_halted(self, msg: dict) -> None:
+        self._notify(msg)
+
+    def on_resumed(self, msg: dict) -> None:
+        self._notify(msg)
 
     def on_telemetry(self, msg: dict) -> None:
         dec = self._changes

@@ -151,6 +151,7 @@ class Simulation:
         self.error: Optional[str] = None
         self._tick_cost = 2e-6                  # seconds a tick takes, averaged
         self._held_since: Optional[float] = None  # waiting for a lossless subscriber since
+        self._was_halted = False
         self.clock: Callable[[], float] = time.monotonic
         self._base_wall = self.clock()
         self._base_t = controller.t_ms
@@ -354,6 +355,18 @@ class Simulation:
         next_due = self._base_wall + (t + 1 - self._base_t) / rate
         return max(next_due - now, self.batch)
 
+    def _halted(self) -> bool:
+        """The debugger halted the controller: time stands still (requests are
+        still answered); when it goes on, pacing starts again from then."""
+        dbg = getattr(self.controller, "debugger", None)
+        halted = dbg is not None and dbg.halt is not None
+        if halted:
+            self._was_halted = True
+        elif self._was_halted:
+            self._was_halted = False
+            self._rebase()
+        return halted
+
     def _shutdown_controller(self) -> None:
         try:
             self.controller.shutdown()
@@ -368,8 +381,8 @@ class Simulation:
             if self._stop:
                 break
             mode = self.mode
-            if mode == "pause":
-                self._wait(0.5)
+            if mode == "pause" or self._halted():
+                self._wait(0.5 if mode == "pause" else 0.05)
                 continue
             if mode == "max":
                 n = self._chunk()

@@ -23,6 +23,8 @@ Messages
         speed {mode, factor?}           step {ms}
         reset {}                        event {handler}
         ping {}
+        set_breakpoints {file, breakpoints}   debug_state {}      (docs/protocol.md, "Debugging")
+        debug_continue {}  debug_pause {}  debug_step {kind, procedure?}  debug_run_to {file, line}
 
     server -> client:
         welcome {id, version, server, pid, t_ms, speed}   the answer to hello
@@ -30,6 +32,8 @@ Messages
         error {id, code, reason}                          a request refused
         telemetry {t_ms, changes, events, missed, missed_events}   (MessagePack)
         bye {reason}                                      the server is going away
+        halted {state}   resumed {t_ms}                   the debugger halted / went on
+                                                          (to every subscriber)
 
     Both ends dispatch a message by its type to a method named ``handle_<type>``
     (server) or ``on_<type>`` (client) after checking the type against the
@@ -89,8 +93,12 @@ _MAX_ID_TEXT = 64
 #: Requests a client may send, and the messages a server may send. Dispatch
 #: only ever looks a type up in these sets.
 REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state", "variables",
-                      "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping"})
-REPLIES = frozenset({"welcome", "result", "error", "telemetry", "bye"})
+                      "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping"}
+                     | {"set_breakpoints", "debug_continue", "debug_pause", "debug_step",
+                        "debug_run_to", "debug_state"})
+#: Events that travel as notifications of their own (not inside telemetry).
+NOTIFICATIONS = frozenset({"halted", "resumed"})
+REPLIES = frozenset({"welcome", "result", "error", "telemetry", "bye"}) | NOTIFICATIONS
 
 #: Speed modes of the ``speed`` request.
 SPEED_MODES = ("realtime", "factor", "max", "pause")

@@ -703,6 +703,10 @@ class Server:
             if got is None:
                 continue
             rows, events, missed, missed_events, t_ms = got
+            notes = [e for e in events if getattr(e, "type", None) in protocol.NOTIFICATIONS]
+            if notes:
+                events = [e for e in events if getattr(e, "type", None) not in
+                          protocol.NOTIFICATIONS]
             enc = conn.session.changes
             if missed:
                 enc.reset()                    # the chain is broken: start from a whole sample
@@ -724,6 +728,11 @@ class Server:
                 self._send_frame(conn, frame)
                 if conn.closed:
                     break
+            for e in notes:                    # after the telemetry that led to them
+                if conn.closed:
+                    break
+                note = protocol.event_dict(e)
+                self._send(conn, {"type": note.pop("type"), **note})
             if not conn.closed:
                 self._update(conn)
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 from typing import Callable, Optional
 
 from plcbuilder.controller.controller import Controller, ControllerError
+from plcbuilder.controller.debugger import DebugError
 from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.image.manifest import Image, ImageError, Limits, read_image
 from plcbuilder.link import protocol
@@ -21,6 +22,7 @@ from plcbuilder.link.pacing import Simulation, SimulationDown, TelemetryQueue
 from plcbuilder.link.protocol import (MAX_IMAGE, REQUESTS, SAMPLE_FIELDS, BadRequest, ErrorCode,
                                       ProtocolError)
 from plcbuilder.link.protocol import debug as _debug
+from plcbuilder.link.service_debug import DebugVerbs
 
 __all__ = ["EVENT_HANDLERS", "Refused", "Service", "Session", "image_summary"]
 
@@ -53,8 +55,9 @@ def image_summary(image: Optional[Image]) -> list[dict]:
              "file_size": p.file_size, "crc32": f"{p.crc32:08x}"} for p in image.procedures]
 
 
-class Service:
-    """The controller's verbs, one ``handle_<type>`` per request type.
+class Service(DebugVerbs):
+    """The controller's verbs, one ``handle_<type>`` per request type (the
+    debugger's in :class:`~plcbuilder.link.service_debug.DebugVerbs`).
 
     ``controller_factory`` makes a fresh controller for ``reset`` (None: reset
     is refused). ``limits`` are the controller's code size limits that an
@@ -91,7 +94,7 @@ class Service:
         """Run fn on the simulation thread; a ControllerError becomes Refused."""
         try:
             return self.sim.call(fn)
-        except ControllerError as exc:
+        except (ControllerError, DebugError) as exc:
             raise Refused(str(exc)) from None
         except SimulationDown as exc:
             raise Refused(str(exc)) from None

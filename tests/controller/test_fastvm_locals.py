@@ -42,7 +42,7 @@ main()
 def test_a_loop_that_calls_nothing_keeps_its_variables_in_locals():
     prog = compile_proc(LOOP, "M10")
     src = fastvm.translate(prog)
-    assert "if (yield) is not None:" in src and "v22 += 1" in src and "finally:" in src
+    assert "if (yield " in src and "v22 += 1" in src and "finally:" in src
 
 
 @pytest.mark.parametrize("src", [LOOP, CALLS])

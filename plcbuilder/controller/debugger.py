@@ -1,0 +1,613 @@
+"""The debugger: line breakpoints (conditions, hit counts, logpoints), halting
+mid-tick, stepping and the halted state (SPEC §6, docs/debugging.md).
+
+How it reaches the running code: each program has a list of *marks*, one per
+code offset, true where something is watched (a breakpoint's offset, a "run
+to" target, every statement start of a program being stepped). The reference
+interpreter sees the marks as K_BREAK in its instruction table; the fast
+backend, for a program that has breakpoints when a procedure starts, runs a
+translation that tests the mark at every statement start (a plain translation
+otherwise; a procedure running plain code when its program gets a mark is
+handed over to the reference interpreter at its tick end). At a marked
+offset both call :meth:`Watch.brk`, which decides: a condition, a hit count,
+a logpoint (a log event and no halt), a step that is done, or a halt. A halt
+in the fast backend hands the procedure to the reference interpreter, which
+goes on from there when it resumes; so both backends halt at the same
+instruction with the same stack and variables.
+
+Halting stops the whole controller: the PLC keeps the rest of the tick
+(the procedures not yet run, then the end of the tick) and runs it on
+:meth:`Debugger.resume` (continue, a step). While halted, time does not move.
+"""
+
+from __future__ import annotations
+
+import inspect
+import re
+from dataclasses import dataclass, field
+from typing import Optional
+
+from plcbuilder.bytecode import abi
+from plcbuilder.bytecode.opcodes import Op, size_of, validate
+from plcbuilder.bytecode.program import LoadError, Program
+from plcbuilder.controller import vm
+from plcbuilder.controller.events import Halted, Log, Resumed
+
+REASONS = ("breakpoint", "step", "pause", "fault")
+HIT_MODES = ("eq", "ge", "every")
+STEP_KINDS = ("tick", "into", "over", "out")
+_CALL_SIZE = size_of(Op.CALL)
+_SLOT_OPS = frozenset({Op.LOAD, Op.STORE, Op.INC, Op.DEC})
+_PLACEHOLDER = re.compile(r"\{([A-Za-z_][A-Za-z0-9_]*)\}")
+
+
+class DebugError(Exception):
+    """A debugger request refused; the message says why. Nothing was changed."""
+
+
+@dataclass
+class Breakpoint:
+    id: int
+    file: str
+    line: int                          # the line asked for (kept across rebuilds)
+    enabled: bool = True
+    condition: Optional[str] = None
+    code: Optional[bytes] = None       # the compiled condition (a Program binary)
+    hit: Optional[tuple[str, int]] = None
+    log: Optional[str] = None
+    #: where it resolved: program name -> (line, offsets); and the bound conditions
+    where: dict = field(default_factory=dict)
+    bound: dict = field(default_factory=dict)
+    hits: int = 0
+    reason: Optional[str] = None
+
+    @property
+    def at_line(self) -> int:
+        """The line it moved to (the first line with code at or after ``line``)."""
+        lines = sorted(ln for ln, _ in self.where.values())
+        return lines[0] if lines else self.line
+
+    def answer(self) -> dict:
+        return {"id": self.id, "file": self.file, "line": self.at_line,
+                "verified": bool(self.where) and self.reason is None, "reason": self.reason}
+
+    def spec(self) -> dict:
+        return {"id": self.id, "file": self.file, "line": self.line, "enabled": self.enabled,
+                "condition": self.condition,
+                "hit": {"mode": self.hit[0], "n": self.hit[1]} if self.hit else None,
+                "log": self.log, "hits": self.hits, **{k: v for k, v in self.answer().items()
+                                                     if k in ("verified", "reason")},
+                "at_line": self.at_line}
+
+
+@dataclass
+class Halt:
+    reason: str
+    process: object = None             # plc.Process, or None (pause, step tick)
+    pc: Optional[int] = None
+    rets: tuple = ()
+    breakpoint: Optional[Breakpoint] = None
+    fault: Optional[str] = None
+
+
+class Watch:
+    """What one running procedure's interpreter asks (``Host.debug``)."""
+
+    __slots__ = ("marks", "brk", "_debugger", "_program")
+
+    def __init__(self, debugger: "Debugger", process):
+        self._debugger = debugger
+        self._program = process.program
+        self.marks = debugger._marks_of(process.program)
+
+        def brk(pc: int, rets, _d=debugger, _p=process) -> bool:
+            return _d._reached(_p, pc, rets)
+
+        self.brk = brk
+
+    def table(self, program: Program, base: list) -> list:
+        return self._debugger._table_of(program, base)
+
+
+def resolve(program: Program, file: str, line: int) -> Optional[tuple[int, list[int]]]:
+    """(the line, its offsets): the first line at or after ``line`` of ``file``
+    that has code in ``program``, and the offsets where that line is entered
+    (an entry of the line table whose previous entry is another line)."""
+    want = [i for i, f in enumerate(program.files) if _same_file(f, file)]
+    if not want:
+        return None
+    starts: dict[int, list[int]] = {}
+    prev = None
+    for e in sorted(program.lines, key=lambda e: e.pc):
+        key = (e.file, e.line)
+        if e.file in want and e.line >= line and key != prev:
+            starts.setdefault(e.line, []).append(e.pc)
+        prev = key
+    if not starts:
+        return None
+    first = min(starts)
+    return first, starts[first]
+
+
+def _same_file(stored: str, asked: str) -> bool:
+    if stored == asked:
+        return True
+    a = asked.replace("\\", "/").rsplit("/", 1)[-1]
+    return stored.replace("\\", "/").rsplit("/", 1)[-1] == a
+
+
+def bind(condition: Program, target: Program) -> Program:
+    """The condition with its variables renumbered to ``target``'s slots, by
+    name (predefined variables have the same slots everywhere)."""
+    slots = {n: abi.FIRST_USER_SLOT + i for i, n in enumerate(target.var_names)}
+    own = {abi.FIRST_USER_SLOT + i: n for i, n in enumerate(condition.var_names)}
+    code = bytearray(condition.code)
+    for ins in validate(condition.code, condition.entry):
+        if ins.op in _SLOT_OPS and ins.arg in own:
+            name = own[ins.arg]
+            if name not in slots:
+                raise DebugError(f"the condition reads {name!r}, which is not a variable "
+                                 f"of {target.name}")
+            code[ins.offset + 1] = slots[name]
+    return Program(condition.name, target.kind, bytes(code), condition.entry,
+                   list(target.var_names), list(condition.files), list(condition.lines),
+                   list(condition.procs))
+
+
+class Debugger:
+    """Breakpoints, stepping and the halted state of one PLC (``controller.debugger``)."""
+
+    def __init__(self, plc):
+        self.plc = plc
+        self._next_id = 1
+        self._bps: dict[str, list[Breakpoint]] = {}      # by file as given
+        self._marks: dict[str, list] = {}                 # program name -> per-offset marks
+        self._tables: dict[str, tuple[list, list]] = {}   # program name -> (base, table)
+        self._at: dict[tuple[str, int], list[Breakpoint]] = {}
+        self._run_to: dict[str, set[int]] = {}
+        self._stepping: Optional[tuple] = None            # (process, kind, depth)
+        self._step_end_tick = False                       # halt at this tick's end
+        self.halt: Optional[Halt] = None
+        self._told: Optional[Halt] = None                 # the halt last announced
+        #: halt at a runtime fault (on while any breakpoint is set, or when asked)
+        self.halt_on_fault = False
+
+    # ----------------------------------------------------------- queries
+    @property
+    def on(self) -> bool:
+        """Whether faults halt: a breakpoint is set, a step runs, or asked for."""
+        return self.halt_on_fault or bool(self._at) or any(self._bps.values()) \
+            or self._stepping is not None or bool(self._run_to)
+
+    @property
+    def halted(self) -> bool:
+        return self.halt is not None
+
+    def breakpoints(self) -> list[dict]:
+        return [bp.spec() for file in sorted(self._bps) for bp in self._bps[file]]
+
+    def watched(self, program: Program) -> bool:
+        """Whether a procedure of ``program`` starting now runs watched code."""
+        marks = self._marks.get(program.name)
+        return marks is not None and any(marks) or any(
+            program.name in bp.where for bps in self._bps.values() for bp in bps)
+
+    def watch(self, process) -> Watch:
+        return Watch(self, process)
+
+    # ------------------------------------------------------- breakpoints
+    def set_breakpoints(self, file: str, specs: list) -> list[dict]:
+        """Replace the breakpoints of ``file`` with ``specs`` (dicts: line,
+        enabled, condition ({text, code} or None), hit ({mode, n} or None),
+        log). Refuses the whole request (DebugError) when one is bad."""
+        if not isinstance(file, str) or not file.strip():
+            raise DebugError("a breakpoint needs a file name")
+        if not isinstance(specs, (list, tuple)):
+            raise DebugError("breakpoints must be a list")
+        programs = self._programs_with(file)
+        if specs and not programs:
+            loaded = sorted({_base(f) for p in self.plc.programs.values() for f in p.files})
+            raise DebugError(f"no loaded procedure is built from {file!r}"
+                             + (f" (files: {', '.join(loaded[:20])})" if loaded else
+                                " (nothing is loaded)"))
+        made = []
+        for k, spec in enumerate(specs):
+            made.append(self._make(file, spec, programs, f"breakpoint {k + 1}"))
+        old = {(bp.line, bp.condition, bp.hit, bp.log): bp for bp in self._bps.get(file, [])}
+        for bp in made:                     # a breakpoint set again keeps its id and hits
+            same = old.get((bp.line, bp.condition, bp.hit, bp.log))
+            if same is not None:
+                bp.id, bp.hits = same.id, same.hits
+            else:
+                bp.id, self._next_id = self._next_id, self._next_id + 1
+        if made:
+            self._bps[file] = made
+        else:
+            self._bps.pop(file, None)
+        self._remark()
+        return [bp.answer() for bp in made]
+
+    def _make(self, file: str, spec, programs: list[Program], what: str) -> Breakpoint:
+        if not isinstance(spec, dict):
+            raise DebugError(f"{what}: not an object")
+        line = spec.get("line")
+        if isinstance(line, bool) or not isinstance(line, int) or line < 1:
+            raise DebugError(f"{what}: line must be a whole number from 1, not {line!r}")
+        bp = Breakpoint(0, file, line, enabled=bool(spec.get("enabled", True)))
+        hit = spec.get("hit")
+        if hit is not None:
+            if not isinstance(hit, dict) or hit.get("mode") not in HIT_MODES:
+                raise DebugError(f"{what}: hit must be {{mode: eq|ge|every, n}}, not {hit!r}")
+            n = hit.get("n")
+            if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+                raise DebugError(f"{what}: hit count n must be 1 or more, not {n!r}")
+            bp.hit = (hit["mode"], n)
+        log = spec.get("log")
+        if log is not None and not isinstance(log, str):
+            raise DebugError(f"{what}: log must be text")
+        bp.log = log
+        cond = spec.get("condition")
+        if cond is not None:
+            if isinstance(cond, Program):
+                cond = {"text": cond.name, "code": cond.to_bytes()}
+            if not isinstance(cond, dict) or not isinstance(cond.get("code"), (bytes, bytearray)):
+                raise DebugError(f"{what}: a condition must arrive compiled ({{text, code}})")
+            try:
+                Program.from_bytes(bytes(cond["code"]))
+            except LoadError as exc:
+                raise DebugError(f"{what}: the compiled condition is damaged: {exc}") from None
+            bp.condition = str(cond.get("text") or "")
+            bp.code = bytes(cond["code"])
+        self._resolve(bp, programs)
+        if bp.reason is not None and programs:
+            raise DebugError(f"{what}: {bp.reason}")
+        if programs and not bp.where:
+            last = max((e.line for p in programs for e in p.lines
+                        if _same_file(p.files[e.file] if e.file < len(p.files) else "", file)),
+                       default=0)
+            raise DebugError(f"{what}: {file} has no code on line {line} or after it "
+                             f"(its last line with code is {last})")
+        return bp
+
+    def _programs_with(self, file: str) -> list[Program]:
+        return [p for _n, p in sorted(self.plc.programs.items())
+                if any(_same_file(f, file) for f in p.files)]
+
+    def _resolve(self, bp: Breakpoint, programs: list[Program]) -> None:
+        """Where bp is in these programs (its offsets), and its condition bound to each."""
+        bp.where, bp.bound, bp.reason = {}, {}, None
+        for p in programs:
+            r = resolve(p, bp.file, bp.line)
+            if r is None:
+                continue
+            if bp.code is not None:
+                try:
+                    bp.bound[p.name] = bind(Program.from_bytes(bp.code), p)
+                except DebugError as exc:
+                    bp.reason = str(exc)
+                    continue
+            bp.where[p.name] = r
+        if not programs:
+            bp.reason = f"no loaded procedure is built from {bp.file}"
+
+    def rebind(self) -> None:
+        """After a rebuild: every breakpoint again on its line in the new programs."""
+        self._stepping = None
+        self._run_to.clear()
+        self._marks.clear()
+        self._tables.clear()
+        for file, bps in self._bps.items():
+            programs = self._programs_with(file)
+            for bp in bps:
+                self._resolve(bp, programs)
+        self._remark()
+
+    def clear(self) -> None:
+        """No breakpoint, no step, not halted (the rest of a halted tick is the PLC's)."""
+        self._bps.clear()
+        self._run_to.clear()
+        self._stepping = None
+        self.halt = None
+        self._remark()
+
+    def _remark(self) -> None:
+        """Marks from the breakpoints, the run-to targets and the step, set in
+        place (running interpreters see them); procedures running plain fast
+        code whose program gains marks go over to the reference interpreter."""
+        at: dict[tuple[str, int], list[Breakpoint]] = {}
+        for bps in self._bps.values():
+            for bp in bps:
+                if not bp.enabled:
+                    continue
+                for name, (_line, pcs) in bp.where.items():
+                    for pc in pcs:
+                        at.setdefault((name, pc), []).append(bp)
+        self._at = at
+        want: dict[str, set[int]] = {}
+        for name, pc in at:
+            want.setdefault(name, set()).add(pc)
+        for name, pcs in self._run_to.items():
+            want.setdefault(name, set()).update(pcs)
+        step = self._stepping
+        if step is not None:
+            prog = step[0].program
+            want.setdefault(prog.name, set()).update(e.pc for e in prog.lines)
+        for name, program in self.plc.programs.items():
+            pcs = want.get(name, ())
+            if not pcs and name not in self._marks:
+                continue
+            marks = self._marks_of(program)
+            table = self._tables.get(name)
+            for pc in range(len(marks)):
+                on = pc in pcs
+                if marks[pc] != on:
+                    marks[pc] = on
+                    if table is not None:
+                        table[1][pc] = vm.K_BREAK if on else table[0][pc]
+            if pcs:
+                for p in self.plc.running():
+                    if p.program is program:
+                        self.plc.watch_process(p)
+        self.plc.watching = self.on
+
+    def _marks_of(self, program: Program) -> list:
+        marks = self._marks.get(program.name)
+        if marks is None or len(marks) != len(program.code) + 1:
+            marks = self._marks[program.name] = [False] * (len(program.code) + 1)
+        return marks
+
+    def _table_of(self, program: Program, base: list) -> list:
+        entry = self._tables.get(program.name)
+        if entry is None or entry[0] is not base:
+            marks = self._marks_of(program)
+            table = [vm.K_BREAK if marks[pc] else k for pc, k in enumerate(base)]
+            entry = self._tables[program.name] = (base, table)
+        return entry[1]
+
+    # ------------------------------------------------------------ reaching
+    def _reached(self, p, pc: int, rets) -> bool:
+        """An interpreter reached a marked offset: True to halt before it."""
+        step = self._stepping
+        if step is not None and step[0] is p:
+            depth = len(rets)
+            kind, depth0 = step[1], step[2]
+            if kind == "into" or (kind == "over" and depth <= depth0) or \
+                    (kind == "out" and depth < depth0):
+                return self._halt_at("step", p, pc, rets)
+        if pc in self._run_to.get(p.program.name, ()):
+            return self._halt_at("step", p, pc, rets)
+        for bp in self._at.get((p.program.name, pc), ()):
+            if bp.code is not None and not self._holds(bp, p):
+                continue
+            bp.hits += 1
+            if bp.hit is not None:
+                mode, n = bp.hit
+                if mode == "eq" and bp.hits != n or mode == "ge" and bp.hits < n \
+                        or mode == "every" and bp.hits % n:
+                    continue
+            if bp.log is not None:
+                self._log(p, bp.log)
+                continue
+            return self._halt_at("breakpoint", p, pc, rets, bp)
+        return False
+
+    def _holds(self, bp: Breakpoint, p) -> bool:
+        cond = bp.bound.get(p.program.name)
+        if cond is None:
+            return False
+        h = p.host
+        host = vm.Host(portset=h.portset, portclr=h.portclr, portget=h.portget,
+                       gvarget=h.gvarget, gvarset=h.gvarset, g0move=h.g0move, plain=h.plain)
+        try:
+            next(vm.run_reference(cond, p.slots, host))
+        except vm.ProcExit as done:
+            return done.code != 0
+        except vm.VMFault as exc:
+            self._log(p, f"breakpoint condition {bp.condition!r}: {exc.text}")
+            return False
+        return False
+
+    def _log(self, p, text: str) -> None:
+        values = p.variables()
+        out = _PLACEHOLDER.sub(lambda m: str(values[m.group(1)]) if m.group(1) in values
+                               else m.group(0), text)
+        self.plc.events.append(Log(self.plc.t, p.name, out))
+
+    def _halt_at(self, reason: str, p, pc: int, rets, bp=None) -> bool:
+        self.halt = Halt(reason, p, pc, tuple(rets), bp)
+        self._finish_command()
+        return True
+
+    def faulted(self, p, pc: Optional[int], text: str, callers) -> bool:
+        """A runtime fault in p: True when it halts there (the PLC ends p on resume)."""
+        if not self.on or pc is None:
+            return False
+        rets = tuple(c + _CALL_SIZE for c in reversed(list(callers)))
+        self.halt = Halt("fault", p, pc, rets, fault=text)
+        self._finish_command()
+        return True
+
+    def ended(self, p) -> None:
+        """p ended: a step in it halts at the end of this tick."""
+        if self._stepping is not None and self._stepping[0] is p:
+            self._stepping = None
+            self._step_end_tick = True
+
+    def tick_ended(self) -> None:
+        """The end of a tick (the PLC calls this while watching)."""
+        if self._step_end_tick and self.halt is None:
+            self._step_end_tick = False
+            self.halt = Halt("step")
+            self._finish_command()
+
+    def _finish_command(self) -> None:
+        """A halt ends the step or run-to that was going on."""
+        self._step_end_tick = False
+        if self._stepping is not None or self._run_to:
+            self._stepping = None
+            self._run_to.clear()
+            self._remark()
+
+    def settle(self) -> None:
+        """Announce what changed since the last call: a ``resumed`` event when
+        the halt announced is over, a ``halted`` event (with the state) for a
+        new one. The controller calls it after running ticks and after each command."""
+        h = self.halt
+        if h is self._told:
+            return
+        events = self.plc.events
+        if self._told is not None:
+            events.append(Resumed(self.plc.t))
+        if h is not None:
+            events.append(Halted(self.plc.t, self.halted_state()))
+        self._told = h
+
+    # ------------------------------------------------------------ commands
+    def pause(self) -> None:
+        """Halt at the end of the current tick (now, between ticks)."""
+        if self.halt is None:
+            self.halt = Halt("pause")
+            self._finish_command()
+        self.settle()
+
+    def resume(self) -> None:
+        """Continue: the rest of a halted tick runs (it may halt again)."""
+        if self.halt is None:
+            return
+        self.halt = None
+        self.plc.resume_tick()
+        self.settle()
+
+    def step(self, kind: str, procedure: Optional[str] = None) -> None:
+        """Step ``kind`` (tick, into, over, out) in ``procedure`` (default: the one halted)."""
+        if kind not in STEP_KINDS:
+            raise DebugError(f"unknown step {kind!r} (one of {', '.join(STEP_KINDS)})")
+        if self.halt is None:
+            raise DebugError("not halted: pause first")
+        if kind == "tick":                  # the rest of this tick, or one whole tick
+            self.halt = None
+            mid_tick = self.plc.mid_tick
+            if self.plc.resume_tick() and not mid_tick:
+                self.plc.run(1)
+            if self.halt is None:
+                self.halt = Halt("step")
+            self.settle()
+            return
+        p = self._procedure(procedure)
+        depth = len(self._position(p)[1])
+        self.plc.watch_process(p)
+        self._stepping = (p, kind, depth)
+        self._remark()
+        self.halt = None
+        self.plc.resume_tick()
+        self.settle()
+
+    def run_to(self, file: str, line: int) -> dict:
+        """Run until any procedure reaches ``file:line`` (a one-time breakpoint)."""
+        if self.halt is None:
+            raise DebugError("not halted: pause first")
+        programs = self._programs_with(file)
+        if not programs:
+            raise DebugError(f"no loaded procedure is built from {file!r}")
+        if isinstance(line, bool) or not isinstance(line, int) or line < 1:
+            raise DebugError(f"line must be a whole number from 1, not {line!r}")
+        found = {p.name: r for p in programs if (r := resolve(p, file, line)) is not None}
+        if not found:
+            raise DebugError(f"{file} has no code on line {line} or after it")
+        self._run_to = {name: set(pcs) for name, (_ln, pcs) in found.items()}
+        self._remark()
+        self.halt = None
+        self.plc.resume_tick()
+        self.settle()
+        return {"file": file, "line": min(ln for ln, _ in found.values())}
+
+    def _procedure(self, name: Optional[str]):
+        running = self.plc.running()
+        if name is None:
+            h = self.halt
+            if h.process is not None and h.process in running and h.reason != "fault":
+                return h.process
+            if self.plc.hw is not None:
+                return self.plc.hw
+            if running:
+                return running[0]
+            raise DebugError("no procedure is running")
+        for p in running:
+            if p.name == name:
+                return p
+        raise DebugError(f"{name!r} is not running (running: "
+                         f"{', '.join(p.name for p in running) or 'none'})")
+
+    # ------------------------------------------------------- halted state
+    def _position(self, p) -> tuple[Optional[int], tuple, bool]:
+        """(offset, return addresses, at a loop's end) of a running procedure."""
+        h = self.halt
+        if h is not None and h.process is p and h.pc is not None:
+            return h.pc, h.rets, False
+        gen = p.gen
+        if gen is None or inspect.getgeneratorstate(gen) == inspect.GEN_CREATED:
+            return p.program.entry, (), False
+        if not p.on_reference() and gen.gi_yieldfrom is not None:
+            self.plc.to_reference(p)         # inside a call: the reference knows the chain
+            gen = p.gen
+        rets: tuple = ()
+        if p.on_reference():
+            rets = tuple(inspect.getgeneratorlocals(gen).get("calls", ()))
+        at = p.at if p.at is not None else p.program.entry
+        code = p.program.code
+        loop = at < len(code) and code[at] in (Op.LOOP8, Op.LOOP16)
+        return at, rets, loop
+
+    def halted_state(self) -> Optional[dict]:
+        """The halted state (docs/debugging.md), or None while running."""
+        h = self.halt
+        if h is None:
+            return None
+        procs = []
+        for p in self.plc.running(include_faulted=True):
+            pc, rets, loop = self._position(p)
+            stack = self._frames(p.program, pc, rets)
+            top = stack[0] if stack else {"file": None, "line": None}
+            procs.append({"name": p.name, "kind": p.kind.label, "file": top["file"],
+                          "line": top["line"], "at_loop_end": loop, "stack": stack,
+                          "vars": p.variables()})
+        halting = h.process
+        here = None
+        if halting is not None:
+            here = next((q for q in procs if q["name"] == halting.name), None)
+        bp = h.breakpoint
+        return {"reason": h.reason, "t_ms": self.plc.t,
+                "procedure": halting.name if halting is not None else None,
+                "file": here["file"] if here else None, "line": here["line"] if here else None,
+                "procedures": procs, "machine": self._machine(),
+                "fault": {"text": h.fault} if h.fault is not None else None,
+                "breakpoint": {"id": bp.id, "file": bp.file, "line": bp.at_line}
+                if bp is not None else None}
+
+    @staticmethod
+    def _frames(program: Program, pc: Optional[int], rets) -> list[dict]:
+        sites = [pc] + [r - _CALL_SIZE for r in reversed(list(rets))]
+        out = []
+        for at in sites:
+            if at is None:
+                continue
+            loc = program.location(at)
+            out.append({"procedure": program.proc_at(at) or "main",
+                        "file": loc[0] if loc else None, "line": loc[1] if loc else None})
+        return out[:vm.MAX_CALL_DEPTH + 1]
+
+    def _machine(self) -> dict:
+        m = self.plc.machine
+        f = m.sample_fields()
+        n_in = getattr(m, "input_count", 64)
+        n_out = getattr(m, "output_count", 64)
+        bits = lambda words, n: [(words[i // 32] >> (i % 32)) & 1 for i in range(n)]  # noqa: E731
+        regs = getattr(m, "_regs", {})
+        return {"inputs": bits(f["inputs"], n_in), "outputs": bits(f["outputs"], n_out),
+                "adc": list(f["adc"]), "pwm": list(f["pwm"]), "dac": list(f["dac"]),
+                "axes": dict(m.axis_positions()),
+                "registers": {str(k): v for k, v in sorted(regs.items())}}
+
+
+def _base(f: str) -> str:
+    return f.replace("\\", "/").rsplit("/", 1)[-1]
