@@ -25,6 +25,7 @@ from plcbuilder.bytecode.opcodes import DecodeError, validate
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.controller.debugger import Debugger
 from plcbuilder.controller.events import ControllerStatus, Event, Note, Sample
+from plcbuilder.controller.forces import ForceError, Forces
 from plcbuilder.controller.plc import BACKENDS, PLC, mcode_names
 
 HANDLER_INIT = "__HANDLER_INIT"
@@ -62,6 +63,8 @@ class Controller:
         self._loaded_once = False
         self._stop_presses = 0
         self._crc: dict[str, int] = {}
+        #: write, force and release (controller/forces.py); forces() lists them
+        self.forces = Forces(self._plc, machine)
 
     # ------------------------------------------------------------ basics
     @property
@@ -142,6 +145,7 @@ class Controller:
         first, self._loaded_once = not self._loaded_once, True
         if first:
             plc.grid = plc.t               # the software grid starts at the first load
+        self.forces.on_load()              # forces survive the build
         if not autostart:
             return
         for name in sorted(by_name):
@@ -260,12 +264,39 @@ class Controller:
         except ValueError as exc:
             raise ControllerError(str(exc)) from None
 
+    # ------------------------------------------------------ write and force
+    def write(self, target: str, value) -> str:
+        """Set a target (``M03.x``, ``in 4``, ``out 0``, ``adc 1``, ``pwm 0``,
+        ``dac 1``, ``gvar 5000``) to ``value`` once. Returns its canonical name."""
+        return self._forcing(self.forces.write, target, value)
+
+    def force(self, target: str, value) -> str:
+        """Hold a target at ``value`` until released (SPEC §6)."""
+        return self._forcing(self.forces.force, target, value)
+
+    def release(self, target: str, mode: str = "restore") -> str:
+        """Release a target: ``keep`` its value or ``restore`` the program's."""
+        return self._forcing(self.forces.release, target, mode)
+
+    def release_all(self, mode: str = "restore") -> list[str]:
+        """Release everything forced; returns the names released."""
+        return self._forcing(self.forces.release_all, mode)
+
+    @staticmethod
+    def _forcing(fn, *args):
+        try:
+            return fn(*args)
+        except ForceError as exc:
+            raise ControllerError(str(exc)) from None
+
     # --------------------------------------------------------------- time
     def step(self, ms: int = 1) -> None:
         """Run ``ms`` ticks of 1 ms."""
         ms = self._int(ms, "ms")
         if ms < 0:
             raise ControllerError(f"cannot step {ms} ms")
+        if self.forces.pending:
+            self.forces.retry_pending()
         self._plc.run(ms)
         self.debugger.settle()
 
@@ -275,6 +306,8 @@ class Controller:
         ms = self._int(ms, "ms")
         if ms < 0:
             raise ControllerError(f"cannot step {ms} ms")
+        if self.forces.pending:
+            self.forces.retry_pending()
         ran = self._plc.run(ms, until_idle=True)
         self.debugger.settle()
         return ran

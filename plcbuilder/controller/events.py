@@ -98,7 +98,16 @@ class Resumed:
     type: str = "resumed"
 
 
-Event = Started | Ended | Message | Print | Fault | Note | Log | Halted | Resumed
+@dataclass(frozen=True)
+class Forces:
+    """The set of forces changed (controller/forces.py): everything forced now,
+    each ``{target, value, since_ms}``."""
+    t_ms: int
+    forces: tuple = ()
+    type: str = "forces"
+
+
+Event = Started | Ended | Message | Print | Fault | Note | Log | Halted | Resumed | Forces
 
 
 @dataclass
@@ -126,10 +135,13 @@ def to_dict(obj) -> dict:
 def from_dict(d: dict):
     """The inverse of :func:`to_dict` for events (by their ``type``) and samples."""
     kinds = {"started": Started, "ended": Ended, "message": Message, "print": Print,
-             "fault": Fault, "note": Note, "log": Log, "halted": Halted, "resumed": Resumed}
+             "fault": Fault, "note": Note, "log": Log, "halted": Halted, "resumed": Resumed,
+             "forces": Forces}
     t = d.get("type")
     if t == "fault" and "calls" in d:
         d = dict(d, calls=tuple(tuple(c) for c in d["calls"]))
+    if t == "forces":
+        d = dict(d, forces=tuple(dict(f) for f in d.get("forces", ())))
     if t in kinds:
         return kinds[t](**d)
     s = dict(d)

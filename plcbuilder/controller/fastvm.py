@@ -879,7 +879,8 @@ class _Gen:
         self.emit(ind + 1, f"raise Handoff({resume}, [{stack}], {self.rets()}, 0) from None")
         if self.budget:
             self.emit(ind, "n = 0")
-        self.known.pop(abi.SLOT_MESSAGE, None)    # the controller clears message at a tick end
+        # the controller clears message at a tick end, and a debugger may write any slot
+        self.known = {}
 
     def _check_ranges(self, ind: int, resume: Optional[int], depth: int) -> None:
         """After a SYNC: the variables read back must be in the ranges the code

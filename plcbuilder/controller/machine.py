@@ -62,8 +62,9 @@ class Machine:
         self._get: dict[int, Callable[[int], int]] = {}
         self._set: dict[int, Callable[[int, int], None]] = {}
         self._build_register_map()
-        #: each pin's state as a list, kept equal to in_bits/out_bits and changed in
-        #: place (the fast backend reads them: Host.io)
+        #: each pin's state as a list, changed in place (the fast backend reads them:
+        #: Host.io): in_levels equals in_bits; out_on is the outputs as the program
+        #: last set them (prog_out), equal to out_bits unless an output is forced
         self.in_levels = [0] * cfg.input_count
         self.out_on = [False] * cfg.output_count
         self.reset()
@@ -76,14 +77,25 @@ class Machine:
     def reset(self) -> None:
         """Power-on state: start positions, outputs off, no overrides, registers
         cleared, t_ms = 0."""
+        for addr in list(getattr(self, "_held", ())):
+            self.release_register(addr, True)     # its own functions back in the tables
         self.quiet = False
         self.t_ms = 0
         self._notes.clear()
         self.motion.reset()
         self.out_bits = 0
+        self.prog_out = 0                  # the outputs as the program set them
         self.out_on[:] = [False] * self.output_count
         self._ov_mask = 0
         self._ov_val = 0
+        # forces (controller/forces.py): pins and channels held by the debugger
+        self._fin_mask = self._fin_val = 0
+        self._fout_mask = self._fout_val = 0
+        self._adc_force: dict[int, int] = {}
+        #: forced register address -> [held value, the program's last write]
+        self._held: dict[int, list[int]] = {}
+        self._plain_held: set[int] = set()
+        self._unheld: dict[int, tuple] = {}     # address -> its own (get, set) functions
         self.sensors.reset(self.motion.ipos, 0)
         self.in_bits = 0
         self.in_levels[:] = [0] * self.input_count
@@ -146,8 +158,8 @@ class Machine:
         """Turn output ``pin`` on (at once). Writing the value an output already
         has changes nothing, and costs little: the machine stays quiet."""
         if 0 <= pin < self.output_count:
-            new = self.out_bits | (1 << pin)
-            if new != self.out_bits:
+            new = self.prog_out | (1 << pin)
+            if new != self.prog_out:
                 self._set_outputs(new)
         else:
             self._bad_pin("portset", pin, self.output_count, "outputs")
@@ -155,8 +167,8 @@ class Machine:
     def portclear(self, pin: int) -> None:
         """Turn output ``pin`` off (at once)."""
         if 0 <= pin < self.output_count:
-            new = self.out_bits & ~(1 << pin)
-            if new != self.out_bits:
+            new = self.prog_out & ~(1 << pin)
+            if new != self.prog_out:
                 self._set_outputs(new)
         else:
             self._bad_pin("portclear", pin, self.output_count, "outputs")
@@ -184,7 +196,7 @@ class Machine:
 
     def is_plain_register(self, addr: int) -> bool:
         """True when gvarget(addr) reads the plain global register store."""
-        return addr not in self._get
+        return addr not in self._get or addr in self._plain_held
 
     def g0move(self, flags: int, mask: int, distance: int) -> None:
         """g0moveA(flags, mask, distance): bit 0 absolute, bit 1 machine coordinates,
@@ -248,6 +260,155 @@ class Machine:
         """Give ADC ``channel`` back to its source."""
         self._adc_override.pop(channel, None)
         self._refresh_adc()
+
+    # ------------------------------------------------- debugger forces
+    # (controller/forces.py names and lists them; here they take effect)
+    def force_input(self, pin: int, value: int) -> None:
+        """Hold input ``pin`` at ``value`` over the wiring and hand settings."""
+        self._check_pin(pin, self.input_count, "input")
+        bit = 1 << pin
+        self._fin_mask |= bit
+        self._fin_val = self._fin_val | bit if value else self._fin_val & ~bit
+        self._recompute_inputs()
+
+    def release_input(self, pin: int, restore: bool) -> None:
+        """Release input ``pin`` (forced or set by hand): back to the wiring
+        (``restore``), or kept at its value as if set by hand."""
+        self._check_pin(pin, self.input_count, "input")
+        value = (self.in_bits >> pin) & 1
+        bit = 1 << pin
+        self._fin_mask &= ~bit
+        self._fin_val &= ~bit
+        if restore:
+            self.clear_override(pin)
+        else:
+            self.set_input(pin, value)
+
+    def force_output(self, pin: int, value: int) -> None:
+        """Hold output ``pin`` at ``value`` whatever the program writes."""
+        self._check_pin(pin, self.output_count, "output")
+        bit = 1 << pin
+        self._fout_mask |= bit
+        self._fout_val = self._fout_val | bit if value else self._fout_val & ~bit
+        self._apply_output_forces()
+
+    def release_output(self, pin: int, restore: bool) -> None:
+        """Release output ``pin``: it takes the value the program last gave it
+        (``restore``), or keeps its value until the program writes it."""
+        self._check_pin(pin, self.output_count, "output")
+        bit = 1 << pin
+        if not self._fout_mask & bit:
+            return
+        self._fout_mask &= ~bit
+        self._fout_val &= ~bit
+        if not restore:
+            prog = (self.prog_out & ~bit) | (self.out_bits & bit)
+            if prog != self.prog_out:
+                self.prog_out = prog
+                self.out_on[pin] = bool(prog & bit)
+        self._apply_output_forces()
+
+    def _apply_output_forces(self) -> None:
+        fm = self._fout_mask
+        new = (self.prog_out & ~fm) | (self._fout_val & fm)
+        old = self.out_bits
+        self.quiet = False
+        self._set_physical(new)
+        if (old ^ new) & self.sensors.followed_mask \
+                and self.sensors.output_changed(self.t_ms, old, new):
+            self._recompute_inputs()
+
+    def force_adc(self, channel: int, value: int) -> None:
+        """Hold ADC ``channel`` at ``value`` over its source and hand settings."""
+        self._check_pin(channel, ADC_CHANNELS, "ADC channel")
+        self._adc_force[channel] = int(value)
+        self._refresh_adc()
+
+    def release_adc(self, channel: int, restore: bool) -> None:
+        """Release ADC ``channel``: back to its source (``restore``), or kept
+        at its value as if set by hand."""
+        self._check_pin(channel, ADC_CHANNELS, "ADC channel")
+        value = self._adc[channel]
+        self._adc_force.pop(channel, None)
+        if restore:
+            self.clear_adc(channel)
+        else:
+            self.set_adc(channel, value)
+
+    def writable_register(self, addr: int) -> bool:
+        """Whether gvarset(addr) does something (the register is not read-only)."""
+        return self._set.get(addr) != self._read_only
+
+    def forceable_register(self, addr: int) -> bool:
+        """Whether ``force_register`` takes ``addr``: a plain register, PWM or DAC."""
+        return addr not in self._get or addr in self._held or self._channel_list(addr) is not None
+
+    def force_register(self, addr: int, value: int) -> None:
+        """Hold register ``addr`` (plain, PWM or DAC) at ``value``: gvarget reads
+        it and the program's writes only remember what it would be."""
+        value = wrap(int(value))
+        held = self._held.get(addr)
+        if held is not None:
+            held[0] = value
+        elif not self.forceable_register(addr):
+            raise ValueError(f"register {addr} cannot be forced")
+        else:
+            lst = self._channel_list(addr)
+            if lst is None:
+                self._plain_held.add(addr)
+                would = self._regs.get(addr, 0)
+            else:
+                would = lst[self._channel(addr)]
+            held = self._held[addr] = [value, would]
+            self._unheld[addr] = (self._get.get(addr), self._set.get(addr))
+            self._get[addr] = lambda _a, h=held: h[0]
+            self._set[addr] = lambda _a, v, h=held: h.__setitem__(1, v)
+        lst = self._channel_list(addr)
+        if lst is not None:
+            self._write_list(lst, self._channel(addr), value)
+
+    def release_register(self, addr: int, restore: bool) -> None:
+        """Release register ``addr``: it takes the value the program last wrote
+        (``restore``), or keeps the forced value."""
+        held = self._held.pop(addr, None)
+        if held is None:
+            return
+        get, set_ = self._unheld.pop(addr)
+        self._plain_held.discard(addr)
+        for table, f in ((self._get, get), (self._set, set_)):
+            if f is None:
+                table.pop(addr, None)
+            else:
+                table[addr] = f
+        value = held[1] if restore else held[0]
+        lst = self._channel_list(addr)
+        if lst is None:
+            self._regs[addr] = value
+        else:
+            self._write_list(lst, self._channel(addr), value)
+
+    def held_would_be(self, addr: int) -> Optional[int]:
+        """A forced register's value as the program last wrote it (None: not forced)."""
+        held = self._held.get(addr)
+        return None if held is None else held[1]
+
+    def _channel_list(self, addr: int) -> Optional[list]:
+        if abi.GVAR_HW_PWM0 <= addr < abi.GVAR_HW_PWM0 + 8:
+            return self._pwm
+        if abi.GVAR_HW_DAC0 <= addr < abi.GVAR_HW_DAC0 + 8:
+            return self._dac
+        return None
+
+    @staticmethod
+    def _channel(addr: int) -> int:
+        base = abi.GVAR_HW_PWM0 if abi.GVAR_HW_PWM0 <= addr < abi.GVAR_HW_PWM0 + 8 \
+            else abi.GVAR_HW_DAC0
+        return addr - base
+
+    @staticmethod
+    def _check_pin(n: int, count: int, what: str) -> None:
+        if not 0 <= n < count:
+            raise ValueError(f"no {what} {n} (0..{count - 1})")
 
     def advance(self) -> list[tuple[str, str]]:
         """Advance 1 ms: motion, jog watchdog, delayed inputs, ADC sources, limits.
@@ -330,6 +491,9 @@ class Machine:
     def _recompute_inputs(self) -> None:
         m = self._ov_mask
         v = ((self.sensors.wired & ~m) | (self._ov_val & m)) & self._in_mask
+        fm = self._fin_mask
+        if fm:
+            v = (v & ~fm) | (self._fin_val & fm)
         if v != self.in_bits:
             changed = v ^ self.in_bits
             self.in_bits = v
@@ -342,16 +506,25 @@ class Machine:
             self._sample = None
 
     def _set_outputs(self, new: int) -> None:
-        old = self.out_bits
+        """The program sets the outputs to ``new``; forced ones keep their value."""
+        old = self.prog_out
         if new == old:
             return
-        self.out_bits = new
+        self.prog_out = new
         on = self.out_on
         changed = old ^ new
         while changed:
             low = changed & -changed
             on[low.bit_length() - 1] = bool(new & low)
             changed ^= low
+        fm = self._fout_mask
+        self._set_physical((new & ~fm) | (self._fout_val & fm) if fm else new)
+
+    def _set_physical(self, new: int) -> None:
+        old = self.out_bits
+        if new == old:
+            return
+        self.out_bits = new
         self._sample = None
         if (old ^ new) & self.sensors.followed_mask:
             self.quiet = False             # a wired input may follow after a delay
@@ -360,7 +533,7 @@ class Machine:
 
     def _set_output_word(self, k: int, value: int) -> None:
         shift = 32 * k
-        new = (self.out_bits & ~(_M32 << shift)) | ((value & _M32) << shift)
+        new = (self.prog_out & ~(_M32 << shift)) | ((value & _M32) << shift)
         self._set_outputs(new & self._out_mask)
 
     def _get_output_bit(self, addr: int) -> int:
@@ -374,6 +547,8 @@ class Machine:
     def _refresh_adc(self) -> None:
         adc = list(self.sensors.adc)
         for ch, v in self._adc_override.items():
+            adc[ch] = v
+        for ch, v in self._adc_force.items():
             adc[ch] = v
         if adc != self._adc:
             self._adc = adc

@@ -32,6 +32,7 @@ from plcbuilder.bytecode.semantics import wrap
 from plcbuilder.controller import fastvm, vm
 from plcbuilder.controller.events import (Ended, Fault, Message, Note, Print, Sample,
                                           Started)
+from plcbuilder.controller.forces import ForcedSlots
 from plcbuilder.controller.vm import HALT, Halted, Handoff, Host, Migrate, ProcExit, VMFault
 
 SOFTWARE_PERIOD_MS = 100
@@ -82,6 +83,11 @@ class Process:
         gen = self.gen
         return gen is not None and gen.gi_code is vm.run_reference.__code__
 
+    @property
+    def runner(self):
+        """The generator that runs it (either backend), None once it ended."""
+        return self.gen if self.ended_at is None else None
+
     def sync(self) -> None:
         """Make ``slots`` hold every variable's value now (the fast backend keeps
         some in locals while it runs); call it before reading or writing them
@@ -130,6 +136,9 @@ class PLC:
         self.watching = False
         #: the rest of a tick halted by the debugger: (t, procedures still to run, ran)
         self._rest = None
+        #: procedure name -> {slot: value} of its forced variables (controller/forces.py):
+        #: such a procedure runs on the reference interpreter over ForcedSlots
+        self.var_forces: dict[str, dict[int, int]] = {}
         self.events: deque = deque(maxlen=EVENT_BUFFER)
         self.samples: deque = deque(maxlen=SAMPLE_BUFFER)
         self.programs: dict[str, Program] = {}
@@ -217,11 +226,19 @@ class PLC:
         if program.kind is Kind.SOFTWARE:
             slots[abi.SLOT_PARAM] = eparam
         host = self._host(program.name, program.kind)
+        forced = self.var_forces.get(program.name) if self.var_forces else None
+        if forced:
+            slots = ForcedSlots(slots)
+            for slot, value in forced.items():
+                slots.hold(slot, value)
         p = Process(program, slots, eparam, self.t, host)
         dbg = self.debugger
         if dbg is not None:
             host.debug = dbg.watch(p)
-        if self.backend == "fast":
+        if forced:                  # forced variables: the reference interpreter over ForcedSlots
+            gen = vm.run_reference(program, slots, host, cover=self.coverage)
+            p.watched = True
+        elif self.backend == "fast":
             p.watched = dbg is not None and dbg.watched(program)
             gen = fastvm.make_runner(program, slots, host, watched=p.watched)
             if not p.watched and fastvm.answers_sync(program, host):
@@ -309,6 +326,57 @@ class PLC:
             else:                           # a bug must not bring the controller down
                 self._fault(p, None, f"internal error: {type(exc).__name__}: {exc}")
             return
+
+    # ------------------------------------------------------- forced slots
+    def hold_slot(self, p: Process, slot: int, value: int) -> bool:
+        """Force variable ``slot`` of the running ``p`` to ``value`` (a debugger's
+        force): p goes on, from where it is, on the reference interpreter over
+        :class:`ForcedSlots`. False when p cannot change over now (it waits
+        for a gvarget's latency): then try again after a tick."""
+        if not isinstance(p.slots, ForcedSlots):
+            if not self._hand_over(p):
+                return False
+        p.slots.hold(slot, value)
+        return True
+
+    def release_slot(self, p: Process, slot: int, restore: bool) -> None:
+        """Release a forced slot of ``p``: it keeps the forced value, or takes
+        the value the program last stored (``restore``). p stays on the
+        reference interpreter until it ends."""
+        if isinstance(p.slots, ForcedSlots):
+            p.slots.release(slot, restore)
+
+    def _hand_over(self, p: Process) -> bool:
+        """Run ``p`` on the reference interpreter over ForcedSlots from exactly
+        where it is (a tick end, a gvarget's wait, a debugger's halt, or its
+        entry when it has not run yet)."""
+        gen = p.gen
+        if p.ended_at is not None or gen is None or gen.gi_running or gen.gi_frame is None:
+            return False
+        kw = {}
+        frame = gen.gi_frame
+        if frame.f_lasti < 0:                  # not started: from its entry, or the state given
+            if p.on_reference():
+                loc = frame.f_locals
+                kw = {k: loc[k] for k in ("pc", "stack", "rets", "count", "passed") if k in loc}
+        else:
+            try:
+                gen.throw(Migrate)
+            except Handoff as h:
+                kw = dict(pc=h.pc, stack=h.stack, rets=h.rets, count=h.count)
+                if isinstance(h, Halted):
+                    kw["passed"] = h.pc
+            except Exception as exc:  # noqa: BLE001 - a bug must not bring the controller down
+                self._outcome(p, exc)
+                return False
+            else:                              # pragma: no cover - every suspension answers
+                return False
+        p.slots = ForcedSlots(p.slots)
+        new = vm.run_reference(p.program, p.slots, p.host, cover=self.coverage, **kw)
+        p.syncing = None
+        p.watched = True
+        p.set_gen(new)
+        return True
 
     # ------------------------------------------------------------- starts
     def start_hardware(self, name: str, eparam: int = 0) -> None:

@@ -88,9 +88,10 @@ class Halted(Handoff):
 
 
 class Migrate(Exception):
-    """Thrown into a fast-backend generator suspended at a tick end: it answers
-    with a :class:`Handoff` of its exact state, so that the reference interpreter
-    can go on from there (the debugger does this to watch or step it)."""
+    """Thrown into a generator suspended at a tick end (either backend): it answers
+    with a :class:`Handoff` of its exact state, so that a new reference interpreter
+    can go on from there (the debugger does this to watch or step it; forces to
+    run it over forced slots)."""
 
 
 class Host:
@@ -275,7 +276,10 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                     kinds[pending] = K_BREAK if marks[pending] else base[pending]
                     pending = -1
                 passed = -1
-                yield at
+                try:
+                    yield at
+                except Migrate:         # a new interpreter (over forced slots) goes on here
+                    raise Handoff(pc, stack, tuple(calls), 0) from None
                 count = 0
                 continue
             elif k == K_INC:
@@ -308,7 +312,10 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                     if len(stack) > STACK_LIMIT:
                         raise VMFault(pc, FAULT_OVERFLOW)
                     for _ in range(lat):
-                        yield pc
+                        try:
+                            yield pc
+                        except Migrate:     # the wait starts again there
+                            raise Handoff(pc, stack + [a], tuple(calls), 0) from None
                     count = 0
                 push(gvarget(a))
             elif k == K_PORTGET:
@@ -327,7 +334,10 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                     kinds[pending] = K_BREAK if marks[pending] else base[pending]
                     pending = -1
                 passed = -1
-                yield at
+                try:
+                    yield at
+                except Migrate:         # a new interpreter (over forced slots) goes on here
+                    raise Handoff(pc, stack, tuple(calls), 0) from None
                 count = 0
                 continue
             elif k == K_CALL:
@@ -375,7 +385,10 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                 if passed != pc:
                     if brk(pc, calls):
                         passed = pc
-                        yield HALT
+                        try:
+                            yield HALT
+                        except Migrate:     # halted here: the new one does not ask again
+                            raise Halted(pc, stack, tuple(calls), count) from None
                         continue
                 passed = -1
                 if pending >= 0:

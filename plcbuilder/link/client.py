@@ -372,6 +372,26 @@ class Client:
                 self._batch_ready.wait(left if left is not None else 0.5)
             return self._notes.popleft()
 
+    # write and force (SPEC §6): targets as PROC.var, in N, out N, adc N, pwm N, dac N, gvar N
+    def write(self, target: str, value: int) -> dict:
+        """Set a target once; the answer has the canonical ``target``, ``t_ms``, ``forces``."""
+        return self.request("write", target=target, value=value)
+
+    def force(self, target: str, value: int) -> dict:
+        """Hold a target at ``value`` until released."""
+        return self.request("force", target=target, value=value)
+
+    def release(self, target: str, mode: str = "restore") -> dict:
+        """Release a target: ``keep`` its value or ``restore`` the program's."""
+        return self.request("release", target=target, mode=mode)
+
+    def release_all(self, mode: str = "restore") -> dict:
+        return self.request("release_all", mode=mode)
+
+    def forces(self) -> list[dict]:
+        """Everything forced: ``{target, value, since_ms}`` each."""
+        return self.request("forces").get("forces", [])
+
     # ------------------------------------------------------------ telemetry
     def subscribe(self, callback: Optional[Callable[[Telemetry], None]] = None, *,
                   samples: bool = True, events: bool = True, queue: int = 1000,

@@ -25,6 +25,9 @@ Messages
         ping {}
         set_breakpoints {file, breakpoints}   debug_state {}      (docs/protocol.md, "Debugging")
         debug_continue {}  debug_pause {}  debug_step {kind, procedure?}  debug_run_to {file, line}
+        write {target, value}           force {target, value}
+        release {target, mode}          release_all {mode}
+        forces {}                       (write and force: SPEC §6)
 
     server -> client:
         welcome {id, version, server, pid, t_ms, speed}   the answer to hello
@@ -99,6 +102,11 @@ REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state
 #: Events that travel as notifications of their own (not inside telemetry).
 NOTIFICATIONS = frozenset({"halted", "resumed"})
 REPLIES = frozenset({"welcome", "result", "error", "telemetry", "bye"}) | NOTIFICATIONS
+#: Write and force (controller/forces.py); their changes also travel as "forces" events.
+FORCE_REQUESTS = frozenset({"write", "force", "release", "release_all", "forces"})
+REQUESTS = REQUESTS | FORCE_REQUESTS
+#: How a release leaves its target: its current value, or the program's (the wiring).
+RELEASE_MODES = ("keep", "restore")
 
 #: Speed modes of the ``speed`` request.
 SPEED_MODES = ("realtime", "factor", "max", "pause")

@@ -208,6 +208,48 @@ class Service(DebugVerbs):
                                   self.sim.controller.t_ms)[1])
         return {"channel": ch, "value": value, "t_ms": t}
 
+    # ---------------------------------------------------------------- write and force
+    def _forcing(self, fn: Callable) -> dict:
+        """Run fn(controller) on the simulation thread; the answer adds t_ms and
+        the forces now."""
+        def go():
+            c = self.sim.controller
+            out = fn(c)
+            return {**out, "t_ms": c.t_ms, "forces": c.forces()}
+        return self._on_sim(go)
+
+    @staticmethod
+    def _target(msg: dict) -> str:
+        return protocol.field_str(msg, "target", max_len=128)
+
+    @staticmethod
+    def _mode(msg: dict) -> str:
+        mode = protocol.field_str(msg, "mode", "restore", max_len=16)
+        if mode not in protocol.RELEASE_MODES:
+            raise BadRequest(f"mode must be one of {', '.join(protocol.RELEASE_MODES)}")
+        return mode
+
+    def handle_write(self, msg: dict, session: Session) -> dict:
+        target = self._target(msg)
+        value = protocol.field_int(msg, "value", lo=-(1 << 31), hi=(1 << 32) - 1)
+        return self._forcing(lambda c: {"target": c.write(target, value), "value": value})
+
+    def handle_force(self, msg: dict, session: Session) -> dict:
+        target = self._target(msg)
+        value = protocol.field_int(msg, "value", lo=-(1 << 31), hi=(1 << 32) - 1)
+        return self._forcing(lambda c: {"target": c.force(target, value), "value": value})
+
+    def handle_release(self, msg: dict, session: Session) -> dict:
+        target, mode = self._target(msg), self._mode(msg)
+        return self._forcing(lambda c: {"target": c.release(target, mode), "mode": mode})
+
+    def handle_release_all(self, msg: dict, session: Session) -> dict:
+        mode = self._mode(msg)
+        return self._forcing(lambda c: {"released": c.release_all(mode), "mode": mode})
+
+    def handle_forces(self, msg: dict, session: Session) -> dict:
+        return {"forces": self._on_sim(lambda: self.sim.controller.forces())}
+
     # ---------------------------------------------------------------- state
     def state(self) -> ControllerStatus:
         st = self._on_sim(self.sim.controller.state)
