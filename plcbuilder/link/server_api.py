@@ -27,7 +27,7 @@ import socket
 import time
 from typing import Callable, Optional
 
-from plcbuilder.bytecode import abi
+from plcbuilder.controller import abi
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.link.pacing import SimulationDown
 
