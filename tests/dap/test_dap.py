@@ -193,3 +193,52 @@ def test_a_build_error_is_reported_and_nothing_starts(dap, project):
                     and "error:" in b["output"])
     assert out["category"] == "stderr" and "gvarset" in out["output"]
     dap.ok("disconnect")
+
+
+def test_attach_to_a_running_controller(project, tmp_path):
+    """attach joins a controller that runs already (its address and token):
+    breakpoints and pause reach the procedure it runs; disconnect leaves it running."""
+    from plcbuilder.link.process import ControllerProcess
+    from plcbuilder.project import Project, build_project
+
+    (project / "software").joinpath("LUBE.plc").write_text(
+        "main()\n{\n  do {\n    n = n + 1;\n  } while (1);\n}\n")
+    build = build_project(Project.open(project))
+    assert build.ok
+    ctl = ControllerProcess.start(image=build.image_path)
+    try:
+        ep = ctl.wait_endpoint()
+        dap = DapClient(spawn("dap", cwd=project))
+        try:
+            dap.ok("initialize", {"adapterID": "plcbuilder"})
+            dap.ok("attach", {"controller": f"{ep.host}:{ep.port}", "token": ep.token,
+                              "project": str(project)})
+            dap.event("initialized")
+            threads = dap.ok("threads")["threads"]
+            assert [t["name"] for t in threads] == ["LUBE"]
+            lube = str(project / "software" / "LUBE.plc")
+            bp = dap.ok("setBreakpoints", {"source": {"path": lube},
+                                           "breakpoints": [{"line": 4, "condition": "n > 20"}]})
+            assert bp["breakpoints"][0]["verified"]
+            dap.ok("configurationDone")
+            stopped = dap.event("stopped")
+            frames = _frames(dap, stopped["threadId"])
+            assert frames[0]["line"] == 4 and frames[0]["source"]["name"] == "LUBE.plc"
+            assert int(_vars(dap, frames[0]["id"])[1]["n"]) > 20      # the condition held
+            dap.ok("setBreakpoints", {"source": {"path": lube}, "breakpoints": []})
+            dap.ok("continue", {"threadId": stopped["threadId"]})
+            dap.event("continued")
+            dap.ok("pause", {"threadId": stopped["threadId"]})
+            assert dap.event("stopped")["reason"] == "pause"
+            dap.ok("disconnect", {})
+            dap.proc.wait(20)
+        finally:
+            dap.close()
+        c = ctl.connect()
+        try:
+            assert c.debug_state() is None            # left running
+            assert c.state().software == ("LUBE",)
+        finally:
+            c.close()
+    finally:
+        ctl.stop()
