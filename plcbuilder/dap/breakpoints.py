@@ -1,6 +1,6 @@
 """``setBreakpoints``: a source's breakpoints as the client sends them
 (line, ``condition``, ``hitCondition``, ``logMessage``) turned into the
-debugger's (docs/debugging.md): conditions compiled here
+debugger's (docs/editors.md, "What the debugger shows"): conditions compiled here
 (:func:`~plcbuilder.project.conditions.compile_condition`), hit conditions
 read as ``N`` / ``==N`` (the Nth hit), ``>=N`` (from the Nth on), ``>N`` and
 ``%N`` (every Nth). A breakpoint the debugger cannot take (a condition that

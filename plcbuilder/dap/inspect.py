@@ -1,5 +1,5 @@
-"""The halted state (docs/debugging.md) as the Debug Adapter Protocol shows it:
-threads (one per running procedure), stack frames, scopes and variables, and
+"""The halted state as the Debug Adapter Protocol shows it
+(docs/editors.md, "What the debugger shows"): threads (one per running procedure), stack frames, scopes and variables, and
 the write target behind each variable (``setVariable``).
 
 Ids are small numbers kept for the session: a procedure keeps its thread id,

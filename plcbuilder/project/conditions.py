@@ -1,5 +1,5 @@
 """Breakpoint conditions: an expression of the PLC language compiled into a
-small procedure whose exit code is its value (docs/debugging.md). The
+small procedure whose exit code is its value (SPEC §6). The
 debugger binds its variables by name to the procedure that reaches the
 breakpoint. The IDE, ``plcbuilder run --break`` (through the api) and the
 debug adapter compile conditions here."""
