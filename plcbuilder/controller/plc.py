@@ -23,6 +23,7 @@ Everything is deterministic: the same calls give the same events and samples.
 
 from __future__ import annotations
 
+import inspect
 from collections import deque
 from typing import Callable, Iterable, Optional
 
@@ -355,7 +356,7 @@ class PLC:
             return False
         kw = {}
         frame = gen.gi_frame
-        if frame.f_lasti < 0:                  # not started: from its entry, or the state given
+        if inspect.getgeneratorstate(gen) == inspect.GEN_CREATED:   # from its entry, or the state given
             if p.on_reference():
                 loc = frame.f_locals
                 kw = {k: loc[k] for k in ("pc", "stack", "rets", "count", "passed") if k in loc}
@@ -601,7 +602,7 @@ class PLC:
             p.watched = True
             return
         gen = p.gen
-        if gen.gi_frame is None or gen.gi_frame.f_lasti < 0:     # not started yet
+        if inspect.getgeneratorstate(gen) == inspect.GEN_CREATED:      # not started yet
             new = vm.run_reference(p.program, p.slots, p.host)
         else:
             try:

@@ -1,6 +1,7 @@
 """The halted state as the Debug Adapter Protocol shows it
-(docs/editors.md, "What the debugger shows"): threads (one per running procedure), stack frames, scopes and variables, and
-the write target behind each variable (``setVariable``).
+(docs/editors.md, "What the debugger shows"): threads (one per running
+procedure), stack frames, scopes and variables, and the write target behind
+each variable (``setVariable``).
 
 Ids are small numbers kept for the session: a procedure keeps its thread id,
 a frame id is ``thread * 100 + depth``, and a scope's ``variablesReference``
