@@ -18,7 +18,15 @@
 5. the workload of 3. (in-process) whose hardware procedure writes an output
    its current value every tick, against the same workload without the write:
                                                            goal <= 1.10x
-6. a one-hour simulated run of the example project (its software procedures,
+6. the debugger (SPEC §6), the workload of 1. (default machine) run three ways
+   in each round: with the debugger detached (the controller as it was
+   before it had one), with the debugger and no breakpoint set
+                                                           goal >= 0.95x the speed
+   detached, and with a breakpoint on a line the hardware procedure runs
+   every tick (a hit count that is never reached: asked at every tick, no
+   halt), and one in each software procedure's loop too
+                                                           goal >= 0.33x
+7. a one-hour simulated run of the example project (its software procedures,
    and a hardware procedure watching an input all the time) with ``--trace``
    streamed to disk, in a fresh process: wall time, trace size, peak memory
    (goal < 200 MB).
@@ -283,6 +291,40 @@ def realtime(sim_ms: int, machine=None, backend: str = "fast") -> float:
     return sim_ms / 1000 / best
 
 
+def _debug_run(mode: str, ms: int) -> float:
+    """Seconds to simulate ``ms`` of the workload of realtime() with the debugger
+    ``detached``, with ``none`` set, or with breakpoints ``set``."""
+    hw = _compile(HARDWARE, "M88")
+    sws = [_compile(SOFTWARE[i % len(SOFTWARE)], f"S{i:02d}", True) for i in range(20)]
+    c = Controller(record_samples=False)
+    if mode == "detached":
+        c.plc.debugger = None
+    c.load([hw, *sws])
+    if mode == "set":                    # never halts: a hit count never reached
+        never = {"mode": "eq", "n": 10 ** 9}
+        c.debugger.set_breakpoints("M88.plc", [{"line": 8, "hit": never}])
+        for i in range(20):
+            c.debugger.set_breakpoints(f"S{i:02d}.plc", [{"line": 1, "hit": never}])
+    c.start("M88")
+    c.step(10)
+    t0 = time.perf_counter()
+    c.step(ms)
+    took = time.perf_counter() - t0
+    assert c.debugger.halt is None and c.state().running == "M88"
+    return took
+
+
+def debugger_ratios(rounds: int = 3, ms: int = 30_000) -> tuple[float, float]:
+    """Median speed ratios (interleaved rounds): no breakpoint / detached, and
+    breakpoints set / detached."""
+    none, bps = [], []
+    for _ in range(rounds):
+        base = _debug_run("detached", ms)
+        none.append(base / _debug_run("none", ms))
+        bps.append(base / _debug_run("set", ms))
+    return statistics.median(none), statistics.median(bps)
+
+
 def vm_ratios(ticks: int = 200_000) -> tuple[float, float, float]:
     prog = _compile(LOOP, "L")
     assert fastvm.unsupported_reason(prog) is None
@@ -355,6 +397,10 @@ def run() -> list[str]:
                  f"{fr:.2f}x (goal <= 1.2x)")
     lines.append(f"  writing an output its current value every tick: "
                  f"{unchanged_write_ratio():.3f}x the same tick without the write (goal <= 1.10x)")
+    none, bps = debugger_ratios()
+    lines.append(f"debugger, the workload of the first line: no breakpoint set {none:.2f}x the "
+                 f"speed without a debugger (goal >= 0.95x); breakpoints asked every tick "
+                 f"{bps:.2f}x (goal >= 0.33x)")
     ns, fast, ref = vm_ratios()
     lines.append(f"one loop, native Python {ns:.0f} ns/tick: fast backend {fast:.2f}x native "
                  f"(goal <= 2x), reference interpreter {ref:.1f}x native (goal <= 20x)")

@@ -22,7 +22,6 @@ Halting stops the whole controller: the PLC keeps the rest of the tick
 
 from __future__ import annotations
 
-import inspect
 import re
 from dataclasses import dataclass, field
 from typing import Optional
@@ -30,7 +29,7 @@ from typing import Optional
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import Op, size_of, validate
 from plcbuilder.bytecode.program import LoadError, Program
-from plcbuilder.controller import vm
+from plcbuilder.controller import halted_state, vm
 from plcbuilder.controller.events import Halted, Log, Resumed
 
 REASONS = ("breakpoint", "step", "pause", "fault")
@@ -100,8 +99,14 @@ class Watch:
         self._program = process.program
         self.marks = debugger._marks_of(process.program)
 
+        name = process.program.name
+
         def brk(pc: int, rets, _d=debugger, _p=process) -> bool:
-            return _d._reached(_p, pc, rets)
+            if _d._busy:                    # a step or a run-to goes on
+                return _d._reached(_p, pc, rets)
+            at = _d._at.get(name)
+            bps = at.get(pc) if at is not None else None
+            return bps is not None and _d._breakpoints_at(_p, pc, rets, bps)
 
         self.brk = brk
 
@@ -163,16 +168,27 @@ class Debugger:
         self._bps: dict[str, list[Breakpoint]] = {}      # by file as given
         self._marks: dict[str, list] = {}                 # program name -> per-offset marks
         self._tables: dict[str, tuple[list, list]] = {}   # program name -> (base, table)
-        self._at: dict[tuple[str, int], list[Breakpoint]] = {}
+        #: program name -> offset -> the enabled breakpoints there
+        self._at: dict[str, dict[int, list[Breakpoint]]] = {}
+        self._busy = False                                # a step or a run-to goes on
         self._run_to: dict[str, set[int]] = {}
         self._stepping: Optional[tuple] = None            # (process, kind, depth)
         self._step_end_tick = False                       # halt at this tick's end
         self.halt: Optional[Halt] = None
         self._told: Optional[Halt] = None                 # the halt last announced
-        #: halt at a runtime fault (on while any breakpoint is set, or when asked)
-        self.halt_on_fault = False
+        self._halt_on_fault = False
 
     # ----------------------------------------------------------- queries
+    @property
+    def halt_on_fault(self) -> bool:
+        """Halt at a runtime fault even with no breakpoint set (the IDE's debug session)."""
+        return self._halt_on_fault
+
+    @halt_on_fault.setter
+    def halt_on_fault(self, on: bool) -> None:
+        self._halt_on_fault = bool(on)
+        self._remark()
+
     @property
     def on(self) -> bool:
         """Whether faults halt: a breakpoint is set, a step runs, or asked for."""
@@ -314,18 +330,17 @@ class Debugger:
         """Marks from the breakpoints, the run-to targets and the step, set in
         place (running interpreters see them); procedures running plain fast
         code whose program gains marks go over to the reference interpreter."""
-        at: dict[tuple[str, int], list[Breakpoint]] = {}
+        at: dict[str, dict[int, list[Breakpoint]]] = {}
         for bps in self._bps.values():
             for bp in bps:
                 if not bp.enabled:
                     continue
                 for name, (_line, pcs) in bp.where.items():
                     for pc in pcs:
-                        at.setdefault((name, pc), []).append(bp)
+                        at.setdefault(name, {}).setdefault(pc, []).append(bp)
         self._at = at
-        want: dict[str, set[int]] = {}
-        for name, pc in at:
-            want.setdefault(name, set()).add(pc)
+        self._busy = self._stepping is not None or bool(self._run_to)
+        want: dict[str, set[int]] = {name: set(pcs) for name, pcs in at.items()}
         for name, pcs in self._run_to.items():
             want.setdefault(name, set()).update(pcs)
         step = self._stepping
@@ -348,7 +363,8 @@ class Debugger:
                 for p in self.plc.running():
                     if p.program is program:
                         self.plc.watch_process(p)
-        self.plc.watching = self.on
+        self.plc.halting = self.on
+        self.plc.watching = self._stepping is not None or bool(self._run_to)
 
     def _marks_of(self, program: Program) -> list:
         marks = self._marks.get(program.name)
@@ -376,7 +392,12 @@ class Debugger:
                 return self._halt_at("step", p, pc, rets)
         if pc in self._run_to.get(p.program.name, ()):
             return self._halt_at("step", p, pc, rets)
-        for bp in self._at.get((p.program.name, pc), ()):
+        bps = self._at.get(p.program.name, {}).get(pc)
+        return bps is not None and self._breakpoints_at(p, pc, rets, bps)
+
+    def _breakpoints_at(self, p, pc: int, rets, bps: list) -> bool:
+        """The breakpoints at pc decide: a condition, a hit count, a logpoint, a halt."""
+        for bp in bps:
             if bp.code is not None and not self._holds(bp, p):
                 continue
             bp.hits += 1
@@ -573,73 +594,11 @@ class Debugger:
 
     # ------------------------------------------------------- halted state
     def _position(self, p) -> tuple[Optional[int], tuple, bool]:
-        """(offset, return addresses, at a loop's end) of a running procedure."""
-        h = self.halt
-        if h is not None and h.process is p and h.pc is not None:
-            return h.pc, h.rets, False
-        gen = p.gen
-        if gen is None or inspect.getgeneratorstate(gen) == inspect.GEN_CREATED:
-            return p.program.entry, (), False
-        if not p.on_reference() and gen.gi_yieldfrom is not None:
-            self.plc.to_reference(p)         # inside a call: the reference knows the chain
-            gen = p.gen
-        rets: tuple = ()
-        if p.on_reference():
-            rets = tuple(inspect.getgeneratorlocals(gen).get("calls", ()))
-        at = p.at if p.at is not None else p.program.entry
-        code = p.program.code
-        loop = at < len(code) and code[at] in (Op.LOOP8, Op.LOOP16)
-        return at, rets, loop
+        return halted_state.position(self, p)
 
     def halted_state(self) -> Optional[dict]:
         """The halted state (docs/debugging.md), or None while running."""
-        h = self.halt
-        if h is None:
-            return None
-        procs = []
-        for p in self.plc.running(include_faulted=True):
-            pc, rets, loop = self._position(p)
-            stack = self._frames(p.program, pc, rets)
-            top = stack[0] if stack else {"file": None, "line": None}
-            procs.append({"name": p.name, "kind": p.kind.label, "file": top["file"],
-                          "line": top["line"], "at_loop_end": loop, "stack": stack,
-                          "vars": p.variables()})
-        halting = h.process
-        here = None
-        if halting is not None:
-            here = next((q for q in procs if q["name"] == halting.name), None)
-        bp = h.breakpoint
-        return {"reason": h.reason, "t_ms": self.plc.t,
-                "procedure": halting.name if halting is not None else None,
-                "file": here["file"] if here else None, "line": here["line"] if here else None,
-                "procedures": procs, "machine": self._machine(),
-                "fault": {"text": h.fault} if h.fault is not None else None,
-                "breakpoint": {"id": bp.id, "file": bp.file, "line": bp.at_line}
-                if bp is not None else None}
-
-    @staticmethod
-    def _frames(program: Program, pc: Optional[int], rets) -> list[dict]:
-        sites = [pc] + [r - _CALL_SIZE for r in reversed(list(rets))]
-        out = []
-        for at in sites:
-            if at is None:
-                continue
-            loc = program.location(at)
-            out.append({"procedure": program.proc_at(at) or "main",
-                        "file": loc[0] if loc else None, "line": loc[1] if loc else None})
-        return out[:vm.MAX_CALL_DEPTH + 1]
-
-    def _machine(self) -> dict:
-        m = self.plc.machine
-        f = m.sample_fields()
-        n_in = getattr(m, "input_count", 64)
-        n_out = getattr(m, "output_count", 64)
-        bits = lambda words, n: [(words[i // 32] >> (i % 32)) & 1 for i in range(n)]  # noqa: E731
-        regs = getattr(m, "_regs", {})
-        return {"inputs": bits(f["inputs"], n_in), "outputs": bits(f["outputs"], n_out),
-                "adc": list(f["adc"]), "pwm": list(f["pwm"]), "dac": list(f["dac"]),
-                "axes": dict(m.axis_positions()),
-                "registers": {str(k): v for k, v in sorted(regs.items())}}
+        return halted_state.state_of(self)
 
 
 def _base(f: str) -> str:

@@ -133,7 +133,10 @@ class PLC:
         self.coverage = None
         #: the Debugger (controller/debugger.py) when there is one
         self.debugger = None
-        #: the debugger watches (a breakpoint, a step): every tick runs through _tick
+        #: the debugger may halt (a breakpoint is set, …): a hardware procedure on the
+        #: reference interpreter then runs through _tick (which sees it yield HALT)
+        self.halting = False
+        #: a step or a run-to goes on: every tick runs through _tick
         self.watching = False
         #: the rest of a tick halted by the debugger: (t, procedures still to run, ran)
         self._rest = None
@@ -498,13 +501,15 @@ class PLC:
         end = t + ms
         while t < end:
             next_sw = t + (self.grid - t) % SOFTWARE_PERIOD_MS
-            if t == next_sw or self._due_hw or self.bindings or self.watching:
+            hw = self.hw
+            if t == next_sw or self._due_hw or self.bindings or self.watching or \
+                    (self.halting and hw is not None and hw.on_reference()):
                 if not self._tick(t, software=t == next_sw):
                     break                    # halted mid-tick: the rest waits
                 t += 1
                 if dbg is not None and dbg.halt is not None:
                     break
-            elif self.hw is not None:
+            elif hw is not None:
                 t = self._hardware_alone(t, end)
                 if dbg is not None and dbg.halt is not None:
                     break
@@ -581,8 +586,9 @@ class PLC:
         self.t = t + 1
         return True
 
-    def running(self, include_faulted: bool = True) -> list[Process]:
-        """The procedures running: the hardware one, then software by name."""
+    def running(self) -> list[Process]:
+        """The procedures running (a procedure halted at its fault too): the
+        hardware one, then software by name."""
         out = [self.hw] if self.hw is not None else []
         return out + list(self._sw_order)
 
@@ -602,7 +608,7 @@ class PLC:
             p.watched = True
             return
         gen = p.gen
-        if inspect.getgeneratorstate(gen) == inspect.GEN_CREATED:      # not started yet
+        if inspect.getgeneratorstate(gen) == inspect.GEN_CREATED:     # not started yet
             new = vm.run_reference(p.program, p.slots, p.host)
         else:
             try:

@@ -167,3 +167,70 @@ def test_the_controller_api_refuses_what_does_not_fit(tmp_path):
     with pytest.raises(api.ControllerError, match="eparam must be from"):
         c.start("M05", 1 << 32)
     c.start("M05", 0xFFFFFFFF)
+
+
+# ------------------------------------------------------------------ --break (SPEC §6)
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "plcbuilder" / "resources" / "example_project"
+
+
+def test_break_halts_the_run_and_the_json_says_where(capsys):
+    """"When a run halts at a breakpoint, it ends there: the JSON gains
+    `halted: {reason, t_ms, procedure, file, line, stack: [{procedure, line}],
+    vars}` and the exit status is 0." — M80 halts on the line that reads the
+    home switch."""
+    code, out, err = run_cli(capsys, "run", EXAMPLE, "--start", "M80@5", "--break",
+                             "M80.plc:31", "--json")
+    assert code == 0, err
+    rep = json.loads(out)
+    h = rep["halted"]
+    assert (h["reason"], h["t_ms"], h["procedure"], h["file"], h["line"]) == \
+        ("breakpoint", 5, "M80", "M80.plc", 31)
+    assert [(f["procedure"], f["line"]) for f in h["stack"]] == [("find_home_z", 31),
+                                                                  ("main", 75)]
+    assert h["vars"]["statez"] == 0 and h["vars"]["speed"] == 500
+    assert rep["ended_at_ms"] == 5
+    m80 = [p for p in rep["procedures"] if p["name"] == "M80"][0]
+    assert m80["ended_at_ms"] is None
+
+
+def test_break_with_a_condition_and_on_a_line_without_code(capsys):
+    """"--break FILE:LINE[:CONDITION] (repeatable; FILE is a procedure's file
+    name, e.g. `M80.plc:12`)" — a condition, and a line without code (30) that
+    moves to the next one with code (31)."""
+    code, out, err = run_cli(capsys, "run", EXAMPLE, "--start", "M80@5", "--break",
+                             "M80.plc:41:sens==1 && timer>0", "--break", "M80.plc:30:statez==2",
+                             "--json")
+    assert code == 0, err
+    h = json.loads(out)["halted"]
+    assert (h["line"], h["vars"]["sens"], h["vars"]["statez"]) == (41, 1, 1)
+
+
+def test_without_break_halted_is_null(tmp_path, capsys):
+    """"Without `--break`, `halted` is null." """
+    f = write(tmp_path / "M05.plc", DELAY)
+    code, out, err = run_cli(capsys, "run", f, "--json")
+    assert code == 0 and json.loads(out)["halted"] is None
+
+
+def test_a_break_never_reached_leaves_halted_null_and_the_summary_says_halted(capsys, tmp_path):
+    f = write(tmp_path / "M05.plc", DELAY)
+    code, out, err = run_cli(capsys, "run", f, "--break", "M05.plc:1:timer==99", "--json")
+    assert code == 0 and json.loads(out)["halted"] is None
+    code, out, err = run_cli(capsys, "run", EXAMPLE, "--start", "M80@5", "--break",
+                             "M80.plc:31")
+    assert code == 0 and "halted (breakpoint) at 5 ms in M80: M80.plc:31" in out
+    assert "run ended at 5 ms (halted)" in out
+
+
+@pytest.mark.parametrize("spec, msg", [
+    ("M80.plc", "give FILE:LINE[:CONDITION]"),
+    ("M80.plc:x", "give FILE:LINE[:CONDITION]"),
+    ("M80.plc:31:sens==", "the condition does not compile"),
+    ("M80.plc:31:ghost==1", "'ghost', which is not a variable of M80"),
+    ("M80.plc:500", "M80.plc has no code on line 500"),
+    ("NOPE.plc:3", "no loaded procedure is built from 'NOPE.plc'"),
+])
+def test_bad_breaks_exit_2_with_the_reason(capsys, spec, msg):
+    code, out, err = run_cli(capsys, "run", EXAMPLE, "--start", "M80@5", "--break", spec)
+    assert code == 2 and msg in err and "Traceback" not in err
