@@ -123,6 +123,8 @@ class RunOptions:
     starts: Sequence[str] = ()           # "NAME[:EPARAM]@MS"
     inputs: Sequence[str] = ()           # "PIN=0|1@MS"
     adcs: Sequence[str] = ()             # "CH=VALUE@MS"
+    writes: Sequence[str] = ()           # "NAME=VALUE@MS" (SPEC §6 names)
+    forces: Sequence[str] = ()           # "NAME=VALUE@MS"
     scenario: Optional[Path] = None
     machine: Optional[Path] = None
     software: bool = False
@@ -171,7 +173,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     if not 0 <= limit <= MAX_MS:
         raise UsageError(f"--ms must be from 0 to {MAX_MS}, not {limit}")
     target = Path(target)
-    sc = build_scenario(opts.scenario, opts.starts, opts.inputs, opts.adcs)
+    sc = build_scenario(opts.scenario, opts.starts, opts.inputs, opts.adcs, opts.writes,
+                        opts.forces)
     tg = _compile_target(target, opts)
     if any(not r.ok for r in tg.compiled):
         return RunResult(tg.compiled, None)

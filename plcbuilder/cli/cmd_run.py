@@ -31,7 +31,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                     "dac, messages, prints, faults, axes, proc, ended_at_ms).",
         epilog="Scenario lines (--scenario FILE): 'start NAME[:EPARAM] @ MS', "
                "'input PIN=0|1 @ MS', 'adc CH=VALUE @ MS', 'stop @ MS', "
-               "'event GCODE_START @ MS', 'bind PIN=NAME[:EPARAM] @ MS'; '#' starts a "
+               "'event GCODE_START @ MS', 'bind PIN=NAME[:EPARAM] @ MS', "
+               "'write NAME=VALUE @ MS', 'force NAME=VALUE @ MS', "
+               "'release NAME|all [keep|restore] @ MS'; '#' starts a "
                "comment. See docs/controller.md, 'Scenario files'.")
     p.add_argument("target", type=Path, metavar="TARGET",
                    help="a .plc file (a hardware procedure) or a project folder")
@@ -48,6 +50,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "wiring of that pin from then on)")
     p.add_argument("--adc", action="append", default=[], metavar="CH=VALUE@MS",
                    help="set an ADC channel by hand at MS (repeatable)")
+    p.add_argument("--write", action="append", default=[], metavar="NAME=VALUE@MS",
+                   help="set a value once at MS (repeatable); NAME is PROC.var, 'in N', "
+                        "'out N', 'adc N', 'pwm N', 'dac N' or 'gvar N'")
+    p.add_argument("--force", action="append", default=[], metavar="NAME=VALUE@MS",
+                   help="hold a value from MS on (repeatable; names as --write): reads see "
+                        "it and the program's writes are discarded")
     p.add_argument("--scenario", type=Path, metavar="FILE",
                    help="a scenario file: one start/input/adc/stop/event line each")
     p.add_argument("--machine", type=Path, metavar="FILE",
@@ -98,7 +106,8 @@ def run(args: argparse.Namespace) -> int:
         from plcbuilder import api
         target: Path = args.target
         opts = api.RunOptions(ms=args.ms, eparam=args.eparam, starts=args.start, inputs=args.input,
-                          adcs=args.adc, scenario=args.scenario, machine=args.machine,
+                          adcs=args.adc, writes=args.write, forces=args.force,
+                          scenario=args.scenario, machine=args.machine,
                           software=args.software, strict=args.strict, include_dirs=tuple(args.include),
                           trace=args.trace, backend=args.backend,
                           gvarget_latency_ms=args.gvarget_latency, breaks=args.breaks)
@@ -169,6 +178,9 @@ def summary(rep: dict, out: term.Out) -> str:
         own = {k: v for k, v in variables.items()
                if not (k.startswith("var") and k[3:].isdigit()) or v}
         lines.append(f"{name}: " + ", ".join(f"{k}={v}" for k, v in own.items()))
+    if rep.get("forces"):
+        lines.append("forced: " + ", ".join(f"{f['target']}={f['value']} (from {f['since_ms']} ms)"
+                                            for f in rep["forces"]))
     still = [p["name"] for p in rep["procedures"] if p["ended_at_ms"] is None]
     why = "time limit" if still else "nothing left to run"
     h = rep.get("halted")

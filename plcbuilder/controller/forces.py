@@ -171,6 +171,10 @@ class Forces:
         return [{"target": name, "value": v, "since_ms": since}
                 for name, (_t, v, since, _s) in self._held.items()]
 
+    def check(self, target) -> str:
+        """The canonical name of a target that exists; ForceError otherwise."""
+        return self._resolve(target)[0].name
+
     def is_forced(self, target) -> bool:
         return self._resolve(target)[0].name in self._held
 

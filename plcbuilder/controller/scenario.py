@@ -12,6 +12,13 @@ file (``--scenario FILE``), whose lines are the same::
     stop @ 5000                # press Stop (M02, then OFF)
     event GCODE_START @ 100    # __HANDLER_GCODE_START
     bind 9=M88:0 @ 0           # from then on, input 9 going 0 -> 1 starts M88
+    write M03.speed=500 @ 10   # TARGET=VALUE @ MS: set once (SPEC §6 names)
+    force in 2=1 @ 20          # TARGET=VALUE @ MS: hold until released
+    release in 2 keep @ 30     # TARGET [keep|restore] @ MS (default restore)
+    release all @ 40           # everything forced [keep|restore]
+
+A target is ``PROC.var``, ``in N``, ``out N``, ``adc N``, ``pwm N``, ``dac N`` or
+``gvar N`` (controller/forces.py).
 
 Numbers are decimal or hex (``0x…``); ``@ MS`` may be left out (0), and the
 command may also be written as its option (``--start M03@0``).
@@ -29,9 +36,10 @@ from typing import Callable, Iterable, Optional
 
 from plcbuilder._support.files import read_bounded
 from plcbuilder._support.numbers import INT32, WORD32, parse_int_in, to_int32
+from plcbuilder.controller.forces import MODES, ForceError, parse_target
 
 MAX_SCENARIO_BYTES = 4 << 20
-KINDS = ("start", "input", "adc", "stop", "event", "bind")
+KINDS = ("start", "input", "adc", "stop", "event", "bind", "write", "force", "release")
 
 
 class ScenarioError(ValueError):
@@ -47,9 +55,10 @@ class ScenarioError(ValueError):
 class Action:
     t_ms: int
     kind: str                  # one of KINDS
-    name: str = ""             # start, bind: procedure; event: handler
-    a: int = 0                 # start: eparam; input, bind: pin; adc: channel
-    b: int = 0                 # input/adc: value; bind: eparam
+    name: str = ""             # start, bind: procedure; event: handler; write, force,
+                               # release: target ("all": release everything)
+    a: int = 0                 # start: eparam; input, bind: pin; adc: channel; write/force: value
+    b: int = 0                 # input/adc: value; bind: eparam; release: 1 restore, 0 keep
 
     def describe(self) -> str:
         if self.kind == "start":
@@ -60,6 +69,10 @@ class Action:
             return f"event {self.name} @ {self.t_ms}"
         if self.kind == "bind":
             return f"bind {self.a}={self.name}:{self.b} @ {self.t_ms}"
+        if self.kind in ("write", "force"):
+            return f"{self.kind} {self.name}={self.a} @ {self.t_ms}"
+        if self.kind == "release":
+            return f"release {self.name} {MODES[self.b]} @ {self.t_ms}"
         return f"stop @ {self.t_ms}"
 
 
@@ -166,9 +179,52 @@ def parse_bind(text: str) -> Action:
     return Action(t, "bind", start.name, pin, start.a)
 
 
+def _target(text: str, what: str) -> str:
+    try:
+        return parse_target(text).name
+    except ForceError as exc:
+        raise ScenarioError(f"{what}: {exc}") from None
+
+
+def _set(text: str, kind: str) -> Action:
+    body, t = _split_time(text, f"--{kind}")
+    left, sep, right = body.partition("=")
+    if not sep:
+        raise ScenarioError(f"--{kind} needs NAME=VALUE@MS (NAME: PROC.var, in N, out N, "
+                            f"adc N, pwm N, dac N or gvar N), not {text!r}")
+    name = _target(left, f"--{kind}")
+    value = to_int32(parse_int(right, f"the value of --{kind} {name}", *WORD32))
+    return Action(t, kind, name, value)
+
+
+def parse_write(text: str) -> Action:
+    """``NAME=VALUE[@MS]``: set once."""
+    return _set(text, "write")
+
+
+def parse_force(text: str) -> Action:
+    """``NAME=VALUE[@MS]``: hold until released."""
+    return _set(text, "force")
+
+
+def parse_release(text: str) -> Action:
+    """``NAME [keep|restore][@MS]`` or ``all [keep|restore][@MS]``."""
+    body, t = _split_time(text, "release")
+    words = body.split()
+    mode = "restore"
+    if words and words[-1].lower() in MODES:
+        mode = words.pop().lower()
+    rest = " ".join(words)
+    if not rest:
+        raise ScenarioError("release needs NAME [keep|restore] @ MS, or all")
+    name = "all" if rest.lower() == "all" else _target(rest, "release")
+    return Action(t, "release", name, 0, MODES.index(mode))
+
+
 _PARSERS: dict[str, Callable[[str], Action]] = {
     "start": parse_start, "input": parse_input, "adc": parse_adc,
     "stop": parse_stop, "event": parse_event, "bind": parse_bind,
+    "write": parse_write, "force": parse_force, "release": parse_release,
 }
 
 
@@ -240,12 +296,23 @@ def apply(controller, action: Action) -> None:
         controller.event(action.name)
     elif action.kind == "bind":
         controller.bind_input(action.a, action.name, action.b)
+    elif action.kind == "write":
+        controller.write(action.name, action.a)
+    elif action.kind == "force":
+        controller.force(action.name, action.a)
+    elif action.kind == "release":
+        if action.name == "all":
+            controller.release_all(MODES[action.b])
+        else:
+            controller.release(action.name, MODES[action.b])
     else:  # pragma: no cover
         raise ScenarioError(f"unknown action {action.kind!r}")
 
 
 #: Actions that can start a procedure (the run is not over while one is due).
 STARTING = frozenset({"start", "stop", "event", "bind"})
+#: Actions that can change an input (which may be bound to a procedure).
+_PIN_CHANGES = frozenset({"input", "write", "force", "release"})
 
 
 def drive(controller, scenario: Scenario, limit_ms: int, *, until_idle: bool = True,
@@ -267,7 +334,7 @@ def drive(controller, scenario: Scenario, limit_ms: int, *, until_idle: bool = T
         if t >= limit_ms:
             return limit_ms
         bound = bool(c.bindings)           # then an input can start a procedure too
-        more_starts = any(a.kind in STARTING or (bound and a.kind == "input")
+        more_starts = any(a.kind in STARTING or (bound and a.kind in _PIN_CHANGES)
                           for a in actions[i:])
         if until_idle and not more_starts and c.idle():
             return max(t - 1, 0) if t else 0

@@ -22,7 +22,7 @@ from plcbuilder.bytecode import abi
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import Ended, Fault, Log, Message, Note, Print, Started
 from plcbuilder.controller.scenario import (Scenario, ScenarioError, drive, parse_adc,
-                                            parse_input, parse_start)
+                                            parse_force, parse_input, parse_start, parse_write)
 
 __all__ = ["CHUNK_MS", "ReportCollector", "TraceWriter", "UsageError", "build_scenario",
            "check_scenario", "run_session"]
@@ -88,8 +88,10 @@ class TraceWriter:
 # --------------------------------------------------------------------- run
 
 def build_scenario(scenario: Optional[Path] = None, starts: Sequence[str] = (),
-                   inputs: Sequence[str] = (), adcs: Sequence[str] = ()) -> Scenario:
-    """A scenario file's actions, then ``--start``/``--input``/``--adc`` options."""
+                   inputs: Sequence[str] = (), adcs: Sequence[str] = (),
+                   writes: Sequence[str] = (), forces: Sequence[str] = ()) -> Scenario:
+    """A scenario file's actions, then ``--start``/``--input``/``--adc``/
+    ``--write``/``--force`` options."""
     sc = Scenario()
     try:
         if scenario is not None:
@@ -97,6 +99,8 @@ def build_scenario(scenario: Optional[Path] = None, starts: Sequence[str] = (),
         sc.extend(parse_start(s) for s in starts)
         sc.extend(parse_input(s) for s in inputs)
         sc.extend(parse_adc(s) for s in adcs)
+        sc.extend(parse_write(s) for s in writes)
+        sc.extend(parse_force(s) for s in forces)
     except ScenarioError as exc:
         raise UsageError(str(exc)) from None
     return sc
@@ -117,6 +121,11 @@ def check_scenario(sc: Scenario, controller) -> None:
                              f"0..{n_in - 1})")
         if a.kind == "adc" and not 0 <= a.a < 8:
             raise UsageError(f"--adc {a.a}: no such ADC channel (0..7)")
+        if a.kind in ("write", "force", "release") and a.name != "all":
+            try:
+                controller.forces.check(a.name)
+            except ValueError as exc:
+                raise UsageError(f"--{a.kind}: {exc}") from None
 
 
 def run_session(c: Controller, sc: Scenario, limit_ms: int, *, trace: Optional[Path] = None,
@@ -211,4 +220,5 @@ class ReportCollector:
             "proc_name": st.proc_name,
             "running": st.running,
             "software": list(st.software),
+            "forces": c.forces(),
         }

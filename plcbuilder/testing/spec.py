@@ -7,7 +7,7 @@ or more ``[[test]]`` tables.
 
 A test has a ``name``, a time limit ``ms`` (default 10000), an optional
 ``machine`` file (relative to the project), a ``scenario`` (the lines of a
-scenario file: start, input, adc, stop, event, bind) and one or more
+scenario file: start, input, adc, stop, event, bind, write, force, release) and one or more
 ``[[test.expect]]`` tables. An expectation has exactly one time selector
 (``at_ms``, ``by_ms``, ``during_ms``, ``at_end``) and one or more conditions.
 
@@ -482,6 +482,13 @@ def resolve(tc: TestCase, names: Names, machine_names: Optional[Names] = None) -
         if a.kind in ("input", "bind") and not 0 <= a.a < n.inputs:
             raise TestFileError(f"scenario: no input {a.a} (the machine has inputs "
                                 f"0..{n.inputs - 1})", tc.file, line)
+        if a.kind in ("write", "force", "release") and "." in a.name:
+            proc, var = a.name.split(".", 1)
+            if proc not in procs:
+                raise TestFileError(f"scenario: {unknown_proc(proc)}", tc.file, line)
+            if var not in procs[proc] and var not in ("command", "parameter"):
+                raise TestFileError(f"scenario: {proc} has no variable {var!r} (its variables: "
+                                    f"{', '.join(sorted(procs[proc]))})", tc.file, line)
     for ex in tc.expectations:
         for c in ex.conditions:
             def fail(msg: str, c=c):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -234,3 +235,71 @@ def test_a_break_never_reached_leaves_halted_null_and_the_summary_says_halted(ca
 def test_bad_breaks_exit_2_with_the_reason(capsys, spec, msg):
     code, out, err = run_cli(capsys, "run", EXAMPLE, "--start", "M80@5", "--break", spec)
     assert code == 2 and msg in err and "Traceback" not in err
+
+
+# ------------------------------------------------------------ --write and --force (SPEC §6)
+
+COUNT = ("main(){ x = 0; do { x = x + 1; y = portget(2); if (x > 5) { portset(1); } }"
+         " while (x < 20); exit(99); };\n")
+
+
+def test_force_and_write_options_act_at_their_ms_and_the_json_lists_what_is_forced(
+        tmp_path, capsys):
+    """"`--force NAME=VALUE@MS` and `--write NAME=VALUE@MS` (repeatable; NAME is
+    `PROC.var`, `in N`, `out N`, `adc N`, `pwm N`, `dac N` or `gvar N`)" """
+    f = write(tmp_path / "C.plc", COUNT)
+    code, out, err = run_cli(capsys, "run", f, "--json", "--ms", "30", "--force", "C.x=3@2",
+                             "--force", "in 2=1@0", "--write", "out 7=1@1",
+                             "--write", "pwm 1=250@4", "--force", "gvar 0x401=0@0")
+    assert code == 0, err
+    rep = json.loads(out)
+    assert rep["vars"]["C"]["x"] == 3 and rep["vars"]["C"]["y"] == 1
+    assert rep["procedures"][0]["ended_at_ms"] is None          # x never reaches 20
+    assert rep["outputs"] == [7] and rep["pwm"][1] == 250       # output 1 held off
+    assert list(rep)[-1] == "forces"
+    assert rep["forces"] == [{"target": "in 2", "value": 1, "since_ms": 0},
+                             {"target": "out 1", "value": 0, "since_ms": 0},
+                             {"target": "C.x", "value": 3, "since_ms": 2}]
+    code, out, err = run_cli(capsys, "run", f, "--ms", "30", "--force", "C.x=3@2")
+    assert code == 0 and "forced: C.x=3 (from 2 ms)" in out
+
+
+def test_without_forces_the_json_has_an_empty_list(tmp_path, capsys):
+    f = write(tmp_path / "C.plc", COUNT)
+    code, out, err = run_cli(capsys, "run", f, "--json")
+    assert code == 0 and json.loads(out)["forces"] == []
+
+
+@pytest.mark.parametrize("opt, value, reason", [
+    ("--force", "C.zz=3@2", "C has no variable 'zz'"),
+    ("--force", "D.x=3@2", "no procedure named D"),
+    ("--force", "in 99=1@2", r"no input 99 \(0..63\)"),
+    ("--write", "adc 8=1", "no ADC channel 8"),
+    ("--force", "in 2=x@2", "the value of --force in 2 must be a whole number"),
+    ("--force", "in 2=2@2", "0 or 1"),
+    ("--write", "bogus 2=1", "'bogus 2' is not a target"),
+    ("--write", "in 2", "--write needs NAME=VALUE@MS"),
+    ("--force", "gvar 6060=1", "cannot be forced"),
+])
+def test_bad_force_and_write_options_are_usage_errors(tmp_path, capsys, opt, value, reason):
+    f = write(tmp_path / "C.plc", COUNT)
+    code, out, err = run_cli(capsys, "run", f, opt, value)
+    assert code == 2 and out == ""
+    assert re.search(reason, err), err
+
+
+def test_scenario_file_lines_write_force_and_release(tmp_path, capsys):
+    f = write(tmp_path / "C.plc", COUNT)
+    sc = write(tmp_path / "s.txt", "force C.x=3 @ 2\nforce in 2=1 @ 0\n"
+                                   "release C.x restore @ 10\nrelease in 2 keep @ 12\n"
+                                   "write C.x=18 @ 12\n")
+    code, out, err = run_cli(capsys, "run", f, "--json", "--scenario", sc)
+    assert code == 0, err
+    rep = json.loads(out)
+    # released at 10 with the program's x (4): 5, 6; written 18 at 12: 19, 20 (tick 13);
+    # exit(99) runs in the next tick
+    assert rep["procedures"][0]["ended_at_ms"] == 14 and rep["vars"]["C"]["x"] == 20
+    assert rep["forces"] == [] and rep["vars"]["C"]["y"] == 1   # in 2 kept as set by hand
+    bad = write(tmp_path / "bad.txt", "release in 2 later @ 3\n")
+    code, out, err = run_cli(capsys, "run", f, "--scenario", bad)
+    assert code == 2 and "bad.txt:1:" in err and "is not a target" in err

@@ -313,3 +313,64 @@ def test_nothing_forced_keeps_the_fast_backend_running_translated_code():
     c.force("M03.x", 1)                      # a variable force does
     assert c.plc.hw.runner.gi_code.co_name == "run_reference"
     assert abi.SLOT_MESSAGE not in c.plc.hw.slots.held
+
+
+#: main calls wait(), whose loop ends ticks: a force lands while it is inside the call
+NESTED = """
+wait()
+{
+  n = 0;
+  do { n = n + 1; k = k + 10; } while (n < 5);
+};
+main()
+{
+  do { wait(); r = r + 1; } while (r < 3);
+  exit(99);
+};
+"""
+
+
+@pytest.mark.parametrize("at", range(1, 9))
+def test_a_force_inside_a_called_procedure_goes_on_there_and_returns_to_its_caller(at):
+    """The hand-over keeps the call chain: forced while wait() runs, main
+    continues after the call when wait() returns (both backends the same)."""
+    out = {}
+    for backend in BACKENDS:
+        c = _c(backend, NESTED)
+        c.step(at)
+        c.force("M03.k", 7)
+        c.step(4)
+        c.release("M03.k", "restore")
+        c.run_until_idle(100)
+        ev = [to_dict(e) for e in c.drain_events()]
+        out[backend] = (ev, c.variables())
+        assert ev[-1]["type"] == "ended" and ev[-1]["exit_code"] == 99
+    assert out["fast"] == out["reference"]
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_software_procedures_variable_is_forced_the_same_way(backend):
+    sw = compile_proc("main(){ do { t = t + 1; gvarset(5001, t); } while (1); };", "LUBE",
+                      software=True)
+    c = controller(sw, backend=backend)
+    c.step(250)                                # software ticks at 0, 100, 200
+    c.force("LUBE.t", 40)
+    c.step(200)                                # ticks at 300, 400
+    assert _v(c, "LUBE")["t"] == 40 and c.machine.gvarget(5001) == 40
+    c.release("LUBE.t", "restore")
+    assert _v(c, "LUBE")["t"] == 41
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_force_while_a_gvarget_waits_for_its_latency_applies_when_it_can(backend):
+    """A procedure waiting for a gvarget's host latency cannot change over
+    there: the force is listed at once and holds from the next step on."""
+    src = "main(){ do { v = gvarget(5000); x = x + 1; } while (1); };"
+    c = controller(compile_proc(src), backend=backend, gvarget_latency_ms=3)
+    c.start("M03")
+    c.step(2)                                  # inside the first wait
+    c.force("M03.x", 9)
+    assert c.forces()[0]["target"] == "M03.x"
+    for _ in range(6):
+        c.step(1)
+    assert _v(c)["x"] == 9

@@ -176,3 +176,24 @@ def test_parallel_results_equal_serial_ones_in_order(tmp_path):
     cov_s = run_suite(suite, jobs=1, coverage=True).coverage
     cov_p = run_suite(suite, jobs=2, coverage=True).coverage
     assert [c.to_dict() for c in cov_p] == [c.to_dict() for c in cov_s]
+
+
+# ------------------------------------------------------- write and force lines
+
+def test_scenario_lines_force_and_release_outputs_and_variables(tmp_path):
+    """Scenario lines (SPEC §5 syntax, extended for writes and forces):
+    PULSE's output 3 forced off stays off while it runs; its timer forced to 1
+    holds the first loop until released (restore: the program's last store, 0)."""
+    r = run_one(tmp_path, "[[test.expect]]\nduring_ms = [0, 12]\noutputs_off = [3]\n"
+                          "[[test.expect]]\nat_end = true\nexit = { PULSE = 99 }\n",
+                scenario="start PULSE @ 0\\nforce out 3=0 @ 0\\nforce PULSE.timer=1 @ 1\\n"
+                         "release PULSE.timer restore @ 9\\nrelease all @ 13")
+    assert r.passed, failures(r)
+
+
+def test_a_scenario_force_of_an_unknown_variable_is_reported_at_its_line(tmp_path):
+    text = ('[[test]]\nname = "t"\nms = 50\nscenario = """\nstart PULSE @ 0\n'
+            'force PULSE.nope=1 @ 2\n"""\n[[test.expect]]\nat_end = true\nno_faults = true\n')
+    suite = prepare(make_project(tmp_path / "p", {"t": text}))
+    (err,) = suite.errors
+    assert "PULSE has no variable 'nope'" in str(err) and ":6:" in str(err)
