@@ -195,6 +195,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     _set_breaks(c, opts.breaks, target)
     report = run_session(c, sc, limit, trace=opts.trace, target=str(target))
     report["halted"] = _halted_report(c.debugger.halted_state()) if opts.breaks else None
+    if "forces" in report:
+        report["forces"] = report.pop("forces")       # what is forced stays the last key
     return RunResult(tg.compiled, report)
 
 

@@ -17,6 +17,7 @@ request the adapter does not know, or cannot carry out, gets a response with
 from __future__ import annotations
 
 import sys
+import threading
 from pathlib import Path
 from typing import Optional
 
@@ -52,6 +53,8 @@ class Session:
         self.configured = False
         self.started = False
         self.done = False
+        self._last_stop = None
+        self._stop_lock = threading.Lock()
 
     # ------------------------------------------------------------ the loop
     def serve(self) -> None:
@@ -256,9 +259,17 @@ class Session:
             self.on_halted(msg["state"])
         elif msg.get("type") == "resumed":
             self.view = None
+            self._last_stop = None
             self.wire.event("continued", {"threadId": 1, "allThreadsContinued": True})
 
     def on_halted(self, state: dict) -> None:
+        bp = state.get("breakpoint") or {}
+        key = (state.get("t_ms"), state.get("reason"), state.get("procedure"), state.get("line"),
+               bp.get("id"))
+        with self._stop_lock:       # (the main thread and the link's reader may both see it)
+            if key == self._last_stop:
+                return              # the same halt, seen by debug_state and by its notification
+            self._last_stop = key
         view = self.view = View(state, self.threads, self._source_path)
         tid = view.stopped_thread()
         body = {"reason": _STOP_REASONS.get(state.get("reason"), "pause"), "threadId": tid,
