@@ -72,6 +72,8 @@ class Analysis:
         #: source uri (or "project:ROOT") -> {target uri: diagnostics}
         self._contrib: dict[str, dict[str, list[T.Diagnostic]]] = {}
         self._headers: dict[str, tuple[int, dict]] = {}
+        self._indexes: dict[str, tuple] = {}        # uri -> (text, include dirs, index)
+        self._header_defs: dict[tuple, tuple] = {}   # include dirs -> (stamp, defines)
 
     # ------------------------------------------------------------ documents
     def open(self, uri: str, text: str, version: int = 0) -> None:
@@ -86,6 +88,7 @@ class Analysis:
         if doc is not None and doc.path is not None:
             self._by_path.pop(_key(doc.path), None)
         self.results.pop(uri, None)
+        self._indexes.pop(uri, None)
         old = self._contrib.pop(uri, {})
         out = {t: self.merged(t) for t in old}
         out[uri] = [] if not self._owned_elsewhere(uri) else self.merged(uri)
@@ -269,11 +272,38 @@ class Analysis:
             return None
         return line
 
+    # ------------------------------------------------------------ symbols
+    def index(self, uri: str, text: str, name: str, path: Optional[Path], ctx: Context):
+        """The symbol index of a document's text (kept while the text is the same:
+        hover, completion and the rest ask again and again between edits)."""
+        hit = self._indexes.get(uri)
+        if hit is not None and hit[0] is text and hit[1] == ctx.include_dirs:
+            return hit[2]
+        idx = lang_symbols.index(text, name, path, ctx.include_dirs, software=ctx.software)
+        if uri in self.docs:
+            self._indexes[uri] = (text, ctx.include_dirs, idx)
+        return idx
+
     # ------------------------------------------------------------ header defines
     def header_defines(self, ctx: Context) -> dict[str, tuple[str, str, int]]:
-        """{name: (value, file, line)} of the project's headers and the built-in pins.h."""
-        return {n: (s.value, s.span.file, s.span.line)
-                for n, s in lang_symbols.header_defines(ctx.include_dirs, read=self._header).items()}
+        """{name: (value, file, line)} of the project's headers and the built-in
+        pins.h (made again only when a header changed, on disk or in the editor)."""
+        stamp = []
+        for d in ctx.include_dirs:
+            try:
+                for h in sorted(Path(d).glob("*.h")):
+                    doc = self._by_path.get(_key(h))
+                    stamp.append((str(h), id(doc.text) if doc else h.stat().st_mtime_ns))
+            except OSError:
+                continue
+        key = (ctx.include_dirs, tuple(stamp))
+        hit = self._header_defs.get(ctx.include_dirs)
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        found = {n: (s.value, s.span.file, s.span.line)
+                 for n, s in lang_symbols.header_defines(ctx.include_dirs, read=self._header).items()}
+        self._header_defs[ctx.include_dirs] = (key, found)
+        return found
 
     def _header(self, path: Path) -> dict:
         doc = self._by_path.get(_key(path))

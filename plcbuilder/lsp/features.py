@@ -56,8 +56,7 @@ class Snapshot:
         self.lines = Lines(self.text, analysis.encoding)
         name = str(self.path) if self.path is not None else "<" + uri.rsplit("/", 1)[-1] + ">"
         self.name = name
-        self.index = S.index(self.text, name, self.path, self.ctx.include_dirs,
-                             software=self.ctx.software)
+        self.index = analysis.index(uri, self.text, name, self.path, self.ctx)
 
     def offset(self, pos: T.Position) -> int:
         return self.lines.offset(pos)
