@@ -27,7 +27,7 @@ helper()
 
 
 class DapClient(Client):
-    def request(self, command: str, arguments=None, timeout: float = 30.0) -> dict:
+    def request(self, command: str, arguments=None, timeout: float = 60.0) -> dict:
         seq = self.next_id()
         self.send({"seq": seq, "type": "request", "command": command,
                    "arguments": arguments or {}})
@@ -39,7 +39,7 @@ class DapClient(Client):
         assert r["success"], r
         return r.get("body") or {}
 
-    def event(self, name: str, timeout: float = 30.0, pred=lambda b: True) -> dict:
+    def event(self, name: str, timeout: float = 60.0, pred=lambda b: True) -> dict:
         m = self.wait(lambda m: m.get("type") == "event" and m.get("event") == name
                       and pred(m.get("body") or {}), timeout)
         return m.get("body") or {}

@@ -67,7 +67,7 @@ class Client:
         return self._next
 
     # ------------------------------------------------------------ receiving
-    def wait(self, pred, timeout: float = 20.0) -> dict:
+    def wait(self, pred, timeout: float = 60.0) -> dict:
         """The first message (seen before or arriving) that pred accepts."""
         for m in self.seen:
             if pred(m):
@@ -99,7 +99,7 @@ class Client:
 
 
 class LspClient(Client):
-    def request(self, method: str, params=None, timeout: float = 20.0) -> dict:
+    def request(self, method: str, params=None, timeout: float = 60.0) -> dict:
         mid = self.next_id()
         self.send({"jsonrpc": "2.0", "id": mid, "method": method, "params": params})
         return self.wait(lambda m: m.get("id") == mid and "method" not in m, timeout)
@@ -112,7 +112,7 @@ class LspClient(Client):
     def notify(self, method: str, params=None) -> None:
         self.send({"jsonrpc": "2.0", "method": method, "params": params})
 
-    def diagnostics(self, uri: str, timeout: float = 20.0, pred=lambda d: True) -> list:
+    def diagnostics(self, uri: str, timeout: float = 60.0, pred=lambda d: True) -> list:
         m = self.wait(lambda m: m.get("method") == "textDocument/publishDiagnostics"
                       and m["params"]["uri"] == uri and pred(m["params"]["diagnostics"]), timeout)
         return m["params"]["diagnostics"]
