@@ -99,14 +99,31 @@ class Watch:
         self._program = process.program
         self.marks = debugger._marks_of(process.program)
 
-        name = process.program.name
+        at = debugger._at_of(process.program.name)      # kept up to date in place
 
-        def brk(pc: int, rets, _d=debugger, _p=process) -> bool:
+        def brk(pc: int, rets, _d=debugger, _p=process, _at=at) -> bool:
+            # (the common case written out: asked at every watched statement start)
             if _d._busy:                    # a step or a run-to goes on
                 return _d._reached(_p, pc, rets)
-            at = _d._at.get(name)
-            bps = at.get(pc) if at is not None else None
-            return bps is not None and _d._breakpoints_at(_p, pc, rets, bps)
+            bps = _at.get(pc)
+            if bps is None:
+                return False
+            for bp in bps:
+                if bp.code is not None and not _d._holds(bp, _p):
+                    continue
+                bp.hits += 1
+                hit = bp.hit
+                if hit is not None:
+                    mode, n = hit
+                    k = bp.hits
+                    if mode == "eq" and k != n or mode == "ge" and k < n \
+                            or mode == "every" and k % n:
+                        continue
+                if bp.log is not None:
+                    _d._log(_p, bp.log)
+                    continue
+                return _d._halt_at("breakpoint", _p, pc, rets, bp)
+            return False
 
         self.brk = brk
 
@@ -192,7 +209,7 @@ class Debugger:
     @property
     def on(self) -> bool:
         """Whether faults halt: a breakpoint is set, a step runs, or asked for."""
-        return self.halt_on_fault or bool(self._at) or any(self._bps.values()) \
+        return self.halt_on_fault or any(self._at.values()) or any(self._bps.values()) \
             or self._stepping is not None or bool(self._run_to)
 
     @property
@@ -338,9 +355,12 @@ class Debugger:
                 for name, (_line, pcs) in bp.where.items():
                     for pc in pcs:
                         at.setdefault(name, {}).setdefault(pc, []).append(bp)
-        self._at = at
+        for name in set(self._at) | set(at):
+            mine = self._at_of(name)
+            mine.clear()
+            mine.update(at.get(name, {}))
         self._busy = self._stepping is not None or bool(self._run_to)
-        want: dict[str, set[int]] = {name: set(pcs) for name, pcs in at.items()}
+        want: dict[str, set[int]] = {name: set(pcs) for name, pcs in at.items() if pcs}
         for name, pcs in self._run_to.items():
             want.setdefault(name, set()).update(pcs)
         step = self._stepping
@@ -365,6 +385,13 @@ class Debugger:
                         self.plc.watch_process(p)
         self.plc.halting = self.on
         self.plc.watching = self._stepping is not None or bool(self._run_to)
+
+    def _at_of(self, name: str) -> dict:
+        """The breakpoints of a program by offset (one dict, changed in place)."""
+        at = self._at.get(name)
+        if at is None:
+            at = self._at[name] = {}
+        return at
 
     def _marks_of(self, program: Program) -> list:
         marks = self._marks.get(program.name)

@@ -596,8 +596,13 @@ class PLC:
         """Make p run code that asks the debugger: a procedure running plain
         fast code goes over to the reference interpreter, exactly where it is
         (suspended at a tick end, or not started yet)."""
-        if not p.watched:
-            self.to_reference(p)
+        if p.watched or p.ended_at is not None or p.gen is None:
+            return
+        if self.backend == "fast" and inspect.getgeneratorstate(p.gen) == inspect.GEN_CREATED:
+            p.set_gen(fastvm.make_runner(p.program, p.slots, p.host, watched=True))
+            p.syncing, p.watched = None, True            # not started: watched code from the start
+            return
+        self.to_reference(p)
 
     def to_reference(self, p: Process) -> None:
         """Hand p (suspended at a tick end, or not started) to the reference
