@@ -24,6 +24,9 @@ How the code is translated:
   outside hands the procedure to the reference interpreter where it is.
 - Tick ends: a plain ``yield`` whose answer is tested against None (SYNC);
   a loop's condition is taken before the tick ends, and each way ends it.
+  ``vm.Migrate`` thrown in there raises :class:`~plcbuilder.controller.vm.Handoff`
+  with the exact state, so that the reference interpreter goes on from that
+  point (a debugger watching, stepping or forcing a variable).
 - A constant pin's ``portget`` reads ``io.in_bits`` where the value is used,
   and ``portset``/``portclr`` test ``io.out_bits`` before calling.
 - Control flow: a block with exactly one predecessor is written inline at its

@@ -33,6 +33,7 @@ controller turns into its own ControllerError.
 
 from __future__ import annotations
 
+import inspect
 import re
 from dataclasses import dataclass
 from typing import Optional
@@ -42,6 +43,7 @@ from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.controller.events import Forces as ForcesEvent
 from plcbuilder.controller.events import Note
+from plcbuilder.controller.vm import Halted, Handoff, Migrate, run_reference
 
 __all__ = ["ForceError", "ForcedSlots", "Forces", "Target", "parse_target", "parse_value",
            "MODES"]
@@ -250,8 +252,8 @@ class Forces:
                 self.plc.var_forces.pop(t.proc, None)
             self.pending.discard(t.name)
             p = self._running(t)
-            if p is not None and held is not None:
-                self.plc.release_slot(p, slot, restore)
+            if p is not None and held is not None and isinstance(p.slots, ForcedSlots):
+                p.slots.release(slot, restore)      # it stays on the reference interpreter
         elif t.kind == "in":
             m.release_input(t.n, restore)
         elif t.kind == "out":
@@ -311,8 +313,50 @@ class Forces:
     # ------------------------------------------------------------ helpers
     def _hold_running(self, t: Target, slot: int, value: int) -> None:
         p = self._running(t)
-        if p is not None and not self.plc.hold_slot(p, slot, value):
+        if p is not None and not self._hold_slot(p, slot, value):
             self.pending.add(t.name)
+
+    def _hold_slot(self, p, slot: int, value: int) -> bool:
+        """Force variable ``slot`` of the running process ``p`` to ``value``: p
+        goes on, from where it is, on the reference interpreter over
+        :class:`ForcedSlots`. False when p cannot change over now (it waits for
+        a gvarget's latency): then it is tried again before the next step."""
+        if not isinstance(p.slots, ForcedSlots) and not self._hand_over(p):
+            return False
+        p.slots.hold(slot, value)
+        return True
+
+    def _hand_over(self, p) -> bool:
+        """Run ``p`` on the reference interpreter over ForcedSlots from exactly
+        where it is (a tick end, a gvarget's wait, a debugger's halt, or its
+        entry when it has not run yet): a suspended generator answers
+        ``vm.Migrate`` with a Handoff of its state."""
+        gen = p.gen
+        if p.ended_at is not None or gen is None or gen.gi_running or gen.gi_frame is None:
+            return False
+        kw = {}
+        if inspect.getgeneratorstate(gen) == inspect.GEN_CREATED:   # its entry, or the state given
+            if p.on_reference():
+                loc = gen.gi_frame.f_locals
+                kw = {k: loc[k] for k in ("pc", "stack", "rets", "count", "passed") if k in loc}
+        else:
+            try:
+                gen.throw(Migrate)
+            except Halted as h:                    # halted there: do not ask the debugger again
+                kw = dict(pc=h.pc, stack=h.stack, rets=h.rets, count=h.count, passed=h.pc)
+            except Handoff as h:
+                kw = dict(pc=h.pc, stack=h.stack, rets=h.rets, count=h.count)
+            except Exception as exc:  # noqa: BLE001 - a bug must not bring the controller down
+                self.plc._outcome(p, exc)
+                return False
+            else:                                  # pragma: no cover - every suspension answers
+                return False
+        p.slots = ForcedSlots(p.slots)
+        new = run_reference(p.program, p.slots, p.host, cover=self.plc.coverage, **kw)
+        p.syncing = None
+        p.watched = True
+        p.set_gen(new)
+        return True
 
     def _changed(self) -> None:
         self.plc.events.append(ForcesEvent(self.plc.t, tuple(self.list())))

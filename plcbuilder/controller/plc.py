@@ -331,57 +331,6 @@ class PLC:
                 self._fault(p, None, f"internal error: {type(exc).__name__}: {exc}")
             return
 
-    # ------------------------------------------------------- forced slots
-    def hold_slot(self, p: Process, slot: int, value: int) -> bool:
-        """Force variable ``slot`` of the running ``p`` to ``value`` (a debugger's
-        force): p goes on, from where it is, on the reference interpreter over
-        :class:`ForcedSlots`. False when p cannot change over now (it waits
-        for a gvarget's latency): then try again after a tick."""
-        if not isinstance(p.slots, ForcedSlots):
-            if not self._hand_over(p):
-                return False
-        p.slots.hold(slot, value)
-        return True
-
-    def release_slot(self, p: Process, slot: int, restore: bool) -> None:
-        """Release a forced slot of ``p``: it keeps the forced value, or takes
-        the value the program last stored (``restore``). p stays on the
-        reference interpreter until it ends."""
-        if isinstance(p.slots, ForcedSlots):
-            p.slots.release(slot, restore)
-
-    def _hand_over(self, p: Process) -> bool:
-        """Run ``p`` on the reference interpreter over ForcedSlots from exactly
-        where it is (a tick end, a gvarget's wait, a debugger's halt, or its
-        entry when it has not run yet)."""
-        gen = p.gen
-        if p.ended_at is not None or gen is None or gen.gi_running or gen.gi_frame is None:
-            return False
-        kw = {}
-        frame = gen.gi_frame
-        if inspect.getgeneratorstate(gen) == inspect.GEN_CREATED:   # from its entry, or the state given
-            if p.on_reference():
-                loc = frame.f_locals
-                kw = {k: loc[k] for k in ("pc", "stack", "rets", "count", "passed") if k in loc}
-        else:
-            try:
-                gen.throw(Migrate)
-            except Handoff as h:
-                kw = dict(pc=h.pc, stack=h.stack, rets=h.rets, count=h.count)
-                if isinstance(h, Halted):
-                    kw["passed"] = h.pc
-            except Exception as exc:  # noqa: BLE001 - a bug must not bring the controller down
-                self._outcome(p, exc)
-                return False
-            else:                              # pragma: no cover - every suspension answers
-                return False
-        p.slots = ForcedSlots(p.slots)
-        new = vm.run_reference(p.program, p.slots, p.host, cover=self.coverage, **kw)
-        p.syncing = None
-        p.watched = True
-        p.set_gen(new)
-        return True
-
     # ------------------------------------------------------------- starts
     def start_hardware(self, name: str, eparam: int = 0) -> None:
         """Start a hardware procedure now: it runs from the next tick (self.t) on;
