@@ -46,6 +46,7 @@ from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header, builtin_h
 from plcbuilder.project import (BuildResult, ProcedureBuild, Project, ProjectError, build_project,
                                 create_project)
 from plcbuilder.project.build import compile_all
+from plcbuilder.project.conditions import compile_condition
 from plcbuilder.project.model import DEFAULT_MACHINE, kind_of
 from plcbuilder.testing.junit import junit_xml, write_junit
 from plcbuilder.testing.runner import Suite, SuiteError, SuiteRun, prepare, run_suite
@@ -306,56 +307,8 @@ def _save_capture(capturer, opts: RunOptions) -> Optional[dict]:
 
 # -------------------------------------------------------------- debugging
 
-_CONDITION_FILE = "<condition>"
-
-
-def compile_condition(text: str, context=None) -> "bytes | list[Diagnostic]":
-    """A breakpoint's condition (an expression of the PLC language) compiled
-    into a small procedure whose exit code is its value: the Program's bytes,
-    which the debugger binds by name to the variables of the procedure that
-    reaches the breakpoint. ``context``: the source file (or project folder)
-    whose ``#include`` and ``#define`` lines the condition may use. When it
-    does not compile: its error diagnostics, pointing into the condition's text
-    (file ``<condition>``, line 1)."""
-    if not isinstance(text, str) or not text.strip():
-        return [error("condition", "a condition needs an expression",
-                      Span.point(_CONDITION_FILE, 1, 1))]
-    if "\n" in text or "\r" in text:
-        return [error("condition", "a condition is one line", Span.point(_CONDITION_FILE, 1, 1))]
-    head: list[str] = []
-    path = Path(context) if context is not None else None
-    options = CompileOptions()
-    if path is not None and path.is_file():
-        try:
-            options = options_for(path)
-            lines = read_bounded(path, MAX_FILE_SIZE, "source").decode("utf-8", "replace")
-        except (ProjectError, OSError):
-            lines = ""
-        head = [ln for ln in lines.splitlines() if ln.lstrip().startswith(("#include", "#define"))]
-    elif path is not None and path.is_dir():
-        try:
-            options = Project.open(path).compile_options(path / "hardware" / "_.plc")
-        except (ProjectError, OSError):
-            pass
-    prefix = "  exit("
-    src = "\n".join([*head, "main()", "{", f"{prefix}{text});", "}"]) + "\n"
-    where = str(path.with_name("__condition__.plc")) if path is not None and path.is_file() \
-        else "<condition>"
-    r = compile_source(src, where, options)
-    at = len(head) + 3
-    errors = []
-    for d in r.diagnostics:
-        if not d.is_error:
-            continue
-        s = d.span
-        span = (Span(_CONDITION_FILE, 1, max(1, s.col - len(prefix)), 1,
-                     max(2, s.end_col - len(prefix))) if s is not None and s.line == at
-                else Span.point(_CONDITION_FILE, 1, 1))
-        errors.append(Diagnostic(d.severity, d.code, d.message, span, d.hints))
-    if errors or r.program is None:
-        return errors or [error("condition", "the condition does not compile",
-                                Span.point(_CONDITION_FILE, 1, 1))]
-    return r.program.to_bytes()
+# compile_condition lives in plcbuilder.project.conditions (the debug adapter uses it
+# too, and may not import api); it is part of this facade as it was.
 
 
 def _set_breaks(c: Controller, breaks: Sequence[str], target: Path) -> None:

@@ -10,10 +10,14 @@ these; cli → api, link; ide → api, project, link, lang, trace, testing; noth
 imports ide, cli, lsp or dap. Every package may use ``_support`` (stdlib-only
 helpers "used everywhere").
 
+The exceptions are the commands that start a front end: ``cli/cmd_gui.py``
+(the IDE), ``cli/cmd_lsp.py`` (the language server) and ``cli/cmd_dap.py``
+(the debug adapter).
+
 Read literally: an arrow is a direct import. A package reaches what its
 neighbours offer only through them (project gets the Diagnostic type from lang,
 which produces diagnostics; the IDE gets the ABI tables and events from api).
-The one exception is ``cli/cmd_gui.py``, the command that starts the IDE.
+The exceptions are the commands that start a front end (above).
 """
 
 import ast
@@ -46,6 +50,8 @@ ALLOWED = {
     "__main__": {"cli"},
 }
 NOBODY_IMPORTS = {"ide", "cli", "lsp", "dap"}
+#: The commands that start a front end, and the one each may import.
+FRONT_END_COMMANDS = {"cli/cmd_gui.py": "ide", "cli/cmd_lsp.py": "lsp", "cli/cmd_dap.py": "dap"}
 QT = ("PySide6", "pyqtgraph", "pyside6_scintilla", "shiboken6")
 
 
@@ -85,8 +91,8 @@ def test_packages_import_only_what_design_allows():
                 target = parts[1]
                 if target == top or target == "_support" or target.startswith("__"):
                     continue                         # itself, the helpers, __version__
-                if rel.as_posix() == "cli/cmd_gui.py" and target == "ide":
-                    continue                         # the command that starts the IDE
+                if FRONT_END_COMMANDS.get(rel.as_posix()) == target:
+                    continue                         # the command that starts a front end
                 if target not in ALLOWED[top]:
                     problems.append(f"{rel}: imports {mod}")
             if top != "ide" and parts[0] in QT:
@@ -100,8 +106,8 @@ def test_nothing_imports_the_front_ends():
         for mod in _imports(py):
             parts = mod.split(".")
             if parts[0] == "plcbuilder" and len(parts) > 1 and parts[1] in NOBODY_IMPORTS:
-                ok = parts[1] == top or (py.relative_to(PKG).as_posix() == "cli/cmd_gui.py"
-                                         and parts[1] == "ide") or top == "__main__"
+                ok = parts[1] == top or FRONT_END_COMMANDS.get(
+                    py.relative_to(PKG).as_posix()) == parts[1] or top == "__main__"
                 assert ok, f"{py.relative_to(PKG)} imports {mod}"
 
 

@@ -102,6 +102,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--state", type=Path, metavar="FILE",
                    help="keep the controller's state (a Huazhong program's B registers) in "
                         "FILE: read at the start, written when it stops (docs/targets.md)")
+    p.add_argument("--server-api", type=int_in(0, 65535), default=None, metavar="PORT",
+                   help="also answer myCNC's text Server API on PORT (myCNC uses 4266; 0: a "
+                        "free port). It has no token, as on myCNC: it listens on 127.0.0.1 "
+                        "unless --server-api-host says otherwise. Off by default")
+    p.add_argument("--server-api-host", default="127.0.0.1", metavar="HOST",
+                   help="the address the Server API listens on (default 127.0.0.1; another "
+                        "address lets anyone who reaches it drive the machine)")
     p.add_argument("--parent", type=int_in(1, (1 << 31) - 1), metavar="PID",
                    help="stop (as on SIGTERM) when process PID has ended: the IDE passes its "
                         "own id for the controller it starts")
@@ -146,15 +153,18 @@ def run(args: argparse.Namespace) -> int:
     path = args.runtime_file or runtime.default_path()
     mode, factor = args.speed
     try:
+        api = (args.server_api_host, args.server_api) if args.server_api is not None else None
         srv = ControllerServer(controller_factory=factory, host=args.host, port=args.port,
                                speed=mode, factor=factor, limits=args.limits, image=image,
-                               runtime_file=path)
+                               runtime_file=path, server_api=api)
     except Refused as exc:
         say(f"plcbuilder controller: {args.image}: {exc.reason}", True)
         return EXIT_FAIL
     except OSError as exc:
-        say(f"plcbuilder controller: cannot listen on {args.host}:{args.port}: "
-            f"{exc.strerror or exc}", True)
+        where = f"{args.host}:{args.port}"
+        if api is not None:
+            where += f" (or the Server API's {api[0]}:{api[1]})"
+        say(f"plcbuilder controller: cannot listen on {where}: {exc.strerror or exc}", True)
         return EXIT_FAIL
     if args.state is not None:
         try:
@@ -205,6 +215,13 @@ def run(args: argparse.Namespace) -> int:
         speed = mode if mode != "factor" else f"{factor:g}x real time"
         say(f"plcbuilder controller: listening on {host}:{port} ({speed}); "
             f"runtime file {path}")
+        if srv.server_api is not None:
+            ahost, aport = srv.server_api.address
+            say(f"plcbuilder controller: Server API on {ahost}:{aport} (no token, as on myCNC)")
+            if not _loopback(ahost):
+                say(f"plcbuilder controller: warning: the Server API listens on {ahost}, not "
+                    "loopback, and has no token: anyone who can reach this port can start "
+                    "procedures, set outputs and jog the machine", True)
         if image is not None:
             n = len(srv.service.image.procedures) if srv.service.image else 0
             say(f"plcbuilder controller: loaded {args.image} ({n} procedures)")

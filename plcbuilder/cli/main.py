@@ -9,7 +9,7 @@ import sys
 
 #: Subcommand modules, in the order ``--help`` lists them.
 COMMANDS = ("gui", "check", "compile", "disasm", "run", "test", "new", "build",
-            "controller", "upload", "start", "stop", "input", "state", "trace")
+            "controller", "upload", "start", "stop", "input", "state", "trace", "lsp", "dap")
 
 
 def build_parser() -> argparse.ArgumentParser:

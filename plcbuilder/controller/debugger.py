@@ -586,6 +586,39 @@ class Debugger:
         raise DebugError(f"{name!r} is not running (running: "
                          f"{', '.join(p.name for p in running) or 'none'})")
 
+    # ------------------------------------------------------- evaluate
+    def evaluate(self, code: bytes, procedure: Optional[str] = None) -> int:
+        """The value of an expression compiled as a condition is
+        (``compile_condition``), over the variables of ``procedure`` (None: the
+        halted one, else the hardware one, else the first running); built-in
+        functions read the machine as the procedure would. It writes nothing."""
+        try:
+            cond = Program.from_bytes(bytes(code))
+        except LoadError as exc:
+            raise DebugError(f"the compiled expression is damaged: {exc}") from None
+        if procedure is None and self.halt is None:
+            running = self.plc.running()
+            if not running:
+                raise DebugError("no procedure is running")
+            p = self.plc.hw if self.plc.hw is not None else running[0]
+        else:
+            p = self._procedure(procedure)
+        p.sync()
+        bound = bind(cond, p.program)
+        h = p.host
+
+        def refused(*_a):
+            raise DebugError("an expression to evaluate may not write")
+        host = vm.Host(portset=refused, portclr=refused, portget=h.portget, gvarget=h.gvarget,
+                       gvarset=refused, g0move=refused, plain=h.plain)
+        try:
+            next(vm.run_reference(bound, list(p.slots), host))
+        except vm.ProcExit as done:
+            return done.code
+        except vm.VMFault as exc:
+            raise DebugError(f"{exc.text}") from None
+        raise DebugError("the expression did not end")       # pragma: no cover
+
     # ------------------------------------------------------- halted state
     def _position(self, p) -> tuple[Optional[int], tuple, bool]:
         return halted_state.position(self, p)

@@ -17,6 +17,7 @@ from plcbuilder.api import Kind
 from plcbuilder.ide.editor import (KIND_CONSTANT, KIND_DEFINE, KIND_FUNCTION, KIND_KEYWORD,
                                    KIND_PREDEFINED, KIND_PROCEDURE, KIND_VARIABLE)
 from plcbuilder.lang import symbols as lang_symbols
+from plcbuilder.lang.hover import signature_text
 
 #: the language's kinds of item -> the editor's
 KINDS = {
@@ -94,10 +95,7 @@ def completions(prefix: str, *, kind: Kind = Kind.HARDWARE, text: str = "",
 
 def signature(name: str) -> Optional[str]:
     """The call tip of a built-in function: its signature and what it does."""
-    b = lang_symbols.FUNCTIONS.get(name)
-    if b is None:
-        return None
-    return f"{b.call_text}  — {b.returns_text}\n{b.doc}"
+    return signature_text(name)
 
 
 def definition(word: str, text: str, path: Optional[str], include_dirs: Iterable[Path] = (),

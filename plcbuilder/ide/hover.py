@@ -1,126 +1,21 @@
-"""Hover help: what the name or number under the mouse is.
-
-- a register number (``gvarget(6060)``) or name (``GVAR_CURRENT_MOTION_CODE``)
-  says what the register is (from :func:`plcbuilder.bytecode.abi.describe_register`);
-- a number given to ``exit()`` names the exit code, one assigned to
-  ``message`` or ``proc`` names the message or proc state;
-- a define shows its value and where it is defined; built-in names their
-  value and table; built-in functions their signature; predefined variables
-  what they hold; the file's own variables and procedures what they are.
-
-:func:`hover_text` is pure (word + context -> text) so it is tested without
-a widget; the editor supplies the word and the text before it.
-"""
+"""Hover help in the editor: the text comes from :mod:`plcbuilder.lang.hover`
+(the language server shows the same); this adds the editor's procedure kind."""
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Optional
 
-from plcbuilder.api import Kind, abi
-from plcbuilder.lang import symbols as lang_symbols
+from plcbuilder.api import Kind
+from plcbuilder.lang import hover as _lang_hover
+from plcbuilder.lang.hover import register_text, value_text
 
-
-def _num(v: int) -> str:
-    return f"{v} (0x{v & 0xFFFFFFFF:x})" if v >= 0 else f"{v}"
-
-
-def register_text(value: int) -> Optional[str]:
-    desc = abi.describe_register(value)
-    if desc is None:
-        return None
-    return f"register {_num(value)}: {desc}"
-
-
-def value_text(value: int, context: str = "") -> Optional[str]:
-    """Hover text for a number (given what precedes it)."""
-    if context == "exit":
-        name = abi.exit_name(value)
-        desc = abi.EXIT_DESCRIPTIONS.get(value)
-        if name:
-            return f"exit code {value}: {name}" + (f" — {desc}" if desc else "")
-        return f"exit code {value}"
-    if context == "message":
-        name = abi.message_name(value)
-        return f"message {value}: {name}" if name else f"message {value}"
-    if context == "proc":
-        name = abi.proc_name(value)
-        return f"proc state {value}: {name}" if name else f"proc state {value}"
-    if context == "pin":
-        return f"pin {value}"
-    reg = register_text(value)
-    if context == "register":
-        return reg or f"register {_num(value)}: a plain global register (keeps what is written)"
-    if reg and value >= 1000:
-        return reg
-    if value > 9 or value < 0:
-        return _num(value)
-    return None
+__all__ = ["hover_text", "register_text", "value_text"]
 
 
 def hover_text(word: str, before: str = "", *, kind: Kind = Kind.HARDWARE, symbols=None,
                header_defines: Optional[dict] = None, variables: tuple = (),
                procedures: dict | None = None) -> Optional[str]:
-    """The hover text for word (an identifier or a number); ``before`` is the
-    text of the line before it. ``symbols`` is the last compile's
-    CompileResult.symbols; ``header_defines`` {name: (value, file, line)}."""
-    if not word:
-        return None
-    if word[:1].isdigit():
-        value = lang_symbols.number_of(word)
-        if value is None:
-            return None
-        return value_text(value, lang_symbols.number_context(before))
-    if word in lang_symbols.KEYWORDS:
-        return None
-    b = lang_symbols.FUNCTIONS.get(word)
-    if b is not None:
-        return f"{b.call_text} — built-in function, {b.returns_text}\n{b.doc}"
-    v = lang_symbols.PREDEFINED.get(word)
-    if v is not None and v.register is not None:
-        return f"{word}: predefined variable, {v.doc} (register {v.register})"
-    if v is not None and (not v.software_only or kind is Kind.SOFTWARE):
-        return f"{word}: predefined variable — {v.doc}"
-    defines = getattr(symbols, "defines", None) or {}
-    if word in defines:
-        value, span = defines[word]
-        where = f"{Path(span.file).name}:{span.line}" if span is not None else ""
-        return _define_text(word, value, where)
-    if header_defines and word in header_defines:
-        value, file, line = header_defines[word]
-        return _define_text(word, value, f"{Path(file).name}:{line}")
-    if word in abi.BUILTIN_NAMES:
-        value = abi.BUILTIN_NAMES[word]
-        kind_name = abi.BUILTIN_KIND.get(word, "built-in name")
-        text = f"{word} = {_num(value)} — built-in {kind_name}"
-        if kind_name == "register":
-            desc = abi.describe_register(value)
-            if desc and desc != word:
-                text += f"\n{desc}"
-        elif kind_name == "exit code" and value in abi.EXIT_DESCRIPTIONS:
-            text += f"\n{abi.EXIT_DESCRIPTIONS[value]}"
-        return text
-    procs = dict(procedures or {})
-    procs.update(getattr(symbols, "procedures", None) or {})
-    if word in procs:
-        span = procs[word]
-        line = f", line {span.line}" if span is not None else ""
-        return f"{word}(): procedure of this file{line}"
-    own = set(variables) | set(getattr(symbols, "variables", None) or [])
-    if word in own:
-        return f"{word}: variable of this file (0 when the procedure starts)"
-    return None
-
-
-def _define_text(name: str, value: str, where: str) -> str:
-    text = f"#define {name} {value}".rstrip()
-    if where:
-        text += f"    ({where})"
-    n = lang_symbols.number_of(value)
-    if n is not None and n >= 0:
-        reg = abi.describe_register(n) if n >= 1000 else None
-        if reg:
-            text += f"\nas a register: {reg}"
-        elif name.startswith(("INPUT_", "OUTPUT_")):
-            text += f"\n{'input' if name.startswith('INPUT_') else 'output'} pin {n}"
-    return text
+    """The hover text for word (see :func:`plcbuilder.lang.hover.hover_text`)."""
+    return _lang_hover.hover_text(word, before, software=kind is Kind.SOFTWARE, symbols=symbols,
+                                  header_defines=header_defines, variables=variables,
+                                  procedures=procedures)

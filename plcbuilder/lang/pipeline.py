@@ -120,18 +120,22 @@ def procedure_name(path: str) -> str:
 
 def compile_source(text: str, path: str = "<input>", options: CompileOptions = CompileOptions(),
                    *, file_path: Optional[Path] = None,
-                   incremental: Optional[Incremental] = None) -> CompileResult:
+                   incremental: Optional[Incremental] = None,
+                   read_file=None) -> CompileResult:
     """Compile source text. ``path`` is the name diagnostics use; ``file_path``
     (when the text is a file's) locates the procedure's folder for #include.
     ``incremental``, kept by the caller for one file from compile to compile,
     makes the compile of an edited text redo only what the edit changed
-    (:mod:`plcbuilder.lang.incremental`); the result is the same."""
+    (:mod:`plcbuilder.lang.incremental`); the result is the same.
+    ``read_file(path, name) -> (text or None, diagnostics)`` reads headers
+    (default :func:`~plcbuilder.lang.source.read_source`; an editor passes one
+    that gives the unsaved text of open headers)."""
     if file_path is None and not path.startswith("<"):
         p = Path(path)
         file_path = p if p.parent != Path("") or p.exists() else None
     if incremental is None:
-        return _compile(Preprocessor(options.include_dirs, root=options.root), text, path,
-                        file_path, options)
+        return _compile(Preprocessor(options.include_dirs, read_file or read_source,
+                                     root=options.root), text, path, file_path, options)
     with incremental.lock:
         try:
             return _compile(Preprocessor(options.include_dirs, root=options.root,

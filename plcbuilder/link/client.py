@@ -372,6 +372,14 @@ class Client:
     def debug_run_to(self, file: str, line: int) -> dict:
         return self.request("debug_run_to", file=file, line=line)
 
+    def debug_evaluate(self, code: bytes, procedure: Optional[str] = None) -> int:
+        """The value of an expression compiled as a condition
+        (``compile_condition``) over a running procedure's variables."""
+        fields = {"code": base64.b64encode(bytes(code)).decode("ascii")}
+        if procedure is not None:
+            fields["procedure"] = procedure
+        return self.request("debug_evaluate", **fields)["value"]
+
     def debug_state(self) -> Optional[dict]:
         """The halted state, or None while running."""
         return self.request("debug_state")["halted"]

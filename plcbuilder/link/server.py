@@ -67,6 +67,14 @@ class _Conn:
         return len(self.out) + self.decoder.pending
 
 
+class _Watch:
+    """A socket another part of the controller serves through this loop."""
+    __slots__ = ("callback",)
+
+    def __init__(self, callback: Callable):
+        self.callback = callback
+
+
 class Server:
     """Serves a :class:`Service` over TCP (one selector thread, many clients).
 
@@ -150,6 +158,7 @@ class Server:
         self._stopping = False
         self._next_flush = time.monotonic()
         self._flushing: list[_Conn] = []          # subscribers still to serve this round
+        self._parts: list = []                    # other protocols this loop serves (attach)
         self.stats = {"accepted": 0, "closed": 0, "bad_frames": 0, "unauthorized": 0,
                       "timeouts": 0, "requests": 0, "telemetry_frames": 0, "evicted": 0,
                       "busy": 0, "overflow": 0}
@@ -188,6 +197,26 @@ class Server:
         self._wake()
         self._thread.join(timeout)
 
+    # ---------------------------------------------------------------- other parts
+    def attach(self, part) -> None:
+        """Serve another protocol on this loop (the Server API,
+        :mod:`plcbuilder.link.server_api`), before :meth:`start`:
+        ``part.attach_to(self)`` registers its sockets with :meth:`watch`;
+        after every pass of the loop ``part.on_pass()`` runs, and the loop
+        does not sleep while ``part.pending``; ``part.close()`` when the loop ends."""
+        part.attach_to(self)
+        self._parts.append(part)
+
+    def watch(self, sock, events: int, callback: Callable) -> None:
+        """Call ``callback(sock, mask)`` from the loop when sock is ready."""
+        self._sel.register(sock, events, _Watch(callback))
+
+    def rewatch(self, sock, events: int, callback: Callable) -> None:
+        self._sel.modify(sock, events, _Watch(callback))
+
+    def unwatch(self, sock) -> None:
+        self._sel.unregister(sock)
+
     def _wake(self) -> None:
         try:
             self._wake_w.send(b"x")
@@ -198,7 +227,8 @@ class Server:
     def _loop(self) -> None:
         try:
             while not self._stopping:
-                timeout = 0.0 if self._backlog or self._flushing else self._timeout()
+                busy = self._backlog or self._flushing or any(p.pending for p in self._parts)
+                timeout = 0.0 if busy else self._timeout()
                 for key, mask in self._sel.select(timeout):
                     tag = key.data
                     if tag == "listen":
@@ -209,10 +239,14 @@ class Server:
                                 pass
                         except OSError:
                             pass
+                    elif isinstance(tag, _Watch):
+                        self._part_call(tag.callback, key.fileobj, mask)
                     else:
                         conn: _Conn = tag
                         self._guard(conn, self._on_ready, conn, mask)
                 self._finish_slow()
+                for part in self._parts:
+                    self._part_call(part.on_pass)
                 for conn in list(self._backlog):
                     self._guard(conn, self._serve, conn)
                 try:
@@ -227,6 +261,13 @@ class Server:
             self._flush_telemetry(time.monotonic(), everything=True)
             self._close_all(self._stopping if isinstance(self._stopping, str) else "stopped")
             self._pool.shutdown(wait=False, cancel_futures=True)
+
+    @staticmethod
+    def _part_call(fn, *args) -> None:
+        try:
+            fn(*args)
+        except Exception:  # noqa: BLE001 - a bug in another part costs nothing here
+            traceback.print_exc()
 
     def _guard(self, conn: _Conn, fn, *args) -> None:
         try:
@@ -399,6 +440,8 @@ class Server:
             total -= held
 
     def _close_all(self, reason: str) -> None:
+        for part in self._parts:
+            self._part_call(part.close)
         for c in list(self._conns.values()):
             if not c.closed:
                 try:
@@ -724,7 +767,7 @@ class ControllerServer:
                  controller_factory: Optional[Callable[[], Controller]] = None,
                  speed: str = "realtime", factor: float = 1.0, limits: Optional[Limits] = None,
                  image: Optional[bytes] = None, runtime_file: Optional[Path] = None,
-                 **server_options):
+                 server_api: Optional[tuple[str, int]] = None, **server_options):
         if controller is None:
             controller_factory = controller_factory or (lambda: Controller())
             controller = controller_factory()
@@ -733,6 +776,16 @@ class ControllerServer:
         if image is not None:
             self.service.load_image(image)          # Refused: the caller says why
         self.server = Server(self.service, host, port, token, **server_options)
+        #: myCNC's text Server API on (host, port), when asked for (no token: loopback by default)
+        self.server_api = None
+        if server_api is not None:
+            from plcbuilder.link.server_api import ServerApi
+            try:
+                self.server_api = ServerApi(self.sim, *server_api)
+            except OSError:
+                self.server.stop()
+                raise
+            self.server.attach(self.server_api)
         self.runtime_file = runtime_file
         self._endpoint = None
         self._previous = None

@@ -89,6 +89,16 @@ class DebugVerbs:
             return self._halted(d)
         return self._debug(go)
 
+    def handle_debug_evaluate(self, msg: dict, session) -> dict:
+        """{code: base64 of an expression compiled as a condition, procedure?} -> {value}."""
+        raw = protocol.field_str(msg, "code", max_len=4 * protocol.MAX_FRAME // 8)
+        proc = protocol.field_str(msg, "procedure", None, max_len=128)
+        try:
+            code = base64.b64decode(raw, validate=True)
+        except (binascii.Error, ValueError):
+            raise BadRequest("debug_evaluate: code is not base64") from None
+        return {"value": self._debug(lambda d: d.evaluate(code, proc))}
+
     def handle_debug_state(self, msg: dict, session) -> dict:
         return self._debug(lambda d: {**self._halted(d), "breakpoints": d.breakpoints()})
 
