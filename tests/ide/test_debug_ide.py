@@ -457,7 +457,7 @@ def test_an_empty_controller_gets_the_projects_image(make_window, example, qtbot
     image = (example / "build" / "eeprom.rom").read_bytes()
     conn.connect_now()
     conn.sig_state.emit(ControllerStatus(image_crc32=None), 0)
-    assert conn.named("upload") == [("upload", image)]
+    assert [c[:2] for c in conn.named("upload")] == [("upload", image)]
     assert "The controller had no image: loaded" in w.statusBar().currentMessage()
     # a controller running another image is told about, not overwritten
     conn.connect_now()

@@ -68,6 +68,8 @@ def test_live_values_of_the_rows_on_screen(win, qtbot):
     conn = FakeConnection()
     b = win.workbench.registers
     b.set_connection(conn)
+    win.registers_dock.setFloating(True)                    # room for the eight PWM rows
+    win.registers_dock.resize(700, 900)
     win.registers_dock.show()
     win.registers_dock.raise_()
     qtbot.waitUntil(b.isVisible)
