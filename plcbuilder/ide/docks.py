@@ -120,7 +120,7 @@ def default_dock_sizes(win) -> None:
                      Qt.Orientation.Vertical)
     if getattr(win, "callstack_dock", None) is not None:     # the tree keeps most of the left
         h = max(win.height() - 260, 400)
-        win.resizeDocks([win.project_dock, win.callstack_dock], [int(h * 0.62), int(h * 0.38)],
+        win.resizeDocks([win.project_dock, win.callstack_dock], [int(h * 0.6), int(h * 0.4)],
                          Qt.Orientation.Vertical)
 
 

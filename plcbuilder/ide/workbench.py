@@ -71,7 +71,13 @@ class Workbench(QObject):
         area = Qt.DockWidgetArea
         win.outline_dock = make_dock(win, "Outline", "outlineDock", self.outline,
                                      area.LeftDockWidgetArea)
-        win.splitDockWidget(win.project_dock, win.outline_dock, Qt.Orientation.Vertical)
+        if getattr(win, "callstack_dock", None) is not None:
+            # one tab group under the tree (Outline, Call Stack, Breakpoints), so
+            # the tree keeps its height
+            win.tabifyDockWidget(win.callstack_dock, win.outline_dock)
+            win.outline_dock.raise_()
+        else:
+            win.splitDockWidget(win.project_dock, win.outline_dock, Qt.Orientation.Vertical)
         win.find_dock = make_dock(win, "Find in Files", "findInFilesDock", self.find_panel,
                                   area.BottomDockWidgetArea)
         win.references_dock = make_dock(win, "References", "referencesDock", self.references,

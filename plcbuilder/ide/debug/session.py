@@ -317,6 +317,10 @@ class DebugSession(QObject):
         self.halted = state
         self.picked = None
         self.call_stack.show_state(state)
+        dock = getattr(self.win, "callstack_dock", None)
+        if dock is not None:                # it shares its tabs with Outline and Breakpoints
+            dock.show()
+            dock.raise_()
         for ed in self.win.editors():
             self._show_in(ed, scroll=True)
         file, line = state.get("file"), state.get("line")

@@ -50,7 +50,7 @@ class TriggerBar(QtWidgets.QWidget):
         self.spec.setToolTip("What starts a capture: 'out 7 rise', 'in 3 fall', 'adc 0 up 1200', "
                              "'proc = 33', 'message', 'print = 20001', 'M80.var03 bit 2 rise' "
                              "(see the manual, Traces)")
-        self.spec.setMinimumWidth(90)
+        self.spec.setMinimumWidth(60)
         self.spec.returnPressed.connect(lambda: self.arm.setChecked(True))
         lay.addWidget(self.spec, 2)
         self.pre = self._ms("pre", 100, "Time kept before the trigger")
@@ -75,6 +75,10 @@ class TriggerBar(QtWidgets.QWidget):
                                  QtWidgets.QSizePolicy.Policy.Preferred)
         self.state.setMinimumWidth(0)
         lay.addWidget(self.state, 3)
+        # the bar never widens its dock: it takes the width there is
+        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,
+                           QtWidgets.QSizePolicy.Policy.Fixed)
+        self.setMinimumWidth(0)
 
     @staticmethod
     def _ms(prefix: str, value: int, tip: str) -> QtWidgets.QSpinBox:
@@ -85,6 +89,7 @@ class TriggerBar(QtWidgets.QWidget):
         box.setPrefix(f"{prefix} ")
         box.setSuffix(" ms")
         box.setToolTip(tip)
+        box.setMaximumWidth(box.fontMetrics().horizontalAdvance(f"{prefix} 99999 ms") + 36)
         return box
 
     def _armed(self, on: bool) -> None:
