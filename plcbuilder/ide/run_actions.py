@@ -33,6 +33,10 @@ from plcbuilder.link.protocol import MAX_IMAGE
 SPEEDS = (("1×", "realtime"), ("10×", "10"), ("Max", "max"), ("Pause", "pause"))
 
 
+#: where the embedded controller keeps a target's state (Huazhong's B registers)
+STATE_FILE = "controller-state.json"
+
+
 class Step(enum.Enum):
     """Where the build → upload sequence is."""
     IDLE = "idle"                            # no build running
@@ -285,6 +289,9 @@ class RunActions(QObject):
             args += ["--io-dat", str(p.root / "IO.DAT")]
         lim = p.limits
         args += ["--limits", f"{lim.hw_proc},{lim.hw_total},{lim.sw_proc}"]
+        if getattr(p, "target", "mycnc") != "mycnc":
+            # Huazhong's B registers are kept across restarts of the IDE too
+            args += ["--state", str(p.root / "build" / STATE_FILE)]
         return args
 
     def connect_dialog(self) -> bool:

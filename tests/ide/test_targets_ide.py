@@ -127,3 +127,17 @@ def test_run_panels_show_huazhong_registers(qtbot, live):
     assert "plc1" in panels.registers.calls.text()
     panels.set_target("mycnc")
     assert not panels.registers.isVisible()
+
+
+def test_the_embedded_controller_keeps_huazhong_b_across_ide_restarts(window, tmp_path):
+    """SPEC §9: 'B[n] (100 16-bit words kept across controller restarts)': the IDE
+    starts its controller with a state file in the project's build/ (a myCNC
+    project has no such state)."""
+    from plcbuilder.ide.run_actions import STATE_FILE
+    mill = api.create_project(tmp_path / "mill", target="huazhong")
+    assert window.open_project(mill.root, offer_recovery=False)
+    args = window.run_actions.controller_args()
+    assert args[args.index("--state") + 1] == str(mill.root / "build" / STATE_FILE)
+    plain = api.create_project(tmp_path / "plain")
+    assert window.open_project(plain.root, offer_recovery=False)
+    assert "--state" not in window.run_actions.controller_args()
