@@ -206,3 +206,18 @@ def test_record_and_replay_a_session_in_the_ide(qtbot, tmp_path):
     assert diff.same, diff.text()
     assert replay.t_end >= live.t_end - 50
     win.close()
+
+
+def test_the_whole_session_shows_from_the_start(qtbot, panels, fake):
+    """Issue 11: the panels can scroll back to t = 0 — the Session button shows
+    every change since the controller started, not only the live window."""
+    _toggle(fake, 0, 60_000)                       # 6,000 changes; the live view keeps 500
+    assert panels.model.time.view()[0] > 1.0
+    qtbot.mouseClick(panels.traces.bar.session, Qt.MouseButton.LeftButton)
+    assert panels.recorded is not None and "whole session" in panels.recorded
+    t = panels.model.time.view()
+    assert t[0] == 0.0 and t[-1] == pytest.approx(59.99)
+    t0, t1 = panels.lanes.visible_span()
+    assert t0 == pytest.approx(0.0, abs=1e-6) and t1 == pytest.approx(59.99, abs=0.02)
+    panels.back_to_live()
+    assert panels.recorded is None

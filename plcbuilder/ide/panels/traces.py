@@ -38,6 +38,8 @@ class TriggerBar(QtWidgets.QWidget):
     """Stop waiting for the trigger."""
     sig_now = Signal()
     """Trigger now."""
+    sig_session = Signal()
+    """Show the whole session so far."""
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -70,6 +72,11 @@ class TriggerBar(QtWidgets.QWidget):
         self.now = style.small_button("Now", "Trigger now: capture around this moment")
         self.now.clicked.connect(self.sig_now)
         lay.addWidget(self.now)
+        self.session = style.small_button("Session", "Show the whole session so far, from "
+                                          "t = 0, in the panels (zoom and pan over all of it; "
+                                          "Back to Live returns)")
+        self.session.clicked.connect(self.sig_session)
+        lay.addWidget(self.session)
         self.state = QtWidgets.QLabel()
         self.state.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,
                                  QtWidgets.QSizePolicy.Policy.Preferred)
@@ -126,6 +133,7 @@ class TraceTools(QtCore.QObject):
         self.bar.sig_arm.connect(self.arm)
         self.bar.sig_disarm.connect(self.disarm)
         self.bar.sig_now.connect(self.trigger_now)
+        self.bar.sig_session.connect(self.show_session)
         self.bar.set_state("not armed")
 
     @staticmethod
@@ -202,6 +210,17 @@ class TraceTools(QtCore.QObject):
         self.shown = trace
         self.panels.show_recorded(title, samples, events_of(trace), marker,
                                   text=f"showing {title}")
+
+    def show_session(self) -> api.Trace:
+        """Show the whole session so far in the run panels (every change since
+        the controller started, not only the seconds the live view keeps)."""
+        tr = self.session_trace()
+        self.show(tr, f"the whole session, {tr.t_start / 1000:.3f}..{tr.t_end / 1000:.3f} s")
+        panels = self.panels
+        t0, t1 = tr.t_start * 1e-3, max(tr.t_end * 1e-3, tr.t_start * 1e-3 + 0.01)
+        for panel in panels.time_panels:
+            panel.show_span(t0, t1)
+        return tr
 
     def current(self) -> api.Trace:
         """The trace on show, or the whole session so far."""
