@@ -292,6 +292,8 @@ class History:
             words = f["inputs" if bank == "in" else "outputs"]
             before = old["inputs" if bank == "in" else "outputs"] if old else None
             for w, word in enumerate(words):
+                if before is not None and w >= len(before):
+                    before = None               # a sample with more words: all of them new
                 base = w * 32
                 if base >= count:
                     break
@@ -311,7 +313,8 @@ class History:
         axes = f["axes"]
         if old is None or axes != old["axes"]:
             for a, i in zip(self.axes, self._axis_idx):
-                sig[f"axis {a}"].append(t, axes[i])
+                if i < len(axes):               # a sample may carry fewer axes
+                    sig[f"axis {a}"].append(t, axes[i])
 
     def watch(self, t: int, name: str, value: int) -> None:
         """A watched value (a variable ``PROC.var``) at the end of tick t."""

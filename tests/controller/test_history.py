@@ -108,3 +108,17 @@ def test_snapshot_starts_with_the_value_that_held():
     assert kind == "bit"
     assert ch[0] == (50, 1) and ch[-1] == (60, 1) and len(ch) == 11
     assert tr.signals["in 0"][1] == [(50, h.signals["in 0"].value_at(50))]
+
+
+def test_samples_with_fewer_axes_or_words_are_taken_as_they_are():
+    """A client's samples may carry fewer axes or I/O words than the history has
+    signals for (another machine, another target): nothing fails, what is there
+    is recorded."""
+    from plcbuilder.controller.events import Sample
+    h = History(input_count=64, output_count=64, axes=("X", "Y", "Z"))
+    h.feed_samples([Sample(0, None, 0, 0, (1,), (2,), (0,) * 8, (0,) * 8, (0,) * 8, (150,)),
+                    Sample(5, None, 0, 0, (1, 4), (2, 0), (0,) * 8, (0,) * 8, (0,) * 8, (150, 7))])
+    assert h.signals["axis X"].changes() == [(0, 150)]
+    assert h.signals["axis Y"].changes() == [(5, 7)]
+    assert h.signals["in 0"].changes() == [(0, 1)] and h.signals["in 34"].changes() == [(5, 1)]
+    assert h.signals["out 1"].changes() == [(0, 1)]
