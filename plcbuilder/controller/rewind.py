@@ -31,6 +31,9 @@ from plcbuilder.controller.scenario import apply
 #: ticks run at most in one go while running the session again
 CHUNK_MS = 10_000
 KINDS = ("tick", "statement")
+#: how far back a statement back looks for the procedure's previous statement
+#: (a software procedure runs every 100 ms)
+LOOK_BACK_MS = 101
 
 
 class RewindError(Exception):
@@ -79,20 +82,22 @@ def _fresh(old, factory: Callable):
 
 
 def replay(old, factory: Callable, until: int, *, through: bool = False,
-           on_halt: Optional[Callable] = None, counter: Optional[_Counter] = None):
+           on_halt: Optional[Callable] = None, counter: Optional[_Counter] = None,
+           count_from: int = 0):
     """A fresh controller that ran ``old``'s recording up to tick ``until``
     (between ticks, the actions at ``until`` not done) or, with ``through``,
     into tick ``until`` until ``on_halt(new)`` says a halt is the one wanted.
-    Any other halt is continued. Returns the controller (halted or between ticks)."""
+    Any other halt is continued. ``counter`` counts statements from tick
+    ``count_from`` on (counting makes the procedure run watched code, slower).
+    Returns the controller (halted or between ticks)."""
     new = _fresh(old, factory)
     actions = [a for a in old.recorder.actions if a.t_ms < until or through and a.t_ms == until]
     for a in actions:
         if a.kind == "upload" and a.name not in old.images:
             raise RewindError(f"the image {a.name} loaded at {a.t_ms} ms is not kept")
     dbg = new.debugger
-    dbg.counter = counter
-    dbg._remark()
     end = until + 1 if through else until
+    count_from = min(max(0, count_from), end) if counter is not None else end + 1
     i, n = 0, len(actions)
     while True:
         t = new.t_ms
@@ -102,6 +107,9 @@ def replay(old, factory: Callable, until: int, *, through: bool = False,
             dbg.halt = None
             new.plc.resume_tick()
             continue
+        if t >= count_from and dbg.counter is None:
+            dbg.counter = counter
+            dbg._remark()
         if t >= end:
             break
         while i < n and actions[i].t_ms <= t:
@@ -111,6 +119,8 @@ def replay(old, factory: Callable, until: int, *, through: bool = False,
             apply(new, a)
             i += 1
         stop = end if i >= n else min(end, max(actions[i].t_ms, t + 1))
+        if t < count_from < stop:
+            stop = count_from
         new.step(min(stop - t, CHUNK_MS))
         new.drain_events()
     dbg.counter = None
@@ -148,15 +158,20 @@ def step_back(old, factory: Callable, kind: str = "tick"):
                           "ticks: step back a tick)")
     name, t = h.process.name, old.t_ms
     first = _Counter(name, find=(t, h.pc, tuple(h.rets)))
-    replay(old, factory, t, through=True, counter=first, on_halt=lambda _c: first.done)
+    # the statement before is in this tick, or in the last tick it ran before:
+    # the tick before (hardware) or the software tick before (100 ms)
+    since = t - LOOK_BACK_MS
+    replay(old, factory, t, through=True, counter=first, count_from=since,
+           on_halt=lambda _c: first.done)
     if not first.done:
         raise RewindError(f"running the session again did not reach {name} at {t} ms "
                           f"(was something done that is not recorded?)")
     target = (t, first.found - 1) if first.found > 1 else first.last
     if target is None:
-        raise RewindError(f"nothing to go back to: {name} ran no statement before this one")
+        raise RewindError(f"nothing to go back to: {name} ran no statement before this one "
+                          f"(in the last {LOOK_BACK_MS} ms)")
     again = _Counter(name, stop_at=target)
-    new = replay(old, factory, target[0], through=True, counter=again,
+    new = replay(old, factory, target[0], through=True, counter=again, count_from=target[0],
                  on_halt=lambda _c: again.done)
     if not again.done:                                    # pragma: no cover - determinism
         raise RewindError(f"running the session again did not reach {name} at {target[0]} ms")
@@ -177,7 +192,7 @@ def run_back(old, factory: Callable):
     h = old.debugger.halt
     if h is not None and h.process is not None and h.pc is not None and old.plc.mid_tick:
         now = _Counter(h.process.name, find=(old.t_ms, h.pc, tuple(h.rets)))
-        replay(old, factory, old.t_ms, through=True, counter=now,
+        replay(old, factory, old.t_ms, through=True, counter=now, count_from=old.t_ms,
                on_halt=lambda c: now.done or count(c))
     else:
         replay(old, factory, old.t_ms, on_halt=count)
