@@ -15,14 +15,17 @@ there on the session is written anew). The breakpoints are the old
 controller's, counted as if they had been set from the start. Nothing is
 changed when a request is refused (:class:`RewindError`).
 
-There are no checkpoints: running the session again is the whole cost. A
-generator's state (a running procedure) cannot be copied, and running again
-is fast enough (docs/debugging.md, "Stepping back", gives the figure and
-``scripts/bench_rewind.py`` measures it).
+Checkpoints (:class:`Checkpoints`): a running procedure is a generator, whose
+state cannot be copied, so a checkpoint is a whole controller that already ran
+the session to a tick k * 30 s, made in the simulation's idle time (while it is
+halted or paced to real time). A step back starts from the latest one before
+where it goes and uses it up; without one it runs from t = 0, as long as
+simulating the session at Max speed takes (``scripts/bench_rewind.py``).
 """
 
 from __future__ import annotations
 
+import time
 from typing import Callable, Optional
 
 from plcbuilder.controller.debugger import Halt
@@ -30,6 +33,8 @@ from plcbuilder.controller.scenario import apply
 
 #: ticks run at most in one go while running the session again
 CHUNK_MS = 10_000
+#: ... while making a checkpoint in idle time (a few milliseconds of wall time)
+BUILD_CHUNK_MS = 1000
 KINDS = ("tick", "statement")
 #: how far back a statement back looks for the procedure's previous statement
 #: (a software procedure runs every 100 ms)
@@ -83,22 +88,44 @@ def _fresh(old, factory: Callable):
 
 def replay(old, factory: Callable, until: int, *, through: bool = False,
            on_halt: Optional[Callable] = None, counter: Optional[_Counter] = None,
-           count_from: int = 0):
+           count_from: int = 0, pool: Optional["Checkpoints"] = None):
     """A fresh controller that ran ``old``'s recording up to tick ``until``
     (between ticks, the actions at ``until`` not done) or, with ``through``,
     into tick ``until`` until ``on_halt(new)`` says a halt is the one wanted.
     Any other halt is continued. ``counter`` counts statements from tick
     ``count_from`` on (counting makes the procedure run watched code, slower).
-    Returns the controller (halted or between ticks)."""
-    new = _fresh(old, factory)
+    With ``pool``, it starts from the latest checkpoint that fits, when there is
+    one. Returns the controller (halted or between ticks)."""
+    actions = _actions(old, until, through)
+    end = until + 1 if through else until
+    count_from = min(max(0, count_from), end) if counter is not None else end + 1
+    spare = pool.take(old, min(until, count_from)) if pool is not None else None
+    if spare is not None:
+        new, i = spare
+    else:
+        new, i = _fresh(old, factory), 0
+    for _ in _run(old, new, actions, i, end, on_halt, counter, count_from):
+        pass
+    new.replay_image = None
+    new.drain_events()
+    new.drain_sample_rows()
+    return new
+
+
+def _actions(old, until: int, through: bool = False) -> list:
     actions = [a for a in old.recorder.actions if a.t_ms < until or through and a.t_ms == until]
     for a in actions:
         if a.kind == "upload" and a.name not in old.images:
             raise RewindError(f"the image {a.name} loaded at {a.t_ms} ms is not kept")
+    return actions
+
+
+def _run(old, new, actions: list, i: int, end: int, on_halt=None, counter=None,
+         count_from: int = 1 << 62, chunk: int = CHUNK_MS):
+    """Run ``new`` on ``actions[i:]`` up to tick ``end`` (see :func:`replay`);
+    yields after each chunk of ticks."""
     dbg = new.debugger
-    end = until + 1 if through else until
-    count_from = min(max(0, count_from), end) if counter is not None else end + 1
-    i, n = 0, len(actions)
+    n = len(actions)
     while True:
         t = new.t_ms
         if dbg.halt is not None:
@@ -121,14 +148,91 @@ def replay(old, factory: Callable, until: int, *, through: bool = False,
         stop = end if i >= n else min(end, max(actions[i].t_ms, t + 1))
         if t < count_from < stop:
             stop = count_from
-        new.step(min(stop - t, CHUNK_MS))
+        new.step(min(stop - t, chunk))
         new.drain_events()
+        yield
     dbg.counter = None
     dbg._remark()
-    new.replay_image = None
-    new.drain_events()
-    new.drain_sample_rows()
-    return new
+
+
+def _breakpoints_key(dbg) -> tuple:
+    """What a checkpoint's breakpoints must equal to be used (hits count from 0)."""
+    return (dbg.halt_on_fault,) + tuple(
+        (bp.file, bp.line, bp.enabled, bp.condition, bp.code, bp.hit, bp.log)
+        for file in sorted(dbg._bps) for bp in dbg._bps[file])
+
+
+class Checkpoints:
+    """Controllers that already ran the session to ticks k * ``every_ms``
+    (between ticks), made in the simulation's idle time by :meth:`work`; a
+    step back starts from the latest one at or before where it goes (and uses
+    it up: :meth:`work` makes it again). A checkpoint is used only while the
+    session's recording up to it and the breakpoints are what they were."""
+
+    def __init__(self, factory: Callable, every_ms: int = 30_000, keep: int = 16):
+        self.factory = factory
+        self.every_ms = every_ms
+        self.keep = keep
+        self.ready: dict[int, tuple] = {}     # tick -> (controller, actions applied, bp key)
+        self._job = None                      # (tick, controller, actions, generator)
+
+    def wanted(self, old) -> list[int]:
+        """The ticks to have checkpoints at, latest first."""
+        last = (old.t_ms - 1) // self.every_ms
+        return [k * self.every_ms for k in range(last, max(0, last - self.keep), -1)]
+
+    def clear(self) -> None:
+        self.ready.clear()
+        self._job = None
+
+    def take(self, old, before: int) -> Optional[tuple]:
+        """(controller, next action's index) of the latest fitting checkpoint at
+        or before tick ``before``, removed from the pool; or None."""
+        key = _breakpoints_key(old.debugger)
+        acts = old.recorder.actions
+        for tick in sorted(self.ready, reverse=True):
+            if tick > before:
+                continue
+            c, applied, bps = self.ready[tick]
+            k = len(applied)
+            if bps == key and acts[:k] == applied and (k == len(acts) or acts[k].t_ms >= tick) \
+                    and not old.recorder.dropped:
+                del self.ready[tick]
+                return c, k
+        return None
+
+    def work(self, old, budget_s: float) -> bool:
+        """Make checkpoints for about ``budget_s`` seconds; False when there is
+        nothing to do (every wanted checkpoint is there)."""
+        if old.target is not None or old.recorder.dropped:
+            return False
+        deadline = time.perf_counter() + budget_s
+        wanted = self.wanted(old)
+        for tick in list(self.ready):
+            if tick not in wanted:
+                del self.ready[tick]
+        while time.perf_counter() < deadline:
+            if self._job is None:
+                todo = [t for t in wanted if t not in self.ready]
+                if not todo:
+                    return False
+                tick = todo[0]
+                try:
+                    actions = _actions(old, tick)
+                    c = _fresh(old, self.factory)
+                except RewindError:
+                    return False
+                self._job = (tick, c, actions, _run(old, c, actions, 0, tick,
+                                                    chunk=BUILD_CHUNK_MS))
+            tick, c, actions, gen = self._job
+            try:
+                next(gen)
+            except StopIteration:
+                self._job = None
+                c.replay_image = None
+                c.drain_events()
+                self.ready[tick] = (c, actions, _breakpoints_key(old.debugger))
+        return True
 
 
 def _halted(new, halt: Halt):
@@ -143,7 +247,8 @@ def _announce(new):
     return new
 
 
-def step_back(old, factory: Callable, kind: str = "tick"):
+def step_back(old, factory: Callable, kind: str = "tick",
+              pool: Optional[Checkpoints] = None):
     """The controller one tick (or one statement of the procedure halted) earlier."""
     if kind not in KINDS:
         raise RewindError(f"unknown step back {kind!r} (one of {', '.join(KINDS)})")
@@ -151,7 +256,7 @@ def step_back(old, factory: Callable, kind: str = "tick"):
         t = old.t_ms if old.plc.mid_tick else old.t_ms - 1
         if t < 0:
             raise RewindError("nothing to go back to: the session is at its start (t = 0 ms)")
-        return _halted(replay(old, factory, t), Halt("step"))
+        return _halted(replay(old, factory, t, pool=pool), Halt("step"))
     h = old.debugger.halt
     if h is None or h.process is None or h.pc is None or not old.plc.mid_tick:
         raise RewindError("a statement back needs a halt at a statement (halted between "
@@ -162,7 +267,7 @@ def step_back(old, factory: Callable, kind: str = "tick"):
     # the tick before (hardware) or the software tick before (100 ms)
     since = t - LOOK_BACK_MS
     replay(old, factory, t, through=True, counter=first, count_from=since,
-           on_halt=lambda _c: first.done)
+           on_halt=lambda _c: first.done, pool=pool)
     if not first.done:
         raise RewindError(f"running the session again did not reach {name} at {t} ms "
                           f"(was something done that is not recorded?)")
@@ -172,7 +277,7 @@ def step_back(old, factory: Callable, kind: str = "tick"):
                           f"(in the last {LOOK_BACK_MS} ms)")
     again = _Counter(name, stop_at=target)
     new = replay(old, factory, target[0], through=True, counter=again, count_from=target[0],
-                 on_halt=lambda _c: again.done)
+                 on_halt=lambda _c: again.done, pool=pool)
     if not again.done:                                    # pragma: no cover - determinism
         raise RewindError(f"running the session again did not reach {name} at {target[0]} ms")
     return _announce(new)

@@ -96,11 +96,19 @@ class DebugVerbs:
         kind = protocol.field_str(msg, "kind", "tick", max_len=16)
         if kind not in rewind.KINDS:
             raise BadRequest(f"debug_step_back: kind must be one of {', '.join(rewind.KINDS)}")
-        return self._rewind(lambda old, factory: rewind.step_back(old, factory, kind))
+        return self._rewind(lambda old, factory: rewind.step_back(old, factory, kind,
+                                                                  self.checkpoints))
 
     def handle_debug_run_back(self, msg: dict, session) -> dict:
         """{}: the session run again to the previous breakpoint hit."""
         return self._rewind(rewind.run_back)
+
+    def start_checkpoints(self) -> None:
+        """Make stepping back's checkpoints in the simulation's idle time."""
+        if self.controller_factory is not None and self.checkpoints is None:
+            self.checkpoints = rewind.Checkpoints(self.controller_factory)
+            pool = self.checkpoints
+            self.sim.idle_work = lambda s: pool.work(self.sim.controller, s)
 
     def _rewind(self, fn) -> dict:
         factory = self.controller_factory

@@ -9,7 +9,7 @@ import pytest
 
 from plcbuilder import api
 from plcbuilder.controller.controller import Controller
-from plcbuilder.controller.rewind import RewindError, run_back, step_back
+from plcbuilder.controller.rewind import Checkpoints, RewindError, run_back, step_back
 
 from tests.controller._sim import BACKENDS, compile_proc
 
@@ -177,3 +177,43 @@ def test_what_cannot_be_run_again_is_refused():
     with pytest.raises(RewindError, match="lost its first 3 actions"):
         step_back(c, Controller, "tick")
     assert c.t_ms == 10
+
+
+def test_a_step_back_from_a_checkpoint_equals_one_from_the_start():
+    """SPEC §7: '… with checkpoints so that stepping back in a ten-minute session
+    answers in well under a second.' A checkpoint is a controller that already ran
+    the session; a step back from it gives the same state as one from t = 0."""
+    programs = _example_programs() + [compile_proc(SOFT, "S1", software=True)]
+    c = Controller()
+    seen = {}
+    plan = {3: lambda: c.load(programs), 40: lambda: c.set_input(3, 1),
+            95: lambda: c.force("out 7", 1), 160: lambda: c.set_adc(1, 77)}
+    while c.t_ms < 230:
+        seen[c.t_ms] = _look(c)
+        if c.t_ms in plan:
+            plan[c.t_ms]()
+        c.step(1)
+    pool = Checkpoints(Controller, every_ms=50, keep=8)
+    while pool.work(c, 1.0):
+        pass
+    assert sorted(pool.ready) == [50, 100, 150, 200]
+    back = step_back(c, Controller, "tick", pool)
+    assert _look(back) == seen[229]
+    assert 200 not in pool.ready                    # used up
+    back = step_back(back, Controller, "tick", pool)
+    assert _look(back) == seen[228] and 150 not in pool.ready
+    # after the session went on anew, the checkpoints after that are made again
+    back.debugger.resume()
+    back.set_input(4, 1)
+    back.step(5)
+    while pool.work(back, 1.0):
+        pass
+    assert 200 in pool.ready
+    again = step_back(back, Controller, "tick", pool)
+    assert again.t_ms == 232 and 200 not in pool.ready
+    assert _look(again)["inputs"] == _look(step_back(back, Controller, "tick"))["inputs"]
+    # nor one made with other breakpoints
+    while pool.work(back, 1.0):
+        pass
+    back.debugger.set_breakpoints("S1.plc", [{"line": 1, "hit": {"mode": "eq", "n": 10 ** 6}}])
+    assert pool.take(back, 232) is None

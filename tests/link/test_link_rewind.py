@@ -117,3 +117,24 @@ def test_without_a_factory_stepping_back_is_refused():
     finally:
         c.close()
         srv.close()
+
+
+def test_checkpoints_are_made_while_idle_and_used_by_a_step_back(served):
+    """SPEC §7: '… with checkpoints so that stepping back in a ten-minute session
+    answers in well under a second.' The served controller makes them in its idle
+    time (here: paused) and a step back starts from the latest one."""
+    srv, c = served
+    pool = srv.service.checkpoints
+    pool.every_ms = 100
+    c.start("M10")
+    c.step(450)
+    end = time.monotonic() + 20
+    while sorted(pool.ready) != [100, 200, 300, 400] and time.monotonic() < end:
+        time.sleep(0.05)
+    assert sorted(pool.ready) == [100, 200, 300, 400]
+    t = c.state().t_ms
+    spare = pool.ready[400][0]
+    answer = c.debug_step_back("tick")
+    assert t == 450 and answer["t_ms"] == 449
+    assert _n(answer["halted"]) == 449              # M10 started at 0: n++ each tick
+    assert srv.controller is spare                  # the checkpoint at 400 went on to 449
