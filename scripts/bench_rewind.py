@@ -21,7 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from plcbuilder import api  # noqa: E402
 from plcbuilder.controller.controller import Controller  # noqa: E402
-from plcbuilder.controller.rewind import run_back, step_back  # noqa: E402
+from plcbuilder.controller.rewind import Checkpoints, run_back, step_back  # noqa: E402
 
 EXAMPLE = Path(api.__file__).parent / "resources" / "example_project"
 
@@ -59,25 +59,46 @@ def main(argv=None) -> int:
     c, floor = session(args.minutes)
     print(f"session: {c.t_ms} ms simulated, {len(c.recorder.actions)} actions recorded; "
           f"floor (simulating it at Max speed): {floor:.3f} s")
+    pool = Checkpoints(Controller)
+    t0 = time.perf_counter()
+    while pool.work(c, 1.0):
+        pass
+    print(f"checkpoints every {pool.every_ms // 1000} s (the last {pool.keep}), made in "
+          f"idle time: {time.perf_counter() - t0:.3f} s of work in all")
+    t0 = time.perf_counter()
+    back = step_back(c, Controller, "tick", pool)
+    took = time.perf_counter() - t0
+    print(f"step back one tick, from a checkpoint: {took:.3f} s (goal < 0.5 s)")
     t0 = time.perf_counter()
     back = step_back(c, Controller, "tick")
     took = time.perf_counter() - t0
-    print(f"step back one tick: {took:.3f} s ({took / floor:.2f}x the floor), now at "
-          f"{back.t_ms} ms")
+    print(f"step back one tick, without checkpoints: {took:.3f} s "
+          f"({took / floor:.2f}x the floor), now at {back.t_ms} ms")
     # LUBE (software) switches its pump on at line 12 and off at line 17, once a minute
     back.debugger.set_breakpoints("LUBE.plc", [{"line": 12}, {"line": 17}])
     back.debugger.resume()
     back.step(70_000)
     if back.debugger.halted:
         t0 = time.perf_counter()
+        while pool.work(back, 1.0):            # again: the breakpoints changed
+            pass
+        print(f"checkpoints made again with these breakpoints: "
+              f"{time.perf_counter() - t0:.3f} s of work")
+        t0 = time.perf_counter()
+        step_back(back, Controller, "statement", pool)
+        took = time.perf_counter() - t0
+        print(f"step back one statement (LUBE at {back.t_ms} ms), "
+              f"from checkpoints: {took:.3f} s (goal < 0.5 s)")
+        t0 = time.perf_counter()
         step_back(back, Controller, "statement")
         took = time.perf_counter() - t0
-        print(f"step back one statement (at {back.t_ms} ms, two runs, breakpoints set): "
-              f"{took:.3f} s ({took / floor:.2f}x the floor)")
+        print(f"step back one statement, without checkpoints (two runs): {took:.3f} s "
+              f"({took / floor:.2f}x the floor)")
         t0 = time.perf_counter()
         run_back(back, Controller)
         took = time.perf_counter() - t0
-        print(f"run back (two runs): {took:.3f} s ({took / floor:.2f}x the floor)")
+        print(f"run back (two runs from 0: run back uses no checkpoints): {took:.3f} s "
+              f"({took / floor:.2f}x the floor)")
     return 0
 
 

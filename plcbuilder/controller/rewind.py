@@ -174,7 +174,7 @@ class Checkpoints:
         self.every_ms = every_ms
         self.keep = keep
         self.ready: dict[int, tuple] = {}     # tick -> (controller, actions applied, bp key)
-        self._job = None                      # (tick, controller, actions, generator)
+        self._job = None              # (tick, controller, actions, breakpoints, generator)
 
     def wanted(self, old) -> list[int]:
         """The ticks to have checkpoints at, latest first."""
@@ -222,16 +222,16 @@ class Checkpoints:
                     c = _fresh(old, self.factory)
                 except RewindError:
                     return False
-                self._job = (tick, c, actions, _run(old, c, actions, 0, tick,
-                                                    chunk=BUILD_CHUNK_MS))
-            tick, c, actions, gen = self._job
+                self._job = (tick, c, actions, _breakpoints_key(old.debugger),
+                             _run(old, c, actions, 0, tick, chunk=BUILD_CHUNK_MS))
+            tick, c, actions, key, gen = self._job
             try:
                 next(gen)
             except StopIteration:
                 self._job = None
                 c.replay_image = None
                 c.drain_events()
-                self.ready[tick] = (c, actions, _breakpoints_key(old.debugger))
+                self.ready[tick] = (c, actions, key)
         return True
 
 
