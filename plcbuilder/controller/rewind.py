@@ -208,9 +208,13 @@ class Checkpoints:
             return False
         deadline = time.perf_counter() + budget_s
         wanted = self.wanted(old)
-        for tick in list(self.ready):
-            if tick not in wanted:
-                del self.ready[tick]
+        key = _breakpoints_key(old.debugger)
+        acts = old.recorder.actions
+        for tick, (_c, applied, bps) in list(self.ready.items()):
+            if tick not in wanted or bps != key or acts[:len(applied)] != applied:
+                del self.ready[tick]                 # of no use any more: made again
+        if self._job is not None and self._job[3] != key:
+            self._job = None
         while time.perf_counter() < deadline:
             if self._job is None:
                 todo = [t for t in wanted if t not in self.ready]
