@@ -86,6 +86,8 @@ class Controller:
         self.recorder = Recorder()
         #: what a replayed ``upload`` line loads (None: the procedures loaded now)
         self.replay_image: Optional[list[Program]] = None
+        #: every image loaded, by its identity (what stepping back loads again)
+        self.images: dict[str, list[Program]] = {}
 
     # ------------------------------------------------------------ basics
     @property
@@ -167,7 +169,9 @@ class Controller:
         if first:
             plc.grid = plc.t               # the software grid starts at the first load
         self.forces.on_load()              # forces survive the build
-        self.recorder.add(Action(plc.t, "upload", image_id(progs)))
+        iid = image_id(progs)
+        self.images[iid] = progs
+        self.recorder.add(Action(plc.t, "upload", iid))
         if self.target is not None:        # a target's one program: it starts now
             try:
                 plc.program_of(by_name)

@@ -194,6 +194,9 @@ class Debugger:
         self.halt: Optional[Halt] = None
         self._told: Optional[Halt] = None                 # the halt last announced
         self._halt_on_fault = False
+        #: counts the statements one procedure reaches (stepping back, controller/rewind.py):
+        #: an object with ``name`` and ``reach(t, pc, rets) -> bool`` (True: halt there)
+        self.counter = None
 
     # ----------------------------------------------------------- queries
     @property
@@ -210,7 +213,7 @@ class Debugger:
     def on(self) -> bool:
         """Whether faults halt: a breakpoint is set, a step runs, or asked for."""
         return self.halt_on_fault or any(self._at.values()) or any(self._bps.values()) \
-            or self._stepping is not None or bool(self._run_to)
+            or self._stepping is not None or bool(self._run_to) or self.counter is not None
 
     @property
     def halted(self) -> bool:
@@ -335,6 +338,16 @@ class Debugger:
                 self._resolve(bp, programs)
         self._remark()
 
+    def copy_breakpoints(self, other: "Debugger") -> None:
+        """The breakpoints of ``other`` (hits from 0) and its halt-on-fault, for a
+        controller that runs the same session again (stepping back)."""
+        self._bps = {file: [Breakpoint(bp.id, bp.file, bp.line, bp.enabled, bp.condition,
+                                       bp.code, bp.hit, bp.log) for bp in bps]
+                     for file, bps in other._bps.items()}
+        self._next_id = other._next_id
+        self._halt_on_fault = other._halt_on_fault
+        self.rebind()
+
     def clear(self) -> None:
         """No breakpoint, no step, not halted (the rest of a halted tick is the PLC's)."""
         self._bps.clear()
@@ -359,13 +372,17 @@ class Debugger:
             mine = self._at_of(name)
             mine.clear()
             mine.update(at.get(name, {}))
-        self._busy = self._stepping is not None or bool(self._run_to)
+        counter = self.counter
+        self._busy = self._stepping is not None or bool(self._run_to) or counter is not None
         want: dict[str, set[int]] = {name: set(pcs) for name, pcs in at.items() if pcs}
         for name, pcs in self._run_to.items():
             want.setdefault(name, set()).update(pcs)
         step = self._stepping
         if step is not None:
             prog = step[0].program
+            want.setdefault(prog.name, set()).update(e.pc for e in prog.lines)
+        if counter is not None and counter.name in self.plc.programs:
+            prog = self.plc.programs[counter.name]
             want.setdefault(prog.name, set()).update(e.pc for e in prog.lines)
         for name, program in self.plc.programs.items():
             pcs = want.get(name, ())
@@ -384,7 +401,8 @@ class Debugger:
                     if p.program is program:
                         self.plc.watch_process(p)
         self.plc.halting = self.on
-        self.plc.watching = self._stepping is not None or bool(self._run_to)
+        self.plc.watching = self._stepping is not None or bool(self._run_to) \
+            or counter is not None
 
     def _at_of(self, name: str) -> dict:
         """The breakpoints of a program by offset (one dict, changed in place)."""
@@ -410,6 +428,10 @@ class Debugger:
     # ------------------------------------------------------------ reaching
     def _reached(self, p, pc: int, rets) -> bool:
         """An interpreter reached a marked offset: True to halt before it."""
+        counter = self.counter
+        if counter is not None and p.name == counter.name and \
+                counter.reach(self.plc.t, pc, rets):
+            return self._halt_at("step", p, pc, rets)
         step = self._stepping
         if step is not None and step[0] is p:
             depth = len(rets)

@@ -58,7 +58,8 @@ STABLE_AFTER = 10.0           # a connection up this long resets the backoff
 MAX_SAMPLES_PER_EMIT = 60000  # samples in one sig_samples emission at most
 #: The debugger's requests (SPEC §6); after each the worker asks for the halted state.
 DEBUG_VERBS = frozenset({"debug_continue", "debug_pause", "debug_step", "debug_run_to",
-                         "debug_state", "write", "force", "release", "release_all", "forces"})
+                         "debug_state", "write", "force", "release", "release_all", "forces",
+                         "debug_step_back", "debug_run_back"})
 #: ... and after these for the list of forces too.
 FORCE_VERBS = frozenset({"write", "force", "release", "release_all", "forces"})
 #: Sample changes the controller keeps for this IDE between two telemetry frames

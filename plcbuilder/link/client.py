@@ -372,6 +372,14 @@ class Client:
     def debug_run_to(self, file: str, line: int) -> dict:
         return self.request("debug_run_to", file=file, line=line)
 
+    def debug_step_back(self, kind: str = "tick") -> dict:
+        """kind: tick or statement; the controller halts there (SPEC §7)."""
+        return self.request("debug_step_back", kind=kind)
+
+    def debug_run_back(self) -> dict:
+        """Back to the previous breakpoint hit (SPEC §7)."""
+        return self.request("debug_run_back")
+
     def debug_evaluate(self, code: bytes, procedure: Optional[str] = None) -> int:
         """The value of an expression compiled as a condition
         (``compile_condition``) over a running procedure's variables."""

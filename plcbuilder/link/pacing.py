@@ -155,6 +155,9 @@ class Simulation:
         self.clock: Callable[[], float] = time.monotonic
         self._base_wall = self.clock()
         self._base_t = controller.t_ms
+        #: work for the simulation's idle time (stepping back's checkpoints):
+        #: ``idle_work(seconds) -> bool``, False when there is nothing to do
+        self.idle_work: Optional[Callable[[float], bool]] = None
         self.set_speed(mode, factor)
         self._update_recording()
 
@@ -367,6 +370,18 @@ class Simulation:
             self._rebase()
         return halted
 
+    def _idle(self, seconds: float) -> bool:
+        """Do idle work for about ``seconds``; False when there was none."""
+        work = self.idle_work
+        if work is None or not self._commands.empty():
+            return False
+        try:
+            return bool(work(seconds))
+        except Exception:  # noqa: BLE001 - idle work must not bring the simulation down
+            _debug(traceback.format_exc())
+            self.idle_work = None
+            return False
+
     def _shutdown_controller(self) -> None:
         try:
             self.controller.shutdown()
@@ -382,7 +397,8 @@ class Simulation:
                 break
             mode = self.mode
             if mode == "pause" or self._halted():
-                self._wait(0.5 if mode == "pause" else 0.05)
+                if not self._idle(0.02):
+                    self._wait(0.5 if mode == "pause" else 0.05)
                 continue
             if mode == "max":
                 n = self._chunk()
@@ -406,7 +422,8 @@ class Simulation:
                 continue
             wait = self.pace()
             if wait is not None:
-                self._wait(wait)
+                if wait < 0.002 or not self._idle(wait / 2):
+                    self._wait(wait)
         self._drain_commands()
         if self._shutdown_on_stop:
             self._shutdown_controller()

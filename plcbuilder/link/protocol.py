@@ -28,6 +28,7 @@ Messages
         set_breakpoints {file, breakpoints}   debug_state {}      (docs/protocol.md, "Debugging")
         debug_continue {}  debug_pause {}  debug_step {kind, procedure?}  debug_run_to {file, line}
         debug_evaluate {code, procedure?}   (an expression compiled as a condition -> {value})
+        debug_step_back {kind: tick|statement}   debug_run_back {}   (SPEC §7: back in time)
         write {target, value}           force {target, value}
         release {target, mode}          release_all {mode}
         forces {}                       (write and force: SPEC §6)
@@ -102,7 +103,8 @@ REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state
                       "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping",
                       "registers", "recording"}
                      | {"set_breakpoints", "debug_continue", "debug_pause", "debug_step",
-                        "debug_run_to", "debug_state", "debug_evaluate"})
+                        "debug_run_to", "debug_state", "debug_evaluate"}
+                     | {"debug_step_back", "debug_run_back"})
 #: Events that travel as notifications of their own (not inside telemetry).
 NOTIFICATIONS = frozenset({"halted", "resumed"})
 REPLIES = frozenset({"welcome", "result", "error", "telemetry", "bye"}) | NOTIFICATIONS

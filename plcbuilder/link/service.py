@@ -84,6 +84,9 @@ class Service(DebugVerbs):
         #: file it is kept in across restarts of the server (None: in memory only)
         self.state_path = None
         self.kept: dict[str, tuple] = {}
+        #: stepping back's checkpoints (controller/rewind.py), made while idle
+        self.checkpoints = None
+        self.start_checkpoints()
 
     # ---------------------------------------------------------------- dispatch
     def dispatch(self, msg: dict, session: Session) -> dict:
@@ -384,6 +387,8 @@ class Service(DebugVerbs):
             if self.image is not None:
                 new.load([p.program for p in self.image.procedures])
             self.sim.replace_controller(new)
+            if self.checkpoints is not None:
+                self.checkpoints.clear()
             return new.t_ms
         return {"t_ms": self._on_sim(go)}
 

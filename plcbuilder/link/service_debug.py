@@ -13,6 +13,7 @@ from __future__ import annotations
 import base64
 import binascii
 
+from plcbuilder.controller import rewind
 from plcbuilder.controller.debugger import STEP_KINDS, DebugError
 from plcbuilder.link import protocol
 from plcbuilder.link.protocol import BadRequest
@@ -88,6 +89,45 @@ class DebugVerbs:
             d.run_to(file, line)
             return self._halted(d)
         return self._debug(go)
+
+    def handle_debug_step_back(self, msg: dict, session) -> dict:
+        """{kind: tick|statement}: the session run again to one tick or one
+        statement before now; the new controller, halted there, takes over."""
+        kind = protocol.field_str(msg, "kind", "tick", max_len=16)
+        if kind not in rewind.KINDS:
+            raise BadRequest(f"debug_step_back: kind must be one of {', '.join(rewind.KINDS)}")
+        return self._rewind(lambda old, factory: rewind.step_back(old, factory, kind,
+                                                                  self.checkpoints))
+
+    def handle_debug_run_back(self, msg: dict, session) -> dict:
+        """{}: the session run again to the previous breakpoint hit."""
+        return self._rewind(rewind.run_back)
+
+    def start_checkpoints(self) -> None:
+        """Make stepping back's checkpoints in the simulation's idle time."""
+        if self.controller_factory is not None and self.checkpoints is None:
+            self.checkpoints = rewind.Checkpoints(self.controller_factory)
+            pool = self.checkpoints
+            self.sim.idle_work = lambda s: pool.work(self.sim.controller, s)
+
+    def _rewind(self, fn) -> dict:
+        factory = self.controller_factory
+
+        def go():
+            if factory is None:
+                raise DebugError("stepping back is not available on this controller (it "
+                                 "cannot make a fresh controller to run the session again)")
+            old = self.sim.controller
+            try:
+                new = fn(old, factory)
+            except rewind.RewindError as exc:
+                raise DebugError(str(exc)) from None
+            new.sample_changes_only = old.sample_changes_only
+            self.sim.replace_controller(new)
+            new.record_next_sample()
+            self.sim.publish()
+            return self._halted(new.debugger)
+        return self._on_sim(go)
 
     def handle_debug_evaluate(self, msg: dict, session) -> dict:
         """{code: base64 of an expression compiled as a condition, procedure?} -> {value}."""

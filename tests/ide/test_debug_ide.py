@@ -336,7 +336,8 @@ def test_debug_keys_do_not_clash(make_window, example):
                 keys[text] = act.objectName()
     expected = {"F5": Act.START, "F6": Act.PAUSE, "F10": Act.STEP_OVER, "F11": Act.STEP_INTO,
                 "Shift+F11": Act.STEP_OUT, "Ctrl+F10": Act.RUN_TO_CURSOR, "F7": Act.STEP_TICK,
-                "F9": Act.TOGGLE_BREAKPOINT, "Shift+F5": Act.STOP}
+                "F9": Act.TOGGLE_BREAKPOINT, "Shift+F5": Act.STOP, "Shift+F10": Act.STEP_BACK,
+                "Shift+F7": Act.STEP_BACK_TICK, "Ctrl+Shift+F10": Act.RUN_BACK}
     for key, name in expected.items():
         assert keys[QKeySequence(key).toString()] == name
 

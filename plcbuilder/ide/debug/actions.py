@@ -5,6 +5,8 @@
     F10         Step Over                            F7          Step 1 ms (one tick)
     F11         Step Into                            Ctrl+F10    Run to Cursor
     Shift+F11   Step Out                             Shift+F5    Stop (as before)
+    Shift+F10   Step Back (a statement)              Shift+F7    Step Back 1 ms
+    Ctrl+Shift+F10  Run Back (to the previous breakpoint hit)
 
 F5 keeps its old meaning (Start…) until the controller halts; then it continues.
 """
@@ -36,6 +38,13 @@ def build_debug_actions(win, actions: dict) -> None:
       "Run exactly one 1 ms tick of the whole controller, then halt")
     A(Act.RUN_TO_CURSOR, "&Run to Cursor", dbg.run_to, "Ctrl+F10", "debug-run-to",
       "Run until a procedure reaches the caret's line")
+    A(Act.STEP_BACK, "Step &Back", lambda: dbg.step_back("statement"), "Shift+F10",
+      "debug-step-back", "Go back one statement of the halted procedure (the session runs "
+      "again from its recording)")
+    A(Act.STEP_BACK_TICK, "Step Back 1 m&s", lambda: dbg.step_back("tick"), "Shift+F7",
+      "debug-step-back-tick", "Go back one 1 ms tick of the whole controller")
+    A(Act.RUN_BACK, "Run Bac&k", dbg.run_back, "Ctrl+Shift+F10", "debug-run-back",
+      "Go back to the previous breakpoint hit")
     A(Act.TOGGLE_BREAKPOINT, "Toggle &Breakpoint", dbg.toggle_breakpoint, "F9",
       "debug-breakpoint", "Add or remove a breakpoint on the caret's line")
     A(Act.REMOVE_ALL_BREAKPOINTS, "Remove &All Breakpoints", dbg.store.clear, "Ctrl+Shift+F9",
@@ -53,7 +62,8 @@ def build_debug_menu(win, before) -> None:
     m = win.menuBar().addMenu("&Debug")
     win.menuBar().insertMenu(before, m)
     for name in (Act.START, Act.PAUSE, Act.STOP, None, Act.STEP_OVER, Act.STEP_INTO,
-                 Act.STEP_OUT, Act.STEP_TICK, Act.RUN_TO_CURSOR, None, Act.TOGGLE_BREAKPOINT,
+                 Act.STEP_OUT, Act.STEP_TICK, Act.RUN_TO_CURSOR, None, Act.STEP_BACK,
+                 Act.STEP_BACK_TICK, Act.RUN_BACK, None, Act.TOGGLE_BREAKPOINT,
                  Act.TOGGLE_ALL_BREAKPOINTS, Act.REMOVE_ALL_BREAKPOINTS, None, Act.RELEASE_ALL):
         m.addAction(win.action(name)) if name else m.addSeparator()
     win.debug_menu = m
@@ -65,7 +75,8 @@ def build_debug_toolbar(win) -> QToolBar:
     tb.setIconSize(QSize(20, 20))
     tb.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonIconOnly)
     for name in (Act.PAUSE, Act.STEP_OVER, Act.STEP_INTO, Act.STEP_OUT, Act.STEP_TICK,
-                 Act.RUN_TO_CURSOR, None, Act.TOGGLE_BREAKPOINT):
+                 Act.RUN_TO_CURSOR, Act.STEP_BACK, Act.STEP_BACK_TICK, Act.RUN_BACK, None,
+                 Act.TOGGLE_BREAKPOINT):
         tb.addAction(win.action(name)) if name else tb.addSeparator()
     win.addToolBar(Qt.ToolBarArea.TopToolBarArea, tb)
     win.debug_toolbar = tb
@@ -85,6 +96,9 @@ def update_debug_actions(win) -> None:
     for name in (Act.STEP_OVER, Act.STEP_INTO, Act.STEP_OUT):
         win.action(name).setEnabled(steppable)
     win.action(Act.STEP_TICK).setEnabled(halted)
+    win.action(Act.STEP_BACK).setEnabled(halted and bool((dbg.halted or {}).get("procedure")))
+    win.action(Act.STEP_BACK_TICK).setEnabled(halted)
+    win.action(Act.RUN_BACK).setEnabled(halted)
     win.action(Act.RUN_TO_CURSOR).setEnabled(connected and dbg.breakable(ed))
     win.action(Act.TOGGLE_BREAKPOINT).setEnabled(dbg.breakable(ed))
     win.action(Act.RELEASE_ALL).setEnabled(connected and bool(dbg.forces))

@@ -39,6 +39,15 @@ class DebugRequests:
     def debug_run_to(self, file: str, line: int) -> None:
         self._send("debug_run_to", {"file": str(file), "line": int(line)})
 
+    def debug_step_back(self, kind: str = "tick") -> None:
+        """Back one ``tick`` or one ``statement`` (SPEC §7): the controller runs
+        the session again and halts there."""
+        self._send("debug_step_back", {"kind": kind})
+
+    def debug_run_back(self) -> None:
+        """Back to the previous breakpoint hit (SPEC §7)."""
+        self._send("debug_run_back", {})
+
     def request_debug_state(self) -> None:
         """Ask whether the controller is halted (the answer: sig_halted or sig_resumed)."""
         self._send("debug_state", {})

@@ -441,6 +441,23 @@ class DebugSession(QObject):
         self._send_pending()
         self.connection.debug_step(kind, proc)
 
+    def step_back(self, kind: str) -> None:
+        """Back one ``statement`` (of the procedure halted) or one ``tick``: the
+        controller runs the session again from its recording (SPEC §7)."""
+        if not self.connected():
+            return
+        self._send_pending()
+        self.connection.debug_step_back(kind)
+        self.sig_message.emit("Stepping back: running the session again…", 3000)
+
+    def run_back(self) -> None:
+        """Back to the previous breakpoint hit (SPEC §7)."""
+        if not self.connected():
+            return
+        self._send_pending()
+        self.connection.debug_run_back()
+        self.sig_message.emit("Running back to the previous breakpoint hit…", 3000)
+
     def run_to(self, path: Optional[str] = None, line: Optional[int] = None) -> bool:
         """Run until a line is reached (the current editor's caret line by default)."""
         if not self.connected():

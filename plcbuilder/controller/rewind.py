@@ -1,0 +1,319 @@
+"""Stepping back and running back (SPEC §7): by running the session again.
+
+The controller is deterministic and records everything done to it from outside
+(controller/recorder.py) and every image it loaded (``Controller.images``), so
+the state at any earlier point is found by running the recording again on a
+fresh controller of the same machine:
+
+    new = step_back(controller, factory, "tick")       # halted one tick earlier
+    new = step_back(controller, factory, "statement")  # one statement earlier
+    new = run_back(controller, factory)                # the previous breakpoint hit
+
+Each returns a new controller, halted there, that replaces the old one; its
+recording holds the actions up to there (what came later is dropped: from
+there on the session is written anew). The breakpoints are the old
+controller's, counted as if they had been set from the start. Nothing is
+changed when a request is refused (:class:`RewindError`).
+
+Checkpoints (:class:`Checkpoints`): a running procedure is a generator, whose
+state cannot be copied, so a checkpoint is a whole controller that already ran
+the session to a tick k * 30 s, made in the simulation's idle time (while it is
+halted or paced to real time). A step back starts from the latest one before
+where it goes and uses it up; without one it runs from t = 0, as long as
+simulating the session at Max speed takes (``scripts/bench_rewind.py``).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Callable, Optional
+
+from plcbuilder.controller.debugger import Halt
+from plcbuilder.controller.scenario import apply
+
+#: ticks run at most in one go while running the session again
+CHUNK_MS = 10_000
+#: ... while making a checkpoint in idle time (a few milliseconds of wall time)
+BUILD_CHUNK_MS = 1000
+KINDS = ("tick", "statement")
+#: how far back a statement back looks for the procedure's previous statement
+#: (a software procedure runs every 100 ms)
+LOOK_BACK_MS = 101
+
+
+class RewindError(Exception):
+    """A step back that cannot be done; the message says why. Nothing changed."""
+
+
+class _Counter:
+    """Counts the statements procedure ``name`` reaches, per tick (Debugger.counter)."""
+
+    def __init__(self, name: str, find=None, stop_at=None):
+        self.name = name
+        self.find = find            # (tick, pc, rets): halt there; ``found`` is its number
+        self.stop_at = stop_at      # (tick, n): halt at the n-th statement of that tick
+        self.tick = -1
+        self.n = 0
+        self.last: Optional[tuple[int, int]] = None   # (tick, statements) before ``tick``
+        self.found: Optional[int] = None
+        self.done = False
+
+    def reach(self, t: int, pc: int, rets) -> bool:
+        if t != self.tick:
+            if self.n:
+                self.last = (self.tick, self.n)
+            self.tick, self.n = t, 0
+        self.n += 1
+        if self.find is not None and (t, pc, tuple(rets)) == self.find:
+            self.found = self.n
+            self.done = True
+        elif self.stop_at == (t, self.n):
+            self.done = True
+        return self.done
+
+
+def _fresh(old, factory: Callable):
+    """A controller of the same machine with the old one's breakpoints."""
+    if old.target is not None:
+        raise RewindError(f"stepping back works on the myCNC target only, not on "
+                          f"{old.target.name}")
+    if old.recorder.dropped:
+        raise RewindError(f"the recording lost its first {old.recorder.dropped} actions: "
+                          f"the session cannot be run again")
+    new = factory()
+    new.record_samples = False         # nobody looks at what is run again
+    new.debugger.copy_breakpoints(old.debugger)
+    return new
+
+
+def replay(old, factory: Callable, until: int, *, through: bool = False,
+           on_halt: Optional[Callable] = None, counter: Optional[_Counter] = None,
+           count_from: int = 0, pool: Optional["Checkpoints"] = None):
+    """A fresh controller that ran ``old``'s recording up to tick ``until``
+    (between ticks, the actions at ``until`` not done) or, with ``through``,
+    into tick ``until`` until ``on_halt(new)`` says a halt is the one wanted.
+    Any other halt is continued. ``counter`` counts statements from tick
+    ``count_from`` on (counting makes the procedure run watched code, slower).
+    With ``pool``, it starts from the latest checkpoint that fits, when there is
+    one. Returns the controller (halted or between ticks)."""
+    actions = _actions(old, until, through)
+    end = until + 1 if through else until
+    count_from = min(max(0, count_from), end) if counter is not None else end + 1
+    spare = pool.take(old, min(until, count_from)) if pool is not None else None
+    if spare is not None:
+        new, i = spare
+    else:
+        new, i = _fresh(old, factory), 0
+    for _ in _run(old, new, actions, i, end, on_halt, counter, count_from):
+        pass
+    new.replay_image = None
+    new.drain_events()
+    new.drain_sample_rows()
+    return new
+
+
+def _actions(old, until: int, through: bool = False) -> list:
+    actions = [a for a in old.recorder.actions if a.t_ms < until or through and a.t_ms == until]
+    for a in actions:
+        if a.kind == "upload" and a.name not in old.images:
+            raise RewindError(f"the image {a.name} loaded at {a.t_ms} ms is not kept")
+    return actions
+
+
+def _run(old, new, actions: list, i: int, end: int, on_halt=None, counter=None,
+         count_from: int = 1 << 62, chunk: int = CHUNK_MS):
+    """Run ``new`` on ``actions[i:]`` up to tick ``end`` (see :func:`replay`);
+    yields after each chunk of ticks."""
+    dbg = new.debugger
+    n = len(actions)
+    while True:
+        t = new.t_ms
+        if dbg.halt is not None:
+            if on_halt is not None and on_halt(new):
+                break
+            dbg.halt = None
+            new.plc.resume_tick()
+            continue
+        if t >= count_from and dbg.counter is None:
+            dbg.counter = counter
+            dbg._remark()
+        if t >= end:
+            break
+        while i < n and actions[i].t_ms <= t:
+            a = actions[i]
+            if a.kind == "upload":
+                new.replay_image = old.images[a.name]
+            apply(new, a)
+            i += 1
+        stop = end if i >= n else min(end, max(actions[i].t_ms, t + 1))
+        if t < count_from < stop:
+            stop = count_from
+        new.step(min(stop - t, chunk))
+        new.drain_events()
+        yield
+    dbg.counter = None
+    dbg._remark()
+
+
+def _breakpoints_key(dbg) -> tuple:
+    """What a checkpoint's breakpoints must equal to be used (hits count from 0)."""
+    return (dbg.halt_on_fault,) + tuple(
+        (bp.file, bp.line, bp.enabled, bp.condition, bp.code, bp.hit, bp.log)
+        for file in sorted(dbg._bps) for bp in dbg._bps[file])
+
+
+class Checkpoints:
+    """Controllers that already ran the session to ticks k * ``every_ms``
+    (between ticks), made in the simulation's idle time by :meth:`work`; a
+    step back starts from the latest one at or before where it goes (and uses
+    it up: :meth:`work` makes it again). A checkpoint is used only while the
+    session's recording up to it and the breakpoints are what they were."""
+
+    def __init__(self, factory: Callable, every_ms: int = 30_000, keep: int = 16):
+        self.factory = factory
+        self.every_ms = every_ms
+        self.keep = keep
+        self.ready: dict[int, tuple] = {}     # tick -> (controller, actions applied, bp key)
+        self._job = None              # (tick, controller, actions, breakpoints, generator)
+
+    def wanted(self, old) -> list[int]:
+        """The ticks to have checkpoints at, latest first."""
+        last = (old.t_ms - 1) // self.every_ms
+        return [k * self.every_ms for k in range(last, max(0, last - self.keep), -1)]
+
+    def clear(self) -> None:
+        self.ready.clear()
+        self._job = None
+
+    def take(self, old, before: int) -> Optional[tuple]:
+        """(controller, next action's index) of the latest fitting checkpoint at
+        or before tick ``before``, removed from the pool; or None."""
+        key = _breakpoints_key(old.debugger)
+        acts = old.recorder.actions
+        for tick in sorted(self.ready, reverse=True):
+            if tick > before:
+                continue
+            c, applied, bps = self.ready[tick]
+            k = len(applied)
+            if bps == key and acts[:k] == applied and (k == len(acts) or acts[k].t_ms >= tick) \
+                    and not old.recorder.dropped:
+                del self.ready[tick]
+                return c, k
+        return None
+
+    def work(self, old, budget_s: float) -> bool:
+        """Make checkpoints for about ``budget_s`` seconds; False when there is
+        nothing to do (every wanted checkpoint is there)."""
+        if old.target is not None or old.recorder.dropped:
+            return False
+        deadline = time.perf_counter() + budget_s
+        wanted = self.wanted(old)
+        key = _breakpoints_key(old.debugger)
+        acts = old.recorder.actions
+        for tick, (_c, applied, bps) in list(self.ready.items()):
+            if tick not in wanted or bps != key or acts[:len(applied)] != applied:
+                del self.ready[tick]                 # of no use any more: made again
+        if self._job is not None and self._job[3] != key:
+            self._job = None
+        while time.perf_counter() < deadline:
+            if self._job is None:
+                todo = [t for t in wanted if t not in self.ready]
+                if not todo:
+                    return False
+                tick = todo[0]
+                try:
+                    actions = _actions(old, tick)
+                    c = _fresh(old, self.factory)
+                except RewindError:
+                    return False
+                self._job = (tick, c, actions, _breakpoints_key(old.debugger),
+                             _run(old, c, actions, 0, tick, chunk=BUILD_CHUNK_MS))
+            tick, c, actions, key, gen = self._job
+            try:
+                next(gen)
+            except StopIteration:
+                self._job = None
+                c.replay_image = None
+                c.drain_events()
+                self.ready[tick] = (c, actions, key)
+        return True
+
+
+def _halted(new, halt: Halt):
+    new.debugger.halt = halt
+    return _announce(new)
+
+
+def _announce(new):
+    """The new controller's halt, announced as new (a ``halted`` event)."""
+    new.debugger._told = None
+    new.debugger.settle()
+    return new
+
+
+def step_back(old, factory: Callable, kind: str = "tick",
+              pool: Optional[Checkpoints] = None):
+    """The controller one tick (or one statement of the procedure halted) earlier."""
+    if kind not in KINDS:
+        raise RewindError(f"unknown step back {kind!r} (one of {', '.join(KINDS)})")
+    if kind == "tick":
+        t = old.t_ms if old.plc.mid_tick else old.t_ms - 1
+        if t < 0:
+            raise RewindError("nothing to go back to: the session is at its start (t = 0 ms)")
+        return _halted(replay(old, factory, t, pool=pool), Halt("step"))
+    h = old.debugger.halt
+    if h is None or h.process is None or h.pc is None or not old.plc.mid_tick:
+        raise RewindError("a statement back needs a halt at a statement (halted between "
+                          "ticks: step back a tick)")
+    name, t = h.process.name, old.t_ms
+    first = _Counter(name, find=(t, h.pc, tuple(h.rets)))
+    # the statement before is in this tick, or in the last tick it ran before:
+    # the tick before (hardware) or the software tick before (100 ms)
+    since = t - LOOK_BACK_MS
+    replay(old, factory, t, through=True, counter=first, count_from=since,
+           on_halt=lambda _c: first.done, pool=pool)
+    if not first.done:
+        raise RewindError(f"running the session again did not reach {name} at {t} ms "
+                          f"(was something done that is not recorded?)")
+    target = (t, first.found - 1) if first.found > 1 else first.last
+    if target is None:
+        raise RewindError(f"nothing to go back to: {name} ran no statement before this one "
+                          f"(in the last {LOOK_BACK_MS} ms)")
+    again = _Counter(name, stop_at=target)
+    new = replay(old, factory, target[0], through=True, counter=again, count_from=target[0],
+                 on_halt=lambda _c: again.done, pool=pool)
+    if not again.done:                                    # pragma: no cover - determinism
+        raise RewindError(f"running the session again did not reach {name} at {target[0]} ms")
+    return _announce(new)
+
+
+def run_back(old, factory: Callable):
+    """The controller halted at the last breakpoint hit before now (the
+    breakpoints counted from the session's start)."""
+    if not any(bp["enabled"] for bp in old.debugger.breakpoints()):
+        raise RewindError("no breakpoint is set: nothing to run back to")
+    hits = [0]
+
+    def count(c) -> bool:
+        if c.debugger.halt.reason == "breakpoint":
+            hits[0] += 1
+        return False
+    h = old.debugger.halt
+    if h is not None and h.process is not None and h.pc is not None and old.plc.mid_tick:
+        now = _Counter(h.process.name, find=(old.t_ms, h.pc, tuple(h.rets)))
+        replay(old, factory, old.t_ms, through=True, counter=now, count_from=old.t_ms,
+               on_halt=lambda c: now.done or count(c))
+    else:
+        replay(old, factory, old.t_ms, on_halt=count)
+    if not hits[0]:
+        raise RewindError("no breakpoint was hit before now: nothing to run back to")
+    seen = [0]
+
+    def last(c) -> bool:
+        if c.debugger.halt.reason == "breakpoint":
+            seen[0] += 1
+        return seen[0] == hits[0]
+    new = replay(old, factory, old.t_ms, through=True, on_halt=last)
+    if seen[0] != hits[0]:                                # pragma: no cover - determinism
+        raise RewindError("running the session again did not reach the breakpoint hit")
+    return _announce(new)

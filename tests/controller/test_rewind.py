@@ -1,0 +1,219 @@
+"""Stepping back and running back (SPEC §7): the state after a step back equals
+the state the forward run had there, tick for tick and statement for statement."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from plcbuilder import api
+from plcbuilder.controller.controller import Controller
+from plcbuilder.controller.rewind import Checkpoints, RewindError, run_back, step_back
+
+from tests.controller._sim import BACKENDS, compile_proc
+
+EXAMPLE = Path(api.__file__).parent / "resources" / "example_project"
+
+COUNT = """main()
+{
+  n = 0;
+
+  do
+  {
+    n++;
+    bump();
+  }while(n < 1000);
+  exit(99);
+}
+
+bump()
+{
+  total = total + n;
+}
+"""
+# lines: 3 n=0 | 7 n++ | 8 bump() | 9 while | 10 exit | 15 total=...
+SOFT = "main(){ do { k++; if (k % 3 == 0) { portset(5); } else { portclr(5); } } while(1); }"
+
+
+
+def _example_programs():
+    proj = api.Project.open(EXAMPLE)
+    return [p for p in (pb.program() for pb in api.compile_all(proj)) if p is not None]
+
+
+def _look(c: Controller) -> dict:
+    """Everything a halted controller shows: time, machine, every procedure's
+    line, stack and variables (pausing a running one between ticks to look)."""
+    dbg = c.debugger
+    paused = dbg.halt is None
+    if paused:
+        dbg.pause()
+    st = dbg.halted_state()
+    if paused:
+        dbg.resume()
+    s = c.state()
+    return {"t_ms": c.t_ms, "outputs": s.outputs, "inputs": s.inputs, "pwm": s.pwm,
+            "dac": s.dac, "adc": s.adc, "proc": s.proc, "running": s.running,
+            "software": s.software, "axes": s.axes, "variables": c.variables(),
+            "procedures": [(p["name"], p["line"], p["stack"], p["vars"])
+                           for p in st["procedures"]],
+            "machine": st["machine"]}
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_stepping_back_a_tick_gives_the_forward_state_at_every_tick(backend):
+    """SPEC §7: 'Step back (one tick, or one statement) … work[s] by deterministic
+    re-execution from the recording'."""
+    programs = _example_programs() + [compile_proc(SOFT, "S1", software=True)]
+    hw = sorted(p.name for p in programs if p.kind is api.Kind.HARDWARE)
+
+    def factory():
+        return Controller(backend=backend)
+    c = factory()
+    seen = {}
+    plan = {7: lambda: c.load(programs), 20: lambda: c.start(hw[0], 1200), 45: lambda: c.set_input(3, 1),
+            60: lambda: c.force("out 7", 1), 90: lambda: c.set_adc(2, 900),
+            110: lambda: c.write("pwm 1", 5000), 130: lambda: c.stop(),
+            150: lambda: c.release_all("restore"), 170: lambda: c.start(hw[-1], 7)}
+    end = 240
+    while c.t_ms < end:
+        seen[c.t_ms] = _look(c)              # before what is done at that tick
+        if c.t_ms in plan:
+            try:
+                plan[c.t_ms]()
+            except api.ControllerError:
+                pass
+        c.step(1)
+    seen[c.t_ms] = _look(c)
+    back = c
+    for t in range(end - 1, -1, -1):
+        back = step_back(back, factory, "tick")
+        assert back.debugger.halted_state()["reason"] == "step"
+        look = _look(back)
+        assert look == seen[t], f"tick {t}"
+        assert [a for a in back.recorder.actions if a.t_ms >= t] == []
+    with pytest.raises(RewindError, match="nothing to go back to"):
+        step_back(back, factory, "tick")
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_stepping_back_a_statement_retraces_the_steps_forward(backend):
+    """SPEC §7: 'Step back (one tick, or one statement) … work[s] by deterministic
+    re-execution from the recording'."""
+    def factory():
+        return Controller(backend=backend)
+    c = factory()
+    c.step(3)
+    c.load([compile_proc(COUNT, "M10"), compile_proc(SOFT, "S1", software=True)])
+    c.step(2)
+    c.start("M10")
+    c.debugger.set_breakpoints("M10.plc", [{"line": 7, "hit": {"mode": "eq", "n": 3}}])
+    c.step(50)
+    assert c.debugger.halted_state()["line"] == 7
+    path = []
+    for _ in range(14):                       # across several ticks
+        path.append(_look(c) | {"line": c.debugger.halted_state()["line"]})
+        c.debugger.step("into")
+        while not c.debugger.halted:            # the next statement is in the next tick
+            c.step(1)
+    back = c
+    for want in reversed(path):
+        back = step_back(back, factory, "statement")
+        st = back.debugger.halted_state()
+        assert _look(back) | {"line": st["line"]} == want
+        assert st["procedure"] == "M10"
+    # the procedure's first statement: nothing before it
+    first = factory()
+    first.load([compile_proc(COUNT, "M10")])
+    first.debugger.set_breakpoints("M10.plc", [{"line": 3}])
+    first.start("M10")
+    first.step(5)
+    assert first.debugger.halted_state()["line"] == 3
+    with pytest.raises(RewindError, match="ran no statement before"):
+        step_back(first, factory, "statement")
+    first.debugger.resume()
+    with pytest.raises(RewindError, match="needs a halt at a statement"):
+        step_back(first, factory, "statement")
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_running_back_halts_at_the_previous_breakpoint_hit(backend):
+    """SPEC §7: '… and run back (to the previous breakpoint hit) work by
+    deterministic re-execution from the recording'."""
+    def factory():
+        return Controller(backend=backend)
+    c = factory()
+    c.load([compile_proc(COUNT, "M10")])
+    with pytest.raises(RewindError, match="no breakpoint is set"):
+        run_back(c, factory)
+    c.start("M10")
+    c.debugger.set_breakpoints("M10.plc", [{"line": 15}])
+    hits = []
+    for _ in range(4):
+        c.step(100)
+        hits.append(_look(c))
+        c.debugger.resume()
+    c.step(100)
+    back = c
+    for want in reversed(hits):                 # halted at the 5th: back to the 4th, …
+        back = run_back(back, factory)
+        assert back.debugger.halted_state()["reason"] == "breakpoint"
+        assert _look(back) == want
+        assert back.recorder.actions == c.recorder.actions[:len(back.recorder.actions)]
+    with pytest.raises(RewindError, match="no breakpoint was hit before now"):
+        run_back(back, factory)
+
+
+def test_what_cannot_be_run_again_is_refused():
+    c = Controller()
+    with pytest.raises(RewindError, match="session is at its start"):
+        step_back(c, Controller, "tick")
+    with pytest.raises(RewindError, match="unknown step back"):
+        step_back(c, Controller, "line")
+    c.load([compile_proc(COUNT, "M10")])
+    c.step(10)
+    c.recorder.dropped = 3
+    with pytest.raises(RewindError, match="lost its first 3 actions"):
+        step_back(c, Controller, "tick")
+    assert c.t_ms == 10
+
+
+def test_a_step_back_from_a_checkpoint_equals_one_from_the_start():
+    """SPEC §7: '… with checkpoints so that stepping back in a ten-minute session
+    answers in well under a second.' A checkpoint is a controller that already ran
+    the session; a step back from it gives the same state as one from t = 0."""
+    programs = _example_programs() + [compile_proc(SOFT, "S1", software=True)]
+    c = Controller()
+    seen = {}
+    plan = {3: lambda: c.load(programs), 40: lambda: c.set_input(3, 1),
+            95: lambda: c.force("out 7", 1), 160: lambda: c.set_adc(1, 77)}
+    while c.t_ms < 230:
+        seen[c.t_ms] = _look(c)
+        if c.t_ms in plan:
+            plan[c.t_ms]()
+        c.step(1)
+    pool = Checkpoints(Controller, every_ms=50, keep=8)
+    while pool.work(c, 1.0):
+        pass
+    assert sorted(pool.ready) == [50, 100, 150, 200]
+    back = step_back(c, Controller, "tick", pool)
+    assert _look(back) == seen[229]
+    assert 200 not in pool.ready                    # used up
+    back = step_back(back, Controller, "tick", pool)
+    assert _look(back) == seen[228] and 150 not in pool.ready
+    # after the session went on anew, the checkpoints after that are made again
+    back.debugger.resume()
+    back.set_input(4, 1)
+    back.step(5)
+    while pool.work(back, 1.0):
+        pass
+    assert 200 in pool.ready
+    again = step_back(back, Controller, "tick", pool)
+    assert again.t_ms == 232 and 200 not in pool.ready
+    assert _look(again)["inputs"] == _look(step_back(back, Controller, "tick"))["inputs"]
+    # nor one made with other breakpoints
+    while pool.work(back, 1.0):
+        pass
+    back.debugger.set_breakpoints("S1.plc", [{"line": 1, "hit": {"mode": "eq", "n": 10 ** 6}}])
+    assert pool.take(back, 232) is None
