@@ -39,7 +39,7 @@ from PySide6 import QtCore
 
 from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
 from plcbuilder.ide.debug.requests import DebugRequests
-from plcbuilder.ide.panels.model import StepSamples
+from plcbuilder.ide.panels.steps import StepSamples
 from plcbuilder.link import runtime
 from plcbuilder.link.process import ControllerProcess
 from plcbuilder.link.client import (Client, ConnectionLost, ControllerStatus, LinkError,
