@@ -9,7 +9,8 @@ the token are read. It can also talk to a controller that is already running
 Threads: the GUI never waits for the network. A worker thread owns the
 :class:`~plcbuilder.link.client.Client` (whose own reader thread receives
 telemetry): it spawns and watches the child, connects, runs the requests the
-GUI queued, in order, and polls the state about five times a second. Whatever
+GUI queued, in order, and polls the state about five times a second (once a
+second while nothing runs, and again within 0.2 s of any request). Whatever
 it learns goes into a queue; the first item put into an empty queue wakes the
 GUI thread (a queued signal), which drains it, at most once every ~15 ms,
 emitting the signals below (samples and events merged into one emission per
@@ -52,6 +53,7 @@ __all__ = ["ControllerConnection", "SPEED_CHOICES", "parse_speed"]
 #: What :meth:`ControllerConnection.set_speed` understands (any number is N× real time).
 SPEED_CHOICES = ("realtime", "2", "10", "100", "max", "pause")
 STATE_INTERVAL = 0.2          # seconds between state polls
+IDLE_STATE_INTERVAL = 1.0     # ... while nothing runs (and again 0.2 s after any request)
 PUMP_INTERVAL_MS = 15         # GUI-side drains of the worker's queue at most this often
 SPAWN_TIMEOUT = 20.0          # seconds a child gets to write its runtime file
 BACKOFF = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
@@ -268,17 +270,20 @@ class _Worker(threading.Thread):
                 return
             now = time.monotonic()
             if now >= next_state:
-                next_state = now + STATE_INTERVAL
-                self.post("state", client.state())
+                st = client.state()
+                self.post("state", st)
+                idle = st.idle and not st.running and not st.software and not self.debugging
+                next_state = now + (IDLE_STATE_INTERVAL if idle else STATE_INTERVAL)
                 if self.debugging and not self.notified:    # no halted/resumed messages
                     self._debug_state(client)
             try:
-                cmd = self.commands.get(timeout=max(0.0, min(0.05, next_state - now)))
+                cmd = self.commands.get(timeout=max(0.0, min(0.25, next_state - now)))
             except queue.Empty:
                 continue
             if cmd is None:
                 raise _Stop()
             self._run_command(client, *cmd)
+            next_state = min(next_state, time.monotonic() + STATE_INTERVAL)
 
     def _run_command(self, client: Client, verb: str, args: tuple) -> None:
         try:
