@@ -69,7 +69,7 @@ class TelemetryQueue:
     """
 
     #: Seconds between two time-only takes while no procedure runs.
-    idle_time_interval = 0.25
+    idle_time_interval = 1.0
 
     def __init__(self, max_samples: int = 1000, max_events: int = 20000, samples: bool = True,
                  events: bool = True, lossless: bool = False):

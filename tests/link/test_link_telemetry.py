@@ -122,14 +122,14 @@ def test_a_subscriber_that_needs_nothing_new_gets_small_frames(server, client):
 
 def test_an_idle_controller_sends_its_time_rarely():
     """Nothing runs (no image): a small time-only frame about every
-    TelemetryQueue.idle_time_interval (0.25 s), not one every 20 ms."""
+    TelemetryQueue.idle_time_interval (1 s), not one every 20 ms."""
     with ControllerServer(port=0, speed="factor", factor=50.0) as srv:
         sub = Client.connect(*srv.address, srv.token)
         batches = []
         sub.subscribe(batches.append)
-        time.sleep(1.0)
+        time.sleep(2.5)
         sub.close()
-    assert 2 <= len(batches) <= 8, len(batches)
+    assert 2 <= len(batches) <= 5, len(batches)
     assert batches[-1].t_ms > batches[0].t_ms   # the time still goes on
 
 
