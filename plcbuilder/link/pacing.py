@@ -63,11 +63,14 @@ class TelemetryQueue:
     seconds at a time.
 
     When only time went on (no change, no event), :meth:`take` hands out the
-    new time with every take while a procedure runs (or is due), but at most
-    every :attr:`idle_time_interval` seconds while the controller is idle: an
-    idle controller costs its subscribers (the IDE) next to nothing.
+    new time at most every :attr:`busy_time_interval` seconds while a procedure
+    runs (or is due; the IDE's plots scroll 10 times a second at most), and every
+    :attr:`idle_time_interval` seconds while the controller is idle: a
+    controller where nothing changes costs its subscribers (the IDE) little.
     """
 
+    #: Seconds between two time-only takes while a procedure runs.
+    busy_time_interval = 0.1
     #: Seconds between two time-only takes while no procedure runs.
     idle_time_interval = 1.0
 
@@ -111,8 +114,9 @@ class TelemetryQueue:
                 if self.t_ms == self._taken_t:
                     return None
                 now = time.monotonic()
-                if not self.active and now - self._time_only_at < self.idle_time_interval:
-                    return None                 # idle: the time goes out at a low rate
+                every = self.busy_time_interval if self.active else self.idle_time_interval
+                if now - self._time_only_at < every:
+                    return None                 # only time went on: it goes out at a low rate
                 self._time_only_at = now
             sq, eq = self._samples, self._events
             if limit is None or (len(sq) <= limit and len(eq) <= limit):
