@@ -15,43 +15,111 @@ nothing here keeps global state or prints.
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable, Optional, Sequence
+from typing import TYPE_CHECKING, Callable, Optional, Sequence
 
 from plcbuilder._support.files import atomic_write, read_bounded
-from plcbuilder.bytecode import abi, disasm
+from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.abi import proc_name
 from plcbuilder.bytecode.program import MAGIC, MAX_FILE_SIZE, Kind, LoadError, Program
 from plcbuilder.controller import events
-from plcbuilder.controller.controller import Controller, ControllerError
-from plcbuilder.controller.debugger import DebugError
 from plcbuilder.controller.events import ControllerStatus
-from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
-from plcbuilder.controller.recorder import image_id
-from plcbuilder.controller.history import History, Trace
-from plcbuilder.controller.io_dat import io_dat_of, load_io_dat, with_io_dat
-from plcbuilder.controller.session import UsageError, build_scenario, run_session
-from plcbuilder.controller.targets import TargetConfig
-from plcbuilder.controller.trigger import Capturer, TriggerError, parse_trigger, watched_variables
-from plcbuilder.controller.scenario import Action
-from plcbuilder.controller.variables_xml import load_variables
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
                                     summary)
-from plcbuilder.image.manifest import ImageError, read_image, write_image
-from plcbuilder.lang.pipeline import (CompileOptions, CompileResult, compile_bytes, compile_file,
-                                      compile_source)
-from plcbuilder.lang.highlight import PlcLexer
+from plcbuilder.lang.options import CompileOptions
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header, builtin_header_names
-from plcbuilder.project import (BuildResult, ProcedureBuild, Project, ProjectError, build_project,
-                                create_project)
-from plcbuilder.project.build import compile_all
-from plcbuilder.project.conditions import compile_condition
-from plcbuilder.project.model import DEFAULT_MACHINE, kind_of
-from plcbuilder.testing.junit import junit_xml, write_junit
-from plcbuilder.testing.runner import Suite, SuiteError, SuiteRun, prepare, run_suite
-from plcbuilder.testing.spec import TestFileError
-from plcbuilder.trace import compare as trace_compare, export as trace_export, file as trace_file
+
+if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type checkers
+    from plcbuilder.bytecode import disasm
+    from plcbuilder.controller.controller import Controller, ControllerError
+    from plcbuilder.controller.debugger import DebugError
+    from plcbuilder.controller.history import History, Trace
+    from plcbuilder.controller.io_dat import io_dat_of, load_io_dat, with_io_dat
+    from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
+    from plcbuilder.controller.recorder import image_id
+    from plcbuilder.controller.scenario import Action
+    from plcbuilder.controller.session import UsageError, build_scenario, run_session
+    from plcbuilder.controller.targets import TargetConfig
+    from plcbuilder.controller.trigger import (Capturer, TriggerError, parse_trigger,
+                                              watched_variables)
+    from plcbuilder.controller.variables_xml import load_variables
+    from plcbuilder.image.manifest import ImageError, read_image, write_image
+    from plcbuilder.lang.highlight import PlcLexer
+    from plcbuilder.lang.pipeline import CompileResult, compile_bytes, compile_file, compile_source
+    from plcbuilder.project import (BuildResult, ProcedureBuild, Project, ProjectError,
+                                    build_project, create_project)
+    from plcbuilder.project.build import compile_all
+    from plcbuilder.project.conditions import compile_condition
+    from plcbuilder.project.model import DEFAULT_MACHINE, kind_of
+    from plcbuilder.testing.junit import junit_xml, write_junit
+    from plcbuilder.testing.runner import Suite, SuiteError, SuiteRun, prepare, run_suite
+    from plcbuilder.testing.spec import TestFileError
+    from plcbuilder.trace import compare as trace_compare, export as trace_export, file as trace_file
+    from plcbuilder.trace.export import ExportError
+    from plcbuilder.trace.file import TraceFileError
+
+#: The heavy stages (the compiler and lark, the controller, projects, tests,
+#: traces), loaded the first time one of their names is used, through this
+#: module's ``__getattr__`` (``from plcbuilder.api import X`` and ``api.X`` work
+#: as before) or :func:`_load` (this module's own functions): importing the
+#: facade costs little, so the IDE paints its window before they load.
+_LAZY: dict[str, tuple[str, str | None]] = {}
+for _module, _names in (
+        ("plcbuilder.controller.controller", "Controller ControllerError"),
+        ("plcbuilder.controller.debugger", "DebugError"),
+        ("plcbuilder.controller.history", "History Trace"),
+        ("plcbuilder.controller.io_dat", "io_dat_of load_io_dat with_io_dat"),
+        ("plcbuilder.controller.machine_config", "ConfigError default_machine load_machine"),
+        ("plcbuilder.controller.recorder", "image_id"),
+        ("plcbuilder.controller.scenario", "Action"),
+        ("plcbuilder.controller.session", "UsageError build_scenario run_session"),
+        ("plcbuilder.controller.targets", "TargetConfig"),
+        ("plcbuilder.controller.trigger", "Capturer TriggerError parse_trigger watched_variables"),
+        ("plcbuilder.controller.variables_xml", "load_variables"),
+        ("plcbuilder.image.manifest", "ImageError read_image write_image"),
+        ("plcbuilder.lang.highlight", "PlcLexer"),
+        ("plcbuilder.lang.pipeline",
+         "CompileResult compile_bytes compile_file compile_source"),
+        ("plcbuilder.project",
+         "BuildResult ProcedureBuild Project ProjectError build_project create_project"),
+        ("plcbuilder.project.build", "compile_all"),
+        ("plcbuilder.project.conditions", "compile_condition"),
+        ("plcbuilder.project.model", "DEFAULT_MACHINE kind_of"),
+        ("plcbuilder.testing.junit", "junit_xml write_junit"),
+        ("plcbuilder.testing.runner", "Suite SuiteError SuiteRun prepare run_suite"),
+        ("plcbuilder.testing.spec", "TestFileError"),
+        ("plcbuilder.trace.file", "TraceFileError")):
+    for _name in _names.split():
+        _LAZY[_name] = (_module, _name)
+_LAZY["ExportError"] = ("plcbuilder.trace.export", "ExportError")
+for _name, _module in (("disasm", "plcbuilder.bytecode.disasm"),
+                       ("trace_compare", "plcbuilder.trace.compare"),
+                       ("trace_export", "plcbuilder.trace.export"),
+                       ("trace_file", "plcbuilder.trace.file")):
+    _LAZY[_name] = (_module, None)
+del _module, _names, _name
+
+
+def __getattr__(name: str):
+    """A heavy stage's name, loaded now (PEP 562), and kept in this module."""
+    where = _LAZY.get(name)
+    if where is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module = importlib.import_module(where[0])
+    value = module if where[1] is None else getattr(module, where[1])
+    globals()[name] = value
+    return value
+
+
+def _load() -> None:
+    """Every lazy name into this module (its functions use them as globals)."""
+    if "run_suite" not in globals():
+        for name in _LAZY:
+            if name not in globals():
+                __getattr__(name)
+
 
 __all__ = [
     "Action", "BUILTIN_PREFIX", "BuildResult", "CompileOptions", "CompileResult", "ConfigError",
@@ -67,9 +135,6 @@ __all__ = [
     "Capturer", "History", "Trace", "TriggerError", "parse_trigger", "watched_variables", "load_trace", "save_trace",
     "export_trace", "compare_traces", "TraceFileError", "ExportError",
 ]
-
-TraceFileError = trace_file.TraceFileError
-ExportError = trace_export.ExportError
 
 DEFAULT_MS = 60_000
 MAX_MS = 7 * 24 * 3600 * 1000          # a week of simulated time
@@ -89,6 +154,7 @@ def load_program(path) -> Program:
 def image_of(sources: dict[str, str]) -> bytes:
     """An eeprom.rom of hardware procedures ``{name: source}`` with the built-in
     headers only (raises ValueError naming the first that does not compile)."""
+    _load()
     items = []
     for name, text in sources.items():
         r = compile_source(text, f"{name}.plc")
@@ -99,11 +165,13 @@ def image_of(sources: dict[str, str]) -> bytes:
 
 
 def disassemble(program: Program, source_line: Optional[Callable[[str, int], Optional[str]]] = None) -> str:
+    _load()
     return disasm.render_text(program, source_line)
 
 
 def instructions(program: Program) -> list:
     """The disassembly as records (one per instruction, with its source line)."""
+    _load()
     return disasm.instructions(program)
 
 
@@ -116,6 +184,7 @@ def options_for(path, *, software: bool = False, strict: Optional[bool] = None,
     project (``project``, or the one it sits in), else with the options given.
     ``strict`` None: as its project says (not strict outside a project).
     Raises ProjectError when its project's settings cannot be read."""
+    _load()
     if project is None:
         project = Project.find_for(path)
     if project is not None:
@@ -190,6 +259,7 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
 
     Bad usage raises :class:`UsageError`; compile errors come back as the
     procedures' diagnostics with ``report`` None."""
+    _load()
     opts = options or RunOptions()
     limit = DEFAULT_MS if opts.ms is None else opts.ms
     if not 0 <= limit <= MAX_MS:
@@ -444,21 +514,25 @@ def _target_config(project: Project) -> TargetConfig:
 
 def load_trace(path) -> Trace:
     """Reopen a trace file (``.plctrace``); raises TraceFileError saying why not."""
+    _load()
     return trace_file.load(path)
 
 
 def save_trace(trace: Trace, path) -> None:
     """Save a trace as a ``.plctrace`` file, atomically; raises TraceFileError."""
+    _load()
     trace_file.save(trace, path)
 
 
 def export_trace(trace: Trace, path, fmt: Optional[str] = None, *, per_tick: bool = False) -> str:
     """Export as CSV (per change, or ``per_tick``) or VCD; raises ExportError."""
+    _load()
     return trace_export.export(trace, path, fmt, per_tick=per_tick)
 
 
 def compare_traces(a: Trace, b: Trace) -> "trace_compare.Difference":
     """The first tick where two traces differ, and in which signals."""
+    _load()
     return trace_compare.compare(a, b)
 
 
@@ -531,6 +605,7 @@ def test(project, options: Optional[TestOptions] = None, progress=None) -> TestR
     """``plcbuilder test``: build the project once (writing nothing), read
     ``tests/*.toml``, run every test (or those ``select`` picks), judge them.
     A project that cannot be opened raises :class:`UsageError`."""
+    _load()
     opts = options or TestOptions()
     try:
         suite = prepare(project, opts.select, strict=opts.strict)

@@ -9,10 +9,12 @@ the token are read. It can also talk to a controller that is already running
 Threads: the GUI never waits for the network. A worker thread owns the
 :class:`~plcbuilder.link.client.Client` (whose own reader thread receives
 telemetry): it spawns and watches the child, connects, runs the requests the
-GUI queued, in order, and polls the state about five times a second. Whatever
-it learns goes into a queue that a GUI-thread timer drains every ~15 ms,
+GUI queued, in order, and polls the state about five times a second (once a
+second while nothing runs, and again within 0.2 s of any request). Whatever
+it learns goes into a queue; the first item put into an empty queue wakes the
+GUI thread (a queued signal), which drains it, at most once every ~15 ms,
 emitting the signals below (samples and events merged into one emission per
-drain). If the connection breaks or the child dies, ``sig_disconnected``
+drain). Nothing arrives, nothing runs on the GUI thread: no polling timer. If the connection breaks or the child dies, ``sig_disconnected``
 says why, and the worker connects again (restarting the child) with backoff;
 after a restart it uploads the last image again (and the debug session sends
 the breakpoints again on ``sig_connected``).
@@ -32,13 +34,13 @@ import queue
 import threading
 import time
 import zlib
-from typing import Optional, Sequence
+from typing import Callable, Optional, Sequence
 
 from PySide6 import QtCore
 
 from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
 from plcbuilder.ide.debug.requests import DebugRequests
-from plcbuilder.ide.panels.model import StepSamples
+from plcbuilder.ide.panels.steps import StepSamples
 from plcbuilder.link import runtime
 from plcbuilder.link.process import ControllerProcess
 from plcbuilder.link.client import (Client, ConnectionLost, ControllerStatus, LinkError,
@@ -51,7 +53,8 @@ __all__ = ["ControllerConnection", "SPEED_CHOICES", "parse_speed"]
 #: What :meth:`ControllerConnection.set_speed` understands (any number is N× real time).
 SPEED_CHOICES = ("realtime", "2", "10", "100", "max", "pause")
 STATE_INTERVAL = 0.2          # seconds between state polls
-PUMP_INTERVAL_MS = 15         # GUI-side drain of the worker's queue
+IDLE_STATE_INTERVAL = 1.0     # ... while nothing runs (and again 0.2 s after any request)
+PUMP_INTERVAL_MS = 15         # GUI-side drains of the worker's queue at most this often
 SPAWN_TIMEOUT = 20.0          # seconds a child gets to write its runtime file
 BACKOFF = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 STABLE_AFTER = 10.0           # a connection up this long resets the backoff
@@ -105,6 +108,8 @@ class _Worker(threading.Thread):
                  address: Optional[tuple[str, int, str]] = None, extra_args: Sequence[str] = ()):
         super().__init__(name="plcbuilder-ide-link", daemon=True)
         self.inbox = inbox
+        self.wake: Callable[[], None] = lambda: None   # tells the GUI thread there is mail
+        self.woken = False                      # a wake is on its way, not drained yet
         self.embedded = embedded
         self.address = address
         self.extra_args = tuple(extra_args)
@@ -126,6 +131,12 @@ class _Worker(threading.Thread):
     # ----------------------------------------------------------------- plumbing
     def post(self, kind: str, payload=None) -> None:
         self.inbox.put((kind, payload))
+        if not self.woken:                      # one wake per drain, not one per item
+            self.woken = True
+            try:
+                self.wake()
+            except RuntimeError:                # the IDE's side is gone (closing)
+                pass
 
     def run(self) -> None:
         attempt = 0
@@ -260,17 +271,20 @@ class _Worker(threading.Thread):
                 return
             now = time.monotonic()
             if now >= next_state:
-                next_state = now + STATE_INTERVAL
-                self.post("state", client.state())
+                st = client.state()
+                self.post("state", st)
+                idle = st.idle and not st.running and not st.software and not self.debugging
+                next_state = now + (IDLE_STATE_INTERVAL if idle else STATE_INTERVAL)
                 if self.debugging and not self.notified:    # no halted/resumed messages
                     self._debug_state(client)
             try:
-                cmd = self.commands.get(timeout=max(0.0, min(0.05, next_state - now)))
+                cmd = self.commands.get(timeout=max(0.0, min(0.25, next_state - now)))
             except queue.Empty:
                 continue
             if cmd is None:
                 raise _Stop()
             self._run_command(client, *cmd)
+            next_state = min(next_state, time.monotonic() + STATE_INTERVAL)
 
     def _run_command(self, client: Client, verb: str, args: tuple) -> None:
         try:
@@ -365,6 +379,10 @@ class _Stop(Exception):
 class ControllerConnection(DebugRequests, QtCore.QObject):
     """The IDE's connection to a controller (embedded child or external)."""
 
+    sig_mail = Signal()
+    """(Internal, emitted from the link's threads, queued to the GUI thread.)
+    The worker put something into an empty inbox: drain it."""
+
     sig_connected = Signal(str)
     """Connected (again): the controller's address, ``host:port``."""
 
@@ -433,9 +451,11 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
         super().__init__(parent)
         self._inbox: "queue.SimpleQueue" = queue.SimpleQueue()
         self._worker: Optional[_Worker] = None
-        self._pump = QtCore.QTimer(self)
-        self._pump.setInterval(PUMP_INTERVAL_MS)
+        self._pump = QtCore.QTimer(self)        # a drain held back to keep ~15 ms apart
+        self._pump.setSingleShot(True)
         self._pump.timeout.connect(self._drain)
+        self._last_drain = 0.0
+        self.sig_mail.connect(self._on_mail, QtCore.Qt.ConnectionType.QueuedConnection)
         self.connected = False
         self.address = ""
         self.child_pid: Optional[int] = None
@@ -491,8 +511,8 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
         self._worker = worker
         self.missed = 0
         self.uploaded_crc = None
+        worker.wake = self.sig_mail.emit
         worker.start()
-        self._pump.start()
 
     # ---------------------------------------------------------------- requests
     def upload(self, image_bytes: bytes, target: Optional[dict] = None) -> None:
@@ -567,7 +587,21 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
         w.commands.put((verb, args))
 
     # ------------------------------------------------------------------- pump
+    def _on_mail(self) -> None:
+        """The worker posted: drain now, or when ~15 ms have passed since the last drain."""
+        if self._pump.isActive():
+            return
+        wait_ms = PUMP_INTERVAL_MS - (time.monotonic() - self._last_drain) * 1000
+        if wait_ms > 1:
+            self._pump.start(int(wait_ms))
+        else:
+            self._drain()
+
     def _drain(self) -> None:
+        self._last_drain = time.monotonic()
+        w = self._worker
+        if w is not None:
+            w.woken = False                     # what is posted from now on wakes us again
         samples: list = []
         events: list = []
 
@@ -647,3 +681,5 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
             elif kind == "stopped":
                 pass
         flush()
+        if not self._inbox.empty():             # more than one drain's worth: the rest soon
+            self._pump.start(PUMP_INTERVAL_MS)

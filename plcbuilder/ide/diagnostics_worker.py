@@ -22,15 +22,16 @@ import sys
 import threading
 import traceback
 from dataclasses import dataclass
-from typing import Callable, Optional
+from typing import TYPE_CHECKING, Callable, Optional
 
 from PySide6.QtCore import QObject, QTimer, Signal
 
 from plcbuilder import api
 from plcbuilder.api import Span, error
-from plcbuilder.lang.incremental import Incremental
-from plcbuilder.lang.pipeline import procedure_name
-from plcbuilder.lang.source import SourceSet
+# the compiler (lark and the stages) loads on the worker thread with its first
+# job, not with the main window: the IDE paints before it is there
+if TYPE_CHECKING:
+    from plcbuilder.lang.incremental import Incremental
 
 DEBOUNCE_MS = 200          # + compile time: results land well within 300 ms for normal files
 #: how often the interpreter hands the GIL from the compiling thread to the
@@ -167,6 +168,7 @@ class DiagnosticsWorker(QObject):
                 if job.text is not None:
                     incremental = self._incremental.get(key)
                     if incremental is None:
+                        from plcbuilder.lang.incremental import Incremental
                         incremental = self._incremental[key] = Incremental()
             try:
                 if job.text is None:
@@ -196,6 +198,8 @@ class DiagnosticsWorker(QObject):
 
 
 def _internal_error(job: Job, exc: BaseException):
+    from plcbuilder.lang.pipeline import procedure_name
+    from plcbuilder.lang.source import SourceSet
     detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
     diag = error("internal", f"internal compiler error: {detail}", Span.point(job.path, 1, 1))
     return api.CompileResult(procedure_name(job.path), job.path, job.options.kind, None, [diag],

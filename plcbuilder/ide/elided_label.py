@@ -24,21 +24,40 @@ class ElidedLabel(QLabel):
         self._plain = ""
         self._min_chars = min_chars
         self._own_tip = ""
+        self._pending: str | None = None     # a text to show when the label shows
         self.setSizePolicy(QSizePolicy.Policy.Preferred, QSizePolicy.Policy.Preferred)
         self.setWordWrap(False)
         self.setText(text)
 
     # QLabel API -----------------------------------------------------------
     def setText(self, text: str) -> None:  # noqa: N802 - Qt override
+        self._pending = None
         self._full = text or ""
-        if QtGuiNs.mightBeRichText(self._full):
-            doc = QTextDocument()
-            doc.setHtml(self._full)
-            self._plain = doc.toPlainText()
-        else:
-            self._plain = self._full
+        self._plain = _plain_of(self._full)
         super().setText(self._full)
         self._update_tip()
+
+    def set_text_when_shown(self, text: str) -> None:
+        """Set a text that changes often (a status with the time in it): at once
+        when the label is visible and the text differs, else when it shows.
+        A label's new text lays its window out again (and repaints it), which
+        costs the IDE CPU while the label cannot even be seen (a dock tabbed
+        away). :meth:`full_text` and :meth:`plain_text` give the new text at once."""
+        text = text or ""
+        if text == self._full:
+            return
+        if self.isVisible():
+            self.setText(text)
+            return
+        self._pending = text
+        self._full = text
+        self._plain = _plain_of(text)
+
+    def showEvent(self, event) -> None:  # noqa: N802 - Qt override
+        if self._pending is not None:
+            text, self._pending = self._pending, None
+            self.setText(text)
+        super().showEvent(event)
 
     def setToolTip(self, tip: str) -> None:  # noqa: N802 - Qt override
         self._own_tip = tip or ""
@@ -89,3 +108,12 @@ class ElidedLabel(QLabel):
         if not tip and self._plain and self.is_elided():
             tip = self._plain
         QLabel.setToolTip(self, tip)
+
+
+def _plain_of(text: str) -> str:
+    """The text without markup."""
+    if QtGuiNs.mightBeRichText(text):
+        doc = QTextDocument()
+        doc.setHtml(text)
+        return doc.toPlainText()
+    return text

@@ -52,6 +52,8 @@ class StatusBar(QStatusBar):
         # does not lay the status bar (and the window) out again each time
         self.time_label.setFixedWidth(self.time_label.fontMetrics().horizontalAdvance(
             "t = 000000.000 s") + 12)
+        # (a fixed height too: Qt lays the parent out again unless both are fixed)
+        self.time_label.setFixedHeight(self.time_label.sizeHint().height())
         self.time_label.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
         self.show_problem_counts(0, 0)
         self.set_connection_text("no controller", False)

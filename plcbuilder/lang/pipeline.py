@@ -24,6 +24,7 @@ from plcbuilder.lang.checker import Checker, Symbols
 from plcbuilder.lang.codegen import ADDRESS_LIMIT, JUMP_LIMIT, generate
 from plcbuilder.lang.incremental import Incremental
 from plcbuilder.lang.macro_notes import add_macro_notes
+from plcbuilder.lang.options import CompileOptions
 from plcbuilder.lang.parser import parse_tokens
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocessor
 from plcbuilder.lang.source import SourceSet, decode_source, read_source
@@ -65,21 +66,8 @@ def _recursion_limit():
 
 
 # ====================================================================== options
-@dataclass(frozen=True)
-class CompileOptions:
-    kind: Kind = Kind.HARDWARE
-    strict: bool = False
-    include_dirs: tuple = ()
-    code_limit: Optional[int] = None   # None: the kind's default (512 / 16384)
-    #: the folder headers must stay inside (a project's); None: the procedure's
-    #: own folder. Include folders named outside it are allowed too.
-    root: Optional[Path] = None
-    #: the controller the procedure is for (bytecode.targets.TARGETS; docs/targets.md)
-    target: str = "mycnc"
-
-    @property
-    def limit(self) -> int:
-        return self.code_limit if self.code_limit is not None else self.kind.code_limit
+# CompileOptions is in plcbuilder.lang.options (light: a project opens without
+# loading the compiler) and imported above.
 
 
 @dataclass

@@ -61,7 +61,18 @@ class TelemetryQueue:
     makes a simulation at Max speed wait for it instead (see
     :meth:`Simulation.room`), for at most :attr:`Simulation.lossless_wait`
     seconds at a time.
+
+    When only time went on (no change, no event), :meth:`take` hands out the
+    new time at most every :attr:`busy_time_interval` seconds while a procedure
+    runs (or is due; the IDE's plots scroll 10 times a second at most), and every
+    :attr:`idle_time_interval` seconds while the controller is idle: a
+    controller where nothing changes costs its subscribers (the IDE) little.
     """
+
+    #: Seconds between two time-only takes while a procedure runs.
+    busy_time_interval = 0.1
+    #: Seconds between two time-only takes while no procedure runs.
+    idle_time_interval = 1.0
 
     def __init__(self, max_samples: int = 1000, max_events: int = 20000, samples: bool = True,
                  events: bool = True, lossless: bool = False):
@@ -75,15 +86,19 @@ class TelemetryQueue:
         self.missed = 0
         self.missed_events = 0
         self.t_ms = 0
+        self.active = True              # a procedure runs or is due (time-only takes are due)
+        self._time_only_at = 0.0        # monotonic time of the last time-only take
 
     @property
     def room(self) -> int:
         """Rows that fit before the oldest would be dropped."""
         return self.max_samples - len(self._samples)
 
-    def push(self, samples: list, events: list, t_ms: int) -> None:
+    def push(self, samples: list, events: list, t_ms: int, active: bool = True) -> None:
+        """Add what one batch of ticks produced; ``active``: a procedure runs or is due."""
         with self._lock:
             self.t_ms = t_ms
+            self.active = active
             if self.want_samples and samples:
                 self.missed += _append(self._samples, samples)
             if self.want_events and events:
@@ -95,8 +110,14 @@ class TelemetryQueue:
         next sample left), or None when there is nothing new."""
         with self._lock:
             if not self._samples and not self._events and not self.missed \
-                    and not self.missed_events and self.t_ms == self._taken_t:
-                return None
+                    and not self.missed_events:
+                if self.t_ms == self._taken_t:
+                    return None
+                now = time.monotonic()
+                every = self.busy_time_interval if self.active else self.idle_time_interval
+                if now - self._time_only_at < every:
+                    return None                 # only time went on: it goes out at a low rate
+                self._time_only_at = now
             sq, eq = self._samples, self._events
             if limit is None or (len(sq) <= limit and len(eq) <= limit):
                 samples, events, t = list(sq), list(eq), self.t_ms
@@ -275,8 +296,10 @@ class Simulation:
         queues = self._queues
         if queues:
             t = c.t_ms
+            idle = getattr(c, "idle", None)
+            active = not idle() if idle is not None and not samples and not events else True
             for q in queues:
-                q.push(samples, events, t)
+                q.push(samples, events, t, active)
 
     def room(self) -> Optional[int]:
         """Ticks that may run before a lossless subscriber's queue could overflow

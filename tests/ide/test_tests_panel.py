@@ -284,3 +284,10 @@ def test_a_long_recorded_run_name_never_widens_the_docks(qtbot, live_win):
     assert short[2] == window_before
     assert long_name.strip() in rp.banners[1].toolTip()
     rp.back_to_live()
+
+
+def test_the_panel_looks_for_tests_where_the_runner_does():
+    """The panel names the tests folder without loading the runner at start-up."""
+    from plcbuilder.ide.panels import tests as panel_module
+    from plcbuilder.testing.spec import TESTS_DIR
+    assert panel_module.TESTS_DIR == TESTS_DIR

@@ -10,6 +10,7 @@ from plcbuilder.controller.events import Sample
 from plcbuilder.ide.panels.model import RunModel, StepSamples
 from plcbuilder.link import protocol
 from plcbuilder.link.client import Client
+from plcbuilder.link.pacing import TelemetryQueue
 from plcbuilder.link.server import ControllerServer
 from tests.link.linkkit import TOGGLE, compile_programs, image_of, msg_frame, raw_connect
 
@@ -115,5 +116,39 @@ def test_a_subscriber_that_needs_nothing_new_gets_small_frames(server, client):
                 sizes.append(len(p))
                 changes += len(m["changes"])
     s.close()
-    assert len(sizes) >= 10 and changes <= 3     # time goes on, nothing changes
+    # time goes on (LUBE runs), nothing changes: the time about every 100 ms
+    assert 5 <= len(sizes) <= 15 and changes <= 3
     assert max(sizes[1:]) < 80
+
+
+def test_an_idle_controller_sends_its_time_rarely():
+    """Nothing runs (no image): a small time-only frame about every
+    TelemetryQueue.idle_time_interval (1 s), not one every 20 ms."""
+    with ControllerServer(port=0, speed="factor", factor=50.0) as srv:
+        sub = Client.connect(*srv.address, srv.token)
+        batches = []
+        sub.subscribe(batches.append)
+        time.sleep(2.5)
+        sub.close()
+    assert 2 <= len(batches) <= 5, len(batches)
+    assert batches[-1].t_ms > batches[0].t_ms   # the time still goes on
+
+
+def test_time_only_takes_are_rare_while_idle_and_every_100_ms_while_running():
+    """Only time went on: it goes out every 0.1 s while a procedure runs, every
+    second while the controller is idle; a change goes out at once."""
+    q = TelemetryQueue()
+    q.push([], [], 10, active=True)
+    assert q.take()[4] == 10
+    q.push([], [], 20, active=True)
+    assert q.take() is None                     # running: not again within 0.1 s
+    q._time_only_at -= q.busy_time_interval
+    assert q.take()[4] == 20                    # ... and then it does
+    q.push([], [], 30, active=False)
+    assert q.take() is None                     # idle: not again within the interval
+    q.push([("row",)], [], 40, active=False)
+    assert q.take()[0] == [("row",)]            # a change always goes out
+    q._time_only_at -= q.idle_time_interval
+    q.push([], [], 50, active=False)
+    assert q.take()[4] == 50                    # idle, the interval over: the time goes out
+    assert q.take() is None

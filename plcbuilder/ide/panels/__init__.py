@@ -3,9 +3,22 @@
 ``RunPanels(main_window, connection)`` makes the docks; the main window places
 them (``.docks()``), passes pin names from the project's pins.h
 (``.set_pin_names(inputs, outputs)``) and listens to ``sig_open_location``.
+
+The names load on first use (PEP 562): importing one light panel of this
+package (the Outline, the disassembly) does not load pyqtgraph and numpy, which
+the IDE needs only once its window is painted.
 """
 
-from plcbuilder.ide.panels.runpanels import (RunPanels, default_pin_names,
-                                             pin_names_from_defines, pin_names_from_header)
+from __future__ import annotations
+
+import importlib
 
 __all__ = ["RunPanels", "pin_names_from_defines", "pin_names_from_header", "default_pin_names"]
+
+
+def __getattr__(name: str):
+    if name in __all__:
+        value = getattr(importlib.import_module("plcbuilder.ide.panels.runpanels"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -412,7 +412,6 @@ class RunPanels(QtCore.QObject):
         self._running = st.running
         if (st.running or st.software) and not self.var_timer.isActive() and not self._stopped:
             self.var_timer.start()
-        t = st.t_ms
         parts = []
         if self._running:
             parts.append(f"<b>Running {self._running}</b>")
@@ -425,7 +424,8 @@ class RunPanels(QtCore.QObject):
         proc = st.proc
         name = st.proc_name or abi.proc_name(proc)
         parts.append(f"proc {name} ({proc})" if name else f"proc {proc}")
-        parts.append(f"t = {t / 1000:.3f} s")
+        # (no time here: the status bar shows it, in a label of fixed size; a
+        # text that changed five times a second laid the whole window out again)
         speed = st.speed
         fast = False
         if isinstance(speed, dict) and speed.get("mode"):

@@ -21,8 +21,9 @@ from typing import Optional
 from PySide6 import QtCore, QtWidgets
 
 from plcbuilder.ide.elided_label import ElidedLabel
-from plcbuilder.testing.runner import SuiteError, prepare, record_run, run_suite
-from plcbuilder.testing.spec import TESTS_DIR, load_dir
+# plcbuilder.testing (and through it the compiler) loads when the panel first
+# needs it, not with the main window: the IDE's first paint does not wait for it
+TESTS_DIR = "tests"           # plcbuilder.testing.spec.TESTS_DIR (checked by a test)
 
 Qt = QtCore.Qt
 Signal = QtCore.Signal
@@ -46,6 +47,7 @@ class _Worker(QtCore.QObject):
         self.root, self.names, self.coverage = root, names, coverage
 
     def run(self) -> None:
+        from plcbuilder.testing.runner import SuiteError, prepare, run_suite
         try:
             suite = prepare(self.root)
             if not suite.built:
@@ -75,6 +77,7 @@ class _RecordWorker(QtCore.QObject):
         self.root, self.name, self.keep = root, name, keep
 
     def run(self) -> None:
+        from plcbuilder.testing.runner import SuiteError, prepare, record_run
         try:
             suite = prepare(self.root)
             if not suite.built:
@@ -191,6 +194,7 @@ class TestsPanel(QtWidgets.QWidget):
             self.summary.setText("")
             self._update_buttons()
             return
+        from plcbuilder.testing.spec import load_dir
         tests, errors = load_dir(self.root / TESTS_DIR)
         for e in errors:
             item = QtWidgets.QTreeWidgetItem([Path(e.file).name, e.message,

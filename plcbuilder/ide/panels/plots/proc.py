@@ -116,7 +116,7 @@ class ProcPanel(TimePanel):
         self.messages.clear()
 
     def set_status(self, text: str) -> None:
-        self.status.setText(text)
+        self.status.set_text_when_shown(text)     # with the time: only what can be seen
 
     def y_labels(self) -> list[str]:
         """The state names on the y axis, lowest value first."""

@@ -1,0 +1,33 @@
+"""How a procedure is compiled (:class:`CompileOptions`).
+
+Its own module, without the compiler's stages: a project (which says how its
+files are compiled) and the IDE's first paint do not load lark. The pipeline
+(:mod:`plcbuilder.lang.pipeline`) imports it from here, and so does the facade.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional
+
+from plcbuilder.bytecode.program import Kind
+
+__all__ = ["CompileOptions"]
+
+
+@dataclass(frozen=True)
+class CompileOptions:
+    kind: Kind = Kind.HARDWARE
+    strict: bool = False
+    include_dirs: tuple = ()
+    code_limit: Optional[int] = None   # None: the kind's default (512 / 16384)
+    #: the folder headers must stay inside (a project's); None: the procedure's
+    #: own folder. Include folders named outside it are allowed too.
+    root: Optional[Path] = None
+    #: the controller the procedure is for (bytecode.targets.TARGETS; docs/targets.md)
+    target: str = "mycnc"
+
+    @property
+    def limit(self) -> int:
+        return self.code_limit if self.code_limit is not None else self.kind.code_limit
