@@ -794,14 +794,16 @@ class _Cache:
             pb._binary, pb._bin_path = None, path
         if key is None:
             return
-        self.procs[f"{pb.kind.label}/{pb.name}"] = {
+        # kept as its JSON text (written out as it is): a fraction of the
+        # memory of the dicts, and the diagnostics are not held twice
+        self.procs[f"{pb.kind.label}/{pb.name}"] = _RawJSON(_dumps({
             "key": key,
             "bin": pb.bin_name if binary is not None else None,
             "bin_stat": _stat(path) if binary is not None else None,
             "crc32": pb.crc32 if binary is not None else None,
             "size": pb.size,
             "diagnostics": [_diag_to_json(d) for d in pb.diagnostics],
-        }
+        }))
 
     # ------------------------------------------------------------ image
     def unchanged_image(self, path: Path, key: str) -> Optional[int]:
@@ -830,12 +832,21 @@ class _Cache:
             pass   # a cache that cannot be written only costs time next build
 
 
+class _RawJSON(str):
+    """A value of the cache's tables already as its JSON text (see _json_chunks)."""
+
+
+def _dumps(value) -> str:
+    return json.dumps(value, sort_keys=True, separators=(",", ":"))
+
+
 def _json_chunks(doc: dict, big: tuple = ("files", "procedures")) -> Iterator[bytes]:
     """json.dumps(doc, sort_keys=True, compact) + newline, byte for byte, as
     chunks of about 64 KiB: the two large tables are encoded an entry at a time,
-    so the whole text is never in memory."""
+    so the whole text is never in memory; an entry that is a _RawJSON is its
+    own text."""
     def dumps(value) -> str:
-        return json.dumps(value, sort_keys=True, separators=(",", ":"))
+        return value if isinstance(value, _RawJSON) else _dumps(value)
 
     def pieces() -> Iterator[str]:
         yield "{"
