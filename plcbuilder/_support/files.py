@@ -17,7 +17,8 @@ import re
 import secrets
 import stat
 from pathlib import Path
-from typing import Optional, Union
+from contextlib import contextmanager
+from typing import BinaryIO, Iterable, Iterator, Optional, Union
 
 #: What a file that is not a regular file is, for messages.
 _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
@@ -114,8 +115,9 @@ def check_replaceable(path: Union[str, Path]) -> None:
 TEMP_NAME = re.compile(r"\..+\.[0-9a-f]{8}\.tmp\Z", re.DOTALL)
 
 
-def atomic_write(path: Union[str, Path], data: Union[bytes, str], *,
-                 mode: Optional[int] = None, sync: bool = True) -> None:
+def atomic_write(path: Union[str, Path], data: Union[bytes, str, Iterable[bytes]], *,
+                 mode: Optional[int] = None, sync: bool = True,
+                 unless_same: bool = False) -> bool:
     """Replace path's contents all at once: write a temporary file in the same
     folder, fsync it, ``os.replace`` it over path, then fsync the folder.
     Readers see the old file or the new one, never a half-written one. str is
@@ -126,12 +128,21 @@ def atomic_write(path: Union[str, Path], data: Union[bytes, str], *,
     device, a FIFO, a folder: ``/dev/full`` stays a device), before writing
     anything. ``sync=False`` skips both fsyncs: still all-or-nothing for
     readers, but a power cut may lose the new contents (for files a checksum
-    guards anyway)."""
+    guards anyway).
+
+    ``data`` may also be an iterable of bytes chunks, written as they come (a
+    large file is never whole in memory). With ``unless_same`` the file is
+    left alone when it already holds exactly these bytes (compared as they are
+    written, the old file read alongside). Returns whether it replaced path."""
     path = Path(path)
     if isinstance(data, str):
         data = data.encode("utf-8")
-    elif not isinstance(data, (bytes, bytearray, memoryview)):
-        raise TypeError(f"atomic_write takes bytes or str, not {type(data).__name__}")
+    if isinstance(data, (bytes, bytearray, memoryview)):
+        chunks: Iterable = (data,)
+    elif isinstance(data, Iterable):
+        chunks = data
+    else:
+        raise TypeError(f"atomic_write takes bytes, str or chunks of bytes, not {type(data).__name__}")
     check_replaceable(path)
     keep = None
     if mode is None:
@@ -146,8 +157,16 @@ def atomic_write(path: Union[str, Path], data: Union[bytes, str], *,
     try:
         if mode is not None and hasattr(os, "fchmod"):
             os.fchmod(fd, mode)
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
+        with os.fdopen(fd, "wb") as f, _old_contents(path if unless_same else None) as old:
+            same = old is not None
+            for chunk in chunks:
+                f.write(chunk)
+                if same:
+                    same = old.read(len(chunk)) == chunk
+            if same and old.read(1) == b"":
+                f.close()
+                os.unlink(tmp)
+                return False
             f.flush()
             if sync:
                 os.fsync(f.fileno())
@@ -162,6 +181,22 @@ def atomic_write(path: Union[str, Path], data: Union[bytes, str], *,
         raise
     if sync:
         _fsync_dir(path.parent)
+    return True
+
+
+@contextmanager
+def _old_contents(path: Optional[Path]) -> Iterator[Optional[BinaryIO]]:
+    """The file at path open for reading, or None (no path, or unreadable)."""
+    if path is None:
+        yield None
+        return
+    try:
+        f = open(path, "rb")
+    except OSError:
+        yield None
+        return
+    with f:
+        yield f
 
 
 def remove_temp_files(folder: Union[str, Path]) -> list[str]:

@@ -34,12 +34,12 @@ import json
 import re
 import zlib
 from dataclasses import dataclass, field
-from typing import Iterable, Sequence, Union
+from typing import Callable, Iterable, Iterator, Sequence, Union
 
 from plcbuilder._support.strictjson import strict_json_loads
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind, LoadError, Program
-from plcbuilder.image.romfs import REGULAR, ImageError, read_romfs, write_romfs
+from plcbuilder.image.romfs import REGULAR, ImageError, LazyFile, iter_romfs, read_romfs
 
 MANIFEST_NAME = "MANIFEST"
 FORMAT = "plcbuilder-image"
@@ -56,7 +56,7 @@ _ENTRY_KEYS = {"name", "kind", "file", "code_size", "file_size", "crc32"}
 _TOP_KEYS = {"format", "version", "limits", "manifest_crc32", "procedures"}
 _SELF_CRC = "manifest_crc32"
 
-__all__ = ["ImageError", "Limits", "Image", "ImageProcedure", "write_image", "read_image",
+__all__ = ["ImageError", "Limits", "Image", "ImageProcedure", "write_image", "iter_image", "read_image",
            "valid_name", "MANIFEST_NAME"]
 
 
@@ -196,7 +196,9 @@ def _worst_manifest_size() -> int:
 MAX_MANIFEST = _worst_manifest_size()
 
 
-ProgramInput = tuple[str, Union[Kind, str], bytes]
+#: (name, kind, binary): the binary as bytes, or a function reading it (then it
+#: is read once to check it and once more to write it, never kept).
+ProgramInput = tuple[str, Union[Kind, str], Union[bytes, Callable[[], bytes]]]
 
 
 def write_image(programs: Sequence[ProgramInput], limits: Limits | None = None) -> bytes:
@@ -206,6 +208,14 @@ def write_image(programs: Sequence[ProgramInput], limits: Limits | None = None) 
     limits, the number of procedures) and raises ImageError instead of writing
     an image the controller would refuse; each binary is decoded once. The output depends only on the inputs (sorted by name).
     """
+    return b"".join(iter_image(programs, limits))
+
+
+def iter_image(programs: Sequence[ProgramInput], limits: Limits | None = None) -> Iterator[bytes]:
+    """write_image's image as chunks in order, for writing straight to a file:
+    with binaries given as functions, no binary is held longer than it takes to
+    check or write it. Every check is done before the first chunk; a binary
+    that reads otherwise the second time raises ImageError while writing."""
     limits = limits or Limits()
     limits.check()
     if len(programs) > MAX_PROCEDURES:
@@ -228,21 +238,37 @@ def write_image(programs: Sequence[ProgramInput], limits: Limits | None = None) 
                 raise ImageError(f"procedure {name}: unknown kind {kind!r}")
             kind = _KINDS[kind]
         kind = Kind(kind)
+        read = data if callable(data) else None
+        if read is not None:
+            data = read()
         if not isinstance(data, (bytes, bytearray)):
             raise ImageError(f"procedure {name}: the binary must be bytes")
         data = bytes(data)
         code_size = _load(name, kind, data).code_size    # the decoded program is not kept
-        rows.append((name, kind, data, code_size))
+        crc = zlib.crc32(data)
+        stored = LazyFile(len(data), _reread(name, read, crc)) if read is not None else data
+        rows.append((name, kind, stored, code_size, len(data), crc))
     rows.sort(key=lambda r: r[0])
-    _check_limits([(n, k, size) for n, k, _d, size in rows], limits)
+    _check_limits([(r[0], r[1], r[3]) for r in rows], limits)
     entries = [{"name": n, "kind": _kind_label(k), "file": n + SUFFIX, "code_size": size,
-                "file_size": len(d), "crc32": f"{zlib.crc32(d):08x}"} for n, k, d, size in rows]
-    files: dict[str, bytes] = {n + SUFFIX: d for n, _k, d, _p in rows}
+                "file_size": length, "crc32": f"{crc:08x}"}
+               for n, k, _d, size, length, crc in rows]
+    files: dict = {r[0] + SUFFIX: r[2] for r in rows}
     files[MANIFEST_NAME] = manifest_text(entries, limits)
     # Each binary was loaded (validated) once above, and the layout is what
     # read_image reads (the tests write and read back every kind of image), so
     # the image is not decoded a second time here.
-    return write_romfs(files, VOLUME)
+    return iter_romfs(files, VOLUME)
+
+
+def _reread(name: str, read: Callable[[], bytes], crc: int) -> Callable[[], bytes]:
+    def again() -> bytes:
+        data = read()
+        if not isinstance(data, (bytes, bytearray)) or zlib.crc32(data) != crc:
+            raise ImageError(f"procedure {name}: {name}{SUFFIX} changed while the image "
+                             "was written")
+        return bytes(data)
+    return again
 
 
 # ------------------------------------------------------------------ reading

@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass, field
-from typing import Iterator, Mapping, NoReturn, Union
+from typing import Callable, Iterator, Mapping, NoReturn, Optional, Union
 
 MAGIC = b"-rom1fs-"
 ALIGN = 16
@@ -104,11 +104,27 @@ def _encode_name(name: str, what: str) -> bytes:
 #: A tree to write: names mapped to file contents (bytes) or subtrees.
 #: With ``sort=False`` a subtree may hold the keys ``"."`` and ``".."`` (value
 #: None) to place those entries; they come first otherwise.
-Tree = Mapping[str, Union[bytes, bytearray, "Tree", None]]
+Tree = Mapping[str, Union[bytes, bytearray, "LazyFile", "Tree", None]]
+
+
+@dataclass(frozen=True)
+class LazyFile:
+    """A file's contents read only when the image is written (a large image is
+    never whole in memory): ``size`` bytes that ``read()`` returns."""
+
+    size: int
+    read: Callable[[], bytes]
 
 
 def write_romfs(tree: Tree, volume: str = DEFAULT_VOLUME, *, sort: bool = True) -> bytes:
     """A ROMFS image of ``tree`` (see :data:`Tree`), laid out as genromfs does."""
+    return b"".join(iter_romfs(tree, volume, sort=sort))
+
+
+def iter_romfs(tree: Tree, volume: str = DEFAULT_VOLUME, *, sort: bool = True) -> Iterator[bytes]:
+    """The image write_romfs makes, as chunks in order; a file may be a
+    :class:`LazyFile`, read when its turn comes. Everything is checked before
+    the first chunk."""
     vol = volume.encode("utf-8")
     if b"\0" in vol:
         raise ImageError("volume name contains NUL")
@@ -129,7 +145,7 @@ def write_romfs(tree: Tree, volume: str = DEFAULT_VOLUME, *, sort: bool = True) 
                     raise ImageError(f"{where}: '{name}' must map to None")
                 continue
             _encode_name(name, where or "/")
-            if not isinstance(value, (bytes, bytearray, Mapping)):
+            if not isinstance(value, (bytes, bytearray, LazyFile, Mapping)):
                 raise ImageError(f"{where}/{name}: contents must be bytes or a mapping")
             items.append((name, value))
         if sort:
@@ -166,9 +182,10 @@ def write_romfs(tree: Tree, volume: str = DEFAULT_VOLUME, *, sort: bool = True) 
                     rec.update(type=HARDLINK, spec=dir_hdr)
             elif name == "..":
                 rec.update(type=HARDLINK, spec=root_self if dir_hdr is None else parent)
-            elif isinstance(value, (bytes, bytearray)):
-                rec.update(type=REGULAR, spec=0, data=bytes(value))
-                pos = _align(pos + len(value))
+            elif isinstance(value, (bytes, bytearray, LazyFile)):
+                data = value if isinstance(value, LazyFile) else bytes(value)
+                rec.update(type=REGULAR, spec=0, data=data)
+                pos = _align(pos + _size(data))
             else:
                 rec.update(type=DIRECTORY | EXECUTABLE, spec=pos)
                 # the parent of a subdirectory of the root is the root's "." entry
@@ -181,21 +198,56 @@ def write_romfs(tree: Tree, volume: str = DEFAULT_VOLUME, *, sort: bool = True) 
     if size > MAX_IMAGE_SIZE:
         raise ImageError(f"image would be {size} bytes, more than {MAX_IMAGE_SIZE}")
 
-    # Pass 2: write headers, names, data and checksums.
-    buf = bytearray(_align(size, PAD_TO))
-    buf[0:8] = MAGIC
-    _U32.pack_into(buf, 8, size)
-    buf[16:16 + len(vol)] = vol
+    return _emit(plan, vol, size)
+
+
+def _size(data: "bytes | LazyFile") -> int:
+    return data.size if isinstance(data, LazyFile) else len(data)
+
+
+def _emit(plan: list[dict], vol: bytes, size: int) -> Iterator[bytes]:
+    """Pass 2: headers, names, data and checksums, in offset order. The first
+    CHECKSUM_SPAN bytes are held back until the superblock's checksum is known."""
+    head = bytearray(16 + _padded_name_len(vol))
+    head[0:8] = MAGIC
+    _U32.pack_into(head, 8, size)
+    head[16:16 + len(vol)] = vol
+    at = len(head)                  # bytes made so far (head included)
+    span = min(CHECKSUM_SPAN, size)
+    held: Optional[bytearray] = head
+
+    def put(chunk: bytes) -> Iterator[bytes]:
+        nonlocal held
+        if held is None:
+            if chunk:
+                yield chunk
+            return
+        held += chunk
+        if len(held) >= span:
+            _fix_checksum(held, 0, span, 12)
+            out, held = bytes(held), None
+            yield out
+
     for rec in plan:
-        off = rec["off"]
-        data = rec["data"]
-        _HDR.pack_into(buf, off, rec["next"] | rec["type"], rec["spec"], len(data), 0)
-        name_end = off + 16 + _padded_name_len(rec["name"])
-        buf[off + 16:off + 16 + len(rec["name"])] = rec["name"]
-        buf[name_end:name_end + len(data)] = data
-        _fix_checksum(buf, off, name_end, off + 12)
-    _fix_checksum(buf, 0, min(CHECKSUM_SPAN, size), 12)
-    return bytes(buf)
+        off, data = rec["off"], rec["data"]
+        n = _size(data)
+        name_end = 16 + _padded_name_len(rec["name"])
+        hdr = bytearray(name_end)
+        _HDR.pack_into(hdr, 0, rec["next"] | rec["type"], rec["spec"], n, 0)
+        hdr[16:16 + len(rec["name"])] = rec["name"]
+        _fix_checksum(hdr, 0, name_end, 12)
+        yield from put(bytes(off - at) + hdr)      # alignment padding, then the header
+        if isinstance(data, LazyFile):
+            data = data.read()
+            if len(data) != n:
+                raise ImageError(f"{rec['name'].decode('utf-8', 'replace')}: {len(data)} bytes "
+                                 f"where {n} were planned (changed while writing)")
+        yield from put(data)
+        at = off + name_end + n
+    yield from put(bytes(_align(size, PAD_TO) - at))
+    if held is not None:              # a tiny image: all of it within the span
+        _fix_checksum(held, 0, span, 12)
+        yield bytes(held)
 
 
 # ------------------------------------------------------------------ reader

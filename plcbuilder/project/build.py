@@ -67,7 +67,7 @@ import plcbuilder
 from plcbuilder.bytecode.program import MAX_FILE_SIZE, Kind, Program
 from plcbuilder.lang import Diagnostic, Related, Severity, Span, error
 from plcbuilder.image.manifest import VERSION as IMAGE_VERSION
-from plcbuilder.image.manifest import ImageError, Limits, valid_name, write_image
+from plcbuilder.image.manifest import ImageError, Limits, iter_image, valid_name
 from plcbuilder.lang import pipeline as _compiler
 from plcbuilder.lang.pipeline import CompileOptions, compile_file, compile_source
 from plcbuilder.lang.source import MAX_SOURCE_BYTES
@@ -285,26 +285,39 @@ def _write_the_image(result: BuildResult, cache: "_Cache") -> None:
     changed = False
     size = cache.unchanged_image(path, key)
     if size is None:
-        programs = [(p.name, p.kind, p.binary) for p in result.procedures]
-        lost = [name for name, _k, data in programs if data is None]
-        if lost:
+        # streamed: each binary is read from build/ to check it, then again as
+        # the image is written; neither the binaries nor the image are kept whole
+        programs = [(p.name, p.kind, _reader(p)) for p in result.procedures]
+        try:
+            changed = atomic_write(path, iter_image(programs, limits), unless_same=True)
+            size = path.stat().st_size
+        except _Lost as lost:
             result.diagnostics.append(error(
-                "image", f"cannot make the image: build/{lost[0]}{BIN_SUFFIX} changed during "
+                "image", f"cannot make the image: build/{lost}{BIN_SUFFIX} changed during "
                 "the build", None, "build again"))
             return
-        try:
-            image = write_image(programs, limits)
         except ImageError as exc:
             result.diagnostics.append(error("image", f"cannot make the image: {exc}", None))
             return
-        changed = _write_if_changed(path, image)
-        size = len(image)
         cache.image_written(path, key)
     result.image_written = True
     result.image_size = size
     n = len(result.procedures)
     result.image_message = (f"{'wrote' if changed else 'up to date:'} {path} "
                             f"({size} bytes, {n} procedure{'s' * (n != 1)})")
+
+
+class _Lost(Exception):
+    """A binary no longer in build/ as it was built (its procedure's name)."""
+
+
+def _reader(pb: ProcedureBuild) -> Callable[[], bytes]:
+    def read() -> bytes:
+        data = pb.binary
+        if data is None:
+            raise _Lost(pb.name)
+        return data
+    return read
 
 
 def _image_key(procs: list[ProcedureBuild], limits: Limits) -> str:
@@ -740,7 +753,7 @@ class _Cache:
             return None
         try:
             diags = [_diag_from_json(d) for d in entry["diagnostics"]]
-            size, crc, data = entry.get("size"), entry.get("crc32"), None
+            size, crc = entry.get("size"), entry.get("crc32")
             path = None
             if entry.get("bin"):
                 if entry["bin"] != proc.name + BIN_SUFFIX or type(size) is not int \
@@ -757,6 +770,7 @@ class _Cache:
                         return None
                     if zlib.crc32(data) != crc:
                         return None
+                    del data
                     entry = dict(entry, bin_stat=stat)
             elif any(d.is_error for d in diags):
                 size = crc = None
@@ -765,25 +779,31 @@ class _Cache:
         except (OSError, KeyError, TypeError, ValueError):
             return None
         self.procs[cache_id] = entry
-        return ProcedureBuild(proc, diags, size, options.limit, crc, True, {}, data, path)
+        # only name, size and CRC are kept: the bytes are read from build/ when needed
+        return ProcedureBuild(proc, diags, size, options.limit, crc, True, {}, None, path)
 
     def compiled(self, pb: ProcedureBuild, key: Optional[str]) -> None:
         """A procedure compiled now: write its binary (or remove the old one)
-        and remember it."""
+        and remember it. Once written, the ProcedureBuild keeps only its name,
+        size and CRC: the bytes are read again from build/ when needed, so a
+        large project's binaries are never all in memory."""
         path = self.build_dir / pb.bin_name
         binary = pb.binary if pb.ok else None
         if binary is not None:
             _write_if_changed(path, binary, sync=False)
+            pb._binary, pb._bin_path = None, path
         if key is None:
             return
-        self.procs[f"{pb.kind.label}/{pb.name}"] = {
+        # kept as its JSON text (written out as it is): a fraction of the
+        # memory of the dicts, and the diagnostics are not held twice
+        self.procs[f"{pb.kind.label}/{pb.name}"] = _RawJSON(_dumps({
             "key": key,
             "bin": pb.bin_name if binary is not None else None,
             "bin_stat": _stat(path) if binary is not None else None,
             "crc32": pb.crc32 if binary is not None else None,
             "size": pb.size,
             "diagnostics": [_diag_to_json(d) for d in pb.diagnostics],
-        }
+        }))
 
     # ------------------------------------------------------------ image
     def unchanged_image(self, path: Path, key: str) -> Optional[int]:
@@ -806,11 +826,50 @@ class _Cache:
                "files": dict(sorted(self.files.items())), "image": self.image}
         if doc == self.doc:
             return
-        text = json.dumps(doc, sort_keys=True, separators=(",", ":")) + "\n"
         try:
-            _write_if_changed(self.build_dir / CACHE_FILE, text.encode("utf-8"))
+            atomic_write(self.build_dir / CACHE_FILE, _json_chunks(doc), unless_same=True)
         except OSError:
             pass   # a cache that cannot be written only costs time next build
+
+
+class _RawJSON(str):
+    """A value of the cache's tables already as its JSON text (see _json_chunks)."""
+
+
+def _dumps(value) -> str:
+    return json.dumps(value, sort_keys=True, separators=(",", ":"))
+
+
+def _json_chunks(doc: dict, big: tuple = ("files", "procedures")) -> Iterator[bytes]:
+    """json.dumps(doc, sort_keys=True, compact) + newline, byte for byte, as
+    chunks of about 64 KiB: the two large tables are encoded an entry at a time,
+    so the whole text is never in memory; an entry that is a _RawJSON is its
+    own text."""
+    def dumps(value) -> str:
+        return value if isinstance(value, _RawJSON) else _dumps(value)
+
+    def pieces() -> Iterator[str]:
+        yield "{"
+        for n, k in enumerate(sorted(doc)):
+            yield ("," if n else "") + dumps(k) + ":"
+            if k in big and isinstance(doc[k], dict):
+                yield "{"
+                for m, sub in enumerate(sorted(doc[k])):
+                    yield ("," if m else "") + dumps(sub) + ":" + dumps(doc[k][sub])
+                yield "}"
+            else:
+                yield dumps(doc[k])
+        yield "}\n"
+
+    batch: list[str] = []
+    held = 0
+    for piece in pieces():
+        batch.append(piece)
+        held += len(piece)
+        if held >= 1 << 16:
+            yield "".join(batch).encode("utf-8")
+            batch, held = [], 0
+    yield "".join(batch).encode("utf-8")
 
 
 def _text(data: bytes) -> str:

@@ -159,3 +159,33 @@ def test_read_bounded_refuses_a_device_through_a_link(tmp_path):
     link.symlink_to("/dev/zero")
     with pytest.raises(FileRefused, match="character device"):
         read_bounded(link, 1 << 20, "settings file")
+
+
+def test_atomic_write_streams_chunks_and_leaves_an_identical_file_alone(tmp_path):
+    f = tmp_path / "eeprom.rom"
+    assert atomic_write(f, (bytes([i]) * 1000 for i in range(5)), unless_same=True) is True
+    assert f.read_bytes() == b"".join(bytes([i]) * 1000 for i in range(5))
+    before = f.stat().st_ino
+    # the same bytes in other chunks: not replaced, no temporary file left
+    assert atomic_write(f, [bytes([0]) * 500, bytes([0]) * 500 + bytes([1]) * 1000,
+                            bytes([2]) * 1000, bytes([3]) * 1000 + bytes([4]) * 1000],
+                        unless_same=True) is False
+    assert f.stat().st_ino == before and os.listdir(tmp_path) == ["eeprom.rom"]
+    # a prefix of the old contents is a change, and so is one byte more
+    assert atomic_write(f, [bytes([0]) * 1000], unless_same=True) is True
+    assert f.read_bytes() == bytes(1000)
+    assert atomic_write(f, [bytes(1000), b"x"], unless_same=True) is True
+    assert f.read_bytes() == bytes(1000) + b"x"
+
+
+def test_atomic_write_of_chunks_that_fail_leaves_the_old_file(tmp_path):
+    f = tmp_path / "eeprom.rom"
+    atomic_write(f, b"old")
+
+    def chunks():
+        yield b"new"
+        raise ValueError("the writer failed half way")
+
+    with pytest.raises(ValueError):
+        atomic_write(f, chunks())
+    assert f.read_bytes() == b"old" and os.listdir(tmp_path) == ["eeprom.rom"]

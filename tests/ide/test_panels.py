@@ -512,3 +512,31 @@ def test_lanes_are_one_curve_that_keeps_every_edge(qtbot, panels, fake):
     edges = np.nonzero(np.diff(words[0]))[0] + 1
     for e in edges[sparse[edges]]:                     # every edge between them is in the path
         assert np.count_nonzero(np.isclose(x, tt[e])) == 2
+
+
+def test_a_forced_redraw_of_unchanged_samples_keeps_the_curves_data(qtbot, panels, fake):
+    """Redraw only what changed: a curve whose samples, window and x origin are
+    the ones it was drawn from gets no new data; a new sample redraws them."""
+    fake.sig_samples.emit([sample(t, outputs=t & 1, pwm=(t % 7, 3)) for t in range(200)])
+    panels.tick()
+    analog, lanes = panels.analog, panels.lanes
+    assert analog.refresh(force=True) and lanes.refresh(force=True)
+    items = [*analog._curves.values(), lanes._items["outputs"]]
+    assert len(items) == 3                   # pwm01, pwm02 and the outputs' lanes
+    calls = []
+    for item in items:
+        real = item.setData
+        item.setData = lambda *a, _real=real, _item=item, **k: (calls.append(_item),
+                                                                _real(*a, **k))
+    before = [np.array(i.getOriginalDataset()[1]) for i in items]
+    analog.refresh(force=True)
+    lanes.refresh(force=True)
+    assert calls == []
+    assert all(np.array_equal(b, i.getOriginalDataset()[1]) for b, i in zip(before, items))
+    fake.sig_samples.emit([sample(200, outputs=1, pwm=(5, 3))])
+    panels.tick()
+    analog.refresh(force=True)
+    lanes.refresh(force=True)
+    assert set(map(id, calls)) == set(map(id, items))
+    x, y = analog._curves[0].getOriginalDataset()
+    assert y[-1] == 5 and len(x) == len(y)

@@ -270,3 +270,30 @@ def test_the_documented_maximum_of_procedures_fits(make_program):
     entries = entries_of(progs + [extra])
     with pytest.raises(ImageError, match="manifest lists 4097 procedures, at most 4096"):
         read_image(forge(files, entries))
+
+
+def test_binaries_given_as_readers_make_the_same_image(sample_programs):
+    """iter_image reads each binary to check it and again to write it, keeping none."""
+    from plcbuilder.image.manifest import iter_image
+    reads = []
+
+    def reader(name, data):
+        def read():
+            reads.append(name)
+            return data
+        return read
+
+    lazy = [(n, k, reader(n, d)) for n, k, d in sample_programs]
+    chunks = iter_image(lazy)
+    assert sorted(reads) == sorted(n for n, _k, _d in sample_programs)   # all checked first
+    assert b"".join(chunks) == write_image(sample_programs)
+    assert len(reads) == 2 * len(sample_programs)
+
+
+def test_a_binary_that_changes_between_check_and_write_is_refused(sample_programs):
+    from plcbuilder.image.manifest import iter_image
+    name, kind, data = sample_programs[0]
+    answers = iter([data, data[:-1] + bytes([data[-1] ^ 1])])    # one bit flipped
+    lazy = [(name, kind, lambda: next(answers))]
+    with pytest.raises(ImageError, match=f"{name}.bin changed while the image was written"):
+        b"".join(iter_image(lazy))

@@ -287,3 +287,31 @@ def test_genromfs_links_read(genromfs, tmp_path):
     assert romfs.HARDLINK in kinds.values() and kinds["s"] == romfs.SYMLINK
     s = [c for c in fs.root.entries() if c.name == "s"][0]
     assert s.data == b"f"
+
+
+def test_lazy_files_give_the_same_bytes_and_are_read_in_turn():
+    """iter_romfs with LazyFile contents writes exactly what write_romfs writes."""
+    from plcbuilder.image.romfs import LazyFile, iter_romfs
+    rng = random.Random(7)
+    tree = {f"F{i:03d}.bin": rng.randbytes(rng.randrange(0, 900)) for i in range(40)}
+    tree["MANIFEST"] = b"{}\n"
+    reads = []
+
+    def lazy(name, data):
+        def read():
+            reads.append(name)
+            return data
+        return LazyFile(len(data), read)
+
+    lazy_tree = {n: lazy(n, d) for n, d in tree.items()}
+    chunks = iter_romfs(lazy_tree)
+    assert reads == []                         # planned, nothing read yet
+    assert b"".join(chunks) == write_romfs(tree)
+    assert sorted(reads) == sorted(tree) and len(reads) == len(tree)
+    assert read_romfs(write_romfs(tree)).files() == tree
+
+
+def test_a_lazy_file_that_changed_size_is_an_error():
+    from plcbuilder.image.romfs import LazyFile, iter_romfs
+    with pytest.raises(ImageError, match="changed while writing"):
+        b"".join(iter_romfs({"A.bin": LazyFile(10, lambda: b"short")}))

@@ -363,3 +363,32 @@ def test_results_keep_only_what_the_report_needs(example):
     assert "unused=3" in r.source_line(pb.diagnostics[0].span.file, pb.diagnostics[0].span.line)
     assert not hasattr(pb, "_source_line")             # no CompileResult held
     assert len(pickle.dumps(r.procedures)) < 1500 * len(r.procedures)
+
+
+def test_builds_keep_no_binary_bytes_in_memory(example):
+    """Each ProcedureBuild keeps name, size and CRC; its bytes are read back from build/."""
+    import zlib
+    for r in (build_project(example), build_project(example)):   # compiled, then cached
+        assert r.ok and r.image_written
+        image = read_image(example.image_path.read_bytes())
+        for pb in r.procedures:
+            assert pb._binary is None
+            assert pb.binary == (example.build_dir / pb.bin_name).read_bytes()
+            assert zlib.crc32(pb.binary) == pb.crc32 == image.get(pb.name).crc32
+            assert pb.program().name == pb.name
+
+
+def test_a_binary_changed_after_compiling_does_not_go_into_the_image(example, monkeypatch):
+    """The image is made from build/'s binaries as compiled, or not at all."""
+    from plcbuilder.project import build as build_mod
+    real = build_mod.iter_image
+
+    def tampered(programs, limits=None):
+        (example.build_dir / "M03.bin").write_bytes(b"changed")
+        return real(programs, limits)
+
+    monkeypatch.setattr(build_mod, "iter_image", tampered)
+    r = build_project(example)
+    assert not r.image_written
+    assert any("build/M03.bin changed during the build" in d.message for d in r.diagnostics)
+    assert not example.image_path.exists()

@@ -35,6 +35,7 @@ class AnalogPanel(TimePanel):
         self.in_legend = style.legend(self.in_plot, columns=2)
         self._fit[0].legend, self._fit[1].legend = self.out_legend, self.in_legend
         self._curves: dict[int, pg.PlotDataItem] = {}
+        self._drawn: dict[int, tuple] = {}     # col -> what its curve's data were made from
         self._empty_out = empty_text(self.out_plot, "No PWM or DAC output yet")
         self._empty_in = empty_text(self.in_plot, "All ADC channels read 0")
         lay = QtWidgets.QVBoxLayout(self)
@@ -61,11 +62,19 @@ class AnalogPanel(TimePanel):
                 # PWM and DAC: 16 distinct colours; ADC (its own plot) starts over
                 c = style.colour(col if col < 16 else col - 16)
                 self._curves[col] = style.new_curve(plot, c, label)
-        t = self.x(a, b)
+        # the same samples, window and x origin as a curve was last given: its
+        # data stand, and only the paint is left (setData costs a copy and a
+        # downsampling pass a curve)
+        key = (m.epoch, m.time.total, a, b, self.offset, self._extend)
+        t = None
         outs, ins = [], []
         for col, item in self._curves.items():
             y = m.analog.view(col)[a:b]
-            item.setData(t, self.hold(y))
+            if self._drawn.get(col) != key:
+                if t is None:
+                    t = self.x(a, b)
+                item.setData(t, self.hold(y))
+                self._drawn[col] = key
             (ins if col >= 16 else outs).append(y)
         self._fit[0].fit(outs)
         self._fit[1].fit(ins)
@@ -90,5 +99,6 @@ class AnalogPanel(TimePanel):
             plot = self.in_plot if col >= 16 else self.out_plot
             plot.removeItem(item)
         self._curves.clear()
+        self._drawn.clear()
         for f in self._fit:
             f.reset()

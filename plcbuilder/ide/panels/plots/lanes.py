@@ -53,6 +53,7 @@ class LanesPanel(TimePanel):
                                  ("vouts", style.OUTPUT_COLOUR),
                                  ("inputs", style.INPUT_COLOUR))}
         self._blocks: dict[str, pg.BarGraphItem] = {}     # dense runs, filled
+        self._drawn: dict[str, tuple] = {}     # kind -> what its curve was made from
         self._lanes: list[tuple[str, int]] = []
         self._lane_y: dict[tuple[str, int], float] = {}
         self._bands: Optional[pg.BarGraphItem] = None
@@ -172,6 +173,13 @@ class LanesPanel(TimePanel):
         left = t0 - self.offset
         for kind, item in self._items.items():
             keys = [k for k in lanes if k[0] == kind]
+            # the same samples, lanes, window and pixels as last drawn: the merged
+            # curve and its blocks stand (only the paint is left)
+            key = (m.epoch, m.time.total, a, b, self.offset, end, left, per_px, tuple(keys),
+                   tuple(self._lane_y.get(k) for k in keys))
+            if self._drawn.get(kind) == key:
+                continue
+            self._drawn[kind] = key
             if not keys or not len(t):
                 item.setData([], [])
                 self._set_blocks(kind, (), (), ())
