@@ -33,13 +33,25 @@ def _failed(win, title: str, exc: Exception) -> None:
     QMessageBox.warning(win, title, str(exc))
 
 
+def _ask(win, title: str, filters: str, save: bool = False, suffix=None):
+    """A file from a dialog: (path, chosen filter), or (None, "") when cancelled.
+    ``suffix(chosen)`` names the suffix a saved name without one gets."""
+    ask = QFileDialog.getSaveFileName if save else QFileDialog.getOpenFileName
+    path, chosen = ask(win, title, _folder(win), filters)
+    if not path:
+        return None, ""
+    if suffix is not None and not Path(path).suffix:
+        path += suffix(chosen)
+    return path, chosen
+
+
 def open_trace(win, path: Optional[str] = None) -> bool:
     tools = _tools(win)
     if tools is None:
         return False
     if path is None:
-        path, _ = QFileDialog.getOpenFileName(win, "Open Trace", _folder(win), TRACE_FILTER)
-        if not path:
+        path, _ = _ask(win, "Open Trace", TRACE_FILTER)
+        if path is None:
             return False
     try:
         tools.open(path)
@@ -57,11 +69,9 @@ def save_trace(win, path: Optional[str] = None) -> bool:
     if tools is None:
         return False
     if path is None:
-        path, _ = QFileDialog.getSaveFileName(win, "Save Trace", _folder(win), TRACE_FILTER)
-        if not path:
+        path, _ = _ask(win, "Save Trace", TRACE_FILTER, True, lambda _c: ".plctrace")
+        if path is None:
             return False
-        if not Path(path).suffix:
-            path += ".plctrace"
     try:
         tools.save(path)
     except api.TraceFileError as exc:
@@ -76,13 +86,11 @@ def export_trace(win, path: Optional[str] = None, per_tick: bool = False) -> boo
     if tools is None:
         return False
     if path is None:
-        path, chosen = QFileDialog.getSaveFileName(win, "Export Trace", _folder(win),
-                                                   EXPORT_FILTER)
-        if not path:
+        path, chosen = _ask(win, "Export Trace", EXPORT_FILTER, True,
+                            lambda c: ".vcd" if "VCD" in c else ".csv")
+        if path is None:
             return False
         per_tick = "per tick" in chosen
-        if not Path(path).suffix:
-            path += ".vcd" if "VCD" in chosen else ".csv"
     try:
         tools.export(path, per_tick=per_tick)
     except api.ExportError as exc:
@@ -97,12 +105,10 @@ def export_plot(win, path: Optional[str] = None) -> bool:
     if tools is None:
         return False
     if path is None:
-        path, chosen = QFileDialog.getSaveFileName(win, "Export Plot Image", _folder(win),
-                                                   IMAGE_FILTER)
-        if not path:
+        path, _ = _ask(win, "Export Plot Image", IMAGE_FILTER, True,
+                       lambda c: ".svg" if "SVG" in c else ".png")
+        if path is None:
             return False
-        if not Path(path).suffix:
-            path += ".svg" if "SVG" in chosen else ".png"
     try:
         tools.export_image(path)
     except api.ExportError as exc:
@@ -117,9 +123,8 @@ def compare_trace(win, path: Optional[str] = None):
     if tools is None:
         return None
     if path is None:
-        path, _ = QFileDialog.getOpenFileName(win, "Compare with Trace", _folder(win),
-                                              TRACE_FILTER)
-        if not path:
+        path, _ = _ask(win, "Compare with Trace", TRACE_FILTER)
+        if path is None:
             return None
     try:
         diff = tools.compare_with(path)

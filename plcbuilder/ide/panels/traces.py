@@ -179,9 +179,7 @@ class TraceTools(QtCore.QObject):
 
     def trigger_now(self) -> None:
         if self.capturer is None:
-            spec = self.bar.spec.text().strip() or "in 0 edge"
-            self.capturer = api.Capturer(self.session, api.parse_trigger(spec)
-                                         if _readable(spec) else api.parse_trigger("in 0 edge"),
+            self.capturer = api.Capturer(self.session, _trigger_or_default(self.bar.spec.text()),
                                          self.bar.pre.value(), self.bar.post.value(), "single")
         self.capturer.trigger_now()
         self.bar.set_state("triggered now: capturing…", armed=True)
@@ -321,9 +319,10 @@ def _svg(scene, path: Path, panel) -> None:
         raise OSError(f"the SVG generator wrote nothing to {path}")
 
 
-def _readable(spec: str) -> bool:
+def _trigger_or_default(spec: str):
+    """The bar's trigger, or "in 0 edge" when it has none that can be read (a
+    manual trigger needs one only to name the capture)."""
     try:
-        api.parse_trigger(spec)
-        return True
+        return api.parse_trigger(spec.strip() or "in 0 edge")
     except api.TriggerError:
-        return False
+        return api.parse_trigger("in 0 edge")
