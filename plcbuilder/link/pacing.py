@@ -165,6 +165,8 @@ class Simulation:
         self._inline = threading.RLock()        # used while the thread is not running
         self._thread: Optional[threading.Thread] = None
         self._stop = False
+        self._closing = threading.Lock()        # held to queue a call, and for the last drain
+        self._closed = False                    # the thread takes no more calls
         self._shutdown_on_stop = True
         self.mode = "pause"
         self.factor = 1.0
@@ -215,10 +217,11 @@ class Simulation:
         if t is None or threading.current_thread() is t:
             with self._inline:
                 return fn()
-        if not t.is_alive():
-            raise SimulationDown("the simulation has stopped")
         c = _Call(fn)
-        self._commands.put(c)
+        with self._closing:         # the thread's last drain cannot slip in between
+            if self._closed or not t.is_alive():
+                raise SimulationDown("the simulation has stopped")
+            self._commands.put(c)
         if not c.done.wait(timeout):
             raise SimulationDown(f"the simulation did not answer within {timeout:g} s")
         if c.error is not None:
@@ -451,6 +454,8 @@ class Simulation:
         if self._shutdown_on_stop:
             self._shutdown_controller()
         # Whoever still waits gets an answer rather than a timeout.
+        with self._closing:
+            self._closed = True
         while True:
             try:
                 c = self._commands.get_nowait()

@@ -101,3 +101,32 @@ def test_a_stopped_and_continued_controller_keeps_answering(tmp_path):
     finally:
         os.kill(proc.popen.pid, signal.SIGCONT)
         proc.stop()
+
+
+def test_a_call_racing_the_stop_is_answered_at_once():
+    """A request that reaches the simulation thread while it stops (a client
+    leaving as the controller shuts down) is answered "stopped" at once, never
+    left waiting out its timeout (it held a server's shutdown for 5 s)."""
+    import threading
+
+    from plcbuilder.link.pacing import SimulationDown
+
+    for _ in range(40):
+        sim = Simulation(Controller(), "pause")
+        sim.start()
+        waits: list[float] = []
+
+        def caller():
+            for _ in range(200):
+                t0 = time.monotonic()
+                try:
+                    sim.call(lambda: None, timeout=5.0)
+                except SimulationDown:
+                    waits.append(time.monotonic() - t0)
+                    return
+        th = threading.Thread(target=caller)
+        th.start()
+        sim.stop(shutdown=False)
+        th.join(10)
+        assert not th.is_alive()
+        assert all(w < 1.0 for w in waits), waits
