@@ -270,6 +270,7 @@ def test_a_loader_bug_refuses_the_image_and_puts_the_old_one_back(image, program
 
 def test_a_long_step_stops_at_its_wall_time_budget(paused):
     paused.step_budget = 0.0            # one slice, then it answers
+    req(paused, "start", name="M88")    # a procedure busy every tick: 600 s cannot fit one slice
     t0 = req(paused, "state")["t_ms"]
     r = req(paused, "step", ms=600_000)
     assert not r["complete"] and 0 < r["stepped"] < 600_000 and r["t_ms"] == t0 + r["stepped"]
