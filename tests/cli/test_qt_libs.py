@@ -43,12 +43,24 @@ def test_the_apt_line_names_the_packages_of_the_missing_libraries():
     assert qt_libs.packages_for(["libunheard.so.3"]) == ["libunheard.so.3"]
 
 
-def test_nothing_is_missing_here():
-    """This machine runs the IDE on Xvfb: ldd finds every library of the plugin."""
+def test_what_this_machine_lacks_is_named_by_its_package():
+    """On this machine, with the real plugin and the real ldd: every library the
+    loader cannot find has its Debian package in the table (so the printed
+    apt-get line installs it), and the module's exit status says whether
+    anything is missing (CI machines differ: both outcomes are checked)."""
     plugin = qt_libs.xcb_plugin()
     if plugin is None or not shutil.which("ldd"):
         pytest.skip("no xcb plugin or no ldd")
-    assert qt_libs.missing_libraries(plugin) == []
+    missing = qt_libs.missing_libraries(plugin)
+    assert [lib for lib in missing if lib not in qt_libs.PACKAGES] == []
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env.pop("PLCBUILDER_LDD", None)
+    out = subprocess.run([sys.executable, "-m", "plcbuilder.cli.qt_libs"], env=env,
+                         capture_output=True, text=True, cwd=ROOT)
+    if missing:
+        assert out.returncode == 1 and qt_libs.apt_line(missing) in out.stderr
+    else:
+        assert out.returncode == 0 and out.stderr == ""
 
 
 def test_the_module_prints_the_line_and_fails(tmp_path):
