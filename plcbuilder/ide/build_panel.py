@@ -21,7 +21,7 @@ from PySide6.QtGui import QColor, QFont, QFontDatabase, QTextCharFormat, QTextCu
 from PySide6.QtWidgets import (QHBoxLayout, QLabel, QPlainTextEdit, QProgressBar, QToolButton,
                                QVBoxLayout, QWidget)
 
-from plcbuilder.api import Severity, render_text
+from plcbuilder.api import render_text
 from plcbuilder.ide.icons import icon
 
 _LOCATION_RE = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): (error|warning|note)")
@@ -177,8 +177,7 @@ class BuildPanel(QWidget):
         root = result.project.root
         width = max([len(p.name) for p in result.procedures] + [8])
         for pb in result.procedures:
-            errors = sum(1 for d in pb.diagnostics if d.is_error)
-            warns = sum(1 for d in pb.diagnostics if d.severity == Severity.WARNING)
+            errors, warns = pb.errors, pb.warnings
             size = f"{pb.size}/{pb.limit} bytes" if pb.size is not None else f"-/{pb.limit} bytes"
             if errors:
                 state, kind = f"{errors} error{'s' * (errors != 1)}", "error"
@@ -189,12 +188,13 @@ class BuildPanel(QWidget):
             cached = "  (unchanged)" if pb.cached else ""
             self.append(f"  {pb.name:<{width}}  {pb.kind.label:<8}  {size:>17}  {state}{cached}",
                         kind, (str(pb.path), 1, 1))
-        diags = result.all_diagnostics
+        diags = [(d, pb.source_line) for pb in result.procedures if pb.errors or pb.warnings
+                 for d in pb.diagnostics] + [(d, result.source_line) for d in result.diagnostics]
         if diags:
             self.append("")
-        for d in diags:
+        for d, source_line in diags:
             kind = "error" if d.is_error else "warning"
-            text = render_text(d, result.source_line)
+            text = render_text(d, source_line)
             for i, line in enumerate(text.split("\n")):
                 loc = (d.span.file, d.span.line, d.span.col) if d.span is not None else None
                 shown = _relative(line, root) if i == 0 else line

@@ -28,8 +28,11 @@ compiling and the machine has more than one core, worker processes compile
 them (forked from this process when it runs a single thread, from a fork server
 otherwise); fewer are compiled here, one after another. The results are the
 same either way, in the same order. Each result keeps only what the report and
-the IDE need: the diagnostics (with the source lines they point at), the code
-size, the binary and its CRC.
+the IDE need: the diagnostics (with the source lines they point at, packed as
+compressed JSON until asked for), the code size and the binary's CRC (its bytes
+are read back from build/). The compiler reads each source it compiles itself,
+so a build never holds the project's sources; one whose bytes changed after
+its key was made is not cached.
 
 Incremental builds: ``build/.cache.json`` remembers, per procedure, a key (a
 SHA-256 of the source, of every header it may include as the search order
@@ -58,7 +61,7 @@ import zlib
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Callable, Iterator, Optional
@@ -102,18 +105,47 @@ Progress = Callable[[int, int, str], None]
 
 # ------------------------------------------------------------------ results
 
-@dataclass
 class ProcedureBuild:
-    procedure: Procedure
-    diagnostics: list[Diagnostic]
-    size: Optional[int]                 # code bytes, None when it did not compile
-    limit: int
-    crc32: Optional[int] = None         # of the binary, None when it did not compile
-    cached: bool = False                # reused from build/.cache.json
-    #: (file, line) -> text of the source lines the diagnostics point at
-    lines: dict = field(default_factory=dict, repr=False)
-    _binary: Optional[bytes] = field(default=None, repr=False)
-    _bin_path: Optional[Path] = field(default=None, repr=False)   # a reused binary
+    """One procedure's outcome. Its diagnostics (with the source lines they point
+    at) are held packed, as zlib-compressed JSON, and decoded when asked for:
+    a large project's report holds a few hundred bytes a procedure, not the
+    objects (docs/projects.md, "Build All")."""
+
+    __slots__ = ("procedure", "size", "limit", "crc32", "cached", "errors", "warnings",
+                 "_packed", "_binary", "_bin_path")
+
+    def __init__(self, procedure: Procedure, diagnostics, size: Optional[int], limit: int,
+                 crc32: Optional[int] = None, cached: bool = False, lines: Optional[dict] = None,
+                 binary: Optional[bytes] = None, bin_path: Optional[Path] = None):
+        self.procedure = procedure
+        self.size = size                    # code bytes, None when it did not compile
+        self.limit = limit
+        self.crc32 = crc32                  # of the binary, None when it did not compile
+        self.cached = cached                # reused from build/.cache.json
+        self._binary = binary
+        self._bin_path = bin_path           # a binary written to (or reused from) build/
+        if isinstance(diagnostics, _Packed):
+            self._packed, self.errors, self.warnings = diagnostics
+        else:
+            rows = [_diag_to_json(d) for d in diagnostics]
+            self._packed, self.errors, self.warnings = _pack(_dumps(rows), *_counts(rows), lines)
+
+    @property
+    def diagnostics(self) -> list[Diagnostic]:
+        return [_diag_from_json(d) for d in _unpack(self._packed)[0]]
+
+    @property
+    def lines(self) -> dict:
+        """(file, line) -> text of the source lines the diagnostics point at."""
+        return {(f, n): text for f, n, text in _unpack(self._packed)[1]}
+
+    def diagnostics_json(self) -> str:
+        """The diagnostics as the cache stores them (compact JSON text)."""
+        return _dumps(_unpack(self._packed)[0])
+
+    def __repr__(self) -> str:
+        return (f"ProcedureBuild({self.name!r}, size={self.size}, limit={self.limit}, "
+                f"errors={self.errors}, warnings={self.warnings}, cached={self.cached})")
 
     @property
     def name(self) -> str:
@@ -129,7 +161,7 @@ class ProcedureBuild:
 
     @property
     def ok(self) -> bool:
-        return self.crc32 is not None and not any(d.is_error for d in self.diagnostics)
+        return self.crc32 is not None and not self.errors
 
     @property
     def bin_name(self) -> str:
@@ -158,6 +190,34 @@ class ProcedureBuild:
         return text if text is not None else _disk_line(file, line)
 
 
+class _Packed(tuple):
+    """(packed bytes, errors, warnings): diagnostics already packed (by _pack)."""
+
+
+def _pack(rows_json: str, errors: int, warnings: int, lines=None) -> _Packed:
+    """Diagnostics as the JSON text of their ``_diag_to_json`` rows, their
+    counts, and the source lines they point at ({(file, line): text} or
+    [[file, line, text]]), packed for a ProcedureBuild."""
+    if rows_json == "[]":
+        return _Packed((b"", 0, 0))
+    if isinstance(lines, dict):
+        lines = [[f, n, text] for (f, n), text in lines.items()]
+    text = '{"d":' + rows_json + ',"l":' + _dumps(lines or []) + "}"
+    return _Packed((zlib.compress(text.encode("utf-8")), errors, warnings))
+
+
+def _counts(rows: list) -> tuple[int, int]:
+    return (sum(1 for r in rows if r["severity"] == Severity.ERROR),
+            sum(1 for r in rows if r["severity"] == Severity.WARNING))
+
+
+def _unpack(packed: bytes) -> tuple[list, list]:
+    if not packed:
+        return [], []
+    doc = json.loads(zlib.decompress(packed))
+    return doc["d"], doc["l"]
+
+
 @dataclass
 class BuildResult:
     project: Project
@@ -179,11 +239,13 @@ class BuildResult:
 
     @property
     def error_count(self) -> int:
-        return sum(1 for d in self.all_diagnostics if d.is_error)
+        return sum(p.errors for p in self.procedures) + \
+            sum(1 for d in self.diagnostics if d.is_error)
 
     @property
     def warning_count(self) -> int:
-        return sum(1 for d in self.all_diagnostics if d.severity == Severity.WARNING)
+        return sum(p.warnings for p in self.procedures) + \
+            sum(1 for d in self.diagnostics if d.severity == Severity.WARNING)
 
     @property
     def ok(self) -> bool:
@@ -196,10 +258,13 @@ class BuildResult:
         return None
 
     def source_line(self, file: str, line: int) -> Optional[str]:
+        """A source line for the project's own diagnostics: as the procedure of
+        that file kept it, or from the disk."""
         for p in self.procedures:
-            text = p.lines.get((file, line))
-            if text is not None:
-                return text
+            if str(p.path) == file and (p.errors or p.warnings):
+                text = p.lines.get((file, line))
+                if text is not None:
+                    return text
         return _disk_line(file, line)
 
 
@@ -369,15 +434,17 @@ def _procedure_builds(project: Project, progress: Optional[Progress], strict: Op
 
     def compiled(k: int, outcome: tuple) -> None:
         i, options, key = pending[k]
-        diags, size, binary, lines = outcome
-        pb = ProcedureBuild(procs[i], diags, size, options.limit,
-                            zlib.crc32(binary) if binary is not None else None, False, lines,
-                            binary)
+        rows_json, errors, warnings, lines, size, binary, read = outcome
+        if read != work[k][2]:
+            key = None           # the source changed after its key was made: not cached
+        pb = ProcedureBuild(procs[i], _pack(rows_json, errors, warnings, lines), size,
+                            options.limit, zlib.crc32(binary) if binary is not None else None,
+                            False, None, binary)
         if cache is not None:
-            cache.compiled(pb, key)
+            cache.compiled(pb, key, rows_json)
         finished(i, pb)
 
-    work = [(str(procs[i].path), options, cache.source_bytes(procs[i]) if cache else None)
+    work = [(str(procs[i].path), options, cache.source_hash(procs[i]) if cache else None)
             for i, options, _key in pending]
     _compile_many(work, compiled, jobs)
     return out   # type: ignore[return-value]  - every slot is filled
@@ -385,24 +452,35 @@ def _procedure_builds(project: Project, progress: Optional[Progress], strict: Op
 
 # ------------------------------------------------------------ compiling
 
-def _compile_job(job: tuple[str, CompileOptions, Optional[bytes]]) -> tuple:
-    """Compile one procedure (in a worker process or here): (diagnostics, size,
-    binary, source lines of the diagnostics), all of it small and picklable."""
-    path, options, data = job
+def _compile_job(job: tuple[str, CompileOptions, Optional[str]]) -> tuple:
+    """Compile one procedure (in a worker process or here): (the diagnostics'
+    JSON text, errors, warnings, the source lines they point at, size, binary,
+    the SHA-256 of the source compiled), small, flat and picklable: the parent
+    builds no objects from it. The source is read here, so the parent never
+    holds a project's sources."""
+    path, options, _hash = job
+    try:
+        data = read_bounded(path, MAX_SOURCE_BYTES)
+    except OSError:
+        data = None                     # the compiler reads it and says why not
+    read = hashlib.sha256(data).hexdigest() if data is not None else None
     try:
         r = compile_file(path, options, data=data)
     except Exception as exc:  # noqa: BLE001 - one procedure must not stop Build All
         diag = error("internal", f"internal compiler error: {type(exc).__name__}: {exc}",
                      Span.point(path, 1, 1))
-        return [diag], None, None, {}
+        rows = [_diag_to_json(diag)]
+        return _dumps(rows), 1, 0, [], None, None, read
     binary = r.program.to_bytes() if r.ok and r.program is not None else None
-    lines = {}
+    lines: dict = {}
     for d in r.diagnostics:
-        if d.span is not None:
+        if d.span is not None and (d.span.file, d.span.line) not in lines:
             text = r.source_line(d.span.file, d.span.line)
             if text is not None:
                 lines[(d.span.file, d.span.line)] = text
-    return list(r.diagnostics), (r.size if binary is not None else None), binary, lines
+    rows = [_diag_to_json(d) for d in r.diagnostics]
+    return (_dumps(rows), *_counts(rows), [[f, n, t] for (f, n), t in lines.items()],
+            (r.size if binary is not None else None), binary, read)
 
 
 def _warm() -> None:
@@ -655,13 +733,11 @@ class _Cache:
         self.procs: dict[str, dict] = {}
         self.files: dict[str, list] = {}
         self.image: dict = {}
-        self.sources: dict[str, bytes] = {}     # procedure sources read (for the compiler)
         self.found: dict[tuple, Optional[Path]] = {}   # include resolutions, this build
 
     # ------------------------------------------------------------ files
-    def info(self, path: Path, keep: bool = False) -> Optional[tuple[str, list]]:
-        """(SHA-256, #include targets) of a file; None when it cannot be read.
-        keep: hold the bytes read for the compiler (a procedure's source)."""
+    def info(self, path: Path) -> Optional[tuple[str, list]]:
+        """(SHA-256, #include targets) of a file; None when it cannot be read."""
         name = str(path)
         rec = self.files.get(name)
         if rec is not None:
@@ -678,17 +754,17 @@ class _Cache:
             data = read_bounded(path, MAX_SOURCE_BYTES)
         except OSError:
             return None
-        if keep:
-            self.sources[name] = data
         trusted = stat[1] <= self.start_ns - RACY_NS
         rec = [stat[0], stat[1], stat[2], hashlib.sha256(data).hexdigest(),
                _include_targets(_text(data)), trusted]
         self.files[name] = rec
         return rec[3], rec[4]
 
-    def source_bytes(self, proc: Procedure) -> Optional[bytes]:
-        """The source read for the key (once), handed over to the compiler."""
-        return self.sources.pop(str(proc.path), None)
+    def source_hash(self, proc: Procedure) -> Optional[str]:
+        """The SHA-256 of the source as its key saw it (the compiler reads the
+        file again, and a build that compiled other bytes does not cache them)."""
+        rec = self.files.get(str(proc.path))
+        return rec[3] if rec is not None else None
 
     def _resolve(self, target: str, folder: Optional[Path], dirs: list[Path]) -> Optional[Path]:
         """The header #include target names from folder (None: a built-in one)."""
@@ -708,7 +784,7 @@ class _Cache:
                 b = part if isinstance(part, bytes) else str(part).encode("utf-8", "surrogatepass")
                 h.update(len(b).to_bytes(8, "little") + b)
 
-        source = self.info(proc.path, keep=True)
+        source = self.info(proc.path)
         if source is None:
             return None
         put(CACHE_VERSION, self.fingerprint, proc.kind.label, options.strict, options.target,
@@ -752,7 +828,8 @@ class _Cache:
         if not entry or entry.get("key") != key:
             return None
         try:
-            diags = [_diag_from_json(d) for d in entry["diagnostics"]]
+            rows = entry["diagnostics"]
+            diags = [_diag_from_json(d) for d in rows]      # checks them
             size, crc = entry.get("size"), entry.get("crc32")
             path = None
             if entry.get("bin"):
@@ -780,9 +857,10 @@ class _Cache:
             return None
         self.procs[cache_id] = entry
         # only name, size and CRC are kept: the bytes are read from build/ when needed
-        return ProcedureBuild(proc, diags, size, options.limit, crc, True, {}, None, path)
+        return ProcedureBuild(proc, _pack(_dumps(rows), *_counts(rows)), size, options.limit,
+                              crc, True, None, None, path)
 
-    def compiled(self, pb: ProcedureBuild, key: Optional[str]) -> None:
+    def compiled(self, pb: ProcedureBuild, key: Optional[str], rows_json: str) -> None:
         """A procedure compiled now: write its binary (or remove the old one)
         and remember it. Once written, the ProcedureBuild keeps only its name,
         size and CRC: the bytes are read again from build/ when needed, so a
@@ -794,16 +872,17 @@ class _Cache:
             pb._binary, pb._bin_path = None, path
         if key is None:
             return
-        # kept as its JSON text (written out as it is): a fraction of the
-        # memory of the dicts, and the diagnostics are not held twice
-        self.procs[f"{pb.kind.label}/{pb.name}"] = _RawJSON(_dumps({
-            "key": key,
+        # kept as its JSON text (written out as it is), the diagnostics as the
+        # compiler's JSON text (``rows_json``): never decoded here
+        first = _dumps({
             "bin": pb.bin_name if binary is not None else None,
             "bin_stat": _stat(path) if binary is not None else None,
             "crc32": pb.crc32 if binary is not None else None,
-            "size": pb.size,
-            "diagnostics": [_diag_to_json(d) for d in pb.diagnostics],
-        }))
+        })
+        last = _dumps({"key": key, "size": pb.size})
+        # the text _dumps would give for the whole entry (keys sorted), packed
+        self.procs[f"{pb.kind.label}/{pb.name}"] = _RawJSON.packed(
+            first[:-1] + ',"diagnostics":' + rows_json + "," + last[1:])
 
     # ------------------------------------------------------------ image
     def unchanged_image(self, path: Path, key: str) -> Optional[int]:
@@ -832,8 +911,16 @@ class _Cache:
             pass   # a cache that cannot be written only costs time next build
 
 
-class _RawJSON(str):
-    """A value of the cache's tables already as its JSON text (see _json_chunks)."""
+class _RawJSON(bytes):
+    """A value of the cache's tables already as its JSON text, zlib-compressed
+    until it is written out (see _json_chunks)."""
+
+    @classmethod
+    def packed(cls, text: str) -> "_RawJSON":
+        return cls(zlib.compress(text.encode("utf-8")))
+
+    def text(self) -> str:
+        return zlib.decompress(self).decode("utf-8")
 
 
 def _dumps(value) -> str:
@@ -846,7 +933,7 @@ def _json_chunks(doc: dict, big: tuple = ("files", "procedures")) -> Iterator[by
     so the whole text is never in memory; an entry that is a _RawJSON is its
     own text."""
     def dumps(value) -> str:
-        return value if isinstance(value, _RawJSON) else _dumps(value)
+        return value.text() if isinstance(value, _RawJSON) else _dumps(value)
 
     def pieces() -> Iterator[str]:
         yield "{"
