@@ -173,7 +173,7 @@ def manifest_crc(entries: Iterable[dict], limits: Limits) -> str:
     return f"{zlib.crc32(_manifest_bytes(entries, limits, '0' * 8)):08x}"
 
 
-def manifest_text(entries: Sequence[dict], limits: Limits) -> bytes:
+def manifest_text(entries: Iterable[dict], limits: Limits) -> bytes:
     """The MANIFEST file: deterministic JSON, one procedure a line, checking
     itself with its own CRC-32 (entries in the order given: write_image sorts)."""
     return _manifest_bytes(entries, limits, manifest_crc(entries, limits))
@@ -250,15 +250,25 @@ def iter_image(programs: Sequence[ProgramInput], limits: Limits | None = None) -
         rows.append((name, kind, stored, code_size, len(data), crc))
     rows.sort(key=lambda r: r[0])
     _check_limits([(r[0], r[1], r[3]) for r in rows], limits)
-    entries = [{"name": n, "kind": _kind_label(k), "file": n + SUFFIX, "code_size": size,
-                "file_size": length, "crc32": f"{crc:08x}"}
-               for n, k, _d, size, length, crc in rows]
     files: dict = {r[0] + SUFFIX: r[2] for r in rows}
-    files[MANIFEST_NAME] = manifest_text(entries, limits)
+    files[MANIFEST_NAME] = manifest_text(_Entries(rows), limits)
     # Each binary was loaded (validated) once above, and the layout is what
     # read_image reads (the tests write and read back every kind of image), so
     # the image is not decoded a second time here.
     return iter_romfs(files, VOLUME)
+
+
+class _Entries:
+    """The manifest's entries of write_image's rows, made as they are read (the
+    manifest is made twice, for its CRC and then with it; no list is kept)."""
+
+    def __init__(self, rows: list):
+        self.rows = rows
+
+    def __iter__(self) -> Iterator[dict]:
+        for n, k, _d, size, length, crc in self.rows:
+            yield {"name": n, "kind": _kind_label(k), "file": n + SUFFIX, "code_size": size,
+                   "file_size": length, "crc32": f"{crc:08x}"}
 
 
 def _reread(name: str, read: Callable[[], bytes], crc: int) -> Callable[[], bytes]:

@@ -133,7 +133,7 @@ def iter_romfs(tree: Tree, volume: str = DEFAULT_VOLUME, *, sort: bool = True) -
     first = 16 + _padded_name_len(vol)
 
     # Pass 1: plan every entry (offsets), depth first, as a flat list.
-    plan: list[dict] = []
+    plan: list[_Rec] = []
 
     def order(subtree: Tree, where: str, root: bool) -> list[tuple[str, object]]:
         if not isinstance(subtree, Mapping):
@@ -171,27 +171,27 @@ def iter_romfs(tree: Tree, volume: str = DEFAULT_VOLUME, *, sort: bool = True) -
         for name, value in entries:
             raw = _encode_name(name, where or "/") if name not in (".", "..") else name.encode()
             hdr = pos
-            rec = {"name": raw, "off": hdr, "next": 0, "data": b""}
+            rec = _Rec(raw, hdr)
             indices.append(len(plan))
             plan.append(rec)
             pos = hdr + 16 + _padded_name_len(raw)
             if name == ".":
                 if dir_hdr is None:   # the root: a directory entry pointing at itself
-                    rec.update(type=DIRECTORY | EXECUTABLE, spec=root_self)
+                    rec.type, rec.spec = DIRECTORY | EXECUTABLE, root_self
                 else:
-                    rec.update(type=HARDLINK, spec=dir_hdr)
+                    rec.type, rec.spec = HARDLINK, dir_hdr
             elif name == "..":
-                rec.update(type=HARDLINK, spec=root_self if dir_hdr is None else parent)
+                rec.type, rec.spec = HARDLINK, root_self if dir_hdr is None else parent
             elif isinstance(value, (bytes, bytearray, LazyFile)):
                 data = value if isinstance(value, LazyFile) else bytes(value)
-                rec.update(type=REGULAR, spec=0, data=data)
+                rec.type, rec.spec, rec.data = REGULAR, 0, data
                 pos = _align(pos + _size(data))
             else:
-                rec.update(type=DIRECTORY | EXECUTABLE, spec=pos)
+                rec.type, rec.spec = DIRECTORY | EXECUTABLE, pos
                 # the parent of a subdirectory of the root is the root's "." entry
                 place(value, f"{where}/{name}", hdr, root_self if dir_hdr is None else dir_hdr)
         for a, b in zip(indices, indices[1:]):
-            plan[a]["next"] = plan[b]["off"]
+            plan[a].next = plan[b].off
 
     place(tree, "", None, None)
     size = _align(pos)
@@ -205,7 +205,17 @@ def _size(data: "bytes | LazyFile") -> int:
     return data.size if isinstance(data, LazyFile) else len(data)
 
 
-def _emit(plan: list[dict], vol: bytes, size: int) -> Iterator[bytes]:
+class _Rec:
+    """One planned file header: its name, offset, next header and contents."""
+
+    __slots__ = ("name", "off", "next", "type", "spec", "data")
+
+    def __init__(self, name: bytes, off: int):
+        self.name, self.off, self.next = name, off, 0
+        self.type, self.spec, self.data = 0, 0, b""
+
+
+def _emit(plan: list[_Rec], vol: bytes, size: int) -> Iterator[bytes]:
     """Pass 2: headers, names, data and checksums, in offset order. The first
     CHECKSUM_SPAN bytes are held back until the superblock's checksum is known."""
     head = bytearray(16 + _padded_name_len(vol))
@@ -229,18 +239,18 @@ def _emit(plan: list[dict], vol: bytes, size: int) -> Iterator[bytes]:
             yield out
 
     for rec in plan:
-        off, data = rec["off"], rec["data"]
+        off, data = rec.off, rec.data
         n = _size(data)
-        name_end = 16 + _padded_name_len(rec["name"])
+        name_end = 16 + _padded_name_len(rec.name)
         hdr = bytearray(name_end)
-        _HDR.pack_into(hdr, 0, rec["next"] | rec["type"], rec["spec"], n, 0)
-        hdr[16:16 + len(rec["name"])] = rec["name"]
+        _HDR.pack_into(hdr, 0, rec.next | rec.type, rec.spec, n, 0)
+        hdr[16:16 + len(rec.name)] = rec.name
         _fix_checksum(hdr, 0, name_end, 12)
         yield from put(bytes(off - at) + hdr)      # alignment padding, then the header
         if isinstance(data, LazyFile):
             data = data.read()
             if len(data) != n:
-                raise ImageError(f"{rec['name'].decode('utf-8', 'replace')}: {len(data)} bytes "
+                raise ImageError(f"{rec.name.decode('utf-8', 'replace')}: {len(data)} bytes "
                                  f"where {n} were planned (changed while writing)")
         yield from put(data)
         at = off + name_end + n
