@@ -392,3 +392,42 @@ def test_a_binary_changed_after_compiling_does_not_go_into_the_image(example, mo
     assert not r.image_written
     assert any("build/M03.bin changed during the build" in d.message for d in r.diagnostics)
     assert not example.image_path.exists()
+
+
+def test_a_source_changed_while_it_is_built_is_not_cached_under_its_old_key(example, monkeypatch):
+    """The compiler reads each source itself (Build All holds no project's
+    sources): when it reads other bytes than the cache key hashed, the result
+    is reported but not cached, so going back to the old text compiles again."""
+    from plcbuilder.project import build as build_module
+    m05 = example.hardware_dir / "M05.plc"
+    original = m05.read_text()
+    edited = original.replace("pwm01=0;", "pwm01=0; unused=3;")
+    real = build_module.read_bounded
+    reads = []
+
+    def edit_first(path, *args, **kw):
+        if str(path) == str(m05):
+            reads.append(path)
+            if len(reads) == 2:             # the compiler's read: after its key was made
+                m05.write_text(edited)
+        return real(path, *args, **kw)
+    monkeypatch.setattr(build_module, "read_bounded", edit_first)
+    r = build_project(example, jobs=1)
+    assert any(d.code == "unused-variable" or "unused" in d.message for d in r.get("M05").diagnostics)
+    monkeypatch.setattr(build_module, "read_bounded", real)
+    m05.write_text(original)
+    again = build_project(example, jobs=1)
+    assert not again.get("M05").cached and again.get("M05").warnings == 0
+    assert again.get("M03").cached
+
+
+def test_counts_and_packed_diagnostics_agree(example):
+    m05 = example.hardware_dir / "M05.plc"
+    m05.write_text(m05.read_text().replace("pwm01=0;", "pwm01=0; unused=3; x = 1 / 0;"))
+    for r in (build_project(example), build_project(example)):     # compiled, then cached
+        for pb in r.procedures:
+            ds = pb.diagnostics
+            assert pb.errors == sum(d.is_error for d in ds)
+            assert pb.warnings == sum(d.severity == 2 for d in ds)
+        assert r.error_count == sum(d.is_error for d in r.all_diagnostics)
+        assert r.warning_count == len(r.all_diagnostics) - r.error_count
