@@ -468,3 +468,43 @@ def test_an_empty_controller_gets_the_projects_image(make_window, example, qtbot
     # a later state does not upload again
     conn.sig_state.emit(ControllerStatus(image_crc32=None), 0)
     assert len(conn.named("upload")) == 1
+
+
+@pytest.mark.parametrize("theme", ["light", "dark"])
+def test_the_halted_line_and_the_stack_follow_the_theme(make_window, example, qtbot, theme):
+    """Issue 13 defect 4 (every widget follows the theme), for the debugger's
+    marks: the halted line's background is light in the light theme and dark
+    in the dark one (a light yellow band under light text was unreadable), and
+    the call stack's innermost frame keeps a readable colour."""
+    import dataclasses
+
+    from PySide6.QtWidgets import QApplication
+
+    from plcbuilder.ide.app import apply_theme
+    w, conn = make_window()
+    ed = open_m80(w, example)
+    conn.connect_now()
+    w.ensure_run_panels()
+    try:
+        other = "light" if theme == "dark" else "dark"
+        w.apply_preferences(dataclasses.replace(w.prefs, theme=other))
+        conn.sig_halted.emit(halted_state())
+        qtbot.wait(20)
+        # the theme changes while halted: the marks and the stack follow at once
+        w.apply_preferences(dataclasses.replace(w.prefs, theme=theme))
+        qtbot.wait(20)
+        assert ed.debug_marks.exec_lines() == [HOME_LINE] and not ed.caretLineVisible()
+        img = ed.viewport().grab().toImage()
+        pos = ed.position_of(HOME_LINE, 1)
+        y = ed.pointYFromPosition(pos) + ed.textHeight(HOME_LINE - 1) // 2
+        band = img.pixelColor(img.width() - 8, y).lightness()
+        text = ed.viewport().palette()
+        frame = w.debug.call_stack.frame_items()[0].foreground(0).color().lightness()
+        paper = w.debug.call_stack.tree.palette().color(text.ColorRole.Base).lightness()
+        if theme == "dark":
+            assert band < 100 and frame > 150, (band, frame)
+        else:
+            assert band > 180 and frame < 110, (band, frame)
+        assert abs(frame - paper) > 80
+    finally:
+        apply_theme(QApplication.instance(), "light")

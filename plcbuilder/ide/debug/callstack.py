@@ -11,14 +11,16 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Optional
 
-from PySide6.QtCore import Qt, Signal
-from PySide6.QtGui import QBrush, QColor, QFont
+from PySide6.QtCore import QEvent, Qt, Signal
+from PySide6.QtGui import QBrush, QColor, QFont, QPalette
 from PySide6.QtWidgets import QLabel, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget
 
 from plcbuilder.ide.icons import icon
 
 ROLE_FRAME = Qt.ItemDataRole.UserRole + 1
 ROLE_TEXTS = Qt.ItemDataRole.UserRole + 2
+#: the innermost frame's colour: {dark theme: (halted here, waiting at a loop's end)}
+_FRAME_COLOURS = {False: ("#8a6d00", "#1f5fa8"), True: ("#e3c04f", "#86b8f0")}
 REASONS = {"breakpoint": "halted at a breakpoint", "step": "halted after a step",
            "pause": "paused", "fault": "halted at a fault"}
 
@@ -82,12 +84,14 @@ class CallStackPanel(QWidget):
         lay.addWidget(self.header)
         lay.addWidget(self.tree, 1)
         self.state: Optional[dict] = None
+        self._innermost: list[tuple[QTreeWidgetItem, bool]] = []
 
     # ------------------------------------------------------------------ API
     def show_state(self, state: Optional[dict]) -> None:
         """The halted state (None: running; the panel empties)."""
         self.state = state
         self.tree.clear()
+        self._innermost: list[tuple[QTreeWidgetItem, bool]] = []   # (item, waiting)
         if state is None:
             self.header.setText("Running — the call stack shows while the controller is halted.")
             return
@@ -117,8 +121,9 @@ class CallStackPanel(QWidget):
                 item.setData(0, ROLE_FRAME, (name, f["index"], str(f.get("file") or ""),
                                              int(f.get("line") or 0)))
                 if f["index"] == 0:
-                    item.setForeground(0, QBrush(QColor("#8a6d00" if not waiting else "#1f5fa8")))
+                    self._innermost.append((item, waiting))
             top.setExpanded(True)
+        self._colour_frames()
         first = self.tree.topLevelItem(0)
         if first is not None and first.childCount():
             for i in range(self.tree.topLevelItemCount()):
@@ -140,6 +145,24 @@ class CallStackPanel(QWidget):
         return [tuple(it.data(0, ROLE_TEXTS)) for it in self.frame_items()]
 
     # -------------------------------------------------------------- private
+    def changeEvent(self, event) -> None:  # noqa: N802 - Qt's name
+        """A new theme: the frames' colours again."""
+        super().changeEvent(event)
+        if event.type() in (QEvent.Type.PaletteChange, QEvent.Type.ApplicationPaletteChange) \
+                and self.state is not None:
+            self._colour_frames()
+
+    def _colour_frames(self) -> None:
+        """Each procedure's innermost frame in the theme's colour for halted
+        here or waiting at its loop's end."""
+        colours = _FRAME_COLOURS[self._dark()]
+        for item, waiting in self._innermost:
+            item.setForeground(0, QBrush(QColor(colours[waiting])))
+
+    def _dark(self) -> bool:
+        """The tree's palette is a dark one (the dark theme)."""
+        return self.palette().color(QPalette.ColorRole.Base).lightness() < 128
+
     def _clicked(self, item: QTreeWidgetItem, _column: int = 0) -> None:
         data = item.data(0, ROLE_FRAME)
         if data is None and item.childCount():

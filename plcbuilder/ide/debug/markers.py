@@ -25,8 +25,10 @@ from plcbuilder.ide.editor.style import M
 BREAKPOINT_RED = "#e51400"
 EXEC_YELLOW = "#f2c200"
 WAIT_BLUE = "#2f7fd1"
-#: line backgrounds, opaque (the caret line hides while halted: it would cover them)
+#: line backgrounds, opaque (the caret line hides while halted: it would cover them),
+#: light and dark: each keeps the theme's text readable on it
 LINE_BACKS = {MK_EXEC_LINE: "#fff1a8", MK_WAIT_LINE: "#d6e8fb", MK_FRAME_LINE: "#d9f2d9"}
+LINE_BACKS_DARK = {MK_EXEC_LINE: "#4d4316", MK_WAIT_LINE: "#1c3550", MK_FRAME_LINE: "#1f3d24"}
 INLINE_STYLE = 60          # the style of inline values (free: lexers use 0..17, Scintilla 32..39)
 EOL_BOXED = 2              # EOLANNOTATION_BOXED
 SIZE = 14
@@ -114,17 +116,36 @@ class EditorMarks:
             ed.send(M.RGBAImageSetHeight, SIZE)
             ed.send(M.RGBAImageSetScale, 100)
             ed.send(M.MarkerDefineRGBAImage, mk, ctypes.addressof(buf))
-        for mk, colour in LINE_BACKS.items():
+        for mk in LINE_BACKS:
             ed.markerDefine(mk, int(Scintilla.MarkerSymbol.Background))
-            ed.markerSetBack(mk, _bgr(colour))
         self.apply_theme(dark=False)
         ed.eOLAnnotationSetVisible(EOL_BOXED)
 
     def apply_theme(self, dark: bool) -> None:
+        """The inline values' style and the halted lines' backgrounds for the
+        light or the dark theme."""
         ed = self.editor
+        self.line_backs = dict(LINE_BACKS_DARK if dark else LINE_BACKS)
+        for mk, colour in self.line_backs.items():
+            ed.markerSetBack(mk, _bgr(colour))
         ed.styleSetFore(INLINE_STYLE, _bgr("#9fb8d6" if dark else "#3a5f8a"))
         ed.styleSetBack(INLINE_STYLE, _bgr("#25303b" if dark else "#eef3fa"))
         ed.styleSetItalic(INLINE_STYLE, True)
+
+    def restyle(self) -> None:
+        """After the editor's preferences changed: the theme's colours, and the
+        caret line (the preferences show it) hidden again while a line is marked."""
+        ed = self.editor
+        self.apply_theme(self._dark())
+        if self.inline:
+            for line in self.inline:
+                ed.eOLAnnotationSetStyle(line - 1, INLINE_STYLE)
+        if self._caret_back is not None:
+            self._caret_back = ed.caretLineBack()
+            ed.setCaretLineVisible(False)
+
+    def _dark(self) -> bool:
+        return getattr(getattr(self.editor, "prefs", None), "theme", "light") == "dark"
 
     # ------------------------------------------------------------ breakpoints
     def show_breakpoints(self, bps: Iterable[Breakpoint]) -> None:
@@ -164,6 +185,7 @@ class EditorMarks:
         """Mark the lines halted procedures are at (arrow + background), the
         loop ends they wait at, and a picked caller's line."""
         ed = self.editor
+        self.apply_theme(self._dark())          # the theme may have changed since
         for mk in (MK_EXEC, MK_EXEC_LINE, MK_WAIT, MK_WAIT_LINE, MK_FRAME_LINE):
             ed.markerDeleteAll(mk)
         count = ed.lineCount()
@@ -202,7 +224,7 @@ class EditorMarks:
         if texts == self.inline:
             return
         # the preferences' restyle resets every style: set the inline one each time
-        self.apply_theme(getattr(getattr(ed, "prefs", None), "theme", "light") == "dark")
+        self.apply_theme(self._dark())
         ed.eOLAnnotationClearAll()          # (an empty text would still draw its box)
         count = ed.lineCount()
         for line, text in texts.items():

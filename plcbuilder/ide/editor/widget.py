@@ -326,6 +326,9 @@ class CodeEditor(SearchMixin, DiagnosticsMixin, KeysMixin, ScintillaEdit):
         self._line_digits = 0
         self._update_line_margin()
         self.highlighter.restyle()
+        marks = getattr(self, "debug_marks", None)      # the debugger's, while halted too
+        if marks is not None:
+            marks.restyle()
 
     def _update_line_margin(self) -> None:
         digits = max(3, len(str(self.lineCount())))
