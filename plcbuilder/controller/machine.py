@@ -129,6 +129,7 @@ class Machine(MachineForces):
         self._warned: set = set()
         self._recompute_inputs()
         self._sample: Optional[dict] = None
+        self._words: dict[str, tuple[int, tuple]] = {}   # "inputs"/"outputs": (bits, words)
         self.vio.reset()
         if self._preset_lost:
             self._notes.append(("warning", "IO.DAT: INP presets input(s) "
@@ -333,11 +334,10 @@ class Machine(MachineForces):
         The same dict is returned until something changes: do not modify it."""
         s = self._sample
         if s is None:
-            ins, outs = self.in_bits, self.out_bits
             m = self.motion
             s = self._sample = {
-                "inputs": tuple((ins >> k) & _M32 for k in _WORD_SHIFTS),
-                "outputs": tuple((outs >> k) & _M32 for k in _WORD_SHIFTS),
+                "inputs": self._words_of("inputs", self.in_bits),
+                "outputs": self._words_of("outputs", self.out_bits),
                 "pwm": tuple(self._pwm),
                 "dac": tuple(self._dac),
                 "adc": tuple(self._adc),
@@ -346,6 +346,13 @@ class Machine(MachineForces):
                 "vio": (self.vio.vin, self.vio.vout),
             }
         return s
+
+    def _words_of(self, kind: str, bits: int) -> tuple:
+        """The 8 words of 32 pins of ``bits`` (the same tuple while they do not change)."""
+        seen = self._words.get(kind)
+        if seen is None or seen[0] != bits:
+            seen = self._words[kind] = (bits, tuple((bits >> k) & _M32 for k in _WORD_SHIFTS))
+        return seen[1]
 
     def outputs_on(self) -> list[int]:
         """The output pins that are on, sorted."""

@@ -169,6 +169,8 @@ class Motion:
         self.pos = list(self.start_pos)
         self.ipos = [round(p) for p in self.pos]
         self.vel = [0.0] * N_AXES
+        self._vel_seen: Optional[list] = None     # the velocities velocity_report last saw
+        self._vel_report: tuple = ()
         self.move: Optional[Move] = None
         self.queue: deque = deque()             # (due_t, flags, mask, distance, recorded)
         self.recorded: dict[int, tuple[int, int]] = {}   # delayed-start targets
@@ -512,5 +514,9 @@ class Motion:
         return self.ipos[i] - self.offset[i]
 
     def velocity_report(self) -> tuple[int, ...]:
-        """Velocities in 0.01 mm/s."""
-        return tuple(round(v * 1000) for v in self.vel)
+        """Velocities in 0.01 mm/s (the same tuple while they do not change)."""
+        vel = self.vel
+        if vel != self._vel_seen:
+            self._vel_seen = list(vel)
+            self._vel_report = tuple(round(v * 1000) for v in vel)
+        return self._vel_report

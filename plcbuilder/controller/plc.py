@@ -622,7 +622,7 @@ class PLC:
         send = self._send
         add_sample = self.samples.append
         rec = self.record_samples
-        only = self.sample_changes_only
+        every = not self.sample_changes_only           # a sample every tick
         last = self._last_row
         last_f, last_p, last_code = self._row_state(last, name)
         while True:
@@ -639,16 +639,15 @@ class PLC:
                 code = slots[message_slot]
                 if code:
                     send(hw, code)
-                if rec:
+                if rec and (every or code or last_code or machine._sample is not last_f
+                            or slots[proc_slot] != last_p):
                     # machine._sample is the cached sample_fields() dict (None once
                     # something changed): no call on a tick where nothing did
                     p = slots[proc_slot]
-                    if not only or code or last_code or machine._sample is not last_f \
-                            or p != last_p:
-                        f = fields()
-                        last = (t, name, p, code, f)
-                        add_sample(last)
-                        last_f, last_p, last_code = f, p, code
+                    f = fields()
+                    last = (t, name, p, code, f)
+                    add_sample(last)
+                    last_f, last_p, last_code = f, p, code
                 t += 1
                 if notes_pending or not machine.quiet:
                     notes = advance()

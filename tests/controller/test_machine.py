@@ -309,6 +309,16 @@ def test_sample_fields_shape_and_caching():
     m.portset(2)
     s2 = m.sample_fields()
     assert s2 is not s and s2["outputs"][0] == 4 and s["outputs"][0] == 0
+    # what did not change is the same tuple (a sample is cheap to make again)
+    assert s2["inputs"] is s["inputs"] and s2["velocities"] is s["velocities"]
+    m.set_input(40, 1)
+    m.g0move(0, 1, 100)
+    for _ in range(30):
+        m.advance()
+    s3 = m.sample_fields()
+    assert s3["outputs"] is s2["outputs"] and s3["inputs"][1] == 1 << 8
+    assert s3["velocities"][0] != 0 and s3["velocities"] == tuple(
+        round(v * 1000) for v in m.motion.vel)
 
 
 def test_advance_counts_milliseconds_and_reset():
