@@ -83,7 +83,10 @@ def test_b_kept_across_a_restart_of_the_server(tmp_path):
         c = Client.connect(*srv.address, srv.token, timeout=10.0)
         try:
             c.upload(image, target={"name": "huazhong"})
-            assert _wait(lambda: c.variables_and_target()[1].get("registers", {}).get("B"))
+            # init() runs in the first tick after the load: wait for ticks to pass
+            # (B[0] may already be 1, kept from the run before, before init adds 1)
+            t0 = c.state().t_ms
+            assert _wait(lambda: c.state().t_ms >= t0 + 2)
             seen.append(c.variables_and_target()[1]["registers"]["B"])
         finally:
             c.close()
