@@ -129,12 +129,17 @@ class TraceTools(QtCore.QObject):
         self.capturer: Optional[api.Capturer] = None
         self.shown: Optional[api.Trace] = None       # a trace on show instead of live data
         self.captures = 0
+        #: the variables this trigger had the controller record (``watch``)
+        self.watching: list[str] = []
         self.bar = TriggerBar()
         self.bar.sig_arm.connect(self.arm)
         self.bar.sig_disarm.connect(self.disarm)
         self.bar.sig_now.connect(self.trigger_now)
         self.bar.sig_session.connect(self.show_session)
         self.bar.set_state("not armed")
+        refused = getattr(panels.connection, "sig_refused", None)
+        if refused is not None:
+            refused.connect(self._refused)
 
     @staticmethod
     def _new_history() -> api.History:
@@ -164,18 +169,47 @@ class TraceTools(QtCore.QObject):
             self.capturer = None
             self.bar.set_state(str(exc), error=True, armed=False)
             return False
-        if api.watched_variables(trig):
-            self.capturer = None
-            self.bar.set_state("a variable's trigger runs headless: plcbuilder run --trigger "
-                               "(the IDE records inputs, outputs and numbers)", error=True,
-                               armed=False)
-            return False
+        names = api.watched_variables(trig)
+        if names:
+            # the telemetry has no variables: the controller records this one each
+            # tick and sends its changes ("watch" events), which the session keeps
+            conn = self.panels.connection
+            if not hasattr(conn, "watch_variables") or not getattr(conn, "connected", False):
+                self.capturer = None
+                self._watch([])
+                self.bar.set_state(f"a trigger on {names[0]} needs the controller to record "
+                                   f"it: not connected to a controller that can", error=True,
+                                   armed=False)
+                return False
+            self._watch(names)
+            self.bar.set_state(f"armed: waiting for {spec} ({mode}; the controller records "
+                               f"{', '.join(names)} each tick)", armed=True)
+            return True
+        self._watch([])
         self.bar.set_state(f"armed: waiting for {spec} ({mode})", armed=True)
         return True
 
     def disarm(self) -> None:
         self.capturer = None
+        self._watch([])
         self.bar.set_state("not armed", armed=False)
+
+    def _watch(self, names: list[str]) -> None:
+        """Have the controller record ``names`` each tick (none: stop), when that changes."""
+        if names == self.watching:
+            return
+        self.watching = list(names)
+        conn = self.panels.connection
+        if hasattr(conn, "watch_variables") and getattr(conn, "connected", False):
+            conn.watch_variables(self.watching)
+
+    def _refused(self, verb: str, reason: str) -> None:
+        """The controller refused to record the trigger's variable: say why, disarmed."""
+        if verb != "watch" or not self.watching:
+            return
+        self.capturer = None
+        self.watching = []
+        self.bar.set_state(f"cannot trigger on it: {reason}", error=True, armed=False)
 
     def trigger_now(self) -> None:
         if self.capturer is None:
@@ -192,6 +226,7 @@ class TraceTools(QtCore.QObject):
         mode = self.capturer.mode if self.capturer is not None else "single"
         if self.capturer is not None and self.capturer.done:
             self.capturer = None
+            self._watch([])
         armed = self.capturer is not None
         self.bar.set_state(f"captured at t = {t / 1000:.3f} s"
                            + (f" (capture {self.captures}, re-armed)" if armed else ""),
