@@ -21,7 +21,8 @@ import pyqtgraph.exporters  # noqa: F401,E402 - pg.exporters
 from plcbuilder import api
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import PINS
-from plcbuilder.trace.samples import events_of, to_samples
+from plcbuilder.ide.panels.plots.overlay import comparison_of, step_samples
+from plcbuilder.trace.samples import events_of
 
 Qt = QtCore.Qt
 Signal = QtCore.Signal
@@ -236,13 +237,13 @@ class TraceTools(QtCore.QObject):
                            f"{cap.t_start}..{cap.t_end} ms")
 
     # ---------------------------------------------------------------- show
-    def show(self, trace: api.Trace, title: str) -> None:
+    def show(self, trace: api.Trace, title: str, marker_label: Optional[str] = None) -> None:
         """Show a trace in the run panels instead of the live data."""
-        samples = to_samples(trace)
+        samples = step_samples(trace)
         marker = (trace.meta.get("trigger") or {}).get("t_ms")
         self.shown = trace
         self.panels.show_recorded(title, samples, events_of(trace), marker,
-                                  text=f"showing {title}")
+                                  text=f"showing {title}", marker_label=marker_label)
 
     def show_session(self) -> api.Trace:
         """Show the whole session so far in the run panels (every change since
@@ -317,19 +318,28 @@ class TraceTools(QtCore.QObject):
         self.sig_note.emit(f"exported {path}")
 
     def compare_with(self, path) -> "api.trace_compare.Difference":
-        """Compare what is on show (or the session) with a trace file; the
-        panels show it with a line at the first difference."""
+        """Compare what is on show (or the session) with a trace file: the
+        panels show the first with the second drawn over it (dashed), and a
+        line at the first difference; raises api.TraceFileError."""
+        shown = self.shown is not None and self.panels.recorded is not None
         base = self.current()
+        base_name = self.panels.recorded if shown else "the session"
         other = api.load_trace(path)
         diff = api.compare_traces(base, other)
+        name = Path(path).name
+        meta = dict(base.meta)
+        meta.pop("trigger", None)
         if diff.t_ms is not None:
-            base.meta = dict(base.meta, trigger={"spec": f"first difference from "
-                                                          f"{Path(path).name}",
-                                                  "t_ms": diff.t_ms, "pre_ms": 0, "post_ms": 0,
-                                                  "mode": "compare"})
-            self.show(base, f"comparison with {Path(path).name}: first difference at "
-                            f"{diff.t_ms / 1000:.3f} s")
-        self.sig_note.emit(diff.text().replace("\n", "; "))
+            meta["trigger"] = {"spec": f"first difference from {name}", "t_ms": diff.t_ms,
+                               "pre_ms": 0, "post_ms": 0, "mode": "compare"}
+        shown_trace = api.Trace(base.t_start, base.t_end, base.signals, base.strings,
+                                base.events, meta)
+        where = (f"first difference at {diff.t_ms / 1000:.3f} s" if diff.t_ms is not None
+                 else "no difference")
+        self.show(shown_trace, base_name, marker_label="first difference")
+        self.panels.compare(comparison_of(other, name, base_name, diff.t_ms))
+        self.sig_note.emit(f"comparing {base_name} with {name}: {where}; "
+                           + diff.text().replace("\n", "; "))
         return diff
 
 
