@@ -113,12 +113,18 @@ def __getattr__(name: str):
     return value
 
 
+_LOADED = False
+
+
 def _load() -> None:
-    """Every lazy name into this module (its functions use them as globals)."""
-    if "run_suite" not in globals():
+    """Every lazy name into this module (its functions use them as globals).
+    Once all of them: one name loaded on its own (``api.run_suite``) is not all."""
+    global _LOADED
+    if not _LOADED:
         for name in _LAZY:
             if name not in globals():
                 __getattr__(name)
+        _LOADED = True
 
 
 __all__ = [

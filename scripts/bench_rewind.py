@@ -5,14 +5,17 @@ statement and a run back, each timed against the floor: the time to simulate
 those ten minutes at Max speed (samples off), which is what running the
 recording again costs at least.
 
-    PYTHONPATH=. .venv/bin/python scripts/bench_rewind.py [--minutes 10]
+    PYTHONPATH=. .venv/bin/python scripts/bench_rewind.py [--minutes 10] [--repeat 3]
 
-Goal: a step back answers in well under a second (issue 11: <= 0.5 s).
+Goal: a step back answers in well under a second (issue 11: <= 0.5 s). Run
+back is timed with and without checkpoints, interleaved with the floor
+measured again each time (medians of ``--repeat``).
 """
 
 from __future__ import annotations
 
 import argparse
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -52,9 +55,34 @@ def session(minutes: float) -> tuple[Controller, float]:
     return c, time.perf_counter() - t0
 
 
+def run_backs(back: Controller, pool: Checkpoints, minutes: float, repeat: int) -> None:
+    """Run back from ``back`` with and without checkpoints, interleaved with the
+    floor (the session simulated again), ``repeat`` times each: the medians."""
+    floors, plain, pooled = [], [], []
+    for _ in range(repeat):
+        floors.append(session(minutes)[1])
+        t0 = time.perf_counter()
+        a = run_back(back, Controller)
+        plain.append(time.perf_counter() - t0)
+        while pool.work(back, 1.0):            # the checkpoints the last one used up
+            pass
+        t0 = time.perf_counter()
+        b = run_back(back, Controller, pool)
+        pooled.append(time.perf_counter() - t0)
+        sa, sb = a.debugger.halted_state(), b.debugger.halted_state()
+        assert (a.t_ms, sa["line"], sa["procedure"]) == (b.t_ms, sb["line"], sb["procedure"])
+    floor = statistics.median(floors)
+    p, q = statistics.median(plain), statistics.median(pooled)
+    print(f"run back (from {back.t_ms} ms to the hit at {a.t_ms} ms, median of {repeat}, "
+          f"floor {floor:.3f} s):")
+    print(f"  without checkpoints (from t = 0): {p:.3f} s ({p / floor:.2f}x the floor)")
+    print(f"  from checkpoints: {q:.3f} s ({q / floor:.2f}x the floor; goal < 0.5 s)")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--minutes", type=float, default=10.0)
+    ap.add_argument("--repeat", type=int, default=3, help="run backs timed each way (median)")
     args = ap.parse_args(argv)
     c, floor = session(args.minutes)
     print(f"session: {c.t_ms} ms simulated, {len(c.recorder.actions)} actions recorded; "
@@ -94,11 +122,7 @@ def main(argv=None) -> int:
         took = time.perf_counter() - t0
         print(f"step back one statement, without checkpoints (two runs): {took:.3f} s "
               f"({took / floor:.2f}x the floor)")
-        t0 = time.perf_counter()
-        run_back(back, Controller)
-        took = time.perf_counter() - t0
-        print(f"run back (two runs from 0: run back uses no checkpoints): {took:.3f} s "
-              f"({took / floor:.2f}x the floor)")
+        run_backs(back, pool, args.minutes, args.repeat)
     return 0
 
 

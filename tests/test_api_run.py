@@ -178,3 +178,16 @@ def test_run_start_m03_at_0_leaves_the_spindle_on(project):
     starts = [(p["name"], p["started_at_ms"]) for p in rep["procedures"]]
     assert starts.index(("__HANDLER_INIT", 0)) < starts.index(("M03", 0))
     assert 0 in rep["outputs"] and rep["pwm"][0] == 12000
+
+
+def test_a_lazy_name_loaded_on_its_own_still_loads_the_rest():
+    """api loads its heavy stages on first use; one of them loaded by name
+    (api.run_suite) must not keep save_trace from finding the trace module."""
+    import subprocess
+    import sys
+    code = ("from plcbuilder import api; api.run_suite; "
+            "import tempfile, os; d = tempfile.mkdtemp(); "
+            "api.save_trace(api.Trace(0, 1, {}), os.path.join(d, 't.plctrace')); print('ok')")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=str(Path(__file__).resolve().parents[1]))
+    assert out.stdout.strip() == "ok", out.stderr[-1500:]

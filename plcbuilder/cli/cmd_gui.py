@@ -45,6 +45,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    metavar="MS",
                    help="with --screenshot: simulated milliseconds to run (with --run), or "
                         "milliseconds to wait (default 1000)")
+    p.add_argument("--trace", action="append", default=[], type=Path, metavar="FILE",
+                   help="with --screenshot: show this .plctrace in the run panels; a second "
+                        "--trace is compared with it (drawn dashed over it)")
     p.add_argument("--settings", type=Path, metavar="FILE",
                    help="keep the IDE's settings in this INI file instead of the user's")
     p.add_argument("--no-controller", action="store_true",
@@ -55,6 +58,14 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     if getattr(args, "run", None) and not getattr(args, "screenshot", None):
         print("plcbuilder gui: --run needs --screenshot", file=sys.stderr)
+        return 2
+    traces = list(getattr(args, "trace", None) or [])
+    if traces and not getattr(args, "screenshot", None):
+        print("plcbuilder gui: --trace needs --screenshot", file=sys.stderr)
+        return 2
+    if len(traces) > 2:
+        print("plcbuilder gui: --trace at most twice (a trace, and one to compare with it)",
+              file=sys.stderr)
         return 2
     if getattr(args, "after", 1000) < 0:
         print("plcbuilder gui: --after must not be negative", file=sys.stderr)
@@ -86,4 +97,5 @@ def run(args: argparse.Namespace) -> int:
                 screenshot=str(args.screenshot) if getattr(args, "screenshot", None) else None,
                 run=getattr(args, "run", None), after_ms=getattr(args, "after", 1000),
                 settings_path=str(settings) if settings else None,
-                start_controller=not getattr(args, "no_controller", False))
+                start_controller=not getattr(args, "no_controller", False),
+                traces=tuple(str(t) for t in traces))

@@ -30,6 +30,7 @@ from plcbuilder.controller.plc import BACKENDS, PLC, mcode_names
 from plcbuilder.controller.recorder import Recorder, image_id
 from plcbuilder.controller.scenario import Action
 from plcbuilder.controller.targets import TargetConfig, TargetConfigError, make_plc
+from plcbuilder.controller.watch import VariableWatch, check_name
 
 HANDLER_INIT = "__HANDLER_INIT"
 HANDLER_EXIT = "__HANDLER_EXIT"
@@ -88,6 +89,8 @@ class Controller:
         self.replay_image: Optional[list[Program]] = None
         #: every image loaded, by its identity (what stepping back loads again)
         self.images: dict[str, list[Program]] = {}
+        #: the variables recorded each tick (controller/watch.py, watch_variables)
+        self.watch = VariableWatch()
 
     # ------------------------------------------------------------ basics
     @property
@@ -355,7 +358,10 @@ class Controller:
             raise ControllerError(f"cannot step {ms} ms")
         if self.forces.pending:
             self.forces.retry_pending()
-        self._plc.run(ms)
+        if self.watch:
+            self._run_watched(ms)
+        else:
+            self._plc.run(ms)
         self.debugger.settle()
 
     def run_until_idle(self, ms: int) -> int:
@@ -366,8 +372,39 @@ class Controller:
             raise ControllerError(f"cannot step {ms} ms")
         if self.forces.pending:
             self.forces.retry_pending()
-        ran = self._plc.run(ms, until_idle=True)
+        ran = self._run_watched(ms, True) if self.watch else self._plc.run(ms, until_idle=True)
         self.debugger.settle()
+        return ran
+
+    def watch_variables(self, names: Iterable[str], check: bool = True) -> list[str]:
+        """Record these variables (``PROC.var``) at the end of every tick, as
+        ``Watched`` events (controller/watch.py); an empty list stops. With
+        ``check``, each must name a variable of a loaded procedure (else
+        ControllerError, and nothing changes). While watching, time runs one
+        tick at a time."""
+        names = [str(n) for n in names]
+        if check:
+            for name in names:
+                try:
+                    check_name(self._plc.programs, name)
+                except ValueError as exc:
+                    raise ControllerError(str(exc)) from None
+        self.watch.set(names)
+        return list(self.watch.names)
+
+    def _run_watched(self, ms: int, until_idle: bool = False) -> int:
+        """Run up to ``ms`` ticks one at a time, reading the watched variables
+        after each (and first a tick a halt held, if it ended since)."""
+        plc, dbg, watch = self._plc, self.debugger, self.watch
+        events = plc.events
+        events.extend(watch.read(plc))
+        ran = 0
+        while ran < ms:
+            n = plc.run(1, until_idle=until_idle)
+            ran += n
+            events.extend(watch.read(plc))
+            if not n or dbg.halt is not None or until_idle and plc.idle():
+                break
         return ran
 
     def idle(self) -> bool:

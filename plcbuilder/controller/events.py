@@ -107,7 +107,18 @@ class Forces:
     type: str = "forces"
 
 
-Event = Started | Ended | Message | Print | Fault | Note | Log | Halted | Resumed | Forces
+@dataclass(frozen=True)
+class Watched:
+    """A watched variable (``PROC.var``, controller/watch.py) is new or changed
+    at the end of tick ``t_ms``."""
+    t_ms: int
+    name: str
+    value: int
+    type: str = "watch"
+
+
+Event = (Started | Ended | Message | Print | Fault | Note | Log | Halted | Resumed | Forces
+         | Watched)
 
 
 @dataclass
@@ -137,7 +148,7 @@ def from_dict(d: dict):
     """The inverse of :func:`to_dict` for events (by their ``type``) and samples."""
     kinds = {"started": Started, "ended": Ended, "message": Message, "print": Print,
              "fault": Fault, "note": Note, "log": Log, "halted": Halted, "resumed": Resumed,
-             "forces": Forces}
+             "forces": Forces, "watch": Watched}
     t = d.get("type")
     if t == "fault" and "calls" in d:
         d = dict(d, calls=tuple(tuple(c) for c in d["calls"]))

@@ -3,6 +3,7 @@
     h = History(machine)            # the signals this machine has
     h.feed(rows, events)            # Controller.drain_sample_rows() / drain_events()
     h.watch(t, "M80.var03", 5)      # a watched variable's value at the end of tick t
+                                    # (a ``watch`` event fed does the same)
     trace = h.snapshot(t0, t1)      # a Trace: every signal over [t0, t1]
 
 A signal is a list of changes ``(t_ms, value)``: the value holds from its tick
@@ -263,8 +264,11 @@ class History:
             d = e if isinstance(e, dict) else to_dict(e)
             t = int(d.get("t_ms", 0))
             self._seen(t)
-            self.events.append(d)
             kind = d.get("type")
+            if kind == "watch":                 # a watched variable: a signal, not an event
+                self.watch(t, str(d.get("name")), int(d.get("value", 0)))
+                continue
+            self.events.append(d)
             if kind == "started":
                 self._add(f"run {d['name']}", BIT).append(t, 1)
             elif kind == "ended":

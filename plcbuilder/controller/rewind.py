@@ -7,7 +7,7 @@ fresh controller of the same machine:
 
     new = step_back(controller, factory, "tick")       # halted one tick earlier
     new = step_back(controller, factory, "statement")  # one statement earlier
-    new = run_back(controller, factory)                # the previous breakpoint hit
+    new = run_back(controller, factory, pool)          # the previous breakpoint hit
 
 Each returns a new controller, halted there, that replaces the old one; its
 recording holds the actions up to there (what came later is dropped: from
@@ -20,7 +20,9 @@ state cannot be copied, so a checkpoint is a whole controller that already ran
 the session to a tick k * 30 s, made in the simulation's idle time (while it is
 halted or paced to real time). A step back starts from the latest one before
 where it goes and uses it up; without one it runs from t = 0, as long as
-simulating the session at Max speed takes (``scripts/bench_rewind.py``).
+simulating the session at Max speed takes (``scripts/bench_rewind.py``). Run
+back looks for the previous hit from the checkpoints back (:func:`_previous_hit`)
+and then runs to it from the latest one left before it.
 """
 
 from __future__ import annotations
@@ -88,28 +90,34 @@ def _fresh(old, factory: Callable):
 
 def replay(old, factory: Callable, until: int, *, through: bool = False,
            on_halt: Optional[Callable] = None, counter: Optional[_Counter] = None,
-           count_from: int = 0, pool: Optional["Checkpoints"] = None):
+           count_from: int = 0, pool: Optional["Checkpoints"] = None,
+           start: Optional[tuple] = None):
     """A fresh controller that ran ``old``'s recording up to tick ``until``
     (between ticks, the actions at ``until`` not done) or, with ``through``,
     into tick ``until`` until ``on_halt(new)`` says a halt is the one wanted.
     Any other halt is continued. ``counter`` counts statements from tick
     ``count_from`` on (counting makes the procedure run watched code, slower).
     With ``pool``, it starts from the latest checkpoint that fits, when there is
-    one. Returns the controller (halted or between ticks)."""
+    one; ``start`` is a (controller, next action) to start from instead (see
+    :func:`_begin`). Returns the controller (halted or between ticks)."""
     actions = _actions(old, until, through)
     end = until + 1 if through else until
     count_from = min(max(0, count_from), end) if counter is not None else end + 1
-    spare = pool.take(old, min(until, count_from)) if pool is not None else None
-    if spare is not None:
-        new, i = spare
-    else:
-        new, i = _fresh(old, factory), 0
+    new, i = start if start is not None else _begin(old, factory, pool, min(until, count_from))
     for _ in _run(old, new, actions, i, end, on_halt, counter, count_from):
         pass
     new.replay_image = None
     new.drain_events()
     new.drain_sample_rows()
     return new
+
+
+def _begin(old, factory: Callable, pool: Optional["Checkpoints"], before: int) -> tuple:
+    """Where a replay starts: (controller, next action's index) of the latest
+    checkpoint at or before tick ``before`` (used up), or a fresh controller at
+    t = 0 and the first action."""
+    spare = pool.take(old, before) if pool is not None and before >= 0 else None
+    return spare if spare is not None else (_fresh(old, factory), 0)
 
 
 def _actions(old, until: int, through: bool = False) -> list:
@@ -287,33 +295,65 @@ def step_back(old, factory: Callable, kind: str = "tick",
     return _announce(new)
 
 
-def run_back(old, factory: Callable):
+def run_back(old, factory: Callable, pool: Optional[Checkpoints] = None):
     """The controller halted at the last breakpoint hit before now (the
-    breakpoints counted from the session's start)."""
+    breakpoints counted from the session's start). With ``pool``, the hit is
+    looked for from the latest checkpoint before now, then from the one
+    before that over the time up to the first, and so on; and the session is
+    run again to it from the latest checkpoint left before it (see
+    :func:`_previous_hit`). Without one, or before the first, from t = 0."""
     if not any(bp["enabled"] for bp in old.debugger.breakpoints()):
         raise RewindError("no breakpoint is set: nothing to run back to")
-    hits = [0]
-
-    def count(c) -> bool:
-        if c.debugger.halt.reason == "breakpoint":
-            hits[0] += 1
-        return False
-    h = old.debugger.halt
-    if h is not None and h.process is not None and h.pc is not None and old.plc.mid_tick:
-        now = _Counter(h.process.name, find=(old.t_ms, h.pc, tuple(h.rets)))
-        replay(old, factory, old.t_ms, through=True, counter=now, count_from=old.t_ms,
-               on_halt=lambda c: now.done or count(c))
-    else:
-        replay(old, factory, old.t_ms, on_halt=count)
-    if not hits[0]:
+    hit = _previous_hit(old, factory, pool)
+    if hit is None:
         raise RewindError("no breakpoint was hit before now: nothing to run back to")
+    t, rank = hit
     seen = [0]
 
-    def last(c) -> bool:
-        if c.debugger.halt.reason == "breakpoint":
+    def at_hit(c) -> bool:
+        if c.t_ms == t and c.debugger.halt.reason == "breakpoint":
             seen[0] += 1
-        return seen[0] == hits[0]
-    new = replay(old, factory, old.t_ms, through=True, on_halt=last)
-    if seen[0] != hits[0]:                                # pragma: no cover - determinism
+        return seen[0] == rank
+    new = replay(old, factory, t, through=True, on_halt=at_hit, pool=pool)
+    if seen[0] != rank:                                   # pragma: no cover - determinism
         raise RewindError("running the session again did not reach the breakpoint hit")
     return _announce(new)
+
+
+def _previous_hit(old, factory: Callable, pool: Optional[Checkpoints]) -> Optional[tuple]:
+    """(tick, n) of the last breakpoint hit before now: the n-th breakpoint halt
+    of that tick; None when there was none since t = 0.
+
+    The session runs again over spans that end where the last one began: from
+    the latest checkpoint to now, then from the one before to that checkpoint,
+    and so on (the last span from t = 0). A checkpoint ran the session from
+    t = 0 with these breakpoints, so its hit counts hold every hit before it:
+    the hits a span finds are the ones running from t = 0 would find there. A
+    hit is named by its tick and its rank in that tick, which do not depend on
+    where the run began."""
+    h = old.debugger.halt
+    mid = h is not None and h.process is not None and h.pc is not None and old.plc.mid_tick
+    upto = old.t_ms
+    first = True
+    while True:
+        new, i = _begin(old, factory, pool, upto if first and mid else upto - 1)
+        begin = new.t_ms
+        hits: list[tuple[int, int]] = []
+
+        def note(c) -> bool:
+            if c.debugger.halt.reason == "breakpoint":
+                t = c.t_ms
+                hits.append((t, hits[-1][1] + 1 if hits and hits[-1][0] == t else 1))
+            return False
+        if first and mid:
+            # this tick up to the statement halted at (the hits before it in the tick count)
+            now = _Counter(h.process.name, find=(upto, h.pc, tuple(h.rets)))
+            replay(old, factory, upto, through=True, counter=now, count_from=upto,
+                   on_halt=lambda c: now.done or note(c), start=(new, i))
+        else:
+            replay(old, factory, upto, on_halt=note, start=(new, i))
+        if hits:
+            return hits[-1]
+        if begin <= 0:
+            return None
+        upto, first = begin, False

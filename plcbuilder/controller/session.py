@@ -23,6 +23,7 @@ from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import Ended, Fault, Log, Message, Note, Print, Started
 from plcbuilder.controller.history import History
 from plcbuilder.controller.trigger import Capturer
+from plcbuilder.controller.watch import check_name
 from plcbuilder.controller.scenario import (Scenario, ScenarioError, drive, parse_adc,
                                             parse_force, parse_input, parse_start, parse_write)
 
@@ -142,13 +143,13 @@ def run_session(c: Controller, sc: Scenario, limit_ms: int, *, trace: Optional[P
     check_scenario(sc, c)
     collector = ReportCollector(c)
     writer = TraceWriter(trace, c.machine) if trace is not None else None
-    watched = [_watched(c, w) for w in watch]
+    for w in watch:
+        _watched(c, w)
     if history is not None:
         c.record_samples = True
         if writer is None:
             c.sample_changes_only = True
-        if watched:
-            chunk_ms = 1
+        c.watch_variables(watch, check=False)        # Watched events, read each tick
 
     def drain() -> None:
         events = c.drain_events()
@@ -160,12 +161,6 @@ def run_session(c: Controller, sc: Scenario, limit_ms: int, *, trace: Optional[P
             history.feed(rows, events)
             t = c.t_ms - 1
             if t >= 0:
-                if watched:
-                    variables = c.variables()
-                    for name, (proc, var) in zip(watch, watched):
-                        value = variables.get(proc, {}).get(var)
-                        if value is not None:
-                            history.watch(t, name, value)
                 history.advance_to(t)
             if capturer is not None:
                 capturer.update()
@@ -185,16 +180,10 @@ def run_session(c: Controller, sc: Scenario, limit_ms: int, *, trace: Optional[P
 
 def _watched(c: Controller, name: str) -> tuple[str, str]:
     """(procedure, variable) of a watched ``PROC.var``; UsageError naming what is wrong."""
-    proc, dot, var = name.partition(".")
-    if not dot or not proc or not var:
-        raise UsageError(f"--watch {name}: name a variable as PROC.var (e.g. M80.var03)")
-    program = c.programs.get(proc)
-    if program is None:
-        loaded = ", ".join(sorted(c.programs)) or "none"
-        raise UsageError(f"--watch {name}: no procedure named {proc} (loaded: {loaded})")
-    if var not in set(program.slot_names().values()):
-        raise UsageError(f"--watch {name}: {proc} has no variable named {var}")
-    return proc, var
+    try:
+        return check_name(c.programs, name)
+    except ValueError as exc:
+        raise UsageError(f"--watch {exc}") from None
 
 
 class ReportCollector:

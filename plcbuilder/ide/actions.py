@@ -79,6 +79,7 @@ class Act:
     EXPORT_TRACE = "export_trace"
     EXPORT_PLOT = "export_plot"
     COMPARE_TRACE = "compare_trace"
+    CLEAR_COMPARISON = "clear_comparison"
     SAVE_RECORDING = "save_recording"
     REPLAY_SESSION = "replay_session"
     # navigation, build insight, registers and help (made by plcbuilder.ide.workbench)
@@ -208,7 +209,11 @@ def build_actions(win) -> dict[str, QAction]:
     A(Act.EXPORT_PLOT, "Export Plot Image…", lambda: ta.export_plot(win), None, None,
       "Save the plots of the first visible run dock as PNG or SVG")
     A(Act.COMPARE_TRACE, "Compare with Trace…", lambda: ta.compare_trace(win), None, None,
-      "The first tick where the trace on show (or the session) differs from a trace file")
+      "Draw a trace file over the trace on show (or the session), with a line at the "
+      "first tick where they differ")
+    A(Act.CLEAR_COMPARISON, "Clear Comparison", lambda: ta.clear_comparison(win), None, None,
+      "Stop drawing the compared trace over the one on show")
+    actions[Act.CLEAR_COMPARISON].setEnabled(False)      # until a comparison is on show
     A(Act.SAVE_RECORDING, "Save Session &Recording…", lambda: ta.save_recording(win), None, None,
       "Save everything done to the controller since it started, as a scenario file that "
       "replays the session")
@@ -231,7 +236,7 @@ def build_menus(win) -> None:
     m.addSeparator()
     for name in (Act.SAVE, Act.SAVE_ALL, Act.REVERT, None, Act.CLOSE_EDITOR, Act.CLOSE_ALL,
                  None, Act.OPEN_TRACE, Act.SAVE_TRACE, Act.EXPORT_TRACE, Act.EXPORT_PLOT,
-                 Act.COMPARE_TRACE, None, Act.PREFERENCES, None, Act.QUIT):
+                 Act.COMPARE_TRACE, Act.CLEAR_COMPARISON, None, Act.PREFERENCES, None, Act.QUIT):
         m.addAction(a(name)) if name else m.addSeparator()
     m = mb.addMenu("&Edit")
     for name in (Act.UNDO, Act.REDO, None, Act.CUT, Act.COPY, Act.PASTE, Act.SELECT_ALL, None,

@@ -79,7 +79,7 @@ def apply_theme(app: QApplication, theme: str) -> None:
 
 def main(project: Optional[str] = None, *, screenshot: Optional[str] = None,
          run: Optional[str] = None, after_ms: int = 1000, settings_path: Optional[str] = None,
-         start_controller: bool = True) -> int:
+         start_controller: bool = True, traces: tuple = ()) -> int:
     """Run the IDE (``plcbuilder gui``); in screenshot mode save a PNG and exit."""
     app = create_application()
     from plcbuilder.ide.main_window import MainWindow
@@ -88,7 +88,8 @@ def main(project: Optional[str] = None, *, screenshot: Optional[str] = None,
     apply_theme(app, settings.preferences().theme)
     if screenshot:
         from plcbuilder.ide import screenshot as shot
-        return shot.run(app, settings, project, screenshot, run, after_ms, start_controller)
+        return shot.run(app, settings, project, screenshot, run, after_ms, start_controller,
+                        traces=tuple(traces))
     win = MainWindow(settings, start_controller=start_controller)
     win.show()
     if project:

@@ -125,6 +125,7 @@ class _Worker(threading.Thread):
         self.restarts = 0
         self.steps = StepSamples()
         self.breakpoints: dict[str, list] = {}  # file -> specs the controller has
+        self.watched: list[str] = []            # variables the controller records (watch)
         self.debugging = False                  # a debug verb was used: follow the halts
         self.notified = False                   # the client passes halted/resumed on
 
@@ -194,6 +195,8 @@ class _Worker(threading.Thread):
                 self.variables_pending = False
             elif verb == "set_breakpoints":
                 pass                        # the session sends them all when connected
+            elif verb == "watch":
+                self.watched = list(args[0]["variables"])    # asked again when connected
             elif verb == "registers":
                 self.registers_pending = False
             else:
@@ -236,6 +239,12 @@ class _Worker(threading.Thread):
                 client.speed(mode, factor)
             except RefusedError as exc:
                 self.post("error", f"speed: {exc.reason}")
+        if self.watched:                        # a trigger on a variable is armed
+            try:
+                client.watch(self.watched)
+            except RefusedError as exc:
+                self.post("error", f"watch: {exc.reason}")
+                self.post("refused", ("watch", exc.reason))
         self._hook_notifications(client)
         try:                                   # does this controller have the debugger?
             forces = client.request("forces").get("forces", [])
@@ -304,6 +313,9 @@ class _Worker(threading.Thread):
                 result = client.speed(args[0], args[1])
             elif verb == "reset":
                 result = client.reset()
+            elif verb == "watch":
+                result = client.request(verb, **args[0])
+                self.watched = list(result.get("variables", []))
             elif verb == "event":
                 result = client.event(args[0])
             elif verb == "variables":
@@ -420,6 +432,10 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
 
     sig_result = Signal(str, dict)
     """A request was done: its verb and the controller's result object."""
+
+    sig_refused = Signal(str, str)
+    """The controller refused a request: its verb and the reason (sig_error
+    says it too, for the log)."""
 
     sig_note = Signal(str)
     """Something worth a line in the log that is not an error (an image uploaded
@@ -557,6 +573,13 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
         ("recording", {text, t_ms, actions})."""
         self._send("recording", {})
 
+    def watch_variables(self, names) -> None:
+        """Have the controller record these variables (``PROC.var``) at the end
+        of every tick and send their changes as ``watch`` events (sig_events),
+        which a trigger on a variable needs; [] stops. Asked again after the
+        controller restarts; a refusal comes as sig_refused("watch", reason)."""
+        self._send("watch", {"variables": [str(n) for n in names]})
+
     def request_variables(self) -> None:
         """Ask for every procedure's variables; the answer comes as sig_variables.
         A request still waiting is not repeated."""
@@ -670,6 +693,7 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
             elif kind == "refused":
                 if payload[0] == "upload":
                     self.uploaded_crc = None
+                self.sig_refused.emit(*payload)
             elif kind == "breakpoints":
                 self.sig_breakpoints.emit(*payload)
             elif kind == "breakpoints_refused":

@@ -504,6 +504,8 @@ class MainWindow(QMainWindow):
             self.statusBar().showMessage(f"The run panels are not available: {exc}")
             return None
         self.run_panels.sig_open_location.connect(lambda f, ln: self.open_location(f, ln))
+        self.run_panels.sig_comparison.connect(
+            lambda name: self.action(Act.CLEAR_COMPARISON).setEnabled(name is not None))
         self.run_panels.set_forces(self.debug.forces)
         if self._project is not None:
             self.run_panels.set_target(self._project.target)

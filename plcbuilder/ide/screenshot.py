@@ -1,11 +1,13 @@
-"""Screenshot mode: ``plcbuilder gui PROJECT --screenshot FILE [--run NAME[:EPARAM]] [--after MS]``.
+"""Screenshot mode: ``plcbuilder gui PROJECT --screenshot FILE [--run NAME[:EPARAM]] [--after MS]
+[--trace FILE [--trace FILE]]``.
 
 Opens the project, builds it, and — with ``--run`` — uploads the image to the
 embedded controller, starts the procedure and lets exactly ``--after``
 milliseconds of simulated time pass (the controller is paused and stepped,
 so the picture is the same every time); then saves a PNG of the main window
 and exits. Without ``--run`` it waits ``--after`` ms of wall-clock time for the
-window to settle.
+window to settle. With ``--trace`` the run panels show that trace file, and a
+second one compared with it (File › Compare with Trace…).
 
 The window uses settings of its own (a temporary file), so a screenshot
 neither uses nor changes the user's layout.
@@ -69,7 +71,7 @@ def _say(text: str) -> None:
 
 
 def run(app, settings, project: Optional[str], out: str, run_spec: Optional[str],
-        after_ms: int, start_controller: bool = True) -> int:
+        after_ms: int, start_controller: bool = True, traces: tuple = ()) -> int:
     from plcbuilder.ide.main_window import MainWindow
     from plcbuilder.ide.settings import Settings
     try:
@@ -110,6 +112,8 @@ def run(app, settings, project: Optional[str], out: str, run_spec: Optional[str]
                           if d.is_error and d.span is not None), None)
             if first is not None and run_target is None:
                 win.open_location(first.span.file, first.span.line, first.span.col)
+        if traces and not _show_traces(win, traces):
+            return 1
         if run_target is not None:
             if not _run_procedure(app, win, run_target, after_ms):
                 return 1
@@ -128,6 +132,36 @@ def run(app, settings, project: Optional[str], out: str, run_spec: Optional[str]
         win._closing = True
         win.hide()
         win.deleteLater()
+
+
+def _show_traces(win, traces: tuple) -> bool:
+    """The first trace in the run panels; the second compared with it (drawn over it)."""
+    from plcbuilder.api import TraceFileError
+    panels = win.ensure_run_panels()
+    if panels is None:
+        _say("--trace needs the run panels (they are not available)")
+        return False
+    try:
+        panels.traces.open(traces[0])
+        for path in traces[1:]:
+            panels.traces.compare_with(path)
+    except TraceFileError as exc:
+        _say(str(exc))
+        return False
+    from PySide6.QtCore import Qt
+    for key in ("outputs", "proc", "analog"):
+        panels.dock(key).show()
+    outputs = panels.dock("outputs")
+    outputs.raise_()
+    # the plots are the picture: give their dock most of the window
+    for key in ("inputs", "watch"):
+        panels.dock(key).hide()
+    if len(traces) > 1:                 # the cursors read both traces
+        panels.dock("cursors").show()
+        panels.dock("cursors").raise_()
+        panels.cursor_table.toggle.setChecked(True)
+    win.resizeDocks([outputs], [int(win.width() * 0.62)], Qt.Orientation.Horizontal)
+    return True
 
 
 def _run_procedure(app, win, target: tuple[str, int], after_ms: int) -> bool:

@@ -131,8 +131,20 @@ def compare_trace(win, path: Optional[str] = None):
     except api.TraceFileError as exc:
         _failed(win, "Compare with Trace", exc)
         return None
-    QMessageBox.information(win, "Compare with Trace", diff.text())
+    QMessageBox.information(win, "Compare with Trace",
+                            f"{diff.text()}\n\n{Path(path).name} is drawn dashed over the "
+                            f"trace on show; File › Clear Comparison (or Back to Live) "
+                            f"removes it.")
     return diff
+
+
+def clear_comparison(win) -> bool:
+    """File › Clear Comparison: the compared trace is no longer drawn."""
+    panels = win.run_panels
+    if panels is None or panels.comparison is None:
+        return False
+    panels.clear_comparison()
+    return True
 
 
 # ------------------------------------------------------- record and replay

@@ -310,6 +310,12 @@ class Client:
         """(variables, the target's report: registers, calls, budget ({} on myCNC))."""
         answer = self.request("variables")
         return answer.get("variables", {}), answer.get("target", {})
+    def watch(self, variables) -> list[str]:
+        """Have the controller record these variables (``PROC.var``) every tick,
+        as ``watch`` events in the telemetry; [] stops. Returns what it watches."""
+        return list(self.request("watch", variables=[str(v) for v in variables])
+                    .get("variables", []))
+
     def registers(self, addresses) -> dict[int, int]:
         """The values of global registers now, ``{address: value}``."""
         r = self.request("registers", addresses=[int(a) for a in addresses])

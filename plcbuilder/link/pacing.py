@@ -311,8 +311,12 @@ class Simulation:
         return min(rooms) if rooms else None
 
     def replace_controller(self, controller: Controller) -> None:
-        """Swap the controller (reset); on the simulation thread."""
+        """Swap the controller (reset, a step back, another target); on the
+        simulation thread. The new one watches the variables the old one did."""
         self.publish()
+        watch = getattr(self.controller, "watch", None)
+        if watch and controller is not self.controller:
+            controller.watch_variables(watch.names, check=False)
         self.controller = controller
         self._update_recording()
         self._rebase()

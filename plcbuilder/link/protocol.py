@@ -21,6 +21,7 @@ Messages
         state {}                        variables {}
         registers {addresses: [int]}    (read global registers, at most MAX_REGISTERS)
         recording {}                    (the session as a scenario file: {text, t_ms, actions})
+        watch {variables: [PROC.var]}   (record them each tick: "watch" events; [] stops)
         subscribe {samples?, events?}   unsubscribe {}
         speed {mode, factor?}           step {ms}
         reset {}                        event {handler}
@@ -101,7 +102,7 @@ _MAX_ID_TEXT = 64
 #: only ever looks a type up in these sets.
 REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state", "variables",
                       "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping",
-                      "registers", "recording"}
+                      "registers", "recording", "watch"}
                      | {"set_breakpoints", "debug_continue", "debug_pause", "debug_step",
                         "debug_run_to", "debug_state", "debug_evaluate"}
                      | {"debug_step_back", "debug_run_back"})

@@ -29,6 +29,8 @@ __all__ = ["EVENT_HANDLERS", "Refused", "Service", "Session", "image_summary"]
 
 #: Handlers that a host may start with the ``event`` request.
 EVENT_HANDLERS = ("__HANDLER_GCODE_START", "__HANDLER_GCODE_STOP")
+#: Variables one ``watch`` request may name at most.
+MAX_WATCHED = 32
 
 
 class Refused(Exception):
@@ -306,6 +308,18 @@ class Service(DebugVerbs):
                 out["target"] = c.target_report()
             return out
         return self._on_sim(read)
+
+    def handle_watch(self, msg: dict, session: Session) -> dict:
+        """{variables: [PROC.var]}: the controller records them at the end of
+        every tick, as ``watch`` events in the telemetry (a trigger on a
+        variable needs them); [] stops. A name that is not a variable of a
+        loaded procedure is refused and nothing changes."""
+        names = msg.get("variables")
+        if not isinstance(names, list) or len(names) > MAX_WATCHED or \
+                not all(isinstance(n, str) and 0 < len(n) <= 160 for n in names):
+            raise BadRequest(f"watch: 'variables' must be a list of at most {MAX_WATCHED} "
+                             f"names (PROC.var)")
+        return {"variables": self._on_sim(lambda: self.sim.controller.watch_variables(names))}
 
     def handle_registers(self, msg: dict, session: Session) -> dict:
         addresses = protocol.field_int_list(msg, "addresses", protocol.MAX_REGISTERS)

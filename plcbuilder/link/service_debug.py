@@ -100,8 +100,10 @@ class DebugVerbs:
                                                                   self.checkpoints))
 
     def handle_debug_run_back(self, msg: dict, session) -> dict:
-        """{}: the session run again to the previous breakpoint hit."""
-        return self._rewind(rewind.run_back)
+        """{}: the session run again to the previous breakpoint hit (from the
+        checkpoints, when there are some before it)."""
+        return self._rewind(lambda old, factory: rewind.run_back(old, factory,
+                                                                 self.checkpoints))
 
     def start_checkpoints(self) -> None:
         """Make stepping back's checkpoints in the simulation's idle time."""

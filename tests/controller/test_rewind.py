@@ -217,3 +217,56 @@ def test_a_step_back_from_a_checkpoint_equals_one_from_the_start():
         pass
     back.debugger.set_breakpoints("S1.plc", [{"line": 1, "hit": {"mode": "eq", "n": 10 ** 6}}])
     assert pool.take(back, 232) is None
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_running_back_from_checkpoints_equals_running_back_from_the_start(backend):
+    """SPEC §7: '… run back (to the previous breakpoint hit) work by deterministic
+    re-execution from the recording, with checkpoints so that stepping back in a
+    ten-minute session answers in well under a second.' Run back starts from the
+    checkpoints; a breakpoint's hit count counts the hits before the checkpoint
+    too, and where it halts equals where running the session again from t = 0
+    halts: time, machine, lines, variables and every breakpoint's hits."""
+    def factory():
+        return Controller(backend=backend)
+    from_zero = []
+
+    def counted():                      # run back's own fresh controllers (t = 0)
+        from_zero.append(1)
+        return factory()
+    c = factory()
+    c.step(3)
+    c.load([compile_proc(COUNT, "M10")])
+    c.start("M10")
+    # both lines run once a tick; every 40th time each halts: two halts in one tick
+    c.debugger.set_breakpoints("M10.plc", [{"line": 7, "hit": {"mode": "every", "n": 40}},
+                                           {"line": 15, "hit": {"mode": "every", "n": 40}}])
+    hits = []
+    while c.t_ms < 430:
+        c.step(1)
+        if c.debugger.halted:
+            hits.append(_look(c) | {"line": c.debugger.halted_state()["line"]})
+            c.debugger.resume()
+            c.debugger.settle()
+            while c.debugger.halted:       # the other line, later in the same tick
+                hits.append(_look(c) | {"line": c.debugger.halted_state()["line"]})
+                c.debugger.resume()
+    assert [h["line"] for h in hits[:4]] == [7, 15, 7, 15] and hits[0]["t_ms"] == hits[1]["t_ms"]
+    c.step(2)
+    pool = Checkpoints(factory, every_ms=20, keep=32)
+    back = plain = c
+    for want in reversed(hits):
+        while pool.work(back, 1.0):
+            pass
+        before = len(from_zero)
+        back = run_back(back, counted, pool)
+        plain = run_back(plain, factory)
+        look = _look(back) | {"line": back.debugger.halted_state()["line"]}
+        assert look == want
+        assert look == _look(plain) | {"line": plain.debugger.halted_state()["line"]}
+        assert back.debugger.breakpoints() == plain.debugger.breakpoints()
+        assert back.recorder.actions == plain.recorder.actions
+        if want["t_ms"] >= 100:            # checkpoints before it: none from t = 0
+            assert len(from_zero) == before, f"run back to {want['t_ms']} ms ran from t = 0"
+    with pytest.raises(RewindError, match="no breakpoint was hit before now"):
+        run_back(back, counted, pool)

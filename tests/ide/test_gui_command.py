@@ -76,3 +76,37 @@ def test_screenshot_running_a_procedure_on_the_embedded_controller(tmp_path):
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "wrote" in proc.stdout
     assert QImage(str(out)).width() >= 1000
+
+
+def test_trace_needs_the_screenshot_and_at_most_two(tmp_path, capsys):
+    parse = build_parser().parse_args
+    assert cmd_gui.run(parse(["gui", str(tmp_path), "--trace", "a.plctrace"])) == 2
+    assert "--trace needs --screenshot" in capsys.readouterr().err
+    assert cmd_gui.run(parse(["gui", str(tmp_path), "--screenshot", "x.png", "--trace", "a",
+                              "--trace", "b", "--trace", "c"])) == 2
+    assert "at most twice" in capsys.readouterr().err
+
+
+def test_screenshot_of_two_traces_compared(tmp_path):
+    """Issue 11: the overlay of a comparison, as a picture (docs/images/trace-compare.png)."""
+    from plcbuilder import api
+    project = make_project(tmp_path / "proj")
+    for name, on in (("a", 1), ("b", 0)):
+        api.save_trace(api.Trace(0, 99, {"out 3": ("bit", [(0, 0), (40, on)])}),
+                       tmp_path / f"{name}.plctrace")
+    (tmp_path / "bad.plctrace").write_text("no trace")
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
+
+    def shot(*traces):
+        out = tmp_path / "cmp.png"
+        args = [sys.executable, "-m", "plcbuilder", "gui", str(project), "--screenshot", str(out),
+                "--after", "50", "--settings", str(tmp_path / "s.ini")]
+        for t in traces:
+            args += ["--trace", str(tmp_path / t)]
+        return subprocess.run(args, capture_output=True, text=True, cwd=ROOT, env=env,
+                              timeout=120), out
+    proc, out = shot("a.plctrace", "b.plctrace")
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert QImage(str(out)).width() >= 1000
+    proc, _out = shot("a.plctrace", "bad.plctrace")
+    assert proc.returncode == 1 and "not a trace file" in proc.stderr

@@ -221,3 +221,120 @@ def test_the_whole_session_shows_from_the_start(qtbot, panels, fake):
     assert t0 == pytest.approx(0.0, abs=1e-6) and t1 == pytest.approx(59.99, abs=0.02)
     panels.back_to_live()
     assert panels.recorded is None
+
+
+class WatchingConnection(FakeConnection):
+    """A connection whose controller records watched variables (the ``watch`` request)."""
+    sig_refused = QtCore.Signal(str, str)
+    sig_result = QtCore.Signal(str, dict)
+
+    def __init__(self):
+        super().__init__()
+        self.connected = True
+        self.watches: list[list[str]] = []
+
+    def watch_variables(self, names):
+        self.watches.append(list(names))
+
+
+def _timer(fake, t0: int, t1: int, start: int = 60, name: str = "M80.timer"):
+    """``name`` counts down from ``start`` one a tick over [t0, t1), as the controller
+    sends a watched variable (one event a change), with a sample each tick."""
+    fake.sig_samples.emit([sample(t) for t in range(t0, t1)])
+    fake.sig_events.emit([api.events.Watched(t, name, start - (t - t0)) for t in range(t0, t1)])
+
+
+def test_a_trigger_on_a_variable_has_the_controller_record_it(qtbot):
+    """SPEC §7: a trigger on 'a variable's bit' and 'a numeric signal crossing a
+    level' — in the IDE too: arming asks the controller to record the variable
+    each tick (``watch``), the capture comes from what it sends, and the watch
+    stops when the trigger is done."""
+    fake = WatchingConnection()
+    win = QtWidgets.QMainWindow()
+    qtbot.addWidget(win)
+    panels = RunPanels(win, fake, capacity=500)
+    try:
+        _toggle(fake, 0, 100)
+        bar = panels.traces.bar
+        bar.spec.setText("M80.timer bit 1 rise")
+        bar.pre.setValue(10)
+        bar.post.setValue(20)
+        qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+        assert bar.arm.isChecked() and "armed" in bar.state.text()
+        assert fake.watches == [["M80.timer"]]
+        _timer(fake, 100, 200)                # 60, 59, 58, …
+        values = {t: 60 - (t - 100) for t in range(100, 200)}
+        rise = next(t for t in range(101, 200)
+                    if (values[t] >> 1) & 1 and not (values[t - 1] >> 1) & 1)
+        assert panels.recorded is not None and panels.failing_ms == rise
+        cap = panels.traces.shown
+        assert cap.value_at("M80.timer", rise) == values[rise]
+        assert (cap.t_start, cap.t_end) == (rise - 10, rise + 20)
+        assert not bar.arm.isChecked() and fake.watches[-1] == []    # single: done, watch off
+        panels.back_to_live()
+
+        # a level crossed, in Normal mode: each crossing down through 15 captures
+        bar.spec.setText("M80.timer down 15")
+        bar.mode.setCurrentIndex(bar.mode.findData("normal"))
+        qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+        assert fake.watches[-1] == ["M80.timer"]
+        _timer(fake, 200, 300, start=40)      # 15 -> 14 at t = 226
+        assert panels.failing_ms == 226 and bar.arm.isChecked()
+        qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)       # disarm: watch off
+        assert fake.watches[-1] == [] and "not armed" in bar.state.text()
+
+        # the controller refuses a variable it does not have: the bar says why
+        bar.spec.setText("M80.nope bit 0 rise")
+        qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+        fake.sig_refused.emit("watch", "M80.nope: M80 has no variable named nope")
+        assert not bar.arm.isChecked() and "no variable named nope" in bar.state.text()
+        assert panels.traces.capturer is None
+    finally:
+        panels.shutdown()
+
+
+def test_a_variable_trigger_needs_a_controller_that_records_variables(qtbot, panels, fake):
+    bar = panels.traces.bar
+    bar.spec.setText("M80.timer up 3")
+    qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+    assert not bar.arm.isChecked() and "not connected" in bar.state.text()
+
+
+def test_a_variable_trigger_against_the_embedded_controller(qtbot, tmp_path):
+    """SPEC §7: 'rising, falling or either edge of … a variable's bit' — with the
+    IDE's embedded controller (a child process): the trigger bar arms on LUBE's
+    timer, the controller records it, and the capture shows when it completes."""
+    from plcbuilder.ide.main_window import MainWindow
+    from plcbuilder.ide.settings import Settings
+    from plcbuilder.project.new import create_project
+    create_project(tmp_path / "p")
+    win = MainWindow(Settings(str(tmp_path / "s.ini")), start_controller=True)
+    qtbot.addWidget(win)
+    win.show()
+    try:
+        win.open_project(str(tmp_path / "p"))
+        conn = win.connection
+        qtbot.waitUntil(lambda: conn.connected, timeout=30000)
+        panels = win.ensure_run_panels()
+        with qtbot.waitSignal(win.sig_build_finished, timeout=60000):
+            win.build_all()
+        with qtbot.waitSignal(conn.sig_result, timeout=30000,
+                              check_params_cb=lambda verb, _r: verb == "upload"):
+            win.run_actions.upload_image()
+        bar = panels.traces.bar
+        bar.spec.setText("LUBE.timer bit 2 rise")       # LUBE counts its timer down each 100 ms
+        bar.pre.setValue(300)
+        bar.post.setValue(200)
+        qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+        assert bar.arm.isChecked(), bar.state.text()
+        qtbot.waitUntil(lambda: panels.recorded is not None, timeout=30000)
+        cap = panels.traces.shown
+        t = cap.meta["trigger"]["t_ms"]
+        assert panels.failing_ms == t and cap.meta["trigger"]["spec"] == "LUBE.timer bit 2 rise"
+        assert (cap.value_at("LUBE.timer", t) >> 2) & 1 == 1
+        assert (cap.value_at("LUBE.timer", t - 1) >> 2) & 1 == 0
+        # post in full; pre as far back as the session goes
+        assert cap.t_end == t + 200 and cap.t_start == max(t - 300, panels.traces.session.t_start)
+        assert not bar.arm.isChecked() and panels.traces.watching == []
+    finally:
+        win.close()

@@ -138,3 +138,35 @@ def test_checkpoints_are_made_while_idle_and_used_by_a_step_back(served):
     assert t == 450 and answer["t_ms"] == 449
     assert _n(answer["halted"]) == 449              # M10 started at 0: n++ each tick
     assert srv.controller is spare                  # the checkpoint at 400 went on to 449
+
+
+def test_run_back_starts_from_the_checkpoints(served):
+    """SPEC §7: run back too uses the checkpoints: the hit before now is looked
+    for from the latest checkpoint back, and the session runs again to it from
+    a checkpoint before it, not from t = 0; the hit counts hold every hit since
+    t = 0 (every 150th time line 6 runs)."""
+    srv, c = served
+    pool = srv.service.checkpoints
+    pool.every_ms = 100
+    c.set_breakpoints("M10.plc", [{"line": 6, "hit": {"mode": "every", "n": 150}}])
+    c.start("M10")
+    hits = []
+    while len(hits) < 3:
+        c.step(200)
+        here = c.debug_state()
+        if here is not None and here.get("reason") == "breakpoint":
+            hits.append((here["t_ms"], _n(here)))
+            if len(hits) < 3:
+                c.debug_continue()
+    assert [t for t, _n in hits] == [149, 299, 449]
+    end = time.monotonic() + 20
+    while sorted(pool.ready) != [100, 200, 300, 400] and time.monotonic() < end:
+        time.sleep(0.05)
+    assert sorted(pool.ready) == [100, 200, 300, 400]
+    spares = {t: pool.ready[t][0] for t in pool.ready}
+    run = c.debug_run_back()
+    assert run["halted"]["reason"] == "breakpoint" and run["halted"]["line"] == 6
+    assert (run["t_ms"], _n(run["halted"])) == hits[1]
+    # the hit was found from 400, 300 and 200, and reached from 100
+    assert srv.controller is spares[100]
+    assert [bp["hits"] for bp in srv.controller.debugger.breakpoints()] == [300]

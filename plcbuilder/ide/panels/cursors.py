@@ -134,47 +134,68 @@ class CursorTable(QtWidgets.QWidget):
         cursors.sig_moved.connect(self.refresh)
         self.refresh()
 
-    def rows(self) -> list[tuple[str, str, str, str]]:
-        """(signal, value at A, value at B, difference) for every row shown."""
+    def rows(self) -> list[tuple[str, ...]]:
+        """(signal, value at A, value at B, difference) for every row shown;
+        while a second trace is compared (drawn dashed), two more: its values
+        at A and at B."""
         c = self.cursors
         if not c.enabled or c.a is None or c.b is None:
             return []
         m = self.panels.model
+        comp = getattr(self.panels, "comparison", None)
+        o = comp.model if comp is not None else None
         sa, sb = m.sample_at(c.a), m.sample_at(c.b)
-        out = [("t", _fmt_time(c.a), _fmt_time(c.b), f"{c.delta * 1000:.0f} ms")]
+        oa, ob = (o.sample_at(c.a), o.sample_at(c.b)) if o is not None else (None, None)
+        t = ("t", _fmt_time(c.a), _fmt_time(c.b), f"{c.delta * 1000:.0f} ms")
+        out = [t + ((_fmt_time(c.a), _fmt_time(c.b)) if o is not None else ())]
 
-        def row(name, va, vb, numeric=True):
+        def row(name, get, numeric=True, show=_text):
+            va, vb = get(sa), get(sb)
             diff = ""
-            if numeric and va is not None and vb is not None and va != vb:
-                d = vb - va
-                diff = f"{d:+g}"
-            out.append((name, "" if va is None else _text(va), "" if vb is None else _text(vb),
-                        diff))
+            if va is not None and vb is not None and va != vb:
+                diff = f"{vb - va:+g}" if numeric else "changed"
+            cells = (name, "" if va is None else show(va), "" if vb is None else show(vb), diff)
+            if o is not None:
+                wa, wb = get(oa), get(ob)
+                cells += ("" if wa is None else show(wa), "" if wb is None else show(wb))
+            out.append(cells)
 
-        def get(s, key, i=None):
-            if s is None:
-                return None
-            v = s[key]
-            return v if i is None else v[i]
+        def field(key, i=None):
+            def get(s):
+                if s is None:
+                    return None
+                return s[key] if i is None else s[key][i]
+            return get
 
-        pa, pb = get(sa, "proc"), get(sb, "proc")
-        out.append(("proc", _proc(pa), _proc(pb), "" if pa == pb or pa is None or pb is None
-                    else "changed"))
-        row("message", get(sa, "message"), get(sb, "message"), numeric=False)
+        row("proc", field("proc"), numeric=False, show=_proc)
+        row("message", field("message"), numeric=False)
         lanes = self.panels.lanes
         for kind, key in (("outputs", "outputs"), ("inputs", "inputs")):
-            pins = sorted(m.active_outputs if kind == "outputs" else m.active_inputs)
-            for pin in pins:
-                label = lanes.lane_label(kind, pin)
-
+            pins = set(m.active_outputs if kind == "outputs" else m.active_inputs)
+            if o is not None:
+                pins |= o.active_outputs if kind == "outputs" else o.active_inputs
+            for pin in sorted(pins):
                 def bit(s, pin=pin, key=key):
                     return None if s is None else (s[key][pin // 32] >> (pin % 32)) & 1
-                row(label, bit(sa), bit(sb))
-        for ch in m.active_analog():
-            row(ANALOG_NAMES[ch], get(sa, "analog", ch), get(sb, "analog", ch))
+                row(lanes.lane_label(kind, pin), bit)
+        channels = set(m.active_analog()) | (set(o.active_analog()) if o is not None else set())
+        for ch in sorted(channels):
+            row(ANALOG_NAMES[ch], field("analog", ch))
         for i in m.active_axes():
-            row(f"{AXES[i]} (mm)", get(sa, "positions", i), get(sb, "positions", i))
+            row(f"{AXES[i]} (mm)", field("positions", i))
         return out
+
+    def set_compared(self, name) -> None:
+        """Two more columns while a trace ``name`` is compared (None: not)."""
+        heads = ["Signal", "A", "B", "B − A"]
+        if name:
+            heads += [f"A ({name})", f"B ({name})"]
+        self.table.setColumnCount(len(heads))
+        self.table.setHorizontalHeaderLabels(heads)
+        head = self.table.horizontalHeader()
+        for c in range(1, len(heads)):
+            head.setSectionResizeMode(c, QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
+        self.refresh()
 
     def refresh(self) -> None:
         rows = self.rows()

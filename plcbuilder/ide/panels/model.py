@@ -183,6 +183,7 @@ class RunModel:
         self.scalars = RingBuffer(capacity, 2, np.float64)
         self.inputs = RingBuffer(capacity, WORDS, np.uint32)
         self.outputs = RingBuffer(capacity, WORDS, np.uint32)
+        self.vouts = RingBuffer(capacity, 1, np.uint32)
         self.analog = RingBuffer(capacity, 24, np.float64)
         self.axes = RingBuffer(capacity, 2 * len(AXES), np.float64)
         self.clear()

@@ -74,6 +74,9 @@ class RunPanels(QtCore.QObject):
     """The panels show a recorded test run (its name), or the live controller
     again (None)."""
 
+    sig_comparison = Signal(object)
+    """A second trace is drawn over the one on show (its name), or no more (None)."""
+
     DOCKS = RUN_DOCKS
 
     def __init__(self, main_window: Optional[QtWidgets.QWidget], connection,
@@ -105,6 +108,7 @@ class RunPanels(QtCore.QObject):
         self.traces.sig_note.connect(lambda text: self.log.add_note(text, "link"))
         self.cursors = Cursors(self)
         self.cursor_table = CursorTable(self, self.cursors)
+        self.sig_comparison.connect(self.cursor_table.set_compared)
         widgets = {"proc": self.proc, "outputs": self.lanes, "analog": self.analog,
                    "axes": self.axes, "inputs": self.inputs, "watch": self.watch,
                    "log": self.log, "cursors": self.cursor_table}
@@ -136,17 +140,27 @@ class RunPanels(QtCore.QObject):
         self._markers: list = []      # (panel, plot, InfiniteLine) at the failing tick
         self.banners: list[ElidedLabel] = []        # "showing test run …" beside
         self.banner_links: list[QtWidgets.QLabel] = []   # "Back to Live"
+        self.compare_links: list[QtWidgets.QLabel] = []  # "Clear Comparison"
+        #: a second trace drawn over the one on show (plots/overlay.py)
+        self.comparison = None
+        self._banner_text = ""
         for panel in self.time_panels:
             # a long test name must never widen the dock (and the window), nor
             # vanish in a narrow one: the link keeps its room, the text elides
             back = QtWidgets.QLabel("<a href='live'>Back to Live</a>")
             back.linkActivated.connect(lambda _link: self.back_to_live())
             back.hide()
+            clear_compare = QtWidgets.QLabel("<a href='clear'>Clear Comparison</a>")
+            clear_compare.setToolTip("Stop drawing the compared trace over this one")
+            clear_compare.linkActivated.connect(lambda _link: self.clear_comparison())
+            clear_compare.hide()
             label = ElidedLabel(min_chars=8)
             label.hide()
             panel.toolbar.extra.addWidget(back)
+            panel.toolbar.extra.addWidget(clear_compare)
             panel.toolbar.extra.addWidget(label, 1)
             self.banner_links.append(back)
+            self.compare_links.append(clear_compare)
             self.banners.append(label)
 
         self.log.sig_open_location.connect(self.sig_open_location)
@@ -245,12 +259,14 @@ class RunPanels(QtCore.QObject):
         self._cleared()
 
     def show_recorded(self, name: str, samples: list, events: list,
-                      failing_ms: Optional[int] = None, text: Optional[str] = None) -> None:
+                      failing_ms: Optional[int] = None, text: Optional[str] = None,
+                      marker_label: Optional[str] = None) -> None:
         """Show a recorded test run (or a trace: ``text`` says what it is)
         instead of the live telemetry (which is not shown until
         :meth:`back_to_live`): its samples and events, the Proc and Outputs
         docks raised, not following, the failing tick (or the trigger) in view
-        with a line at it."""
+        with a line at it (labelled ``marker_label``). A comparison on show ends."""
+        self.clear_comparison()
         self.recorded, self.failing_ms, self.held = name, failing_ms, 0
         self.model.resize(max(self.live_capacity, 2 * len(samples) + 16))
         self.model.add_samples(samples)
@@ -263,19 +279,18 @@ class RunPanels(QtCore.QObject):
             text = f"showing test run '{name}' (recorded){at}"
         self.log.add_note(text, "link")
         self.log.add_events(events)
-        for link, label in zip(self.banner_links, self.banners):
-            label.setText(f"<span style='color:{MARKER_COLOUR}'>"
-                          f"{html.escape(text, quote=False)}</span>")
-            label.setToolTip(f"{text}; the live telemetry is not shown until Back to Live "
-                             f"(or Clear)")
+        self._set_banner(text)
+        for link in self.banner_links:
             link.show()
-            label.show()
         self._remove_markers()
         if failing_ms is not None:
             pen = pg.mkPen(MARKER_COLOUR, width=1.5, style=Qt.PenStyle.DashLine)
+            opts = {"label": marker_label,
+                    "labelOpts": {"position": 0.5, "color": MARKER_COLOUR}} \
+                if marker_label else {}
             for panel in self.time_panels:
                 for plot in panel._time_plots:
-                    line = pg.InfiniteLine(angle=90, movable=False, pen=pen)
+                    line = pg.InfiniteLine(angle=90, movable=False, pen=pen, **opts)
                     line.setZValue(20)
                     plot.addItem(line, ignoreBounds=True)
                     self._markers.append((panel, plot, line))
@@ -299,6 +314,7 @@ class RunPanels(QtCore.QObject):
         live telemetry, following it."""
         if self.recorded is None:
             return
+        self.clear_comparison()
         self.recorded, self.failing_ms = None, None
         for label in self.banners + self.banner_links:
             label.hide()
@@ -308,6 +324,46 @@ class RunPanels(QtCore.QObject):
         self.timebase.set_follow(True)
         self.log.add_note("back to the live controller", "link")
         self.sig_recorded.emit(None)
+
+    def compare(self, comparison) -> None:
+        """Draw a second trace (plots/overlay.py ``Comparison``) over the one on
+        show, in every time panel, until :meth:`clear_comparison` (or Back to
+        Live, or another trace shown)."""
+        self.comparison = comparison
+        for panel in self.time_panels:
+            panel.set_comparison(comparison)
+        for link in self.compare_links:
+            link.show()
+        where = (f"first difference at {comparison.t_ms / 1000:.3f} s"
+                 if comparison.t_ms is not None else "no difference")
+        self._set_banner(f"comparing {comparison.base} (solid) with {comparison.name} "
+                         f"(dashed): {where}")
+        self.sig_comparison.emit(comparison.name)
+        self.wake()
+
+    def clear_comparison(self) -> None:
+        """Stop drawing the compared trace (the trace on show stays)."""
+        if self.comparison is None:
+            return
+        base = self.comparison.base
+        self.comparison = None
+        for panel in self.time_panels:
+            panel.set_comparison(None)
+        for link in self.compare_links:
+            link.hide()
+        if self.recorded is not None:
+            self._set_banner(f"showing {base}")
+        self.sig_comparison.emit(None)
+        self.wake()
+
+    def _set_banner(self, text: str) -> None:
+        self._banner_text = text
+        for label in self.banners:
+            label.setText(f"<span style='color:{MARKER_COLOUR}'>"
+                          f"{html.escape(text, quote=False)}</span>")
+            label.setToolTip(f"{text}; the live telemetry is not shown until Back to Live "
+                             f"(or Clear)")
+            label.show()
 
     def wake(self, *args) -> None:
         """Something may need a redraw: run the redraw timer (it stops itself)."""

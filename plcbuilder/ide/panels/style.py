@@ -159,12 +159,14 @@ class PlotColours:
     legend_back: tuple[int, int, int, int]
     legend_border: str
     label_fill: tuple[int, int, int, int]
+    #: the second trace of a comparison, drawn dashed over the first
+    overlay: str = "#c2185b"
 
 
 LIGHT_PLOTS = PlotColours(BACKGROUND, AXIS, TEXT, GRID, LANE_BANDS, (255, 255, 255, 215),
-                          "#c8c8c8", (255, 255, 255, 200))
+                          "#c8c8c8", (255, 255, 255, 200), "#c2185b")
 DARK_PLOTS = PlotColours("#1e1f22", "#9da0a6", "#dfe1e5", "#34363a", ("#26292e", "#212327"),
-                         (43, 45, 48, 215), "#4a4d52", (30, 31, 34, 200))
+                         (43, 45, 48, 215), "#4a4d52", (30, 31, 34, 200), "#f48fb1")
 
 
 def is_dark() -> bool:
@@ -177,6 +179,13 @@ def is_dark() -> bool:
 
 def plot_colours() -> PlotColours:
     return DARK_PLOTS if is_dark() else LIGHT_PLOTS
+
+
+def dashed_pen(c: str, width: float = 1.6) -> QtGui.QPen:
+    """The pen of a compared trace's curves: dashed, a little wider than the first's."""
+    p = pg.mkPen(c, width=width, style=Qt.PenStyle.DashLine)
+    p.setCosmetic(True)
+    return p
 
 
 def restyle(widget) -> None:

@@ -21,7 +21,8 @@ import pyqtgraph.exporters  # noqa: F401,E402 - pg.exporters
 from plcbuilder import api
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import PINS
-from plcbuilder.trace.samples import events_of, to_samples
+from plcbuilder.ide.panels.plots.overlay import comparison_of, step_samples
+from plcbuilder.trace.samples import events_of
 
 Qt = QtCore.Qt
 Signal = QtCore.Signal
@@ -129,12 +130,17 @@ class TraceTools(QtCore.QObject):
         self.capturer: Optional[api.Capturer] = None
         self.shown: Optional[api.Trace] = None       # a trace on show instead of live data
         self.captures = 0
+        #: the variables this trigger had the controller record (``watch``)
+        self.watching: list[str] = []
         self.bar = TriggerBar()
         self.bar.sig_arm.connect(self.arm)
         self.bar.sig_disarm.connect(self.disarm)
         self.bar.sig_now.connect(self.trigger_now)
         self.bar.sig_session.connect(self.show_session)
         self.bar.set_state("not armed")
+        refused = getattr(panels.connection, "sig_refused", None)
+        if refused is not None:
+            refused.connect(self._refused)
 
     @staticmethod
     def _new_history() -> api.History:
@@ -164,18 +170,47 @@ class TraceTools(QtCore.QObject):
             self.capturer = None
             self.bar.set_state(str(exc), error=True, armed=False)
             return False
-        if api.watched_variables(trig):
-            self.capturer = None
-            self.bar.set_state("a variable's trigger runs headless: plcbuilder run --trigger "
-                               "(the IDE records inputs, outputs and numbers)", error=True,
-                               armed=False)
-            return False
+        names = api.watched_variables(trig)
+        if names:
+            # the telemetry has no variables: the controller records this one each
+            # tick and sends its changes ("watch" events), which the session keeps
+            conn = self.panels.connection
+            if not hasattr(conn, "watch_variables") or not getattr(conn, "connected", False):
+                self.capturer = None
+                self._watch([])
+                self.bar.set_state(f"a trigger on {names[0]} needs the controller to record "
+                                   f"it: not connected to a controller that can", error=True,
+                                   armed=False)
+                return False
+            self._watch(names)
+            self.bar.set_state(f"armed: waiting for {spec} ({mode}; the controller records "
+                               f"{', '.join(names)} each tick)", armed=True)
+            return True
+        self._watch([])
         self.bar.set_state(f"armed: waiting for {spec} ({mode})", armed=True)
         return True
 
     def disarm(self) -> None:
         self.capturer = None
+        self._watch([])
         self.bar.set_state("not armed", armed=False)
+
+    def _watch(self, names: list[str]) -> None:
+        """Have the controller record ``names`` each tick (none: stop), when that changes."""
+        if names == self.watching:
+            return
+        self.watching = list(names)
+        conn = self.panels.connection
+        if hasattr(conn, "watch_variables") and getattr(conn, "connected", False):
+            conn.watch_variables(self.watching)
+
+    def _refused(self, verb: str, reason: str) -> None:
+        """The controller refused to record the trigger's variable: say why, disarmed."""
+        if verb != "watch" or not self.watching:
+            return
+        self.capturer = None
+        self.watching = []
+        self.bar.set_state(f"cannot trigger on it: {reason}", error=True, armed=False)
 
     def trigger_now(self) -> None:
         if self.capturer is None:
@@ -192,6 +227,7 @@ class TraceTools(QtCore.QObject):
         mode = self.capturer.mode if self.capturer is not None else "single"
         if self.capturer is not None and self.capturer.done:
             self.capturer = None
+            self._watch([])
         armed = self.capturer is not None
         self.bar.set_state(f"captured at t = {t / 1000:.3f} s"
                            + (f" (capture {self.captures}, re-armed)" if armed else ""),
@@ -201,13 +237,13 @@ class TraceTools(QtCore.QObject):
                            f"{cap.t_start}..{cap.t_end} ms")
 
     # ---------------------------------------------------------------- show
-    def show(self, trace: api.Trace, title: str) -> None:
+    def show(self, trace: api.Trace, title: str, marker_label: Optional[str] = None) -> None:
         """Show a trace in the run panels instead of the live data."""
-        samples = to_samples(trace)
+        samples = step_samples(trace)
         marker = (trace.meta.get("trigger") or {}).get("t_ms")
         self.shown = trace
         self.panels.show_recorded(title, samples, events_of(trace), marker,
-                                  text=f"showing {title}")
+                                  text=f"showing {title}", marker_label=marker_label)
 
     def show_session(self) -> api.Trace:
         """Show the whole session so far in the run panels (every change since
@@ -282,19 +318,28 @@ class TraceTools(QtCore.QObject):
         self.sig_note.emit(f"exported {path}")
 
     def compare_with(self, path) -> "api.trace_compare.Difference":
-        """Compare what is on show (or the session) with a trace file; the
-        panels show it with a line at the first difference."""
+        """Compare what is on show (or the session) with a trace file: the
+        panels show the first with the second drawn over it (dashed), and a
+        line at the first difference; raises api.TraceFileError."""
+        shown = self.shown is not None and self.panels.recorded is not None
         base = self.current()
+        base_name = self.panels.recorded if shown else "the session"
         other = api.load_trace(path)
         diff = api.compare_traces(base, other)
+        name = Path(path).name
+        meta = dict(base.meta)
+        meta.pop("trigger", None)
         if diff.t_ms is not None:
-            base.meta = dict(base.meta, trigger={"spec": f"first difference from "
-                                                          f"{Path(path).name}",
-                                                  "t_ms": diff.t_ms, "pre_ms": 0, "post_ms": 0,
-                                                  "mode": "compare"})
-            self.show(base, f"comparison with {Path(path).name}: first difference at "
-                            f"{diff.t_ms / 1000:.3f} s")
-        self.sig_note.emit(diff.text().replace("\n", "; "))
+            meta["trigger"] = {"spec": f"first difference from {name}", "t_ms": diff.t_ms,
+                               "pre_ms": 0, "post_ms": 0, "mode": "compare"}
+        shown_trace = api.Trace(base.t_start, base.t_end, base.signals, base.strings,
+                                base.events, meta)
+        where = (f"first difference at {diff.t_ms / 1000:.3f} s" if diff.t_ms is not None
+                 else "no difference")
+        self.show(shown_trace, base_name, marker_label="first difference")
+        self.panels.compare(comparison_of(other, name, base_name, diff.t_ms))
+        self.sig_note.emit(f"comparing {base_name} with {name}: {where}; "
+                           + diff.text().replace("\n", "; "))
         return diff
 
 

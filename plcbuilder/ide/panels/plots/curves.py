@@ -36,6 +36,10 @@ class AnalogPanel(TimePanel):
         self._fit[0].legend, self._fit[1].legend = self.out_legend, self.in_legend
         self._curves: dict[int, pg.PlotDataItem] = {}
         self._drawn: dict[int, tuple] = {}     # col -> what its curve's data were made from
+        #: a compared trace's curve per channel (dashed), and its rows in the legends
+        self.other_curves: dict[int, pg.PlotDataItem] = {}
+        self._other_keys: list[tuple[pg.LegendItem, pg.PlotDataItem]] = []
+        self.widget.theme_hooks = [self._restyle_other]
         self._empty_out = empty_text(self.out_plot, "No PWM or DAC output yet")
         self._empty_in = empty_text(self.in_plot, "All ADC channels read 0")
         lay = QtWidgets.QVBoxLayout(self)
@@ -47,21 +51,15 @@ class AnalogPanel(TimePanel):
     def channels(self) -> list[int]:
         return self.model.active_analog()
 
+    def _plot_of(self, col: int) -> pg.PlotItem:
+        return self.in_plot if col >= 16 else self.out_plot
+
     def draw(self, a: int, b: int, t0: float, t1: float) -> None:
         m = self.model
         for col in self.channels():
             if col not in self._curves:
-                plot = self.in_plot if col >= 16 else self.out_plot
-                label = ANALOG_NAMES[col]
-                if col < 4:
-                    label += f" (pwm0{col + 1})"
-                elif 8 <= col < 10:
-                    label += f" (dac0{col - 7})"
-                elif 16 <= col < 18:
-                    label += f" (adc0{col - 15})"
-                # PWM and DAC: 16 distinct colours; ADC (its own plot) starts over
-                c = style.colour(col if col < 16 else col - 16)
-                self._curves[col] = style.new_curve(plot, c, label)
+                self._curves[col] = style.new_curve(self._plot_of(col), _colour(col),
+                                                    _label(col))
         # the same samples, window and x origin as a curve was last given: its
         # data stand, and only the paint is left (setData costs a copy and a
         # downsampling pass a curve)
@@ -76,10 +74,13 @@ class AnalogPanel(TimePanel):
                 item.setData(t, self.hold(y))
                 self._drawn[col] = key
             (ins if col >= 16 else outs).append(y)
+        if self.comparison is not None:
+            self._draw_other(t0, t1, outs, ins)
         self._fit[0].fit(outs)
         self._fit[1].fit(ins)
-        has_out = any(c < 16 for c in self._curves)
-        has_in = any(c >= 16 for c in self._curves)
+        shown = (*self._curves, *self.other_curves)
+        has_out = any(c < 16 for c in shown)
+        has_in = any(c >= 16 for c in shown)
         self._empty_out.setVisible(not has_out)
         self._empty_in.setVisible(not has_in)
         if not has_out:
@@ -90,8 +91,47 @@ class AnalogPanel(TimePanel):
     def watched(self) -> list:
         return [self.model.analog]
 
+    # ------------------------------------------------------- a compared trace
+    def comparison_changed(self) -> None:
+        for col, item in self.other_curves.items():
+            self._plot_of(col).removeItem(item)
+        self.other_curves.clear()
+        for legend, sample in self._other_keys:
+            legend.removeItem(sample)
+        self._other_keys = []
+        comp = self.comparison
+        if comp is None:
+            return
+        colour = style.plot_colours().text
+        for legend in (self.out_legend, self.in_legend):
+            sample = pg.PlotDataItem(pen=style.dashed_pen(colour))
+            legend.addItem(sample, f"dashed: {comp.name}")
+            self._other_keys.append((legend, sample))
+
+    def _restyle_other(self) -> None:
+        """The theme changed: the legends' dashed row in the text colour (items kept)."""
+        pen = style.dashed_pen(style.plot_colours().text)
+        for _legend, sample in self._other_keys:
+            sample.setPen(pen)
+
+    def _draw_other(self, t0: float, t1: float, outs: list, ins: list) -> None:
+        """Each channel the compared trace uses, dashed in the channel's colour."""
+        o = self.comparison.model
+        a, b = o.window(t0, t1)
+        t = o.time.view()[a:b] - self.offset
+        for col in o.active_analog():
+            item = self.other_curves.get(col)
+            if item is None:
+                item = style.new_curve(self._plot_of(col), _colour(col))
+                item.setPen(style.dashed_pen(_colour(col)))
+                item.setZValue(5)
+                self.other_curves[col] = item
+            y = o.analog.view(col)[a:b]
+            item.setData(t, y)
+            (ins if col >= 16 else outs).append(y)
+
     def shift(self, dx: float) -> None:
-        for item in self._curves.values():
+        for item in (*self._curves.values(), *self.other_curves.values()):
             item.setPos(dx, 0)
 
     def model_cleared(self) -> None:
@@ -102,3 +142,19 @@ class AnalogPanel(TimePanel):
         self._drawn.clear()
         for f in self._fit:
             f.reset()
+
+
+def _label(col: int) -> str:
+    label = ANALOG_NAMES[col]
+    if col < 4:
+        label += f" (pwm0{col + 1})"
+    elif 8 <= col < 10:
+        label += f" (dac0{col - 7})"
+    elif 16 <= col < 18:
+        label += f" (adc0{col - 15})"
+    return label
+
+
+def _colour(col: int) -> str:
+    """PWM and DAC: 16 distinct colours; ADC (its own plot) starts over."""
+    return style.colour(col if col < 16 else col - 16)

@@ -11,6 +11,7 @@ import pyqtgraph as pg  # noqa: E402,I001
 
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import PINS, RunModel
+from plcbuilder.ide.panels.plots import overlay
 from plcbuilder.ide.panels.plots.timebase import TimeBase, TimePanel, center_item, empty_text
 
 Qt = QtCore.Qt
@@ -39,7 +40,8 @@ class LanesPanel(TimePanel):
         self.widget.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
         self.widget.customContextMenuRequested.connect(self._context_menu)
         self.widget.setToolTip("Right-click to add or remove lanes")
-        self.widget.theme_hooks = [lambda: self._relayout(self._lanes)]   # the lane bands
+        # the lane bands, and a compared trace's colour
+        self.widget.theme_hooks = [lambda: self._relayout(self._lanes), self._restyle_other]
         self._empty = empty_text(self.plot, "No output has changed yet.\n"
                                   "Right-click to add a lane.")
         self.names = {"inputs": {}, "outputs": {}, "vouts": {}}
@@ -62,6 +64,10 @@ class LanesPanel(TimePanel):
         self.forced: dict[tuple[str, int], int] = {}
         #: (menu, (kind, pin)) -> None: adds force/release items to a lane's menu
         self.force_menu = None
+        #: a compared trace's path a kind (plots/overlay.py), its dense runs, its key
+        self.other_items: dict[str, pg.PlotDataItem] = {}
+        self._other_blocks: dict[str, pg.BarGraphItem] = {}
+        self.other_key = None
 
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
@@ -129,12 +135,15 @@ class LanesPanel(TimePanel):
     def lanes(self) -> list[tuple[str, int]]:
         """The lanes shown, top to bottom."""
         m = self.model
+        o = self.comparison.model if self.comparison is not None else None
         outs = set(m.active_outputs) | {p for k, p in self.pinned if k == "outputs"}
+        outs |= o.active_outputs if o is not None else set()
         lanes = [("outputs", p) for p in sorted(outs)]
         vouts = set(m.active_vouts) | {p for k, p in self.pinned if k == "vouts"}
         lanes += [("vouts", p) for p in sorted(vouts)]
         if self.show_inputs.isChecked():
             ins = set(m.active_inputs) | {p for k, p in self.pinned if k == "inputs"}
+            ins |= o.active_inputs if o is not None else set()
             lanes += [("inputs", p) for p in sorted(ins)]
         else:
             lanes += [k for k in self.pinned if k[0] == "inputs"]
@@ -190,9 +199,96 @@ class LanesPanel(TimePanel):
                                               per_px)
             item.setData(x, y, connect=connect)
             self._set_blocks(kind, *blocks)
+        if self.comparison is not None:
+            self._draw_other(lanes, t0, t1, left, per_px)
         self._empty.setVisible(not lanes)
         if not lanes:
             center_item(self._empty, self.plot)
+
+    # ------------------------------------------------------- a compared trace
+    #: where the compared trace's levels sit in a lane (its 0 and 1 a little
+    #: inside the first trace's, so both lines show where they agree)
+    OTHER_LOW, OTHER_HIGH = 0.08, 0.92
+
+    def comparison_changed(self) -> None:
+        for kind in list(self.other_items):
+            self.plot.removeItem(self.other_items.pop(kind))
+        for kind in list(self._other_blocks):
+            self.plot.removeItem(self._other_blocks.pop(kind))
+        overlay.remove_key(self.other_key)
+        self.other_key = None
+        self._drawn.clear()                 # the lanes may change: draw them again
+        comp = self.comparison
+        if comp is None:
+            return
+        colour = overlay.overlay_colour()
+        for kind in ("outputs", "inputs"):
+            item = _merged_curve(self.plot, colour)
+            item.setPen(style.dashed_pen(colour))
+            item.setZValue(5)
+            self.other_items[kind] = item
+        self.other_key = overlay.key(self.plot, overlay.key_entries(comp, style.OUTPUT_COLOUR))
+
+    def _restyle_other(self) -> None:
+        """The theme changed: the compared trace in its colour (items kept)."""
+        if self.comparison is None:
+            return
+        colour = overlay.overlay_colour()
+        for item in self.other_items.values():
+            item.setPen(style.dashed_pen(colour))
+        c = pg.mkColor(colour)
+        c.setAlpha(110)
+        for block in self._other_blocks.values():
+            block.setOpts(brush=pg.mkBrush(c))
+        overlay.restyle_key(self.other_key,
+                            overlay.key_entries(self.comparison, style.OUTPUT_COLOUR))
+
+    def _draw_other(self, lanes, t0: float, t1: float, left: float, per_px: float) -> None:
+        """The compared trace's path over each lane (its own samples, the same
+        lanes and pixel thinning as the first trace's)."""
+        o = self.comparison.model
+        a, b = o.window(t0, t1)
+        t = o.time.view()[a:b] - self.offset
+        lo, span = self.OTHER_LOW, self.OTHER_HIGH - self.OTHER_LOW
+        for kind, item in self.other_items.items():
+            keys = [k for k in lanes if k[0] == kind]
+            if not keys or not len(t):
+                item.setData([], [])
+                self._set_other_blocks(kind, ())
+                continue
+            ys = [self._lane_y[k] for k in keys]
+            x, y, connect, blocks = lane_path(o.words(kind).views()[:, a:b],
+                                              [p for _, p in keys], ys, t, t[-1], left, per_px)
+            level = np.mod(y, self.LANE) > 0.5            # 1 where the path is high
+            item.setData(x, y - level + lo + span * level, connect=connect)
+            self._set_other_blocks(kind, blocks)
+
+    def _set_other_blocks(self, kind: str, blocks) -> None:
+        item = self._other_blocks.get(kind)
+        if not len(blocks) or not len(blocks[0]):
+            if item is not None:
+                item.hide()
+            return
+        x0, x1, y0 = blocks
+        h = self.OTHER_HIGH - self.OTHER_LOW
+        if item is None:
+            c = pg.mkColor(overlay.overlay_colour())
+            c.setAlpha(110)
+            item = pg.BarGraphItem(x0=x0, x1=x1, y0=y0 + self.OTHER_LOW, height=h,
+                                   pen=pg.mkPen(None), brush=pg.mkBrush(c))
+            item.setZValue(4)
+            self.plot.addItem(item)
+            self._other_blocks[kind] = item
+        else:
+            item.setOpts(x0=x0, x1=x1, y0=y0 + self.OTHER_LOW, height=h)
+        item.show()
+
+    def other_data(self, kind: str = "outputs") -> tuple[np.ndarray, np.ndarray]:
+        """The compared trace's path over every ``kind`` lane (as last drawn)."""
+        item = self.other_items.get(kind)
+        x, y = item.getOriginalDataset() if item is not None else (None, None)
+        return (np.asarray(x) if x is not None else np.empty(0),
+                np.asarray(y) if y is not None else np.empty(0))
 
     def _set_blocks(self, kind: str, x0, x1, y0) -> None:
         """Runs of pixel columns that each show both levels, filled (one item a kind)."""
@@ -222,7 +318,8 @@ class LanesPanel(TimePanel):
         return [self.model.inputs, self.model.outputs, self.model.vouts]
 
     def shift(self, dx: float) -> None:
-        for item in (*self._items.values(), *self._blocks.values()):
+        for item in (*self._items.values(), *self._blocks.values(), *self.other_items.values(),
+                     *self._other_blocks.values()):
             item.setPos(dx, 0)
 
     # --------------------------------------------------------- context menu

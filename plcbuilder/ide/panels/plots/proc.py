@@ -13,6 +13,7 @@ from plcbuilder.ide.elided_label import ElidedLabel
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.tables import RowsModel
+from plcbuilder.ide.panels.plots import overlay
 from plcbuilder.ide.panels.plots.timebase import TimeBase, TimePanel, center_item, empty_text
 
 Qt = QtCore.Qt
@@ -60,6 +61,10 @@ class ProcPanel(TimePanel):
         self._tick_labels: list[tuple[int, str]] = []
         self._shown_ticks: list[tuple[int, str]] | None = None
         self._empty = empty_text(self.plot, "No samples yet: start a procedure")
+        #: a compared trace's proc (dashed) and the key saying which is which
+        self.other_curve = None
+        self.other_key = None
+        self.widget.theme_hooks = [self._restyle_other]
 
         # what a message means comes right after its name: at the end of the
         # row it was beyond the dock's edge
@@ -97,8 +102,39 @@ class ProcPanel(TimePanel):
         return (self.model.message_version != self._drawn_messages
                 or super().data_changed())
 
+    def comparison_changed(self) -> None:
+        if self.other_curve is not None:
+            self.plot.removeItem(self.other_curve)
+            self.other_curve = None
+        overlay.remove_key(self.other_key)
+        self.other_key = None
+        self._ticks = ()                     # the states of both traces on the axis
+        comp = self.comparison
+        if comp is None:
+            return
+        colour = overlay.overlay_colour()
+        self.other_curve = style.new_curve(self.plot, colour, stepMode="right")
+        self.other_curve.setPen(style.dashed_pen(colour, 2.0))
+        self.other_curve.setZValue(5)
+        self.other_key = overlay.key(self.plot, overlay.key_entries(comp, style.PROC_COLOUR))
+
+    def _restyle_other(self) -> None:
+        """The theme changed: the compared trace in its colour (items kept)."""
+        if self.other_curve is None or self.comparison is None:
+            return
+        self.other_curve.setPen(style.dashed_pen(overlay.overlay_colour(), 2.0))
+        overlay.restyle_key(self.other_key,
+                            overlay.key_entries(self.comparison, style.PROC_COLOUR))
+
+    def _draw_other(self, t0: float, t1: float) -> None:
+        o = self.comparison.model
+        a, b = o.window(t0, t1)
+        self.other_curve.setData(o.time.view()[a:b] - self.offset, o.scalars.view(0)[a:b])
+
     def shift(self, dx: float) -> None:
         self.curve.setPos(dx, 0)
+        if self.other_curve is not None:
+            self.other_curve.setPos(dx, 0)
         self.markers.setPos(dx, 0)
         for lab, (x, y) in zip(self._labels, self._label_pos):
             lab.setPos(x + dx, y)
@@ -145,7 +181,10 @@ class ProcPanel(TimePanel):
             self.plot.getAxis("left").setTicks([kept, []])
 
     def _update_ticks(self) -> None:
-        values = tuple(sorted(self.model.proc_values))
+        values = set(self.model.proc_values)
+        if self.comparison is not None:
+            values |= self.comparison.model.proc_values
+        values = tuple(sorted(values))
         if values == self._ticks:
             return
         self._ticks = values
@@ -166,6 +205,8 @@ class ProcPanel(TimePanel):
         t = self.x(a, b)
         proc = m.scalars.view(0)[a:b]
         self.curve.setData(t, self.hold(proc))
+        if self.other_curve is not None:
+            self._draw_other(t0, t1)
         self._drawn_messages = m.message_version
         self._empty.setVisible(len(m) == 0)
         if len(m) == 0:

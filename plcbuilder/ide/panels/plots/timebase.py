@@ -203,6 +203,8 @@ class TimePanel(QtWidgets.QWidget):
         self._checked = 0           # model rows compared with _base so far
         self._last_move = 0.0
         self._pending_move = False  # a time-only move put off (SCROLL_FPS)
+        #: a second trace drawn over this one (plots/overlay.py), or None
+        self.comparison = None
         timebase.sig_changed.connect(self._mark_dirty)
 
     # ------------------------------------------------------------- plumbing
@@ -359,6 +361,16 @@ class TimePanel(QtWidgets.QWidget):
         self._last_move = time.monotonic()
         self.frames += 1
         return True
+
+    def set_comparison(self, comparison) -> None:
+        """Draw ``comparison`` (plots/overlay.py) over this panel's own curves
+        from the next redraw on; None removes it."""
+        self.comparison = comparison
+        self.comparison_changed()
+        self._mark_dirty()
+
+    def comparison_changed(self) -> None:
+        """Make or remove the items that draw ``self.comparison``."""
 
     def shift(self, dx: float) -> None:
         """Move the drawn curves ``dx`` along x (time-only moves)."""
