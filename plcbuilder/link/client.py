@@ -400,16 +400,7 @@ class Client:
 
     def next_notification(self, timeout: Optional[float] = None) -> Optional[dict]:
         """The next ``halted``/``resumed`` notification (without a callback), or None."""
-        deadline = None if timeout is None else time.monotonic() + timeout
-        with self._batch_ready:
-            while not self._notes:
-                if self._closed:
-                    return None
-                left = None if deadline is None else deadline - time.monotonic()
-                if left is not None and left <= 0:
-                    return None
-                self._batch_ready.wait(left if left is not None else 0.5)
-            return self._notes.popleft()
+        return self._next(self._notes, timeout)
 
     # write and force (SPEC §6): targets as PROC.var, in N, out N, adc N, pwm N, dac N, gvar N
     def write(self, target: str, value: int) -> dict:
@@ -458,16 +449,21 @@ class Client:
     def next_telemetry(self, timeout: Optional[float] = None) -> Optional[Telemetry]:
         """The next queued batch, waiting up to ``timeout`` (None: until one comes
         or the connection closes). None on timeout or when closed."""
+        return self._next(self._batches, timeout)
+
+    def _next(self, queue, timeout: Optional[float]):
+        """The oldest item of one of the reader's queues (notifications or
+        batches), waiting up to ``timeout``; None on timeout or when closed."""
         deadline = None if timeout is None else time.monotonic() + timeout
         with self._batch_ready:
-            while not self._batches:
+            while not queue:
                 if self._closed:
                     return None
                 left = None if deadline is None else deadline - time.monotonic()
                 if left is not None and left <= 0:
                     return None
                 self._batch_ready.wait(left if left is not None else 0.5)
-            return self._batches.popleft()
+            return queue.popleft()
 
     def telemetry(self, timeout: Optional[float] = None) -> Iterator[Telemetry]:
         """Iterate over telemetry batches until the connection closes (or no batch

@@ -42,6 +42,23 @@ __all__ = ["ConfigError", "ControllerServer", "Limits", "Server", "make_controll
 
 # ===================================================================== the network
 
+
+def listening_socket(host: str, port: int, backlog: int) -> socket.socket:
+    """A non-blocking TCP socket listening on host:port (port 0: a free one)."""
+    family, _t, _p, _c, addr = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0]
+    lsock = socket.socket(family, socket.SOCK_STREAM)
+    try:
+        if os.name != "nt":       # (on Windows it would let two servers share the port)
+            lsock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        lsock.bind(addr)
+        lsock.listen(backlog)
+        lsock.setblocking(False)
+    except OSError:
+        lsock.close()
+        raise
+    return lsock
+
+
 class _Conn:
     __slots__ = ("sock", "peer", "decoder", "out", "authed", "opened", "last_rx",
                  "frame_started", "close_at", "session", "closed", "mask", "inflight")
@@ -129,19 +146,7 @@ class Server:
         self.max_clients = max_clients
         self.max_unauthed = max(1, max_unauthed)
         self._sel = selectors.DefaultSelector()
-        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
-        family, _t, _p, _c, addr = infos[0]
-        lsock = socket.socket(family, socket.SOCK_STREAM)
-        try:
-            if os.name != "nt":
-                lsock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-            lsock.bind(addr)
-            lsock.listen(64)
-            lsock.setblocking(False)
-        except OSError:
-            lsock.close()
-            raise
-        self._lsock = lsock
+        lsock = self._lsock = listening_socket(host, port, 64)
         self.address: tuple[str, int] = lsock.getsockname()[:2]
         self._wake_r, self._wake_w = socket.socketpair()
         self._wake_r.setblocking(False)

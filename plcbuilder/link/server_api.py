@@ -24,8 +24,7 @@ from __future__ import annotations
 
 import selectors
 import socket
-import time
-from typing import Callable, Optional
+from typing import Callable
 
 from plcbuilder.controller import abi
 from plcbuilder.controller.controller import Controller, ControllerError
@@ -284,18 +283,8 @@ class ServerApi:
 
     def __init__(self, sim, host: str = "127.0.0.1", port: int = DEFAULT_PORT):
         self.sim = sim
-        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
-        family, _t, _p, _c, addr = infos[0]
-        lsock = socket.socket(family, socket.SOCK_STREAM)
-        try:
-            lsock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-            lsock.bind(addr)
-            lsock.listen(16)
-            lsock.setblocking(False)
-        except OSError:
-            lsock.close()
-            raise
-        self._lsock = lsock
+        from plcbuilder.link.server import listening_socket
+        lsock = self._lsock = listening_socket(host, port, 16)
         self.address: tuple[str, int] = lsock.getsockname()[:2]
         self._clients: dict[int, _Client] = {}
         self._ready: list[_Client] = []          # whole lines waiting for the next pass
