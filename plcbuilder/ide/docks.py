@@ -51,6 +51,25 @@ RUN_DOCKS = (("proc", "Proc / messages", "runProcDock"),
              ("cursors", "Cursors", "runCursorsDock"))
 
 
+def on_screen(widget) -> bool:
+    """Whether ``widget`` can be seen: visible, and not in a dock whose tab is
+    put aside. Qt keeps the docks of a tab group that are not current
+    "visible" and moves them out of the window instead (right or bottom edge
+    below 0, the rule by which QDockWidget itself says ``visibilityChanged``):
+    ``isVisible()`` alone would make them redraw and poll unseen."""
+    if not widget.isVisible():
+        return False
+    w = widget
+    while w is not None:
+        if isinstance(w, QDockWidget):
+            if w.isFloating():
+                return True
+            g = w.geometry()
+            return g.right() >= 0 and g.bottom() >= 0
+        w = w.parentWidget()
+    return True
+
+
 def empty_run_docks(win) -> dict:
     """The run docks, empty, by key (the run panels fill them later)."""
     out = {}

@@ -13,7 +13,8 @@ from plcbuilder.ide.elided_label import ElidedLabel
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.tables import RowsModel
-from plcbuilder.ide.panels.plots.timebase import TimeBase, TimePanel, center_item, empty_text
+from plcbuilder.ide.panels.plots.timebase import (TimeBase, TimePanel, center_item, empty_text,
+                                                  shift_item)
 
 Qt = QtCore.Qt
 
@@ -98,8 +99,8 @@ class ProcPanel(TimePanel):
                 or super().data_changed())
 
     def shift(self, dx: float) -> None:
-        self.curve.setPos(dx, 0)
-        self.markers.setPos(dx, 0)
+        shift_item(self.curve, dx)
+        shift_item(self.markers, dx)
         for lab, (x, y) in zip(self._labels, self._label_pos):
             lab.setPos(x + dx, y)
 
