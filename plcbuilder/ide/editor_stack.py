@@ -441,7 +441,10 @@ class EditorStack(QWidget):
         if i < 0:
             return
         name = Path(ed.path).name + (" (built-in)" if ed.builtin else "")
-        self.tabs.setTabText(i, name + (" ●" if self.is_modified(ed) else ""))
+        modified = self.is_modified(ed)
+        self.tabs.setTabText(i, name + (" ●" if modified else ""))
+        if modified:
+            self.recovery.poke()            # something to autosave (the timer runs again)
         if ed is self.current_editor():
             self.sig_title_changed.emit()
 
