@@ -22,15 +22,19 @@ def build_docks(win) -> None:
     win.tests_dock = make_dock(win, "Tests", "testsDock", win.tests_panel,
                                Qt.DockWidgetArea.BottomDockWidgetArea)
     win.tabifyDockWidget(win.build_dock, win.tests_dock)
+    # the tests are read when their tab first shows (or they are asked for)
+    win.tests_dock.visibilityChanged.connect(lambda on: on and win.tests_panel.ensure_loaded())
     win.problems_dock.raise_()
     win.resizeDocks([win.project_dock], [250], Qt.Orientation.Horizontal)
     win.resizeDocks([win.problems_dock], [200], Qt.Orientation.Vertical)
 
 
 def make_dock(win, title, name, widget, area) -> QDockWidget:
+    """A dock of the window (``widget`` None: its panel comes later)."""
     dock = QDockWidget(title, win)
     dock.setObjectName(name)
-    dock.setWidget(widget)
+    if widget is not None:
+        dock.setWidget(widget)
     dock.setFeatures(QDockWidget.DockWidgetFeature.DockWidgetClosable |
                      QDockWidget.DockWidgetFeature.DockWidgetMovable |
                      QDockWidget.DockWidgetFeature.DockWidgetFloatable)
@@ -59,15 +63,21 @@ def on_screen(widget) -> bool:
     ``isVisible()`` alone would make them redraw and poll unseen."""
     if not widget.isVisible():
         return False
+    dock = dock_of(widget)
+    if dock is None or dock.isFloating():
+        return True
+    g = dock.geometry()
+    return g.right() >= 0 and g.bottom() >= 0
+
+
+def dock_of(widget):
+    """The dock ``widget`` is in (None: in none)."""
     w = widget
     while w is not None:
         if isinstance(w, QDockWidget):
-            if w.isFloating():
-                return True
-            g = w.geometry()
-            return g.right() >= 0 and g.bottom() >= 0
+            return w
         w = w.parentWidget()
-    return True
+    return None
 
 
 def empty_run_docks(win) -> dict:

@@ -25,7 +25,7 @@ tells the parts when it changes; the actions are named by :class:`Act`.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtGui import QAction
@@ -38,7 +38,7 @@ from plcbuilder.ide.debug import actions as debug_actions
 from plcbuilder.ide.build_panel import BuildPanel
 from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
 from plcbuilder.ide.dialogs.not_a_project import project_or_offer
-from plcbuilder.ide.editor import CodeEditor, file_key
+from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.editor_stack import EditorStack
 from plcbuilder.ide.icons import icon
 from plcbuilder.ide.lint import Lint
@@ -52,6 +52,9 @@ from plcbuilder.ide.welcome import APP_NAME
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX
 from plcbuilder.link.client import ControllerStatus
 from plcbuilder.project.model import Project, ProjectError
+
+if TYPE_CHECKING:
+    from plcbuilder.ide.editor import CodeEditor
 
 __all__ = ["APP_NAME", "Act", "MainWindow", "SPEEDS"]
 
@@ -90,6 +93,7 @@ class MainWindow(QMainWindow):
         self._pin_defines: Optional[dict] = None
         self._painted = False
         self._controller_due = False         # started after the first paint
+        self._lint_due = False               # the project's check, after the first paint
         self.right_docks: list = []          # the docks the default sizes apply to
         self._shown_once = False
         self.layout_restored = False
@@ -173,7 +177,7 @@ class MainWindow(QMainWindow):
 
     def busy(self) -> bool:
         """Diagnostics or a build still on their way (tests and screenshots wait)."""
-        return self.lint.busy() or self.run_actions.building()
+        return self._lint_due or self.lint.busy() or self.run_actions.building()
 
     def is_modified(self, editor: CodeEditor) -> bool:
         return self.editor_stack.is_modified(editor)
@@ -290,7 +294,7 @@ class MainWindow(QMainWindow):
         self.settings.add_recent_project(project.root)
         actions.fill_recent_menu(self)
         self.lint.refresh_header_defines()
-        self.lint.lint_project()
+        self._lint_project()
         for f in self.settings.open_files(project.root):
             if Path(f).exists() or f.startswith(BUILTIN_PREFIX):
                 self.open_file(f, focus=False)
@@ -536,6 +540,9 @@ class MainWindow(QMainWindow):
         spawned by the connection's thread) and, while it starts, build the
         run panels."""
         self._painted = True
+        if self._lint_due and not self._closing:
+            self._lint_due = False
+            self.lint.lint_project()
         if self._controller_due and not self._closing:
             self._controller_due = False
             self.run_actions.start_controller_for_project()
@@ -550,6 +557,15 @@ class MainWindow(QMainWindow):
             self._controller_due = True
         else:
             self.run_actions.start_controller_for_project()
+
+    def _lint_project(self) -> None:
+        """Check the project's procedures in the background; before the
+        window's first paint, only note that it is due (loading the compiler
+        and compiling in a thread would compete with the window)."""
+        if self.isVisible() and not self._painted:
+            self._lint_due = True
+        else:
+            self.lint.lint_project()
 
     def _save_session(self) -> None:
         if self.project is not None:

@@ -7,7 +7,6 @@ from PySide6.QtGui import QKeySequence, QShortcut
 from PySide6.QtWidgets import (QCheckBox, QHBoxLayout, QLabel, QLineEdit, QPushButton, QToolButton,
                                QVBoxLayout, QWidget)
 
-from plcbuilder.ide.editor.widget import CodeEditor
 
 
 class FindReplaceBar(QWidget):
@@ -115,6 +114,7 @@ class FindReplaceBar(QWidget):
         self.sig_closed.emit()
 
     def flags(self) -> int:
+        from plcbuilder.ide.editor.widget import CodeEditor    # (loaded with the first editor)
         return CodeEditor.search_flags(self.case_box.isChecked(), self.word_box.isChecked(),
                                        self.regex_box.isChecked())
 
