@@ -23,7 +23,7 @@ from plcbuilder.api import Kind
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.editor import file_key, is_editor, normalise_newlines
 from plcbuilder.ide.editor.find_bar import FindReplaceBar
-from plcbuilder.ide.icons import icon
+from plcbuilder.ide.icons import icon, icon_path
 from plcbuilder.ide.recovery import (MAX_EDIT_BYTES, DiskWatcher, RecoveryManager, digest,
                                      encode_text,
                                      file_digest, save_text)
@@ -33,6 +33,15 @@ from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
 
 if TYPE_CHECKING:
     from plcbuilder.ide.editor import CodeEditor
+
+
+#: The editor tabs' look (the tab bar's own sheet: an application-wide one
+#: would make every widget slower to build and paint).
+TAB_SHEET = """
+QTabBar::tab { padding: 5px 10px; }
+QTabBar::close-button { image: url(%(close)s); subcontrol-position: right; }
+QTabBar::close-button:hover { image: url(%(close_hover)s); }
+"""
 
 
 class EditorStack(QWidget):
@@ -97,6 +106,8 @@ class EditorStack(QWidget):
         self.tabs.setElideMode(Qt.TextElideMode.ElideNone)
         self.tabs.tabCloseRequested.connect(lambda i: self.close_editor(self.tabs.widget(i)))
         bar = self.tabs.tabBar()
+        bar.setStyleSheet(TAB_SHEET % {"close": icon_path("close"),
+                                       "close_hover": icon_path("close-hover")})
         bar.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
         bar.customContextMenuRequested.connect(self._tab_context_menu)
         bar.installEventFilter(self)

@@ -32,7 +32,7 @@ from PySide6.QtGui import QAction
 from PySide6.QtWidgets import QApplication, QFileDialog, QMainWindow, QMessageBox
 
 from plcbuilder.api import Kind
-from plcbuilder.ide import actions, debug, dialogs, docks, workbench
+from plcbuilder.ide import actions, debug, dialogs, docks, startup_done, workbench
 from plcbuilder.ide.actions import Act
 from plcbuilder.ide.debug import actions as debug_actions
 from plcbuilder.ide.build_panel import BuildPanel
@@ -50,11 +50,11 @@ from plcbuilder.ide.settings import Preferences, Settings
 from plcbuilder.ide.status_bar import StatusBar
 from plcbuilder.ide.welcome import APP_NAME
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX
-from plcbuilder.link.client import ControllerStatus
 from plcbuilder.project.model import Project, ProjectError
 
 if TYPE_CHECKING:
     from plcbuilder.ide.editor import CodeEditor
+    from plcbuilder.link.client import ControllerStatus
 
 __all__ = ["APP_NAME", "Act", "MainWindow", "SPEEDS"]
 
@@ -87,7 +87,7 @@ class MainWindow(QMainWindow):
         self.prefs: Preferences = self.settings.preferences()
         self._project: Optional[Project] = None
         self._closing = False
-        self._last_state = ControllerStatus()
+        self._last_state: Optional[ControllerStatus] = None   # the controller's last state
         self.run_panels = None               # made after the first paint (see ensure_run_panels)
         self.run_docks: dict = {}            # the run docks by key (empty until then)
         self._pin_defines: Optional[dict] = None
@@ -540,6 +540,7 @@ class MainWindow(QMainWindow):
         spawned by the connection's thread) and, while it starts, build the
         run panels."""
         self._painted = True
+        startup_done()
         if self._lint_due and not self._closing:
             self._lint_due = False
             self.lint.lint_project()

@@ -27,7 +27,6 @@ from plcbuilder._support.files import read_bounded
 from plcbuilder.api import Kind, ProjectError
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.build_panel import BuildPanel, BuildRunner
-from plcbuilder.link.protocol import MAX_IMAGE
 
 #: simulation speeds: (label, connection mode)
 SPEEDS = (("1×", "realtime"), ("10×", "10"), ("Max", "max"), ("Pause", "pause"))
@@ -128,6 +127,7 @@ class RunActions(QObject):
         if self.project is None or self.connection is None:
             return False
         try:
+            from plcbuilder.link.protocol import MAX_IMAGE
             data = read_bounded(self.project.image_path, MAX_IMAGE, "controller image")
         except OSError as exc:
             QMessageBox.warning(self.parent(), "Upload",

@@ -23,6 +23,7 @@ class FindReplaceBar(QWidget):
         super().__init__(parent)
         self.editor = None
         self.setObjectName("findBar")
+        self.setStyleSheet("QWidget#findBar { border-top: 1px solid palette(mid); }")
         outer = QVBoxLayout(self)
         outer.setContentsMargins(6, 4, 6, 4)
         outer.setSpacing(3)
