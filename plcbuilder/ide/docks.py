@@ -16,13 +16,15 @@ def build_docks(win) -> None:
                                  Qt.DockWidgetArea.LeftDockWidgetArea)
     win.problems_dock = make_dock(win, "Problems", "problemsDock", win.problems,
                                   Qt.DockWidgetArea.BottomDockWidgetArea)
-    win.build_dock = make_dock(win, "Build Output", "buildDock", win.build_panel,
+    win.build_dock = make_dock(win, "Build Output", "buildDock", None,
                                Qt.DockWidgetArea.BottomDockWidgetArea)
+    win.build_dock.visibilityChanged.connect(lambda on: on and win.build_panel)
     win.tabifyDockWidget(win.problems_dock, win.build_dock)
-    win.tests_dock = make_dock(win, "Tests", "testsDock", win.tests_panel,
+    win.tests_dock = make_dock(win, "Tests", "testsDock", None,
                                Qt.DockWidgetArea.BottomDockWidgetArea)
     win.tabifyDockWidget(win.build_dock, win.tests_dock)
-    # the tests are read when their tab first shows (or they are asked for)
+    # the panel is made (and the tests read) when their tab first shows, or
+    # when they are asked for
     win.tests_dock.visibilityChanged.connect(lambda on: on and win.tests_panel.ensure_loaded())
     win.problems_dock.raise_()
     win.resizeDocks([win.project_dock], [250], Qt.Orientation.Horizontal)

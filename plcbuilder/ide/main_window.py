@@ -35,14 +35,12 @@ from plcbuilder.api import Kind
 from plcbuilder.ide import actions, debug, dialogs, docks, startup_done, workbench
 from plcbuilder.ide.actions import Act
 from plcbuilder.ide.debug import actions as debug_actions
-from plcbuilder.ide.build_panel import BuildPanel
 from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
 from plcbuilder.ide.dialogs.not_a_project import project_or_offer
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.editor_stack import EditorStack
 from plcbuilder.ide.icons import icon
 from plcbuilder.ide.lint import Lint
-from plcbuilder.ide.panels.tests import TestsPanel, wire as wire_tests
 from plcbuilder.ide.problems import ProblemsPanel
 from plcbuilder.ide.project_tree import ProjectTree
 from plcbuilder.ide.run_actions import SPEEDS, RunActions
@@ -110,10 +108,10 @@ class MainWindow(QMainWindow):
         self.setCentralWidget(self.editor_stack)
         self.tree = ProjectTree(self)
         self.problems = ProblemsPanel(self)
-        self.build_panel = BuildPanel(self)
-        self.tests_panel = TestsPanel(self)
+        self._build_panel = None             # Build Output: made when first shown or used
+        self._tests_panel = None             # Tests: made when first shown or used
         self.lint = Lint(self, self.editor_stack, self.problems, debounce_ms)
-        self.run_actions = RunActions(self, self.editor_stack, self.build_panel, self.prefs,
+        self.run_actions = RunActions(self, self.editor_stack, lambda: self.build_panel, self.prefs,
                                       connection=connection, start_controller=start_controller)
         self.status = StatusBar(self)
         self.setStatusBar(self.status)
@@ -154,9 +152,34 @@ class MainWindow(QMainWindow):
     def project(self, project: Optional[Project]) -> None:
         self._project = project
         self.editor_stack.project = self.lint.project = self.run_actions.project = project
-        self.tests_panel.set_project(project.root if project is not None else None)
+        if self._tests_panel is not None:
+            self._tests_panel.set_project(project.root if project is not None else None)
         if self.run_panels is not None:
             self.run_panels.set_target(project.target if project is not None else "mycnc")
+
+    @property
+    def tests_panel(self):
+        """The Tests panel, made the first time its dock shows or the tests
+        are run (the window's first paint does not wait for it)."""
+        if self._tests_panel is None:
+            from plcbuilder.ide.panels.tests import TestsPanel, wire
+            self._tests_panel = TestsPanel(self)
+            self.tests_dock.setWidget(self._tests_panel)
+            wire(self)
+            self._tests_panel.set_project(self._project.root if self._project is not None
+                                          else None)
+        return self._tests_panel
+
+    @property
+    def build_panel(self):
+        """The Build Output panel, made the first time its dock shows or a
+        build needs it (the window's first paint does not wait for it)."""
+        if self._build_panel is None:
+            from plcbuilder.ide.build_panel import BuildPanel
+            self._build_panel = BuildPanel(self)
+            self._build_panel.sig_open_location.connect(self.open_location)
+            self.build_dock.setWidget(self._build_panel)
+        return self._build_panel
 
     @property
     def connection(self):
@@ -287,7 +310,8 @@ class MainWindow(QMainWindow):
             return False
         self.editor_stack.close_all(force=True)
         self.project = project
-        self.build_panel.forget()                # not the previous project's build
+        if self._build_panel is not None:
+            self._build_panel.forget()           # not the previous project's build
         self.lint.clear()
         self.problems.set_root(project.root)
         self.tree.set_project(project)
@@ -319,7 +343,8 @@ class MainWindow(QMainWindow):
         self.debug.project_closed()
         self.editor_stack.close_all(force=True)
         self.project = None
-        self.build_panel.forget()
+        if self._build_panel is not None:
+            self._build_panel.forget()
         self.lint.clear(sizes=False)
         self.tree.set_project(None)
         self.problems.set_root(None)
@@ -445,8 +470,6 @@ class MainWindow(QMainWindow):
         tree.sig_changed.connect(self._show_welcome)
         # problems and diagnostics
         self.problems.sig_open_location.connect(self.open_location)
-        self.build_panel.sig_open_location.connect(self.open_location)
-        wire_tests(self)
         lint.sig_problem_files.connect(tree.set_problem_files)
         lint.sig_problem_counts.connect(self._show_problem_counts)
         lint.sig_header_defines.connect(self._set_pin_names)
