@@ -195,3 +195,24 @@ def test_no_timer_runs_while_the_ide_is_idle(qtbot, make_window, project):
     assert w.save_editor(ed)
     w.recovery.autosave_now()
     assert not w.recovery.timer.isActive()
+
+
+def test_the_time_axis_ticks_are_pyqtgraphs_at_round_absolute_times(qtbot):
+    """The following time axis works its ticks out itself (pyqtgraph's way,
+    without numpy: it is asked ten times a second); they are the same."""
+    import random
+
+    import pyqtgraph as pg
+
+    from plcbuilder.ide.panels.style import TimeAxis
+    ax = TimeAxis()
+    rnd = random.Random(14)
+    for _ in range(500):
+        ax.offset = rnd.uniform(0, 5000)
+        width = rnd.choice([0.01, 1, 5, 10, 60, 3600]) * rnd.uniform(0.5, 1.5)
+        size = rnd.uniform(100, 2000)
+        mine = ax.tickValues(-width, 0.0, size)
+        ref = pg.AxisItem.tickValues(ax, ax.offset - width, ax.offset, size)
+        assert [s for s, _v in mine] == pytest.approx([s for s, _v in ref])
+        for (_s, a), (_t, b) in zip(mine, ref):
+            assert [v + ax.offset for v in a] == pytest.approx(b, abs=1e-9)

@@ -6,10 +6,11 @@ only, which hand pyqtgraph views of the buffers cut to the visible time window.
 
 The timer runs only while there is something to redraw: samples, events, a
 view change or a dock shown start it, and it stops after a tick that found
-nothing to do. A hidden dock does not redraw (it catches up when shown); when
-only time advanced, the plots move instead of redrawing, and only while
-something runs. The watch polls the controller's variables only while
-something runs and the watch is shown.
+nothing to do (or, when only a put-off move is left, sleeps until it is due).
+A dock that is not on screen, hidden or behind another tab, does not redraw
+(it catches up when shown); when only time advanced, the plots move instead
+of redrawing, and only while something runs. The watch polls the
+controller's variables only while something runs and the watch is on screen.
 """
 
 from __future__ import annotations
