@@ -317,7 +317,6 @@ class MainWindow(QMainWindow):
         self.tree.set_project(project)
         self.settings.add_recent_project(project.root)
         actions.fill_recent_menu(self)
-        self.lint.refresh_header_defines()
         self._lint_project()
         for f in self.settings.open_files(project.root):
             if Path(f).exists() or f.startswith(BUILTIN_PREFIX):
@@ -566,6 +565,7 @@ class MainWindow(QMainWindow):
         startup_done()
         if self._lint_due and not self._closing:
             self._lint_due = False
+            self.lint.refresh_header_defines()
             self.lint.lint_project()
         if self._controller_due and not self._closing:
             self._controller_due = False
@@ -583,12 +583,14 @@ class MainWindow(QMainWindow):
             self.run_actions.start_controller_for_project()
 
     def _lint_project(self) -> None:
-        """Check the project's procedures in the background; before the
-        window's first paint, only note that it is due (loading the compiler
-        and compiling in a thread would compete with the window)."""
+        """Read the headers' defines (pin names, completion) and check the
+        project's procedures in the background; before the window's first
+        paint, only note that it is due (loading the compiler and compiling in
+        a thread would compete with the window)."""
         if self.isVisible() and not self._painted:
             self._lint_due = True
         else:
+            self.lint.refresh_header_defines()
             self.lint.lint_project()
 
     def _save_session(self) -> None:
