@@ -24,14 +24,14 @@ from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.abi import proc_name
 from plcbuilder.bytecode.program import MAGIC, MAX_FILE_SIZE, Kind, LoadError, Program
-from plcbuilder.controller import events
-from plcbuilder.controller.events import ControllerStatus
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
                                     summary)
 from plcbuilder.lang.options import CompileOptions
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header, builtin_header_names
 
 if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type checkers
+    from plcbuilder.controller import events
+    from plcbuilder.controller.events import ControllerStatus
     from plcbuilder.bytecode import disasm
     from plcbuilder.controller.controller import Controller, ControllerError
     from plcbuilder.controller.debugger import DebugError
@@ -69,6 +69,7 @@ _LAZY: dict[str, tuple[str, str | None]] = {}
 for _module, _names in (
         ("plcbuilder.controller.controller", "Controller ControllerError"),
         ("plcbuilder.controller.debugger", "DebugError"),
+        ("plcbuilder.controller.events", "ControllerStatus"),
         ("plcbuilder.controller.history", "History Trace"),
         ("plcbuilder.controller.io_dat", "io_dat_of load_io_dat with_io_dat"),
         ("plcbuilder.controller.machine_config", "ConfigError default_machine load_machine"),
@@ -95,6 +96,7 @@ for _module, _names in (
         _LAZY[_name] = (_module, _name)
 _LAZY["ExportError"] = ("plcbuilder.trace.export", "ExportError")
 for _name, _module in (("disasm", "plcbuilder.bytecode.disasm"),
+                       ("events", "plcbuilder.controller.events"),
                        ("trace_compare", "plcbuilder.trace.compare"),
                        ("trace_export", "plcbuilder.trace.export"),
                        ("trace_file", "plcbuilder.trace.file")):

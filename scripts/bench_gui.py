@@ -10,8 +10,10 @@
   the debounce timer), per key;
 - opening the example project in a new main window, and Build All from it;
 - idle CPU (issue 14 point 4): the IDE process's CPU time over 10 s with the
-  example project open and nothing running, with a software procedure (LUBE)
-  running at 1x and the run docks shown, and with them hidden; floors: a bare
+  example project open and nothing running (a copy never built: the image of
+  a built one is loaded on connect and starts LUBE, a software procedure),
+  with the built example open as it comes up (LUBE runs), with LUBE running
+  at 1x and the run docks shown, and with them hidden; floors: a bare
   Qt main window idling the same 10 s, and the link alone (the connection and
   the run model receiving the same telemetry, no window);
 - start-up (point 5): a new process to an interactive window with the example
@@ -655,6 +657,16 @@ win.show()
 win.open_project(project)
 if not pump(app, lambda: win.connected() and not win.busy() and win.run_panels is not None, 60):
     raise SystemExit("no controller")
+if mode == "idle":
+    # honest: nothing runs (the project has no build/eeprom.rom, so nothing is
+    # loaded on connect; a loaded image would start its software procedures)
+    pump(app, lambda: False, 1.0)
+    st = win.connection.last_state
+    if st.running or st.software:
+        raise SystemExit(f"something runs: {st.running} {st.software}")
+if mode == "loaded":
+    # the built example: its image is loaded on connect and LUBE starts
+    pump(app, lambda: bool(win.connection.last_state.software), 30)
 if mode in ("run", "hidden"):
     done = []
     win.sig_build_finished.connect(done.append)
@@ -674,7 +686,10 @@ win.shutdown()
 
 CPU_MODES = (("bare", "floor: a bare Qt main window"),
              ("link", "floor: the link alone (connection + run model, LUBE's telemetry)"),
-             ("idle", "IDE, example project open, nothing running (goal <= 1 % of a core)"),
+             ("idle", "IDE, example project open (not built), controller idle, nothing "
+                      "running (goal <= 1 % of a core)"),
+             ("loaded", "IDE, the built example open: its image loads on connect and LUBE "
+                        "runs at 1x, default layout"),
              ("run", "IDE, LUBE running at 1x, run docks shown (goal <= 5 %)"),
              ("hidden", "IDE, LUBE running at 1x, run docks hidden"))
 
@@ -693,9 +708,13 @@ def cpu_figures(seconds: float = 10.0, runs: int = 3) -> list[str]:
         project = Path(d) / "example"
         create_project(project)
         build_project(Project.open(project))
+        # "nothing running" is a project that was never built: a built one's
+        # image is loaded when the controller connects, and LUBE starts with it
+        unbuilt = create_project(Path(d) / "unbuilt").root
         for i in range(runs):
             for mode, _ in CPU_MODES:
-                p = subprocess.run([sys.executable, "-c", _CPU_PROBE, mode, str(project),
+                root = unbuilt if mode == "idle" else project
+                p = subprocess.run([sys.executable, "-c", _CPU_PROBE, mode, str(root),
                                     str(Path(d) / f"{mode}{i}.ini"), str(seconds)],
                                    capture_output=True, text=True, timeout=seconds + 180)
                 for line in p.stdout.splitlines():

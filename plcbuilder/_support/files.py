@@ -14,7 +14,6 @@ from __future__ import annotations
 import errno
 import os
 import re
-import secrets
 import stat
 from pathlib import Path
 from contextlib import contextmanager
@@ -150,7 +149,7 @@ def atomic_write(path: Union[str, Path], data: Union[bytes, str, Iterable[bytes]
             keep = path.stat().st_mode & 0o7777
         except FileNotFoundError:
             pass
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")   # TEMP_NAME
+    tmp = path.with_name(f".{path.name}.{os.urandom(4).hex()}.tmp")   # TEMP_NAME
     flags = (os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
              | getattr(os, "O_NOFOLLOW", 0))
     fd = os.open(tmp, flags, 0o666 if mode is None else mode)

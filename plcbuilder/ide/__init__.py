@@ -1,0 +1,22 @@
+"""The IDE (PySide6, Scintilla, pyqtgraph): ``plcbuilder gui``.
+
+Start-up allocates tens of thousands of objects that live as long as the IDE
+(modules, classes, Qt's wrappers and enums); with the default thresholds the
+cyclic garbage collector walks them some eighty times before the window first
+paints, which cost several percent of the start-up. Until the main window has
+painted (:func:`startup_done`), the youngest generation is collected less
+often; then the usual thresholds come back.
+"""
+
+import gc as _gc
+
+_THRESHOLDS = _gc.get_threshold()
+_STARTUP_THRESHOLDS = (max(_THRESHOLDS[0], 50_000),) + tuple(_THRESHOLDS[1:])
+_gc.set_threshold(*_STARTUP_THRESHOLDS)
+
+
+def startup_done() -> None:
+    """The IDE is up: the garbage collector's usual thresholds again (unless
+    something else changed them meanwhile)."""
+    if _gc.get_threshold() == _STARTUP_THRESHOLDS:
+        _gc.set_threshold(*_THRESHOLDS)

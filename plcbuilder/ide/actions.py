@@ -267,9 +267,9 @@ def build_menus(win) -> None:
 def fill_view_menu(win) -> None:
     m = win.view_menu
     m.clear()
-    for dock in win.findChildren(QDockWidget):
-        if dock.parent() is win:
-            m.addAction(dock.toggleViewAction())
+    # the window's own docks (a recursive search walks every widget: slow)
+    for dock in win.findChildren(QDockWidget, options=Qt.FindChildOption.FindDirectChildrenOnly):
+        m.addAction(dock.toggleViewAction())
     m.addSeparator()
     m.addAction(win.toolbar.toggleViewAction())
     if getattr(win, "debug_toolbar", None) is not None:

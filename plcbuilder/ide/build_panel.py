@@ -1,82 +1,31 @@
-"""Build All and its output panel.
+"""Build All's output panel.
 
-:class:`BuildRunner` runs :func:`plcbuilder.project.build.build_project` on a
-worker thread and reports progress and the result through signals;
 :class:`BuildPanel` shows the output the way a compiler prints it — one line
 per procedure with its size against its limit, every diagnostic with its
 source line and caret, the hardware total, the image — and double-clicking a
-diagnostic opens its file at its line.
+diagnostic opens its file at its line. The build itself runs in
+:class:`~plcbuilder.ide.build_runner.BuildRunner` (given here too).
 """
 
 from __future__ import annotations
 
 import re
-import threading
 import time
 from pathlib import Path
-from typing import Optional
 
-from PySide6.QtCore import QObject, Qt, Signal
+from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QColor, QFont, QFontDatabase, QTextCharFormat, QTextCursor
 from PySide6.QtWidgets import (QHBoxLayout, QLabel, QPlainTextEdit, QProgressBar, QToolButton,
                                QVBoxLayout, QWidget)
 
 from plcbuilder.api import render_text
+from plcbuilder.ide.build_runner import BuildRunner  # noqa: F401 - given here too
 from plcbuilder.ide.icons import icon
 
 _LOCATION_RE = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): (error|warning|note)")
 
 COLOURS = {"error": "#d1242f", "warning": "#9a6700", "ok": "#1a7f37", "dim": "#6e7781",
            "head": "#3a74c9", "text": None, "note": "#6e7781"}
-
-
-class BuildRunner(QObject):
-    """Runs Build All on a worker thread (one build at a time)."""
-
-    sig_started = Signal()
-    """A build started."""
-
-    sig_progress = Signal(int, int, str)
-    """(done, total, procedure name) after each procedure."""
-
-    sig_finished = Signal(object)
-    """The BuildResult, or an Exception when the build could not run."""
-
-    def __init__(self, parent=None):
-        super().__init__(parent)
-        self._thread: Optional[threading.Thread] = None
-        self.started_at = 0.0
-        self.elapsed = 0.0
-
-    def running(self) -> bool:
-        return self._thread is not None and self._thread.is_alive()
-
-    def start(self, project) -> bool:
-        """Start building; False when a build is running already."""
-        if self.running():
-            return False
-        from plcbuilder.project.build import build_project
-        self.started_at = time.perf_counter()
-        self.sig_started.emit()
-
-        def work():
-            try:
-                result = build_project(project, lambda d, t, n: self.sig_progress.emit(d, t, n))
-            except Exception as exc:  # noqa: BLE001 - reported in the panel
-                result = exc
-            self.elapsed = time.perf_counter() - self.started_at
-            try:
-                self.sig_finished.emit(result)
-            except RuntimeError:
-                pass
-
-        self._thread = threading.Thread(target=work, name="plcbuilder-build", daemon=True)
-        self._thread.start()
-        return True
-
-    def wait(self, timeout: float = 30) -> None:
-        if self._thread is not None:
-            self._thread.join(timeout)
 
 
 class BuildPanel(QWidget):

@@ -14,7 +14,6 @@ from pathlib import Path
 from typing import Iterable, Optional
 
 from plcbuilder import api
-from plcbuilder.ide import highlighter as hl
 from plcbuilder.ide.editor import file_key
 
 #: The editor margin of the byte counts (past the ones the editor itself uses).
@@ -62,6 +61,7 @@ def lines_of_file(counts: dict[tuple[str, int], int], path: str) -> dict[int, in
 
 def show_margin(ed, per_line: Optional[dict[int, int]]) -> None:
     """Show the byte counts in the editor's margin (None: hide the margin)."""
+    from plcbuilder.ide import highlighter as hl     # (loaded with the editors)
     if ed.margins() <= MARGIN_BYTES:
         ed.setMargins(MARGIN_BYTES + 1)
     ed.marginTextClearAll()

@@ -34,17 +34,17 @@ import queue
 import threading
 import time
 import zlib
-from typing import Callable, Optional, Sequence
+from typing import TYPE_CHECKING, Callable, Optional, Sequence
 
 from PySide6 import QtCore
 
 from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
 from plcbuilder.ide.debug.requests import DebugRequests
-from plcbuilder.ide.panels.steps import StepSamples
-from plcbuilder.link import runtime
-from plcbuilder.link.process import ControllerProcess
-from plcbuilder.link.client import (Client, ConnectionLost, ControllerStatus, LinkError,
-                                    RefusedError, Telemetry)
+
+if TYPE_CHECKING:
+    from plcbuilder.link import runtime
+    from plcbuilder.link.client import Client, ControllerStatus, Telemetry
+    from plcbuilder.link.process import ControllerProcess
 
 Signal = QtCore.Signal
 
@@ -70,6 +70,15 @@ FORCE_VERBS = frozenset({"write", "force", "release", "release_all", "forces"})
 #: MessagePack, and the IDE subscribes ``lossless``: at Max speed the controller
 #: waits for the IDE rather than drop a change (a paced one drops and counts).
 TELEMETRY_QUEUE = 20000
+
+
+def _link():
+    """The link's client and child process, and the telemetry steps: imported
+    when a connection first starts, not with the main window (its first paint
+    does not wait for them)."""
+    from plcbuilder.ide.panels import steps
+    from plcbuilder.link import client, process
+    return client, process, steps
 
 
 def _telemetry_queue(speed: Optional[tuple[str, Optional[float]]] = None) -> int:
@@ -123,7 +132,7 @@ class _Worker(threading.Thread):
         self.variables_pending = False
         self.registers_pending = False
         self.restarts = 0
-        self.steps = StepSamples()
+        self.steps = _link()[2].StepSamples()
         self.breakpoints: dict[str, list] = {}  # file -> specs the controller has
         self.watched: list[str] = []            # variables the controller records (watch)
         self.debugging = False                  # a debug verb was used: follow the halts
@@ -151,7 +160,7 @@ class _Worker(threading.Thread):
                     reason = self._lost_reason()
                 except _Stop:
                     break
-                except (LinkError, OSError) as exc:
+                except (_link()[0].LinkError, OSError) as exc:
                     reason = self._lost_reason(str(exc))
                 except Exception as exc:  # noqa: BLE001 - a bug here must not kill the link
                     reason = f"internal error in the IDE's link: {type(exc).__name__}: {exc}"
@@ -212,17 +221,19 @@ class _Worker(threading.Thread):
         return detail or "the connection to the controller was lost"
 
     def _open(self) -> None:
+        link, process, _ = _link()
+        RefusedError = link.RefusedError  # noqa: N806 - the exception class
         if self.embedded:
             if self.child is None or not self.child.alive():
                 if self.child is not None:
                     self.child.stop()
-                self.child = ControllerProcess(self.extra_args)
+                self.child = process.ControllerProcess(self.extra_args)
                 self.post("child", self.child.pid)
             ep = self._wait_endpoint(self.child)
             host, port, token = ep.host, ep.port, ep.token
         else:
             host, port, token = self.address
-        client = Client.connect(host, port, token, timeout=30.0, connect_timeout=5.0)
+        client = link.Client.connect(host, port, token, timeout=30.0, connect_timeout=5.0)
         self.client = client
         self.steps.reset()
         client.subscribe(self._on_telemetry, queue=_telemetry_queue(self.speed), lossless=True)
@@ -296,6 +307,7 @@ class _Worker(threading.Thread):
             next_state = min(next_state, time.monotonic() + STATE_INTERVAL)
 
     def _run_command(self, client: Client, verb: str, args: tuple) -> None:
+        link = _link()[0]
         try:
             if verb == "upload":
                 self.image, self.target = args[0], args[1]
@@ -354,9 +366,9 @@ class _Worker(threading.Thread):
                 return
             else:
                 result = client.request(verb, **(args[0] if args else {}))
-        except ConnectionLost:
+        except link.ConnectionLost:
             raise
-        except RefusedError as exc:
+        except link.RefusedError as exc:
             if verb == "set_breakpoints":       # the Breakpoints panel says why
                 self.post("breakpoints_refused", (args[0]["file"], exc.reason))
                 return
@@ -370,7 +382,7 @@ class _Worker(threading.Thread):
     def _debug_state(self, client: Client) -> None:
         try:
             halted = client.request("debug_state").get("halted")
-        except RefusedError as exc:     # a controller without the debugger
+        except _link()[0].RefusedError as exc:     # a controller without the debugger
             self.debugging = False
             self.post("error", f"debug_state: {exc.reason}")
             return
@@ -475,7 +487,7 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
         self.connected = False
         self.address = ""
         self.child_pid: Optional[int] = None
-        self.last_state = ControllerStatus()
+        self._last_state: Optional[ControllerStatus] = None
         self.missed = 0
         self.welcome: dict = {}
         self.halted: Optional[dict] = None      # the last halted state (None: running)
@@ -487,6 +499,18 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
         self.forces: list = []                  # the last list of forces
 
     # -------------------------------------------------------------- lifecycle
+    @property
+    def last_state(self) -> ControllerStatus:
+        """The controller's last state (an empty one until the first arrives)."""
+        if self._last_state is None:
+            from plcbuilder.link.client import ControllerStatus
+            self._last_state = ControllerStatus()
+        return self._last_state
+
+    @last_state.setter
+    def last_state(self, st: ControllerStatus) -> None:
+        self._last_state = st
+
     @property
     def embedded(self) -> bool:
         return self._worker is not None and self._worker.embedded

@@ -16,21 +16,27 @@ def build_docks(win) -> None:
                                  Qt.DockWidgetArea.LeftDockWidgetArea)
     win.problems_dock = make_dock(win, "Problems", "problemsDock", win.problems,
                                   Qt.DockWidgetArea.BottomDockWidgetArea)
-    win.build_dock = make_dock(win, "Build Output", "buildDock", win.build_panel,
+    win.build_dock = make_dock(win, "Build Output", "buildDock", None,
                                Qt.DockWidgetArea.BottomDockWidgetArea)
+    win.build_dock.visibilityChanged.connect(lambda on: on and win.build_panel)
     win.tabifyDockWidget(win.problems_dock, win.build_dock)
-    win.tests_dock = make_dock(win, "Tests", "testsDock", win.tests_panel,
+    win.tests_dock = make_dock(win, "Tests", "testsDock", None,
                                Qt.DockWidgetArea.BottomDockWidgetArea)
     win.tabifyDockWidget(win.build_dock, win.tests_dock)
+    # the panel is made (and the tests read) when their tab first shows, or
+    # when they are asked for
+    win.tests_dock.visibilityChanged.connect(lambda on: on and win.tests_panel.ensure_loaded())
     win.problems_dock.raise_()
     win.resizeDocks([win.project_dock], [250], Qt.Orientation.Horizontal)
     win.resizeDocks([win.problems_dock], [200], Qt.Orientation.Vertical)
 
 
 def make_dock(win, title, name, widget, area) -> QDockWidget:
+    """A dock of the window (``widget`` None: its panel comes later)."""
     dock = QDockWidget(title, win)
     dock.setObjectName(name)
-    dock.setWidget(widget)
+    if widget is not None:
+        dock.setWidget(widget)
     dock.setFeatures(QDockWidget.DockWidgetFeature.DockWidgetClosable |
                      QDockWidget.DockWidgetFeature.DockWidgetMovable |
                      QDockWidget.DockWidgetFeature.DockWidgetFloatable)
@@ -49,6 +55,31 @@ RUN_DOCKS = (("proc", "Proc / messages", "runProcDock"),
              ("watch", "Watch", "runWatchDock"),
              ("log", "Run log", "runLogDock"),
              ("cursors", "Cursors", "runCursorsDock"))
+
+
+def on_screen(widget) -> bool:
+    """Whether ``widget`` can be seen: visible, and not in a dock whose tab is
+    put aside. Qt keeps the docks of a tab group that are not current
+    "visible" and moves them out of the window instead (right or bottom edge
+    below 0, the rule by which QDockWidget itself says ``visibilityChanged``):
+    ``isVisible()`` alone would make them redraw and poll unseen."""
+    if not widget.isVisible():
+        return False
+    dock = dock_of(widget)
+    if dock is None or dock.isFloating():
+        return True
+    g = dock.geometry()
+    return g.right() >= 0 and g.bottom() >= 0
+
+
+def dock_of(widget):
+    """The dock ``widget`` is in (None: in none)."""
+    w = widget
+    while w is not None:
+        if isinstance(w, QDockWidget):
+            return w
+        w = w.parentWidget()
+    return None
 
 
 def empty_run_docks(win) -> dict:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Callable, Optional
+from typing import TYPE_CHECKING, Callable, Optional
 
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import (QApplication, QMessageBox, QStackedWidget, QTabWidget, QVBoxLayout,
@@ -21,16 +21,27 @@ from plcbuilder import api
 from plcbuilder._support.files import read_bounded
 from plcbuilder.api import Kind
 from plcbuilder.ide import dialogs
-from plcbuilder.ide.editor import CodeEditor, file_key, normalise_newlines
+from plcbuilder.ide.editor import file_key, is_editor, normalise_newlines
 from plcbuilder.ide.editor.find_bar import FindReplaceBar
-from plcbuilder.ide.highlighter import lexer_for
-from plcbuilder.ide.icons import icon
+from plcbuilder.ide.icons import icon, icon_path
 from plcbuilder.ide.recovery import (MAX_EDIT_BYTES, DiskWatcher, RecoveryManager, digest,
                                      encode_text,
                                      file_digest, save_text)
 from plcbuilder.ide.settings import Preferences
 from plcbuilder.ide.welcome import WelcomePage
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
+
+if TYPE_CHECKING:
+    from plcbuilder.ide.editor import CodeEditor
+
+
+#: The editor tabs' look (the tab bar's own sheet: an application-wide one
+#: would make every widget slower to build and paint).
+TAB_SHEET = """
+QTabBar::tab { padding: 5px 10px; }
+QTabBar::close-button { image: url(%(close)s); subcontrol-position: right; }
+QTabBar::close-button:hover { image: url(%(close_hover)s); }
+"""
 
 
 class EditorStack(QWidget):
@@ -95,6 +106,8 @@ class EditorStack(QWidget):
         self.tabs.setElideMode(Qt.TextElideMode.ElideNone)
         self.tabs.tabCloseRequested.connect(lambda i: self.close_editor(self.tabs.widget(i)))
         bar = self.tabs.tabBar()
+        bar.setStyleSheet(TAB_SHEET % {"close": icon_path("close"),
+                                       "close_hover": icon_path("close-hover")})
         bar.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
         bar.customContextMenuRequested.connect(self._tab_context_menu)
         bar.installEventFilter(self)
@@ -113,7 +126,7 @@ class EditorStack(QWidget):
 
     def current_editor(self) -> Optional[CodeEditor]:
         w = self.tabs.currentWidget()
-        return w if isinstance(w, CodeEditor) else None
+        return w if is_editor(w) else None
 
     def editor_for(self, path) -> Optional[CodeEditor]:
         key = file_key(path)
@@ -287,7 +300,7 @@ class EditorStack(QWidget):
         from PySide6.QtWidgets import QMenu
         ed = self.tabs.widget(index)
         menu = QMenu(self)
-        if not isinstance(ed, CodeEditor):
+        if not is_editor(ed):
             return menu
         menu.addAction("Close", lambda: self.close_editor(ed)).setObjectName("close")
         menu.addAction("Close Others", lambda: self._close_others(ed)).setObjectName("others")
@@ -405,6 +418,9 @@ class EditorStack(QWidget):
                 return None
             disk = digest(data)
             text, eol = normalise_newlines(data.decode("utf-8", "replace"))
+        # the editor (Scintilla) and the highlighter (pygments) load with the first editor
+        from plcbuilder.ide.editor.widget import CodeEditor
+        from plcbuilder.ide.highlighter import lexer_for
         ed = CodeEditor(self.tabs, self.prefs.editor_prefs())
         ed.path = path
         ed.eol = eol
@@ -441,7 +457,10 @@ class EditorStack(QWidget):
         if i < 0:
             return
         name = Path(ed.path).name + (" (built-in)" if ed.builtin else "")
-        self.tabs.setTabText(i, name + (" ●" if self.is_modified(ed) else ""))
+        modified = self.is_modified(ed)
+        self.tabs.setTabText(i, name + (" ●" if modified else ""))
+        if modified:
+            self.recovery.poke()            # something to autosave (the timer runs again)
         if ed is self.current_editor():
             self.sig_title_changed.emit()
 

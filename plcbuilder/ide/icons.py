@@ -40,7 +40,17 @@ def svg_data(name: str) -> bytes:
 
 @lru_cache(maxsize=None)
 def icon(name: str) -> QIcon:
-    """The icon called name (an SVG rendered crisply at every size asked for)."""
+    """The icon called name (an SVG rendered crisply at every size asked for).
+
+    From a file, Qt's SVG icon engine renders a size when it is first shown
+    (rendering six sizes of every icon up front took a tenth of the IDE's
+    start-up); without the file (a zipped package), the sizes are rendered
+    here."""
+    path = icon_path(name)
+    if path:
+        ic = QIcon(path)
+        if not ic.isNull():
+            return ic
     data = svg_data(name)
     if not data:
         return QIcon()

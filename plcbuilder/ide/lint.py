@@ -9,7 +9,7 @@ Problems panel, the editors' squiggles, completion, hover and go-to-definition.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from PySide6.QtCore import QObject, QTimer, Signal
 
@@ -17,9 +17,12 @@ from plcbuilder import api
 from plcbuilder.api import Kind, Severity
 from plcbuilder.ide import completion, hover
 from plcbuilder.ide.diagnostics_worker import DiagnosticsWorker
-from plcbuilder.ide.editor import CodeEditor, file_key
+from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.problems import ProblemsPanel, ProblemStore
 from plcbuilder.project.model import ProjectError
+
+if TYPE_CHECKING:
+    from plcbuilder.ide.editor import CodeEditor
 
 
 class Lint(QObject):

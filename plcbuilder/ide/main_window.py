@@ -25,24 +25,22 @@ tells the parts when it changes; the actions are named by :class:`Act`.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtGui import QAction
 from PySide6.QtWidgets import QApplication, QFileDialog, QMainWindow, QMessageBox
 
 from plcbuilder.api import Kind
-from plcbuilder.ide import actions, debug, dialogs, docks, workbench
+from plcbuilder.ide import actions, debug, dialogs, docks, startup_done, workbench
 from plcbuilder.ide.actions import Act
 from plcbuilder.ide.debug import actions as debug_actions
-from plcbuilder.ide.build_panel import BuildPanel
 from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
 from plcbuilder.ide.dialogs.not_a_project import project_or_offer
-from plcbuilder.ide.editor import CodeEditor, file_key
+from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.editor_stack import EditorStack
 from plcbuilder.ide.icons import icon
 from plcbuilder.ide.lint import Lint
-from plcbuilder.ide.panels.tests import TestsPanel, wire as wire_tests
 from plcbuilder.ide.problems import ProblemsPanel
 from plcbuilder.ide.project_tree import ProjectTree
 from plcbuilder.ide.run_actions import SPEEDS, RunActions
@@ -50,8 +48,11 @@ from plcbuilder.ide.settings import Preferences, Settings
 from plcbuilder.ide.status_bar import StatusBar
 from plcbuilder.ide.welcome import APP_NAME
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX
-from plcbuilder.link.client import ControllerStatus
 from plcbuilder.project.model import Project, ProjectError
+
+if TYPE_CHECKING:
+    from plcbuilder.ide.editor import CodeEditor
+    from plcbuilder.link.client import ControllerStatus
 
 __all__ = ["APP_NAME", "Act", "MainWindow", "SPEEDS"]
 
@@ -84,12 +85,13 @@ class MainWindow(QMainWindow):
         self.prefs: Preferences = self.settings.preferences()
         self._project: Optional[Project] = None
         self._closing = False
-        self._last_state = ControllerStatus()
+        self._last_state: Optional[ControllerStatus] = None   # the controller's last state
         self.run_panels = None               # made after the first paint (see ensure_run_panels)
         self.run_docks: dict = {}            # the run docks by key (empty until then)
         self._pin_defines: Optional[dict] = None
         self._painted = False
         self._controller_due = False         # started after the first paint
+        self._lint_due = False               # the project's check, after the first paint
         self.right_docks: list = []          # the docks the default sizes apply to
         self._shown_once = False
         self.layout_restored = False
@@ -106,10 +108,10 @@ class MainWindow(QMainWindow):
         self.setCentralWidget(self.editor_stack)
         self.tree = ProjectTree(self)
         self.problems = ProblemsPanel(self)
-        self.build_panel = BuildPanel(self)
-        self.tests_panel = TestsPanel(self)
+        self._build_panel = None             # Build Output: made when first shown or used
+        self._tests_panel = None             # Tests: made when first shown or used
         self.lint = Lint(self, self.editor_stack, self.problems, debounce_ms)
-        self.run_actions = RunActions(self, self.editor_stack, self.build_panel, self.prefs,
+        self.run_actions = RunActions(self, self.editor_stack, lambda: self.build_panel, self.prefs,
                                       connection=connection, start_controller=start_controller)
         self.status = StatusBar(self)
         self.setStatusBar(self.status)
@@ -150,9 +152,34 @@ class MainWindow(QMainWindow):
     def project(self, project: Optional[Project]) -> None:
         self._project = project
         self.editor_stack.project = self.lint.project = self.run_actions.project = project
-        self.tests_panel.set_project(project.root if project is not None else None)
+        if self._tests_panel is not None:
+            self._tests_panel.set_project(project.root if project is not None else None)
         if self.run_panels is not None:
             self.run_panels.set_target(project.target if project is not None else "mycnc")
+
+    @property
+    def tests_panel(self):
+        """The Tests panel, made the first time its dock shows or the tests
+        are run (the window's first paint does not wait for it)."""
+        if self._tests_panel is None:
+            from plcbuilder.ide.panels.tests import TestsPanel, wire
+            self._tests_panel = TestsPanel(self)
+            self.tests_dock.setWidget(self._tests_panel)
+            wire(self)
+            self._tests_panel.set_project(self._project.root if self._project is not None
+                                          else None)
+        return self._tests_panel
+
+    @property
+    def build_panel(self):
+        """The Build Output panel, made the first time its dock shows or a
+        build needs it (the window's first paint does not wait for it)."""
+        if self._build_panel is None:
+            from plcbuilder.ide.build_panel import BuildPanel
+            self._build_panel = BuildPanel(self)
+            self._build_panel.sig_open_location.connect(self.open_location)
+            self.build_dock.setWidget(self._build_panel)
+        return self._build_panel
 
     @property
     def connection(self):
@@ -173,7 +200,7 @@ class MainWindow(QMainWindow):
 
     def busy(self) -> bool:
         """Diagnostics or a build still on their way (tests and screenshots wait)."""
-        return self.lint.busy() or self.run_actions.building()
+        return self._lint_due or self.lint.busy() or self.run_actions.building()
 
     def is_modified(self, editor: CodeEditor) -> bool:
         return self.editor_stack.is_modified(editor)
@@ -283,14 +310,14 @@ class MainWindow(QMainWindow):
             return False
         self.editor_stack.close_all(force=True)
         self.project = project
-        self.build_panel.forget()                # not the previous project's build
+        if self._build_panel is not None:
+            self._build_panel.forget()           # not the previous project's build
         self.lint.clear()
         self.problems.set_root(project.root)
         self.tree.set_project(project)
         self.settings.add_recent_project(project.root)
         actions.fill_recent_menu(self)
-        self.lint.refresh_header_defines()
-        self.lint.lint_project()
+        self._lint_project()
         for f in self.settings.open_files(project.root):
             if Path(f).exists() or f.startswith(BUILTIN_PREFIX):
                 self.open_file(f, focus=False)
@@ -315,7 +342,8 @@ class MainWindow(QMainWindow):
         self.debug.project_closed()
         self.editor_stack.close_all(force=True)
         self.project = None
-        self.build_panel.forget()
+        if self._build_panel is not None:
+            self._build_panel.forget()
         self.lint.clear(sizes=False)
         self.tree.set_project(None)
         self.problems.set_root(None)
@@ -441,8 +469,6 @@ class MainWindow(QMainWindow):
         tree.sig_changed.connect(self._show_welcome)
         # problems and diagnostics
         self.problems.sig_open_location.connect(self.open_location)
-        self.build_panel.sig_open_location.connect(self.open_location)
-        wire_tests(self)
         lint.sig_problem_files.connect(tree.set_problem_files)
         lint.sig_problem_counts.connect(self._show_problem_counts)
         lint.sig_header_defines.connect(self._set_pin_names)
@@ -538,6 +564,11 @@ class MainWindow(QMainWindow):
         spawned by the connection's thread) and, while it starts, build the
         run panels."""
         self._painted = True
+        startup_done()
+        if self._lint_due and not self._closing:
+            self._lint_due = False
+            self.lint.refresh_header_defines()
+            self.lint.lint_project()
         if self._controller_due and not self._closing:
             self._controller_due = False
             self.run_actions.start_controller_for_project()
@@ -552,6 +583,17 @@ class MainWindow(QMainWindow):
             self._controller_due = True
         else:
             self.run_actions.start_controller_for_project()
+
+    def _lint_project(self) -> None:
+        """Read the headers' defines (pin names, completion) and check the
+        project's procedures in the background; before the window's first
+        paint, only note that it is due (loading the compiler and compiling in
+        a thread would compete with the window)."""
+        if self.isVisible() and not self._painted:
+            self._lint_due = True
+        else:
+            self.lint.refresh_header_defines()
+            self.lint.lint_project()
 
     def _save_session(self) -> None:
         if self.project is not None:

@@ -77,6 +77,7 @@ class RecoveryManager(QObject):
         self.folder = Path(folder)
         self.snapshot = snapshot
         self._written: dict[str, str] = {}        # file key -> digest of the copy
+        self._on = False                          # started (and not stopped)
         self.timer = QTimer(self)
         self.timer.timeout.connect(self.autosave_now)
         self.set_interval(interval_s)
@@ -85,10 +86,25 @@ class RecoveryManager(QObject):
         self.timer.setInterval(max(1, int(seconds)) * 1000)
 
     def start(self) -> None:
-        self.timer.start()
+        """Autosave from now on. The timer runs only while an editor has
+        unsaved changes (:meth:`poke` says one may have; an autosave that
+        finds none stops it): an IDE with nothing unsaved is not woken."""
+        self._on = True
+        try:
+            unsaved = bool(self.snapshot())
+        except Exception:  # noqa: BLE001 - never let autosave break the IDE
+            unsaved = True
+        if unsaved:
+            self.timer.start()
 
     def stop(self) -> None:
+        self._on = False
         self.timer.stop()
+
+    def poke(self) -> None:
+        """An editor has unsaved changes now: autosave within the interval."""
+        if self._on and not self.timer.isActive():
+            self.timer.start()
 
     # ------------------------------------------------------------- writing
     def autosave_now(self) -> int:
@@ -122,6 +138,8 @@ class RecoveryManager(QObject):
             changed = True
         if changed:
             self._write_index(index)
+        if not live:
+            self.timer.stop()                     # nothing unsaved: until poke()
         self.sig_autosaved.emit(len(live))
         return len(live)
 

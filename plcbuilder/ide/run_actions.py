@@ -26,8 +26,7 @@ from PySide6.QtWidgets import QComboBox, QMessageBox
 from plcbuilder._support.files import read_bounded
 from plcbuilder.api import Kind, ProjectError
 from plcbuilder.ide import dialogs
-from plcbuilder.ide.build_panel import BuildPanel, BuildRunner
-from plcbuilder.link.protocol import MAX_IMAGE
+from plcbuilder.ide.build_runner import BuildRunner
 
 #: simulation speeds: (label, connection mode)
 SPEEDS = (("1×", "realtime"), ("10×", "10"), ("Max", "max"), ("Pause", "pause"))
@@ -63,11 +62,13 @@ class RunActions(QObject):
     sig_build_finished = Signal(object)
     """Build All finished (the BuildResult, or the exception it raised)."""
 
-    def __init__(self, parent, editors, build_panel: BuildPanel, prefs, *, connection=None,
+    def __init__(self, parent, editors, build_panel, prefs, *, connection=None,
                  start_controller: bool = True):
+        """``build_panel``: the Build Output panel, or a function that gives it
+        (the window makes it when first needed)."""
         super().__init__(parent)
         self.editors = editors                  # the EditorStack
-        self.build_panel = build_panel
+        self._build_panel = build_panel
         self.prefs = prefs
         self.project = None
         self.connection = connection
@@ -128,6 +129,7 @@ class RunActions(QObject):
         if self.project is None or self.connection is None:
             return False
         try:
+            from plcbuilder.link.protocol import MAX_IMAGE
             data = read_bounded(self.project.image_path, MAX_IMAGE, "controller image")
         except OSError as exc:
             QMessageBox.warning(self.parent(), "Upload",
@@ -365,6 +367,12 @@ class RunActions(QObject):
                                   "build/eeprom.rom: Upload (Ctrl+U) loads it", 10000)
             return "differs"
         return None
+
+    @property
+    def build_panel(self):
+        """The Build Output panel."""
+        p = self._build_panel
+        return p() if callable(p) else p
 
     # ============================================================== private
     def _build(self, then: Step) -> bool:

@@ -187,7 +187,7 @@ def _run_procedure(app, win, target: tuple[str, int], after_ms: int) -> bool:
 
     def state_t():
         st = getattr(c, "last_state", None) or win._last_state
-        return st.t_ms
+        return st.t_ms if st is not None else 0
 
     wait_until(app, lambda: "start" in results or not hasattr(c, "sig_result"), 10)
     t0 = state_t() or 0

@@ -4,14 +4,16 @@ size · Ln/Col · encoding."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import QLabel, QStatusBar, QToolButton
 
 from plcbuilder import api
 from plcbuilder.ide.icons import icon
-from plcbuilder.link.client import ControllerStatus
+
+if TYPE_CHECKING:
+    from plcbuilder.link.client import ControllerStatus
 
 
 class StatusBar(QStatusBar):
@@ -24,6 +26,7 @@ class StatusBar(QStatusBar):
         super().__init__(parent)
         sb = self
         sb.setSizeGripEnabled(True)
+        sb.setStyleSheet("QLabel { padding: 0 4px; }")
 
         def lab(name, tip, min_width=0):
             w = QLabel(self)

@@ -19,7 +19,7 @@ and docks. :class:`Workbench` holds them and answers the actions.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from PySide6.QtCore import QObject, Qt
 from PySide6.QtWidgets import QMenu, QMessageBox
@@ -27,20 +27,16 @@ from PySide6.QtWidgets import QMenu, QMessageBox
 from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.ide import actions as acts, code_bytes
 from plcbuilder.ide.actions import Act
-from plcbuilder.ide.dialogs.quick_open import QuickOpenDialog
-from plcbuilder.ide.dialogs.rename import RenameDialog
 from plcbuilder.ide.docks import make_dock
 from plcbuilder.ide.editor import file_key
-from plcbuilder.ide.help import HelpWindow, ShortcutsDialog
 from plcbuilder.ide.navigation import NavigationHistory
-from plcbuilder.ide.panels.disasm_view import DisasmView
-from plcbuilder.ide.panels.find_in_files import FindInFilesPanel
 from plcbuilder.ide.panels.outline import OutlinePanel
-from plcbuilder.ide.panels.register_browser import RegisterBrowser
-from plcbuilder.ide.panels.results import Hit, ResultsPanel
-from plcbuilder.lang import references
 from plcbuilder.lang import symbols as lang_symbols
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
+
+if TYPE_CHECKING:
+    from plcbuilder.ide.help import HelpWindow, ShortcutsDialog
+    from plcbuilder.lang import references
 
 MAX_SOURCE = 4 << 20
 #: The settings key that remembers View → Code Bytes in Margin.
@@ -60,14 +56,11 @@ class Workbench(QObject):
         self.nav = NavigationHistory(win.editor_stack, self)
         self.help_window: Optional[HelpWindow] = None
         self.show_bytes = False
-        # the docks
+        # the docks: the Outline now; the others (hidden until asked for) get
+        # their panel when first shown or used (see _panel)
         self.outline = OutlinePanel(win)
-        self.references = ResultsPanel(win, "Shift+F12 on a name lists where it is used")
-        self.find_panel = FindInFilesPanel(win)
-        self.find_panel.sources_provider = self.project_sources
-        self.disasm = DisasmView(win)
-        self.disasm.source_line = self._source_line
-        self.registers = RegisterBrowser(win)
+        self._panels: dict = {}
+        self._root: Optional[Path] = None
         area = Qt.DockWidgetArea
         win.outline_dock = make_dock(win, "Outline", "outlineDock", self.outline,
                                      area.LeftDockWidgetArea)
@@ -78,15 +71,15 @@ class Workbench(QObject):
             win.outline_dock.raise_()
         else:
             win.splitDockWidget(win.project_dock, win.outline_dock, Qt.Orientation.Vertical)
-        win.find_dock = make_dock(win, "Find in Files", "findInFilesDock", self.find_panel,
+        win.find_dock = make_dock(win, "Find in Files", "findInFilesDock", None,
                                   area.BottomDockWidgetArea)
-        win.references_dock = make_dock(win, "References", "referencesDock", self.references,
+        win.references_dock = make_dock(win, "References", "referencesDock", None,
                                         area.BottomDockWidgetArea)
         for d in (win.find_dock, win.references_dock):
             win.tabifyDockWidget(win.problems_dock, d)
-        win.disasm_dock = make_dock(win, "Disassembly", "disasmDock", self.disasm,
+        win.disasm_dock = make_dock(win, "Disassembly", "disasmDock", None,
                                     area.RightDockWidgetArea)
-        win.registers_dock = make_dock(win, "Registers", "registersDock", self.registers,
+        win.registers_dock = make_dock(win, "Registers", "registersDock", None,
                                        area.RightDockWidgetArea)
         # beside the plots when there are run docks, else tabbed together
         beside = win.right_docks[0] if win.right_docks else win.disasm_dock
@@ -98,8 +91,70 @@ class Workbench(QObject):
         win.problems_dock.raise_()
         for d in win.right_docks:
             d.raise_()
-        if win.connection is not None:
-            self.registers.set_connection(win.connection)
+        for key, dock in self._docks().items():
+            dock.visibilityChanged.connect(lambda on, k=key: on and self._panel(k))
+
+    # ============================================================ the docks
+    @property
+    def references(self):
+        """The References dock's panel (made when first shown or used)."""
+        return self._panel("references")
+
+    @property
+    def find_panel(self):
+        """The Find in Files dock's panel."""
+        return self._panel("find")
+
+    @property
+    def disasm(self):
+        """The Disassembly dock's view."""
+        return self._panel("disasm")
+
+    @property
+    def registers(self):
+        """The Registers dock's browser."""
+        return self._panel("registers")
+
+    def _docks(self) -> dict:
+        w = self.win
+        return {"references": w.references_dock, "find": w.find_dock, "disasm": w.disasm_dock,
+                "registers": w.registers_dock}
+
+    def _panel(self, key: str):
+        """A dock's panel, made (and wired, and brought up to date) the first
+        time it shows or is used: until then the window neither builds it nor
+        loads its module (the first paint does not wait for them)."""
+        panel = self._panels.get(key)
+        if panel is not None:
+            return panel
+        win = self.win
+        if key == "references":
+            from plcbuilder.ide.panels.results import ResultsPanel
+            panel = ResultsPanel(win, "Shift+F12 on a name lists where it is used")
+        elif key == "find":
+            from plcbuilder.ide.panels.find_in_files import FindInFilesPanel
+            panel = FindInFilesPanel(win)
+            panel.sources_provider = self.project_sources
+        elif key == "disasm":
+            from plcbuilder.ide.panels.disasm_view import DisasmView
+            panel = DisasmView(win)
+            panel.source_line = self._source_line
+        else:
+            from plcbuilder.ide.panels.register_browser import RegisterBrowser
+            panel = RegisterBrowser(win)
+            panel.sig_insert.connect(self.insert_name)
+            if win.connection is not None:
+                panel.set_connection(win.connection)
+        self._panels[key] = panel
+        if key != "registers":
+            panel.sig_open_location.connect(self.jump)
+        if key in ("references", "find") and self._root is not None:
+            panel.tree.root = self._root
+        self._docks()[key].setWidget(panel)
+        if key == "disasm":
+            win.disasm_dock.visibilityChanged.connect(lambda on: on and self.refresh_build_views())
+            self.refresh_build_views()
+        return panel
 
     # ============================================================ files
     def project_files(self) -> list[Path]:
@@ -166,6 +221,7 @@ class Workbench(QObject):
         files = []
         for f in sorted(self._all_files(p.root)):
             files.append((str(f), f.relative_to(p.root).as_posix()))
+        from plcbuilder.ide.dialogs.quick_open import QuickOpenDialog
         path = QuickOpenDialog.get_file(self.win, files, text)
         if path:
             self.nav.record()
@@ -210,6 +266,7 @@ class Workbench(QObject):
         if origin not in sources:
             sources[origin] = ed.text()
         dirs = self.win.project.include_dirs() if self.win.project is not None else ()
+        from plcbuilder.lang import references
         scope = references.scope_of(word, origin, sources, dirs)
         if scope is None:
             self.win.statusBar().showMessage(f"{verb}: {word} is not a name of this file", 4000)
@@ -220,6 +277,8 @@ class Workbench(QObject):
         scope, sources = self._scope_at_caret("Find References")
         if scope is None:
             return 0
+        from plcbuilder.ide.panels.results import Hit
+        from plcbuilder.lang import references
         refs = references.find_references(scope, sources)
         hits = [Hit(r.file, r.line, r.col, r.end_col, r.text,
                     "definition" if r.definition else "") for r in refs]
@@ -241,6 +300,8 @@ class Workbench(QObject):
             QMessageBox.information(self.win, "Rename", scope.read_only)
             return False
         dirs = self.win.project.include_dirs() if self.win.project is not None else ()
+        from plcbuilder.ide.dialogs.rename import RenameDialog
+        from plcbuilder.lang import references
         plan = RenameDialog.get_plan(
             self.win, scope, lambda new: references.plan_rename(scope, new, sources, dirs),
             self.win.project.root if self.win.project else None)
@@ -252,6 +313,7 @@ class Workbench(QObject):
         """Write a rename: open editors change as one undoable step each (and are
         saved when they had no other unsaved change); other files are rewritten
         atomically, unless they changed on disk since the preview."""
+        from plcbuilder.lang import references
         es = self.win.editor_stack
         changed, skipped, unsaved = [], [], []
         for path, refs in plan.edits.items():
@@ -302,20 +364,23 @@ class Workbench(QObject):
         """The current procedure was checked again (or another editor came up):
         the disassembly and the byte margin follow."""
         ed = self.win.current_editor()
+        disasm = self._panels.get("disasm")      # (not made yet: it catches up when it is)
         if ed is None:
-            self.disasm.clear_view("No procedure open")
+            if disasm is not None:
+                disasm.clear_view("No procedure open")
             return
         if key is not None and key != file_key(ed.path):
             return
         result = self.win.lint.results.get(file_key(ed.path))
         if ed.kind is None or result is None:
-            self.disasm.clear_view(f"{Path(ed.path).name} is not a procedure: open a .plc file"
-                                   if ed.kind is None else "Checking…")
+            if disasm is not None:
+                disasm.clear_view(f"{Path(ed.path).name} is not a procedure: open a .plc file"
+                                  if ed.kind is None else "Checking…")
             code_bytes.show_margin(ed, None)
             return
-        if not self.win.disasm_dock.isHidden():
-            self.disasm.show_result(ed.path, result)
-            self.disasm.follow(ed.path, ed.cursor_line_col()[0])
+        if disasm is not None and not self.win.disasm_dock.isHidden():
+            disasm.show_result(ed.path, result)
+            disasm.follow(ed.path, ed.cursor_line_col()[0])
         if self.show_bytes:
             counts = code_bytes.bytes_by_line(code_bytes.instructions_of(result), ed.path)
             code_bytes.show_margin(ed, code_bytes.lines_of_file(counts, ed.path))
@@ -347,6 +412,7 @@ class Workbench(QObject):
     # ================================================================= help
     def show_manual(self, chapter: str = "ide", anchor: str = "") -> HelpWindow:
         if self.help_window is None:
+            from plcbuilder.ide.help import HelpWindow
             self.help_window = HelpWindow(self.win)
         self.help_window.show()
         self.help_window.raise_()
@@ -356,6 +422,7 @@ class Workbench(QObject):
         return self.help_window
 
     def show_shortcuts(self) -> ShortcutsDialog:
+        from plcbuilder.ide.help import ShortcutsDialog
         dlg = ShortcutsDialog(self.win, self.win._actions.values())
         dlg.show()
         return dlg
@@ -397,11 +464,16 @@ class Workbench(QObject):
     def on_project_opened(self, root: str) -> None:
         """Another project: the history and the old project's results go."""
         self.nav.clear()
-        for tree in (self.references.tree, self.find_panel.tree):
-            tree.root = Path(root)
-            tree.clear()
-        self.references.summary.setText("Shift+F12 on a name lists where it is used")
-        self.find_panel.summary.setText("")
+        self._root = Path(root)
+        for key in ("references", "find"):
+            panel = self._panels.get(key)
+            if panel is not None:
+                panel.tree.root = self._root
+                panel.tree.clear()
+        if "references" in self._panels:
+            self.references.summary.setText("Shift+F12 on a name lists where it is used")
+        if "find" in self._panels:
+            self.find_panel.summary.setText("")
 
     def on_current_changed(self, ed) -> None:
         self.outline.set_editor(ed)
@@ -410,7 +482,7 @@ class Workbench(QObject):
     def on_cursor_moved(self, line: int, _col: int) -> None:
         ed = self.win.current_editor()
         if ed is not None and not self.win.disasm_dock.isHidden():
-            self.disasm.follow(ed.path, line)
+            self.disasm.follow(ed.path, line)       # (shown: made)
 
     def on_editor_created(self, ed) -> None:
         # Alt+Left/Right are Back/Forward, whatever Scintilla would make of them
@@ -446,12 +518,8 @@ def install(win) -> Workbench:
     win.lint.sig_diagnostics_updated.connect(wb.refresh_build_views)
     win.tree.sig_file_deleted.connect(wb.nav.forget_file)
     win.sig_project_opened.connect(wb.on_project_opened)
-    for panel in (wb.references, wb.find_panel, wb.disasm):
-        panel.sig_open_location.connect(wb.jump)
     wb.outline.sig_goto.connect(lambda line, col: wb.jump(win.current_editor().path, line, col)
                                 if win.current_editor() is not None else None)
-    wb.registers.sig_insert.connect(wb.insert_name)
-    win.disasm_dock.visibilityChanged.connect(lambda on: on and wb.refresh_build_views())
     wb.nav.sig_changed.connect(lambda b, f: (win.action(Act.BACK).setEnabled(b),
                                              win.action(Act.FORWARD).setEnabled(f)))
     win.action(Act.BACK).setEnabled(False)

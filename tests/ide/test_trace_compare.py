@@ -52,12 +52,15 @@ def files(tmp_path):
 
 def _drawn(qtbot, w):
     panels = w.run_panels
-    for key in ("outputs", "analog", "proc"):
+    # the three share a tab group: each draws when its tab is the one shown
+    drawn = {"outputs": lambda: panels.lanes.other_data("outputs")[0].size > 0,
+             "analog": lambda: bool(panels.analog.other_curves),
+             "proc": lambda: panels.proc.other_curve is not None
+             and panels.proc.other_curve.getData()[0] is not None}
+    for key, done in drawn.items():
         panels.dock(key).show()
-    qtbot.waitUntil(lambda: panels.lanes.other_data("outputs")[0].size > 0
-                    and bool(panels.analog.other_curves)
-                    and panels.proc.other_curve is not None
-                    and panels.proc.other_curve.getData()[0] is not None, timeout=10000)
+        panels.dock(key).raise_()
+        qtbot.waitUntil(done, timeout=10000)
     return panels
 
 

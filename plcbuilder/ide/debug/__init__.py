@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from PySide6.QtCore import Qt
 
-from plcbuilder.ide.debug.session import DebugSession
+from plcbuilder.ide.debug.session import DOCKS, DebugSession
 
 __all__ = ["DebugSession", "build_docks"]
 
@@ -25,11 +25,13 @@ def build_docks(win) -> None:
     from plcbuilder.ide.docks import make_dock
     dbg = win.debug
     left = Qt.DockWidgetArea.LeftDockWidgetArea
-    win.callstack_dock = make_dock(win, "Call Stack", "callStackDock", dbg.call_stack, left)
+    # empty: each gets its panel when it first shows (or the session uses it)
+    win.callstack_dock = make_dock(win, "Call Stack", "callStackDock", None, left)
     win.splitDockWidget(win.project_dock, win.callstack_dock, Qt.Orientation.Vertical)
-    win.breakpoints_dock = make_dock(win, "Breakpoints", "breakpointsDock",
-                                     dbg.breakpoints_panel, left)
+    win.breakpoints_dock = make_dock(win, "Breakpoints", "breakpointsDock", None, left)
     win.tabifyDockWidget(win.callstack_dock, win.breakpoints_dock)
-    win.forces_dock = make_dock(win, "Forces", "forcesDock", dbg.forces_panel,
+    win.forces_dock = make_dock(win, "Forces", "forcesDock", None,
                                 Qt.DockWidgetArea.RightDockWidgetArea)
     win.callstack_dock.raise_()
+    for key, name in DOCKS.items():
+        getattr(win, name).visibilityChanged.connect(lambda on, k=key: on and dbg._panel(k))

@@ -50,7 +50,7 @@ def build_debug_actions(win, actions: dict) -> None:
     A(Act.REMOVE_ALL_BREAKPOINTS, "Remove &All Breakpoints", dbg.store.clear, "Ctrl+Shift+F9",
       None, "Remove every breakpoint of the project")
     A(Act.TOGGLE_ALL_BREAKPOINTS, "&Enable or Disable All Breakpoints",
-      dbg.breakpoints_panel.toggle_all, None, None,
+      lambda: dbg.breakpoints_panel.toggle_all(), None, None,
       "Disable every breakpoint (or enable them all again)")
     A(Act.RELEASE_ALL, "Release All &Forces", lambda: dbg.release_all(
         dbg.forces_panel.release_mode()), None, "debug-force",

@@ -19,16 +19,15 @@ from typing import Optional
 from PySide6.QtCore import QObject, QTimer, Signal
 from PySide6.QtWidgets import QMenu
 
-from plcbuilder.ide.debug.breakpoint_dialog import BreakpointDialog
 from plcbuilder.ide.debug.breakpoints import Breakpoint, BreakpointStore
-from plcbuilder.ide.debug.breakpoints_panel import BreakpointsPanel
-from plcbuilder.ide.debug.callstack import CallStackPanel, frames_of, halted_text
-from plcbuilder.ide.debug.forces_panel import ForcesPanel
+from plcbuilder.ide.debug.callstack import frames_of, halted_text
 from plcbuilder.ide.debug.inline import hover_value, inline_values
-from plcbuilder.ide.debug.markers import EditorMarks
 from plcbuilder.ide.editor import file_key
 
 SOURCE_SUFFIXES = (".plc", ".h")
+#: The debug docks (the window's attribute) of the panels, by key.
+DOCKS = {"callstack": "callstack_dock", "breakpoints": "breakpoints_dock",
+         "forces": "forces_dock"}
 SAVE_DELAY_MS = 300
 
 
@@ -53,17 +52,8 @@ class DebugSession(QObject):
         self._send_due: set[str] = set()
         self._send_timer = _single_shot(self, 0, self._send_pending)
         self._save_timer = _single_shot(self, SAVE_DELAY_MS, self.save)
-        self.call_stack = CallStackPanel()
-        self.breakpoints_panel = BreakpointsPanel(self.store)
-        self.forces_panel = ForcesPanel()
+        self._panels: dict = {}           # the docks' panels, made when first shown or used
         self.store.sig_changed.connect(self._on_store_changed)
-        self.call_stack.sig_frame_selected.connect(self.pick_frame)
-        self.breakpoints_panel.sig_open_location.connect(
-            lambda path, line: self.win.open_file(path, line))
-        self.breakpoints_panel.sig_edit.connect(lambda bp: self.edit_breakpoint(bp))
-        self.forces_panel.sig_force.connect(self.force)
-        self.forces_panel.sig_release.connect(self.release)
-        self.forces_panel.sig_release_all.connect(self.release_all)
         win.tree.sig_file_renamed.connect(self.store.rename)
         win.tree.sig_file_deleted.connect(lambda p: self.store.clear(p))
 
@@ -81,6 +71,55 @@ class DebugSession(QObject):
             c.sig_connected.connect(self._on_connected)
             c.sig_disconnected.connect(self._on_disconnected)
             c.sig_result.connect(self._on_result)
+
+    # ================================================================ docks
+    @property
+    def call_stack(self):
+        """The Call Stack dock's panel (made when first shown or used)."""
+        return self._panel("callstack")
+
+    @property
+    def breakpoints_panel(self):
+        """The Breakpoints dock's panel."""
+        return self._panel("breakpoints")
+
+    @property
+    def forces_panel(self):
+        """The Forces dock's panel."""
+        return self._panel("forces")
+
+    def _panel(self, key: str):
+        """A dock's panel, made, wired and brought up to date the first time it
+        shows or is used (the window's first paint does not wait for them)."""
+        panel = self._panels.get(key)
+        if panel is not None:
+            return panel
+        if key == "callstack":
+            from plcbuilder.ide.debug.callstack import CallStackPanel
+            panel = CallStackPanel()
+            panel.sig_frame_selected.connect(self.pick_frame)
+            panel.show_state(self.halted)
+        elif key == "breakpoints":
+            from plcbuilder.ide.debug.breakpoints_panel import BreakpointsPanel
+            panel = BreakpointsPanel(self.store)
+            panel.sig_open_location.connect(lambda path, line: self.win.open_file(path, line))
+            panel.sig_edit.connect(lambda bp: self.edit_breakpoint(bp))
+        else:
+            from plcbuilder.ide.debug.forces_panel import ForcesPanel
+            panel = ForcesPanel()
+            panel.sig_force.connect(self.force)
+            panel.sig_release.connect(self.release)
+            panel.sig_release_all.connect(self.release_all)
+            panel.show_forces(self.forces)
+        self._panels[key] = panel
+        dock = getattr(self.win, DOCKS[key], None)
+        if dock is not None:
+            dock.setWidget(panel)
+        return panel
+
+    def _made(self, key: str):
+        """A dock's panel if it was made (None: it catches up when it is)."""
+        return self._panels.get(key)
 
     # ================================================================ state
     @property
@@ -135,6 +174,7 @@ class DebugSession(QObject):
     def attach(self, ed) -> None:
         """A new editor: breakpoint margin and markers, hover values, and the
         halted marks when halted."""
+        from plcbuilder.ide.debug.markers import EditorMarks    # Scintilla: with the editors
         marks = EditorMarks(ed)
         ed.debug_marks = marks
         ed.sig_margin_clicked.connect(lambda line, _mods, e=ed: self.toggle_breakpoint(e, line))
@@ -187,6 +227,7 @@ class DebugSession(QObject):
         return menu
 
     def edit_breakpoint(self, bp: Breakpoint, focus: str = "condition") -> bool:
+        from plcbuilder.ide.debug.breakpoint_dialog import BreakpointDialog
         dlg = BreakpointDialog(self.win, bp, lambda text: self.condition_error(text, bp.path),
                                focus)
         if dlg.exec() != BreakpointDialog.DialogCode.Accepted:
@@ -209,7 +250,7 @@ class DebugSession(QObject):
                 bp.line, moved = line, True
         if moved:
             self.store.move_lines(ed.path, {})
-            self.breakpoints_panel.refresh()
+            self._refresh_breakpoints()
             self._save_timer.start()
 
     def _redraw(self, path: str = "") -> None:
@@ -221,6 +262,10 @@ class DebugSession(QObject):
                     marks.show_breakpoints(self.store.for_file(ed.path))
 
     # ================================================ breakpoints → controller
+    def _refresh_breakpoints(self) -> None:
+        if self._made("breakpoints") is not None:
+            self.breakpoints_panel.refresh()
+
     def _on_store_changed(self, path: str) -> None:
         self._redraw(path)
         self._save_timer.start()
@@ -261,7 +306,7 @@ class DebugSession(QObject):
         for p in refused:
             self._redraw(p)
         if refused:
-            self.breakpoints_panel.refresh()
+            self._refresh_breakpoints()
         self.connection.set_breakpoints(file_name, specs)
 
     def compile_condition(self, text: str, path: str = "") -> tuple[Optional[str], Optional[str]]:
@@ -289,13 +334,13 @@ class DebugSession(QObject):
     def _on_breakpoint_answers(self, file_name: str, answers: list) -> None:
         for p in self.store.set_answers(self._sent.get(file_name, []), answers):
             self._redraw(p)
-        self.breakpoints_panel.refresh()
+        self._refresh_breakpoints()
 
     def _on_breakpoints_refused(self, file_name: str, reason: str) -> None:
         for bp in self._sent.get(file_name, []):
             self.store.mark_refused(bp, reason)
             self._redraw(bp.path)
-        self.breakpoints_panel.refresh()
+        self._refresh_breakpoints()
 
     def _on_connected(self, _address: str) -> None:
         self.store.reset_answers()
@@ -335,7 +380,8 @@ class DebugSession(QObject):
     def _on_resumed(self, _t_ms: int) -> None:
         self.halted = None
         self.picked = None
-        self.call_stack.show_state(None)
+        if self._made("callstack") is not None:
+            self.call_stack.show_state(None)
         for ed in self.win.editors():
             marks = getattr(ed, "debug_marks", None)
             if marks is not None:
@@ -494,7 +540,8 @@ class DebugSession(QObject):
 
     def _on_forces(self, forces: list) -> None:
         self.forces = list(forces)
-        self.forces_panel.show_forces(self.forces)
+        if self._made("forces") is not None:
+            self.forces_panel.show_forces(self.forces)
         panels = getattr(self.win, "run_panels", None)
         if panels is not None and hasattr(panels, "set_forces"):
             panels.set_forces(self.forces)

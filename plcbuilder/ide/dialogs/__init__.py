@@ -8,10 +8,27 @@ result, or None when cancelled; tests drive the widgets and call
 ``accept()`` through a patched ``exec``.
 """
 
-from plcbuilder.ide.dialogs.files import (GoToLineDialog, HeaderNameDialog, ProcedureNameDialog,
-                                          check_procedure_name)
-from plcbuilder.ide.dialogs.preferences import PreferencesDialog
-from plcbuilder.ide.dialogs.run import ConnectDialog, StartDialog
+import importlib
+
+# Each name loads its module when first used (PEP 562): the main window opens
+# without building the dialogs' classes (nor Qt's for them).
+_WHERE = {"GoToLineDialog": "files", "HeaderNameDialog": "files",
+          "ProcedureNameDialog": "files", "check_procedure_name": "files",
+          "PreferencesDialog": "preferences", "ConnectDialog": "run", "StartDialog": "run"}
+
+
+def __getattr__(name: str):
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list:
+    return sorted(set(globals()) | set(__all__))
+
 
 __all__ = ["ConnectDialog", "GoToLineDialog", "HeaderNameDialog", "PreferencesDialog",
            "ProcedureNameDialog", "StartDialog", "check_procedure_name"]

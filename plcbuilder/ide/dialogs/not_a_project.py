@@ -10,7 +10,6 @@ from typing import Optional
 from PySide6.QtWidgets import QMessageBox
 
 from plcbuilder.project.model import Project, ProjectError, looks_like_project
-from plcbuilder.project.new import create_project, init_project
 
 
 def project_or_offer(parent, folder: Path) -> Optional[Path]:
@@ -33,6 +32,7 @@ def project_or_offer(parent, folder: Path) -> Optional[Path]:
     if answer != QMessageBox.StandardButton.Yes:
         return None
     try:
+        from plcbuilder.project.new import create_project, init_project
         project: Project = create_project(folder) if empty else init_project(folder)
     except ProjectError as exc:
         QMessageBox.critical(parent, "Open Project", f"Cannot create the project:\n\n{exc}")

@@ -16,21 +16,38 @@ Positions: Scintilla counts UTF-8 bytes, Python and the diagnostics count
 characters. Every conversion goes through :mod:`plcbuilder.ide.offsets`.
 """
 
-from plcbuilder.ide.editor.files import file_key, normalise_newlines, same_file
-from plcbuilder.ide.editor.style import (IND_ERROR, IND_FIND, IND_OCCURRENCE, IND_WARNING,
-                                         KIND_CONSTANT, KIND_DEFINE, KIND_FUNCTION, KIND_KEYWORD,
-                                         KIND_PREDEFINED, KIND_PROCEDURE, KIND_VARIABLE,
-                                         MK_COVERED, MK_CURRENT, MK_ERROR, MK_UNCOVERED,
-                                         MK_WARNING, EditorPrefs,
-                                         MK_BREAKPOINT, MK_BREAKPOINT_CONDITIONAL,
-                                         MK_BREAKPOINT_DISABLED, MK_BREAKPOINT_UNVERIFIED,
-                                         MK_EXEC, MK_EXEC_LINE, MK_FRAME_LINE, MK_LOGPOINT,
-                                         MK_WAIT, MK_WAIT_LINE,
-                                         default_font_family)
-from plcbuilder.ide.editor.widget import CodeEditor
+import importlib
+import sys
 
-__all__ = ["CodeEditor", "EditorPrefs", "default_font_family", "file_key", "normalise_newlines",
-           "same_file", "IND_ERROR", "IND_FIND", "IND_OCCURRENCE", "IND_WARNING", "KIND_CONSTANT",
+# The names load their module on first use (PEP 562): ``file_key`` or the
+# marker numbers do not load Scintilla, pygments and the editor widget, which
+# the main window does not need before its first paint (the first editor does).
+_WHERE = {"file_key": "files", "normalise_newlines": "files", "same_file": "files",
+          "CodeEditor": "widget"}
+
+
+def __getattr__(name: str):
+    module = _WHERE.get(name, "marks" if name in __all__ else None)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def is_editor(widget) -> bool:
+    """Whether ``widget`` is a :class:`CodeEditor` (without loading the editor:
+    before it loads, none exists)."""
+    module = sys.modules.get(f"{__name__}.widget")
+    return module is not None and isinstance(widget, module.CodeEditor)
+
+
+def __dir__() -> list:
+    return sorted(set(globals()) | set(__all__))
+
+
+__all__ = ["CodeEditor", "EditorPrefs", "default_font_family", "file_key", "is_editor",
+           "normalise_newlines", "same_file", "IND_ERROR", "IND_FIND", "IND_OCCURRENCE", "IND_WARNING", "KIND_CONSTANT",
            "KIND_DEFINE", "KIND_FUNCTION", "KIND_KEYWORD", "KIND_PREDEFINED", "KIND_PROCEDURE",
            "KIND_VARIABLE", "MK_COVERED", "MK_CURRENT", "MK_ERROR", "MK_UNCOVERED", "MK_WARNING",
            "MK_BREAKPOINT", "MK_BREAKPOINT_CONDITIONAL", "MK_BREAKPOINT_DISABLED",

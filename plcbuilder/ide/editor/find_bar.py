@@ -7,7 +7,6 @@ from PySide6.QtGui import QKeySequence, QShortcut
 from PySide6.QtWidgets import (QCheckBox, QHBoxLayout, QLabel, QLineEdit, QPushButton, QToolButton,
                                QVBoxLayout, QWidget)
 
-from plcbuilder.ide.editor.widget import CodeEditor
 
 
 class FindReplaceBar(QWidget):
@@ -24,6 +23,7 @@ class FindReplaceBar(QWidget):
         super().__init__(parent)
         self.editor = None
         self.setObjectName("findBar")
+        self.setStyleSheet("QWidget#findBar { border-top: 1px solid palette(mid); }")
         outer = QVBoxLayout(self)
         outer.setContentsMargins(6, 4, 6, 4)
         outer.setSpacing(3)
@@ -115,6 +115,7 @@ class FindReplaceBar(QWidget):
         self.sig_closed.emit()
 
     def flags(self) -> int:
+        from plcbuilder.ide.editor.widget import CodeEditor    # (loaded with the first editor)
         return CodeEditor.search_flags(self.case_box.isChecked(), self.word_box.isChecked(),
                                        self.regex_box.isChecked())
 

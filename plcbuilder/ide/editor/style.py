@@ -1,42 +1,26 @@
 """The editor's marks and looks: indicators, markers, margins, the images of
-margin markers and completion kinds, and the preferences every editor follows."""
+margin markers and completion kinds, and the preferences every editor follows
+(the numbers and the preferences are defined in :mod:`.marks`, which does not
+load Scintilla)."""
 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
 
 from PySide6.QtCore import Qt
-from PySide6.QtGui import QColor, QFont, QFontDatabase, QImage, QPainter
+from PySide6.QtGui import QColor, QFont, QImage, QPainter
 from pyside6_scintilla import Scintilla
+
+from plcbuilder.ide.editor.marks import (  # noqa: F401 - this module gives them too
+    IND_ERROR, IND_WARNING, IND_FIND, IND_OCCURRENCE, MK_ERROR, MK_WARNING, MK_CURRENT,
+    MK_COVERED, MK_UNCOVERED, MK_BREAKPOINT, MK_BREAKPOINT_DISABLED, MK_BREAKPOINT_CONDITIONAL,
+    MK_LOGPOINT, MK_BREAKPOINT_UNVERIFIED, MK_EXEC_LINE, MK_WAIT_LINE, MK_FRAME_LINE, MK_EXEC,
+    MK_WAIT, MK_DEBUG_MASK, MK_BACKGROUNDS, KIND_FUNCTION, KIND_VARIABLE, KIND_PREDEFINED,
+    KIND_CONSTANT, KIND_DEFINE, KIND_KEYWORD, KIND_PROCEDURE, KIND_LOOK, EditorPrefs,
+    default_font_family, rgba_image)
 
 M = Scintilla.Message
 
-# indicators (0..7 belong to lexers; containers use 8 and up)
-IND_ERROR = 8
-IND_WARNING = 9
-IND_FIND = 10
-IND_OCCURRENCE = 11
-# markers
-MK_ERROR = 0
-MK_WARNING = 1
-MK_CURRENT = 2          # a line being jumped to (briefly)
-MK_COVERED = 3          # test coverage: a line that ran
-MK_UNCOVERED = 4        # ... a line with code that did not
-# the debugger's markers (plcbuilder.ide.debug.markers draws them); a higher
-# number is drawn over a lower one
-MK_BREAKPOINT = 5
-MK_BREAKPOINT_DISABLED = 6
-MK_BREAKPOINT_CONDITIONAL = 7
-MK_LOGPOINT = 8
-MK_BREAKPOINT_UNVERIFIED = 9
-MK_EXEC_LINE = 10       # background of the line a halted procedure is at
-MK_WAIT_LINE = 11       # ... of a loop's end where a procedure waits for the next tick
-MK_FRAME_LINE = 12      # ... of a caller's line (a call stack frame picked)
-MK_EXEC = 13            # the arrow of the line a halted procedure is at
-MK_WAIT = 14            # the arrow of a loop's end it waits at
-MK_DEBUG_MASK = sum(1 << m for m in range(MK_BREAKPOINT, MK_WAIT + 1))
-MK_BACKGROUNDS = (1 << MK_EXEC_LINE) | (1 << MK_WAIT_LINE) | (1 << MK_FRAME_LINE)
 # elements (SCI_SETELEMENTCOLOUR): the selection's text colours are left unset, so
 # selected text keeps its syntax colours over the selection background
 EL_SELECTION_TEXT = 10
@@ -69,59 +53,6 @@ COMMENT_PREFIX = "//"
 BRACES = "(){}"
 BRACE_BYTES = frozenset(BRACES.encode())
 WORD_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-
-#: completion item kinds, shown with an image in the list
-KIND_FUNCTION = 1
-KIND_VARIABLE = 2
-KIND_PREDEFINED = 3
-KIND_CONSTANT = 4
-KIND_DEFINE = 5
-KIND_KEYWORD = 6
-KIND_PROCEDURE = 7
-KIND_LOOK = {  # letter, colour
-    KIND_FUNCTION: ("f", "#7a3e9d"), KIND_VARIABLE: ("v", "#1f6feb"),
-    KIND_PREDEFINED: ("v", "#00838f"), KIND_CONSTANT: ("c", "#b35900"),
-    KIND_DEFINE: ("#", "#2e7d32"), KIND_KEYWORD: ("k", "#5c5c5c"),
-    KIND_PROCEDURE: ("p", "#00627a"),
-}
-
-
-@dataclass(frozen=True)
-class EditorPrefs:
-    """What the Preferences dialog changes in every editor."""
-    font_family: str = ""
-    font_size: int = 11
-    tab_width: int = 4
-    theme: str = "light"
-    show_whitespace: bool = False
-    indent_guides: bool = True
-    autocomplete: bool = True
-    autocomplete_threshold: int = 2
-    hover: bool = True
-
-
-def default_font_family() -> str:
-    family = QFontDatabase.systemFont(QFontDatabase.SystemFont.FixedFont).family()
-    return family or "DejaVu Sans Mono"
-
-
-def rgba_image(letter: str, colour: str, size: int = 14) -> bytes:
-    img = QImage(size, size, QImage.Format.Format_RGBA8888)
-    img.fill(Qt.GlobalColor.transparent)
-    p = QPainter(img)
-    p.setRenderHint(QPainter.RenderHint.Antialiasing)
-    p.setPen(Qt.PenStyle.NoPen)
-    p.setBrush(QColor(colour))
-    p.drawRoundedRect(1, 1, size - 2, size - 2, 3, 3)
-    f = QFont(default_font_family())
-    f.setPixelSize(size - 4)
-    f.setBold(True)
-    p.setFont(f)
-    p.setPen(QColor("#ffffff"))
-    p.drawText(img.rect(), Qt.AlignmentFlag.AlignCenter, letter)
-    p.end()
-    return bytes(img.constBits())
-
 
 def marker_image(kind: str, size: int = 14) -> bytes:
     """An error (red disc with a cross) or warning (amber triangle with !) icon."""

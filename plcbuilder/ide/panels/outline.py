@@ -13,7 +13,7 @@ from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtGui import QColor, QFont, QIcon, QImage, QPixmap
 from PySide6.QtWidgets import QLabel, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget
 
-from plcbuilder.ide.editor.style import (KIND_DEFINE, KIND_LOOK, KIND_PROCEDURE, KIND_VARIABLE,
+from plcbuilder.ide.editor.marks import (KIND_DEFINE, KIND_LOOK, KIND_PROCEDURE, KIND_VARIABLE,
                                          rgba_image)
 from plcbuilder.lang import symbols as lang_symbols
 

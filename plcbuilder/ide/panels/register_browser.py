@@ -20,6 +20,7 @@ from PySide6.QtWidgets import (QAbstractItemView, QComboBox, QHBoxLayout, QHeade
                                QLineEdit, QTableView, QVBoxLayout, QWidget)
 
 from plcbuilder.api import abi
+from plcbuilder.ide.docks import on_screen
 
 COL_NAME, COL_NUMBER, COL_VALUE, COL_KIND, COL_MEANING = range(5)
 HEADERS = ("Name", "Number", "Value", "Kind", "Meaning")
@@ -167,7 +168,7 @@ class RegisterBrowser(QWidget):
         if connection is not None and hasattr(connection, "sig_registers"):
             connection.sig_registers.connect(self.on_registers)
             connection.sig_disconnected.connect(lambda _why: self.clear_values())
-        self.timer.start()
+        self._run_timer()
 
     def select_name(self, name: str) -> bool:
         """Show and select the row of ``name`` (the search is cleared); False if none."""
@@ -218,7 +219,7 @@ class RegisterBrowser(QWidget):
         """Ask for the values of the registers on screen (when connected and
         visible); True when a request went out."""
         c = self.connection
-        if c is None or not getattr(c, "connected", False) or not self.isVisible():
+        if c is None or not getattr(c, "connected", False) or not on_screen(self):
             return False
         addrs = self.visible_addresses()
         if not addrs:
@@ -244,7 +245,24 @@ class RegisterBrowser(QWidget):
         hits = self.model.findItems(name, Qt.MatchFlag.MatchExactly, COL_NAME)
         return self.model.item(hits[0].row(), COL_VALUE).text() if hits else ""
 
+    def showEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().showEvent(event)
+        self._run_timer()
+
+    def hideEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().hideEvent(event)
+        self._run_timer()
+
     # ------------------------------------------------------------ private
+    def _run_timer(self) -> None:
+        """Poll only while shown with a connection (a hidden browser asks for
+        nothing, so it needs no timer waking the IDE)."""
+        if self.connection is not None and self.isVisible():
+            if not self.timer.isActive():
+                self.timer.start()
+        else:
+            self.timer.stop()
+
     def _refilter(self, *_args) -> None:
         self.proxy.set(self.search.text(), self.kind.currentData() or "")
         self._show_count()

@@ -6,10 +6,11 @@ only, which hand pyqtgraph views of the buffers cut to the visible time window.
 
 The timer runs only while there is something to redraw: samples, events, a
 view change or a dock shown start it, and it stops after a tick that found
-nothing to do. A hidden dock does not redraw (it catches up when shown); when
-only time advanced, the plots move instead of redrawing, and only while
-something runs. The watch polls the controller's variables only while
-something runs and the watch is shown.
+nothing to do (or, when only a put-off move is left, sleeps until it is due).
+A dock that is not on screen, hidden or behind another tab, does not redraw
+(it catches up when shown); when only time advanced, the plots move instead
+of redrawing, and only while something runs. The watch polls the
+controller's variables only while something runs and the watch is on screen.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from plcbuilder.api import abi
 from plcbuilder.link.client import ControllerStatus
 from plcbuilder.api import events as ev
 from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
-from plcbuilder.ide.docks import RUN_DOCKS
+from plcbuilder.ide.docks import RUN_DOCKS, on_screen
 from plcbuilder.ide.panels.cursors import CursorTable, Cursors
 from plcbuilder.ide.elided_label import ElidedLabel
 from plcbuilder.ide.panels.inputs import InputsPanel
@@ -191,9 +192,10 @@ class RunPanels(QtCore.QObject):
         if getattr(c, "connected", False):
             self._on_connected(getattr(c, "address", ""))
 
+        self.frame_ms = max(1, 1000 // max(1, fps))
         self.timer = QtCore.QTimer(self)
         self.timer.setTimerType(Qt.TimerType.PreciseTimer)
-        self.timer.setInterval(max(1, 1000 // max(1, fps)))
+        self.timer.setInterval(self.frame_ms)
         self.timer.timeout.connect(self.tick)
         self.var_timer = QtCore.QTimer(self)
         self.var_timer.setInterval(VARIABLES_INTERVAL_MS)
@@ -366,9 +368,12 @@ class RunPanels(QtCore.QObject):
             label.show()
 
     def wake(self, *args) -> None:
-        """Something may need a redraw: run the redraw timer (it stops itself)."""
-        if not self._stopped and not self.timer.isActive():
-            self.timer.start()
+        """Something may need a redraw: run the redraw timer (it stops itself).
+        A timer waiting longer for a put-off move comes back at once."""
+        if self._stopped:
+            return
+        if not self.timer.isActive() or self.timer.remainingTime() > self.frame_ms:
+            self.timer.start(self.frame_ms)
 
     def busy(self) -> bool:
         """Something runs on the controller (or ended a moment ago)."""
@@ -383,10 +388,13 @@ class RunPanels(QtCore.QObject):
         self.ticks += 1
         moving = self.busy()
         work = False
+        due: Optional[float] = None         # a put-off time-only move: due in (s)
         for panel in self.time_panels:
             if self._shown(panel):
                 work |= panel.refresh(moving=moving)
-                work |= panel.move_pending()
+                d = panel.move_due()
+                if d is not None:
+                    due = d if due is None else min(due, d)
         if self._markers:
             self._place_markers()
         if self.cursors.enabled:
@@ -403,7 +411,15 @@ class RunPanels(QtCore.QObject):
                 self._inputs_shown = key
                 self.inputs.refresh()
             work |= pending
-        if not work:
+        if self._stopped:
+            return
+        if work:
+            if self.timer.interval() != self.frame_ms or not self.timer.isActive():
+                self.timer.start(self.frame_ms)
+        elif due is not None:
+            # only a move is left: come back when it is due, not every frame
+            self.timer.start(max(1, int(due * 1000 + 0.999)))
+        else:
             self.timer.stop()
 
     def shutdown(self) -> None:
@@ -414,7 +430,7 @@ class RunPanels(QtCore.QObject):
     # --------------------------------------------------------------- private
     @staticmethod
     def _shown(w: QtWidgets.QWidget) -> bool:
-        return w.isVisible()
+        return on_screen(w)           # a dock tabbed away is "visible" to Qt
 
     def _place_markers(self) -> None:
         for panel, _plot, line in self._markers:
@@ -466,7 +482,8 @@ class RunPanels(QtCore.QObject):
     def _on_state(self, st: ControllerStatus, missed: int = 0) -> None:
         self._state = st
         self._running = st.running
-        if (st.running or st.software) and not self.var_timer.isActive() and not self._stopped:
+        if (st.running or st.software) and not self.var_timer.isActive() and \
+                not self._stopped and self._shown(self.watch):
             self.var_timer.start()
         parts = []
         if self._running:
@@ -523,8 +540,7 @@ class RunPanels(QtCore.QObject):
         if not getattr(self.connection, "connected", False):
             return
         if not self._shown(self.watch):
-            if not busy:
-                self.var_timer.stop()       # the final polls wait for the watch to show
+            self.var_timer.stop()           # until the watch shows (the final polls wait too)
             return
         if not busy:
             self._final_poll -= 1

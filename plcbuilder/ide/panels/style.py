@@ -6,6 +6,7 @@ nothing else in the IDE changes look because the panels were imported.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import PySide6  # noqa: F401  (pyqtgraph picks the binding imported first)
@@ -62,9 +63,27 @@ class TimeAxis(pg.AxisItem):
             self.update()
 
     def tickValues(self, minVal, maxVal, size):  # noqa: N802
+        """The ticks of each level (``tickSpacing``'s), at round absolute
+        times, in view coordinates; a tick a higher level has is left out.
+        (pyqtgraph's own spends most of its time in numpy on lists this short,
+        and a following axis asks ten times a second.)"""
         o = self.offset
-        levels = super().tickValues(minVal + o, maxVal + o, size)
-        return [(spacing, [v - o for v in values]) for spacing, values in levels]
+        if self.logMode or self.scale != 1.0:
+            levels = super().tickValues(minVal + o, maxVal + o, size)
+            return [(spacing, [v - o for v in values]) for spacing, values in levels]
+        lo, hi = sorted((minVal + o, maxVal + o))
+        out, seen = [], []
+        for spacing, start_at in self.tickSpacing(lo, hi, size):
+            start = math.ceil((lo - start_at) / spacing) * spacing + start_at
+            eps = spacing * 0.01
+            values = []
+            for i in range(int((hi - start) / spacing) + 1):
+                v = start + i * spacing
+                if not any(abs(v - u) <= eps for u in seen):
+                    values.append(v)
+            seen.extend(values)
+            out.append((spacing, [v - o for v in values]))
+        return out
 
     def tickStrings(self, values, scale, spacing):  # noqa: N802
         o = self.offset

@@ -20,6 +20,7 @@ from typing import Optional
 
 from PySide6 import QtCore, QtWidgets
 
+from plcbuilder.ide.docks import dock_of, on_screen
 from plcbuilder.ide.elided_label import ElidedLabel
 # plcbuilder.testing (and through it the compiler) loads when the panel first
 # needs it, not with the main window: the IDE's first paint does not wait for it
@@ -123,6 +124,7 @@ class TestsPanel(QtWidgets.QWidget):
         self.results: dict[str, object] = {}
         self.coverage = None
         self.showing: Optional[str] = None    # the recorded test run the run panels show
+        self._stale = False                   # the project's tests are not read yet
 
         self.run_all_button = QtWidgets.QPushButton("Run All")
         self.run_all_button.setToolTip("Build the project and run every test (Ctrl+T)")
@@ -180,14 +182,25 @@ class TestsPanel(QtWidgets.QWidget):
 
     # ============================================================== public
     def set_project(self, root) -> None:
-        """Show the tests of the project at ``root`` (None: no project)."""
+        """Show the tests of the project at ``root`` (None: no project). In a
+        dock tabbed away or hidden, the files are read when it shows or its
+        tests are asked for: a project opens (and the window first paints)
+        without reading them."""
         self.root = Path(root) if root is not None else None
         self.results.clear()
         self.coverage = None
-        self.reload()
+        self._stale = True
+        if dock_of(self) is None or on_screen(self):
+            self.reload()
+
+    def ensure_loaded(self) -> None:
+        """List the project's tests now, if they were not read since it opened."""
+        if self._stale:
+            self.reload()
 
     def reload(self) -> None:
         """Read tests/*.toml again and list the tests (results are kept by name)."""
+        self._stale = False
         self.tree.clear()
         self.detail.clear()
         if self.root is None:
@@ -217,6 +230,7 @@ class TestsPanel(QtWidgets.QWidget):
 
     def test_names(self) -> list[str]:
         """The tests listed, in order."""
+        self.ensure_loaded()
         items = (self.tree.topLevelItem(i) for i in range(self.tree.topLevelItemCount()))
         return [it.text(NAME) for it in items if it.data(NAME, ROLE_KIND) == "test"]
 
@@ -296,6 +310,7 @@ class TestsPanel(QtWidgets.QWidget):
         return menu
 
     def run_selected(self) -> bool:
+        self.ensure_loaded()
         item = self.tree.currentItem()
         if item is None or item.data(NAME, ROLE_KIND) != "test":
             return False
@@ -373,6 +388,7 @@ class TestsPanel(QtWidgets.QWidget):
         return f"{p.as_posix()}:{line}" if line else p.as_posix()
 
     def _item(self, name: str):
+        self.ensure_loaded()
         for i in range(self.tree.topLevelItemCount()):
             item = self.tree.topLevelItem(i)
             if item.text(NAME) == name:

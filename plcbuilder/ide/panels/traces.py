@@ -19,6 +19,7 @@ import pyqtgraph as pg  # noqa: I001 - after PySide6 (it takes the loaded bindin
 import pyqtgraph.exporters  # noqa: F401,E402 - pg.exporters
 
 from plcbuilder import api
+from plcbuilder.ide.docks import on_screen
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import PINS
 from plcbuilder.ide.panels.plots.overlay import comparison_of, step_samples
@@ -297,7 +298,7 @@ class TraceTools(QtCore.QObject):
         """The plots of one panel (default: the first visible) as PNG or SVG."""
         path = Path(path)
         if panel is None:
-            shown = [p for p in self.panels.time_panels if p.isVisible()]
+            shown = [p for p in self.panels.time_panels if on_screen(p)]
             panel = shown[0] if shown else self.panels.lanes
         scene = panel._time_plots[0].scene()
         suffix = path.suffix.lower()

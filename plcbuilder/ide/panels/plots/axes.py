@@ -8,7 +8,7 @@ import pyqtgraph as pg  # noqa: E402,I001
 
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import AXES, RunModel
-from plcbuilder.ide.panels.plots.timebase import TimeBase, TimePanel, YFit
+from plcbuilder.ide.panels.plots.timebase import TimeBase, TimePanel, YFit, shift_item
 
 Qt = QtCore.Qt
 
@@ -102,7 +102,7 @@ class AxesPanel(TimePanel):
     def shift(self, dx: float) -> None:
         for d in (self._pos, self._vel):
             for item in d.values():
-                item.setPos(dx, 0)
+                shift_item(item, dx)
 
     def model_cleared(self) -> None:
         self._path_version = -1

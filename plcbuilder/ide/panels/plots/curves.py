@@ -7,7 +7,8 @@ import pyqtgraph as pg  # noqa: E402,I001
 
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import ANALOG_NAMES, RunModel
-from plcbuilder.ide.panels.plots.timebase import TimeBase, TimePanel, YFit, center_item, empty_text
+from plcbuilder.ide.panels.plots.timebase import (TimeBase, TimePanel, YFit, center_item,
+                                                  empty_text, shift_item)
 
 
 
@@ -132,7 +133,7 @@ class AnalogPanel(TimePanel):
 
     def shift(self, dx: float) -> None:
         for item in (*self._curves.values(), *self.other_curves.values()):
-            item.setPos(dx, 0)
+            shift_item(item, dx)
 
     def model_cleared(self) -> None:
         for col, item in self._curves.items():

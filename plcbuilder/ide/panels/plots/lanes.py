@@ -12,7 +12,8 @@ import pyqtgraph as pg  # noqa: E402,I001
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import PINS, RunModel
 from plcbuilder.ide.panels.plots import overlay
-from plcbuilder.ide.panels.plots.timebase import TimeBase, TimePanel, center_item, empty_text
+from plcbuilder.ide.panels.plots.timebase import (TimeBase, TimePanel, center_item, empty_text,
+                                                  shift_item)
 
 Qt = QtCore.Qt
 
@@ -320,7 +321,7 @@ class LanesPanel(TimePanel):
     def shift(self, dx: float) -> None:
         for item in (*self._items.values(), *self._blocks.values(), *self.other_items.values(),
                      *self._other_blocks.values()):
-            item.setPos(dx, 0)
+            shift_item(item, dx)
 
     # --------------------------------------------------------- context menu
     def _lane_at(self, pos: QtCore.QPoint) -> Optional[tuple[str, int]]:

@@ -14,7 +14,8 @@ from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.tables import RowsModel
 from plcbuilder.ide.panels.plots import overlay
-from plcbuilder.ide.panels.plots.timebase import TimeBase, TimePanel, center_item, empty_text
+from plcbuilder.ide.panels.plots.timebase import (TimeBase, TimePanel, center_item, empty_text,
+                                                  shift_item)
 
 Qt = QtCore.Qt
 
@@ -132,10 +133,10 @@ class ProcPanel(TimePanel):
         self.other_curve.setData(o.time.view()[a:b] - self.offset, o.scalars.view(0)[a:b])
 
     def shift(self, dx: float) -> None:
-        self.curve.setPos(dx, 0)
+        shift_item(self.curve, dx)
         if self.other_curve is not None:
-            self.other_curve.setPos(dx, 0)
-        self.markers.setPos(dx, 0)
+            shift_item(self.other_curve, dx)
+        shift_item(self.markers, dx)
         for lab, (x, y) in zip(self._labels, self._label_pos):
             lab.setPos(x + dx, y)
 

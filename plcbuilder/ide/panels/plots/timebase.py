@@ -202,7 +202,7 @@ class TimePanel(QtWidgets.QWidget):
         self._base: list = []       # the newest row of each watched buffer at the last draw
         self._checked = 0           # model rows compared with _base so far
         self._last_move = 0.0
-        self._pending_move = False  # a time-only move put off (SCROLL_FPS)
+        self._move_due: Optional[float] = None   # a time-only move put off: due in (s)
         #: a second trace drawn over this one (plots/overlay.py), or None
         self.comparison = None
         timebase.sig_changed.connect(self._mark_dirty)
@@ -293,7 +293,8 @@ class TimePanel(QtWidgets.QWidget):
             force = True
         if not force and not self._view_dirty:
             if m.version == self._drawn_version:
-                return False
+                # nothing new; a move put off earlier may be due now
+                return self._move(moving) if self._move_due is not None else False
             if self.data_changed():
                 force = True
             else:
@@ -302,20 +303,30 @@ class TimePanel(QtWidgets.QWidget):
         return self._redraw()
 
     def _move(self, moving: bool) -> bool:
-        """Only time advanced: move the curves, not their data."""
+        """Only time advanced: move the curves, not their data; at most
+        ``SCROLL_FPS`` times a second, and only by a pixel or more (a window
+        of a minute moves less than a pixel in a tenth of a second)."""
         if not self.timebase.follow or not moving or not self._time_plots:
+            self._move_due = None
             return False
         now = time.monotonic()
-        if now - self._last_move < 1.0 / self.SCROLL_FPS:
-            self._pending_move = True
+        wait = self._last_move + 1.0 / self.SCROLL_FPS - now
+        if wait > 0:
+            self._move_due = wait
             return False
         t0, t1 = self.visible_span()
         if t1 > self._horizon:
             return self._redraw()
         if t1 == self.offset:
+            self._move_due = None
+            return False
+        px = self.pixels_per_second(t1 - t0)
+        if px > 0 and (t1 - self.offset) * px < 1.0:
+            # less than a pixel: nothing to see yet (due when it makes one, at 1x)
+            self._move_due = max(1.0 / self.SCROLL_FPS, (1.0 - (t1 - self.offset) * px) / px)
             return False
         self._last_move = now
-        self._pending_move = False
+        self._move_due = None
         self.offset = t1
         self.shift(self._drawn_offset - t1)
         for ax in self._time_axes:
@@ -323,9 +334,16 @@ class TimePanel(QtWidgets.QWidget):
         self.moves += 1
         return True
 
-    def move_pending(self) -> bool:
-        """A time-only move was put off (the redraw timer comes back for it)."""
-        return self._pending_move
+    def pixels_per_second(self, span: float) -> float:
+        """The plots' width in pixels over ``span`` seconds (0: not laid out)."""
+        if span <= 0 or not self._time_plots:
+            return 0.0
+        return self._time_plots[0].getViewBox().width() / span
+
+    def move_due(self) -> Optional[float]:
+        """Seconds until a time-only move that was put off is due (None: none
+        is): the redraw timer comes back then, not at every frame."""
+        return self._move_due
 
     def _redraw(self) -> bool:
         m = self.model
@@ -357,7 +375,7 @@ class TimePanel(QtWidgets.QWidget):
         self._base = [rb.latest() for rb in self.watched()] if len(m) else []
         self._checked = m.time.total
         self._view_dirty = False
-        self._pending_move = False
+        self._move_due = None
         self._last_move = time.monotonic()
         self.frames += 1
         return True
@@ -386,6 +404,17 @@ class TimePanel(QtWidgets.QWidget):
 
     def set_pin_names(self, inputs: dict[int, str], outputs: dict[int, str]) -> None:
         pass
+
+
+def shift_item(item: pg.GraphicsObject, dx: float, y: float = 0.0) -> None:
+    """Move a drawn item to (dx, y) and nothing else. ``PlotDataItem.setPos``
+    also re-clips, re-downsamples and re-sets its curve's data (a new path to
+    build and paint) for every move; the data drawn up to the horizon
+    already cover the view until the next redraw, so a time-only move keeps
+    them and only forgets the item's cached view rectangle (a redraw, or a
+    view change, clips to the view as it is then)."""
+    pg.GraphicsObject.setPos(item, dx, y)
+    item.viewTransformChanged()
 
 
 def empty_text(plot: pg.PlotItem, text: str) -> pg.TextItem:

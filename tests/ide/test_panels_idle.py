@@ -1,0 +1,218 @@
+"""What the IDE does while little or nothing happens (issue 14 point 4): the
+causes of CPU use found by profiling, each pinned down without timing.
+
+- Qt keeps the docks of a tab group that are not current "visible" (it moves
+  them out of the window): they must neither redraw nor poll.
+- A time-only move shifts the curves; it must not make pyqtgraph re-clip,
+  re-downsample and re-set their data.
+- A move put off by the scroll rate comes back when it is due (not at every
+  frame, and not only when the next telemetry arrives); less than a pixel of
+  time does not move the plots at all.
+- Nothing runs and nothing changes: no QTimer runs.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("PySide6")
+
+from PySide6 import QtCore, QtWidgets  # noqa: E402
+
+from plcbuilder.ide.docks import on_screen  # noqa: E402
+from plcbuilder.ide.panels import RunPanels  # noqa: E402
+from plcbuilder.link.client import ControllerStatus  # noqa: E402
+from tests.ide import _workbench  # noqa: E402
+from tests.ide.test_panels import FakeConnection, sample  # noqa: E402
+
+# the main window's fixtures
+make_window, project, prompts = _workbench.make_window, _workbench.project, _workbench.prompts
+
+Qt = QtCore.Qt
+
+
+@pytest.fixture
+def tabbed(qtbot):
+    """The run docks as the IDE places them: the plots tabbed on the right
+    (Outputs in front), inputs, watch and cursors tabbed under them."""
+    fake = FakeConnection()
+    win = QtWidgets.QMainWindow()
+    qtbot.addWidget(win)
+    win.setCentralWidget(QtWidgets.QTextEdit())
+    p = RunPanels(win, fake, capacity=2000)
+    right = [p.dock(k) for k in ("outputs", "proc", "analog", "axes")]
+    lower = [p.dock(k) for k in ("inputs", "watch", "cursors")]
+    area = Qt.DockWidgetArea.RightDockWidgetArea
+    win.addDockWidget(area, right[0])
+    win.splitDockWidget(right[0], lower[0], Qt.Orientation.Vertical)
+    for d in right[1:]:
+        win.tabifyDockWidget(right[0], d)
+    for d in lower[1:]:
+        win.tabifyDockWidget(lower[0], d)
+    win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, p.dock("log"))
+    right[0].raise_()
+    lower[0].raise_()
+    win.resize(1400, 900)
+    win.show()
+    qtbot.waitExposed(win)
+    yield p, fake
+    p.shutdown()
+
+
+def test_docks_tabbed_away_neither_redraw_nor_poll(qtbot, tabbed):
+    p, fake = tabbed
+    # Qt calls them visible; they are out of the window
+    assert p.proc.isVisible() and p.watch.isVisible()
+    assert not on_screen(p.proc) and not on_screen(p.watch)
+    assert on_screen(p.lanes) and on_screen(p.inputs)
+    frames = [q.frames for q in p.time_panels]
+    fake.sig_samples.emit([sample(t, proc=70 + (t & 1), outputs=t & 1, pwm=(t,), axes=(t,))
+                           for t in range(300)])
+    p.tick()
+    assert [q.frames - f for q, f in zip(p.time_panels, frames)] == [0, 1, 0, 0]  # lanes only
+    fake.connected = True
+    fake.sig_state.emit(ControllerStatus(t_ms=300, running="M03", software=(), proc=70), 0)
+    p._poll_variables()
+    assert ("variables",) not in fake.calls and not p.var_timer.isActive()
+    # brought to the front: they catch up, and the watch polls
+    p.dock("proc").raise_()
+    qtbot.waitUntil(lambda: on_screen(p.proc))
+    p.tick()
+    assert p.proc.frames == frames[0] + 1 and not on_screen(p.lanes)
+    p.dock("watch").raise_()
+    qtbot.waitUntil(lambda: ("variables",) in fake.calls)
+    assert p.var_timer.isActive()
+
+
+def test_a_time_only_move_leaves_the_curves_data_alone(qtbot, tabbed, monkeypatch):
+    """PlotDataItem.setPos re-clips, re-downsamples and sets its curve's data
+    again (a new path to build): a move must not."""
+    import pyqtgraph as pg
+    p, fake = tabbed
+    p.timebase.set_window(1.0)
+    fake.sig_samples.emit([sample(t, outputs=t & 1, pwm=(t,)) for t in range(0, 2000, 10)])
+    fake.sig_samples.emit([sample(2000, outputs=1, pwm=(99,))])
+    p.tick()
+    curve_data = []
+    orig = pg.PlotCurveItem.setData
+    monkeypatch.setattr(pg.PlotCurveItem, "setData",
+                        lambda self, *a, **k: (curve_data.append(self), orig(self, *a, **k)))
+    lanes = p.lanes
+    frames, moves = lanes.frames, lanes.moves
+    fake.sig_samples.emit([sample(t, outputs=1, pwm=(99,)) for t in range(2001, 2100)])
+    lanes._last_move = 0.0
+    p.tick()
+    assert lanes.frames == frames and lanes.moves == moves + 1
+    assert curve_data == []
+    item = lanes._items["outputs"]
+    assert item.pos().x() == pytest.approx(lanes._drawn_offset - lanes.offset)
+    assert item.viewRect().right() == pytest.approx(lanes.offset - lanes._drawn_offset, abs=1e-6)
+
+
+def test_a_put_off_move_comes_back_when_due(qtbot, tabbed):
+    p, fake = tabbed
+    p.timebase.set_window(1.0)
+    p._on_state(ControllerStatus(t_ms=0, running=None, software=("LUBE",), proc=0))
+    fake.sig_samples.emit([sample(t, outputs=(t // 1000) & 1, running=None)
+                           for t in range(0, 2000, 10)])
+    p.tick()
+    lanes = p.lanes
+    fake.sig_samples.emit([sample(2000, outputs=1, running=None)])     # only time advances
+    lanes._last_move = 0.0
+    p.tick()
+    moves = lanes.moves
+    assert moves >= 1
+    # new time right after the move: the scroll rate puts it off ...
+    fake.sig_samples.emit([sample(2100, outputs=1, running=None)])
+    p.tick()
+    assert lanes.moves == moves and lanes.move_due() is not None
+    # ... the timer does not spin at the frame rate meanwhile ...
+    assert p.timer.isActive() and p.timer.interval() > p.frame_ms
+    # ... and the move comes without more telemetry
+    qtbot.waitUntil(lambda: lanes.moves == moves + 1, timeout=2000)
+    assert lanes.offset == pytest.approx(2.1)
+    qtbot.waitUntil(lambda: not p.timer.isActive(), timeout=2000)
+
+
+def test_less_than_a_pixel_does_not_move(qtbot, tabbed):
+    p, fake = tabbed
+    p.timebase.set_window(60.0)
+    p._on_state(ControllerStatus(t_ms=0, running=None, software=("LUBE",), proc=0))
+    fake.sig_samples.emit([sample(t, outputs=(t // 1000) & 1, running=None)
+                           for t in range(0, 61000, 100)])
+    p.tick()
+    lanes = p.lanes
+    per_px = 60.0 / lanes.plot.getViewBox().width()
+    assert per_px > 0.02
+    moves = lanes.moves
+    fake.sig_samples.emit([sample(61010, outputs=1, running=None)])   # 10 ms: under a pixel
+    lanes._last_move = 0.0
+    p.tick()
+    assert lanes.moves == moves
+    fake.sig_samples.emit([sample(61000 + int(per_px * 2000), outputs=1, running=None)])
+    lanes._last_move = 0.0
+    p.tick()
+    assert lanes.moves == moves + 1
+
+
+def test_the_register_browser_polls_only_while_shown(qtbot):
+    from plcbuilder.ide.panels.register_browser import RegisterBrowser
+    b = RegisterBrowser()
+    qtbot.addWidget(b)
+    b.set_connection(_workbench.FakeConnection())
+    assert not b.timer.isActive()                 # hidden: no timer
+    b.show()
+    qtbot.waitExposed(b)
+    assert b.timer.isActive()
+    b.hide()
+    assert not b.timer.isActive()
+
+
+def test_no_timer_runs_while_the_ide_is_idle(qtbot, make_window, project):
+    """The example's case: a project open, the controller connected, nothing
+    running; time advances on the controller (a time-only frame a second)."""
+    conn = _workbench.FakeConnection()
+    w = make_window(connection=conn, start_controller=True)
+    w.open_project(project)
+    _workbench.settle(qtbot, w)
+    qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
+    conn.connected = True
+    conn.sig_connected.emit("127.0.0.1:5700")
+    for t in range(3):
+        conn.sig_state.emit(ControllerStatus(t_ms=1000 * t, running=None, software=(), proc=0), 0)
+        conn.sig_samples.emit([sample(1000 * t, running=None)])
+        qtbot.wait(60)
+    w.statusBar().clearMessage()               # a message's own timeout ends by itself
+    qtbot.waitUntil(lambda: not w.run_panels.timer.isActive(), timeout=3000)
+    active = [(type(t.parent()).__name__, t.interval()) for t in w.findChildren(QtCore.QTimer)
+              if t.isActive()]
+    assert active == []
+    # an unsaved change is autosaved: its timer runs until nothing is unsaved
+    ed = w.open_file(project / "hardware" / "M03.plc")
+    ed.insertText(0, "// x\n")
+    assert w.recovery.timer.isActive()
+    assert w.recovery.autosave_now() == 1 and w.recovery.timer.isActive()
+    assert w.save_editor(ed)
+    w.recovery.autosave_now()
+    assert not w.recovery.timer.isActive()
+
+
+def test_the_time_axis_ticks_are_pyqtgraphs_at_round_absolute_times(qtbot):
+    """The following time axis works its ticks out itself (pyqtgraph's way,
+    without numpy: it is asked ten times a second); they are the same."""
+    import random
+
+    import pyqtgraph as pg
+
+    from plcbuilder.ide.panels.style import TimeAxis
+    ax = TimeAxis()
+    rnd = random.Random(14)
+    for _ in range(500):
+        ax.offset = rnd.uniform(0, 5000)
+        width = rnd.choice([0.01, 1, 5, 10, 60, 3600]) * rnd.uniform(0.5, 1.5)
+        size = rnd.uniform(100, 2000)
+        mine = ax.tickValues(-width, 0.0, size)
+        ref = pg.AxisItem.tickValues(ax, ax.offset - width, ax.offset, size)
+        assert [s for s, _v in mine] == pytest.approx([s for s, _v in ref])
+        for (_s, a), (_t, b) in zip(mine, ref):
+            assert [v + ax.offset for v in a] == pytest.approx(b, abs=1e-9)

@@ -1,0 +1,115 @@
+"""Issue 14 point 5: what the main window does not do before its first paint.
+
+The window shows with the project open; the hidden or tabbed-away docks get
+their panel when they first show (or are used), the project's check starts
+after the paint, and neither the editor (Scintilla, pygments) nor the link
+nor the compiler is loaded by then. Each cause of a slow start found by
+profiling, pinned down without timing.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+from PySide6.QtWidgets import QApplication
+
+from plcbuilder.project.new import create_project
+from tests.ide import _workbench
+
+make_window, prompts = _workbench.make_window, _workbench.prompts
+
+#: Not loaded when the window first paints (they come with the first editor,
+#: the first connection, the first check, the run panels).
+NOT_AT_FIRST_PAINT = ("lark", "plcbuilder.lang.pipeline", "pyside6_scintilla", "pygments",
+                      "plcbuilder.ide.editor.widget", "plcbuilder.link.client",
+                      "plcbuilder.link.process", "plcbuilder.controller.events", "pyqtgraph",
+                      "numpy", "plcbuilder.ide.help", "plcbuilder.ide.build_panel",
+                      "plcbuilder.ide.panels.tests", "plcbuilder.ide.panels.register_browser",
+                      "plcbuilder.testing.spec")
+
+_PROBE = r"""
+import sys
+from PySide6.QtCore import QEvent, QObject, QTimer
+from plcbuilder.ide.app import create_application
+from plcbuilder.ide.main_window import MainWindow
+from plcbuilder.ide.settings import Settings
+app = create_application()
+win = MainWindow(Settings(sys.argv[2]), start_controller=False)
+class FirstPaint(QObject):
+    def eventFilter(self, obj, ev):
+        if ev.type() == QEvent.Type.Paint and not hasattr(self, "seen"):
+            self.seen = sorted(m for m in %r if m in sys.modules)
+            QTimer.singleShot(0, app.quit)
+        return False
+f = FirstPaint()
+win.installEventFilter(f)
+win.show()
+win.open_project(sys.argv[1])
+app.exec()
+print(f.seen, repr(app.styleSheet()))
+win.shutdown()
+""" % (NOT_AT_FIRST_PAINT,)
+
+
+def test_the_first_paint_waits_for_no_editor_link_or_compiler(tmp_path):
+    project = create_project(tmp_path / "example").root
+    r = subprocess.run([sys.executable, "-c", _PROBE, str(project), str(tmp_path / "s.ini")],
+                       capture_output=True, text=True, timeout=120,
+                       env={**__import__("os").environ, "QT_QPA_PLATFORM": "offscreen"})
+    assert r.returncode == 0, r.stderr
+    # no application-wide style sheet: it makes every widget slower to build and paint
+    assert r.stdout.split("\n")[0] == "[] ''", r.stdout
+
+
+def test_hidden_and_tabbed_docks_get_their_panel_when_shown(qtbot, make_window, tmp_path):
+    conn = _workbench.FakeConnection()
+    w = make_window(connection=conn, start_controller=True)
+    project = create_project(tmp_path / "example").root
+    w.open_project(project)
+    # before the first paint the project's check is only due: nothing compiles yet
+    assert w.busy() and not w.lint.worker.pending()
+    qtbot.waitUntil(lambda: w._painted and w.run_panels is not None, timeout=10000)
+    _workbench.settle(qtbot, w)                        # ... then it runs
+    assert w.lint.results
+    wb, dbg = w.workbench, w.debug
+    assert wb._panels == {} and dbg._panels == {}
+    assert w._build_panel is None and w._tests_panel is None
+    for dock in (w.find_dock, w.references_dock, w.disasm_dock, w.registers_dock,
+                 w.callstack_dock, w.breakpoints_dock, w.forces_dock, w.build_dock,
+                 w.tests_dock):
+        assert dock.widget() is None, dock.objectName()
+    # shown: made, in its dock, up to date
+    w.registers_dock.show()
+    w.registers_dock.raise_()
+    qtbot.waitUntil(lambda: "registers" in wb._panels)
+    assert w.registers_dock.widget() is wb.registers and wb.registers.connection is conn
+    w.callstack_dock.raise_()
+    qtbot.waitUntil(lambda: "callstack" in dbg._panels)
+    assert w.callstack_dock.widget() is dbg.call_stack
+    w.tests_dock.raise_()
+    qtbot.waitUntil(lambda: w._tests_panel is not None)
+    assert w.tests_dock.widget() is w.tests_panel
+    assert w.tests_panel.test_names()                  # the example's tests, read on show
+    # used: made (a build needs Build Output)
+    done = []
+    w.sig_build_finished.connect(done.append)
+    assert w.build_all()
+    assert w.build_dock.widget() is w.build_panel
+    qtbot.waitUntil(lambda: bool(done), timeout=30000)
+    assert "0 errors" in w.build_panel.text.toPlainText()
+
+
+def test_no_application_style_sheet_and_the_editor_tabs_keep_their_look(qtbot, make_window):
+    w = make_window()
+    assert QApplication.instance().styleSheet() == ""
+    bar = w.tabs.tabBar()
+    assert "padding: 5px 10px" in bar.styleSheet() and "close.svg" in bar.styleSheet()
+    assert "border-top" in w.find_bar.styleSheet()
+
+
+@pytest.mark.parametrize("name", ["CodeEditor", "file_key", "MK_ERROR", "EditorPrefs"])
+def test_the_editor_package_still_gives_every_name(name):
+    from plcbuilder.ide import editor
+    assert getattr(editor, name) is not None
