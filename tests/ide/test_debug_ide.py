@@ -8,6 +8,7 @@ from __future__ import annotations
 import zlib
 
 import pytest
+import shiboken6
 from PySide6.QtCore import QObject, Qt, QTimer, Signal
 from PySide6.QtGui import QKeySequence
 from PySide6.QtWidgets import QDialog, QMessageBox
@@ -233,8 +234,13 @@ def test_breakpoints_panel_enables_goes_to_the_line_and_removes(make_window, exa
     items = panel.breakpoint_items()
     assert [i.text(1) for i in items] == ["31", "41", "62"]
     items[1].setCheckState(0, Qt.CheckState.Unchecked)
+    # the row clicked outlives its own change (the list is rebuilt after it:
+    # rebuilt inside it, the row was deleted under Qt's feet and the IDE crashed)
+    assert shiboken6.isValid(items[1])
     assert not w.debug.store.at(ed.path, 41).enabled
     assert ed.debug_marks.breakpoint_lines()[41] == MK_BREAKPOINT_DISABLED
+    qtbot.waitUntil(lambda: not shiboken6.isValid(items[1]))          # then rebuilt
+    assert panel.breakpoint_items()[1].checkState(0) == Qt.CheckState.Unchecked
     ed.goto_line(1)
     panel.tree.itemDoubleClicked.emit(panel.breakpoint_items()[2], 0)
     assert w.current_editor() is ed and ed.cursor_line_col()[0] == 62

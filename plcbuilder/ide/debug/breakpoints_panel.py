@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Optional
 
-from PySide6.QtCore import Qt, Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (QHBoxLayout, QMenu, QToolButton, QTreeWidget, QTreeWidgetItem,
                                QVBoxLayout, QWidget)
 
@@ -57,11 +57,17 @@ class BreakpointsPanel(QWidget):
         lay.addLayout(top)
         lay.addWidget(self.tree, 1)
         self._filling = False
+        self._changing = False          # in an item's own change (its checkbox)
         store.sig_changed.connect(lambda _p: self.refresh())
         self.refresh()
 
     # ------------------------------------------------------------------ API
     def refresh(self) -> None:
+        if self._changing:
+            # the store changed from a row's checkbox: the row is still inside
+            # its own setData (rebuilding now would delete it under Qt's feet)
+            QTimer.singleShot(0, self.refresh)
+            return
         self._filling = True
         self.tree.clear()
         for bp in self.store.all():
@@ -110,7 +116,11 @@ class BreakpointsPanel(QWidget):
         bp: Breakpoint = item.data(0, ROLE_BP)
         on = item.checkState(0) == Qt.CheckState.Checked
         if bp.enabled != on:
-            self.store.update(bp, enabled=on)
+            self._changing = True
+            try:
+                self.store.update(bp, enabled=on)
+            finally:
+                self._changing = False
 
     def _activated(self, item: QTreeWidgetItem, _column: int = 0) -> None:
         bp: Breakpoint = item.data(0, ROLE_BP)
