@@ -19,6 +19,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import os
 import sys
 import threading
 from typing import Optional
@@ -74,10 +75,24 @@ class Transport:
         loop = asyncio.get_running_loop()
         chunks: asyncio.Queue = asyncio.Queue()
 
-        def pump():                  # a daemon thread: a blocked read never holds the exit
+        # A daemon thread, so that a blocked read never holds the exit; it reads
+        # the file descriptor itself: a read through the buffered stdin holds
+        # that object's lock, and an interpreter that exits meanwhile aborts
+        # ("could not acquire lock for <stdin> at interpreter shutdown").
+        try:
+            fd = stdin.fileno()
+        except (AttributeError, OSError, ValueError):
+            fd = None
+
+        def read() -> bytes:
+            if fd is not None:
+                return os.read(fd, 65536)
+            return stdin.read1(65536) if hasattr(stdin, "read1") else stdin.read(65536)
+
+        def pump():
             while True:
                 try:
-                    data = stdin.read1(65536) if hasattr(stdin, "read1") else stdin.read(65536)
+                    data = read()
                 except (OSError, ValueError):
                     data = b""
                 loop.call_soon_threadsafe(chunks.put_nowait, data)
