@@ -27,7 +27,6 @@ from plcbuilder.bytecode.program import MAGIC, MAX_FILE_SIZE, Kind, LoadError, P
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
                                     summary)
 from plcbuilder.lang.options import CompileOptions
-from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header, builtin_header_names
 
 if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type checkers
     from plcbuilder.controller import events
@@ -44,6 +43,7 @@ if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type
     from plcbuilder.controller.targets import TargetConfig
     from plcbuilder.controller.trigger import (Capturer, TriggerError, parse_trigger,
                                               watched_variables)
+    from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header, builtin_header_names
     from plcbuilder.controller.variables_xml import load_variables
     from plcbuilder.image.manifest import ImageError, read_image, write_image
     from plcbuilder.lang.highlight import PlcLexer
@@ -81,6 +81,7 @@ for _module, _names in (
         ("plcbuilder.controller.variables_xml", "load_variables"),
         ("plcbuilder.image.manifest", "ImageError read_image write_image"),
         ("plcbuilder.lang.highlight", "PlcLexer"),
+        ("plcbuilder.lang.preprocess", "BUILTIN_PREFIX builtin_header builtin_header_names"),
         ("plcbuilder.lang.pipeline",
          "CompileResult compile_bytes compile_file compile_source"),
         ("plcbuilder.project",

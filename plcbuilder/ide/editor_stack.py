@@ -29,7 +29,7 @@ from plcbuilder.ide.recovery import (MAX_EDIT_BYTES, DiskWatcher, RecoveryManage
                                      file_digest, save_text)
 from plcbuilder.ide.settings import Preferences
 from plcbuilder.ide.welcome import WelcomePage
-from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
+from plcbuilder.lang.builtin_headers import BUILTIN_PREFIX, builtin_header
 
 if TYPE_CHECKING:
     from plcbuilder.ide.editor import CodeEditor

@@ -15,11 +15,11 @@ from PySide6.QtCore import QObject, QTimer, Signal
 
 from plcbuilder import api
 from plcbuilder.api import Kind, Severity
-from plcbuilder.ide import completion, hover
 from plcbuilder.ide.diagnostics_worker import DiagnosticsWorker
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.problems import ProblemsPanel, ProblemStore
 from plcbuilder.project.model import ProjectError
+
 
 if TYPE_CHECKING:
     from plcbuilder.ide.editor import CodeEditor
@@ -56,7 +56,7 @@ class Lint(QObject):
         self.results: dict[str, object] = {}          # file key -> latest CompileResult
         self.sizes: dict[str, tuple] = {}             # file key -> (size, limit)
         self.header_defines: dict = {}
-        self._header_scan = completion.HeaderDefines()
+        self._header_scan = None                       # completion.HeaderDefines, when asked
         self.worker = DiagnosticsWorker(self, **({"debounce_ms": debounce_ms}
                                                  if debounce_ms is not None else {}))
         self.worker.sig_result.connect(self._on_compile_result)
@@ -86,6 +86,7 @@ class Lint(QObject):
 
     def attach(self, ed: CodeEditor) -> None:
         """A new editor: completion, hover and diagnostics for it."""
+        from plcbuilder.ide import completion  # (loaded when first used)
         ed.completion_provider = self.complete
         ed.hover_provider = self.hover
         ed.signature_provider = completion.signature
@@ -212,6 +213,7 @@ class Lint(QObject):
         self.refresh_problems()
 
     def apply_defines(self, ed: CodeEditor) -> None:
+        from plcbuilder.ide import completion  # (loaded when first used)
         result = self.results.get(file_key(ed.path))
         names = set(self.header_defines)
         if result is not None and getattr(result, "symbols", None) is not None:
@@ -234,18 +236,23 @@ class Lint(QObject):
         self.sig_problem_counts.emit(*self.store.counts())
 
     def refresh_header_defines(self) -> None:
+        from plcbuilder.ide import completion  # (loaded when first used)
         dirs = self.project.include_dirs() if self.project is not None else ()
+        if self._header_scan is None:
+            self._header_scan = completion.HeaderDefines()
         self.header_defines = self._header_scan.defines(dirs)
         self.sig_header_defines.emit(self.header_defines)
 
     # ------------------------------------------------ completion, hover, goto
     def complete(self, ed: CodeEditor, prefix: str) -> list:
+        from plcbuilder.ide import completion  # (loaded when first used)
         result = self.results.get(file_key(ed.path))
         return completion.completions(prefix, kind=ed.kind or Kind.HARDWARE, text=_near_caret(ed),
                                       symbols=getattr(result, "symbols", None),
                                       defines=self.header_defines)
 
     def hover(self, ed: CodeEditor, pos: int) -> Optional[str]:
+        from plcbuilder.ide import completion, hover  # (loaded when first used)
         start, end, word = ed.word_at(pos)
         if not word:
             return None
@@ -259,6 +266,7 @@ class Lint(QObject):
                                 variables=tuple(completion.scan_variables(text)))
 
     def goto_definition(self, word: str) -> bool:
+        from plcbuilder.ide import completion  # (loaded when first used)
         if not word:
             return False
         ed = self.editors.current_editor()

@@ -47,7 +47,7 @@ from plcbuilder.ide.run_actions import SPEEDS, RunActions
 from plcbuilder.ide.settings import Preferences, Settings
 from plcbuilder.ide.status_bar import StatusBar
 from plcbuilder.ide.welcome import APP_NAME
-from plcbuilder.lang.preprocess import BUILTIN_PREFIX
+from plcbuilder.lang.builtin_headers import BUILTIN_PREFIX
 from plcbuilder.project.model import Project, ProjectError
 
 if TYPE_CHECKING:

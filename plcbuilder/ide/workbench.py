@@ -31,8 +31,6 @@ from plcbuilder.ide.docks import make_dock
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.navigation import NavigationHistory
 from plcbuilder.ide.panels.outline import OutlinePanel
-from plcbuilder.lang import symbols as lang_symbols
-from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
 
 if TYPE_CHECKING:
     from plcbuilder.ide.help import HelpWindow, ShortcutsDialog
@@ -198,6 +196,7 @@ class Workbench(QObject):
         ed = self.win.editor_for(path)
         if ed is not None:
             return ed.line_text(line - 1)
+        from plcbuilder.lang.builtin_headers import BUILTIN_PREFIX, builtin_header
         if path.startswith(BUILTIN_PREFIX):
             text = builtin_header(path[len(BUILTIN_PREFIX):])
         else:
@@ -452,6 +451,7 @@ class Workbench(QObject):
         a number where it means one (``gvarget(6060)``, ``exit(99)``)."""
         if not word[0].isdigit():
             return self.registers.select_name(word)
+        from plcbuilder.lang import symbols as lang_symbols    # (not needed to start up)
         value = lang_symbols.number_of(word)
         line0 = ed.lineFromPosition(start)
         context = lang_symbols.number_context(ed.byte_range_text(ed.positionFromLine(line0),

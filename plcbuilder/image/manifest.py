@@ -37,8 +37,8 @@ from dataclasses import dataclass, field
 from typing import Callable, Iterable, Iterator, Sequence, Union
 
 from plcbuilder._support.strictjson import strict_json_loads
-from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind, LoadError, Program
+from plcbuilder.image.limits import MAX_LIMIT, Limits
 from plcbuilder.image.romfs import REGULAR, ImageError, LazyFile, iter_romfs, read_romfs
 
 MANIFEST_NAME = "MANIFEST"
@@ -47,7 +47,6 @@ VERSION = 2
 VOLUME = "plcbuilder"
 SUFFIX = ".bin"
 MAX_PROCEDURES = 4096
-MAX_LIMIT = 1 << 24
 MAX_NAME = 64
 MAX_FILE_SIZE = 1 << 32
 NAME_RE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_\-]{0,63}\Z")
@@ -58,27 +57,6 @@ _SELF_CRC = "manifest_crc32"
 
 __all__ = ["ImageError", "Limits", "Image", "ImageProcedure", "write_image", "iter_image", "read_image",
            "valid_name", "MANIFEST_NAME"]
-
-
-@dataclass(frozen=True)
-class Limits:
-    """Code size limits in bytes (defaults from the myCNC manual)."""
-
-    hw_proc: int = abi.HW_PROC_LIMIT
-    hw_total: int = abi.HW_TOTAL_LIMIT
-    sw_proc: int = abi.SW_PROC_LIMIT
-
-    def proc_limit(self, kind: Kind) -> int:
-        return self.hw_proc if Kind(kind) is Kind.HARDWARE else self.sw_proc
-
-    def as_dict(self) -> dict[str, int]:
-        return {"hw_proc": self.hw_proc, "hw_total": self.hw_total, "sw_proc": self.sw_proc}
-
-    def check(self) -> None:
-        for key, value in self.as_dict().items():
-            if type(value) is not int or not 0 < value <= MAX_LIMIT:
-                raise ImageError(f"limit {key} must be a whole number from 1 to {MAX_LIMIT}, "
-                                 f"is {value!r}")
 
 
 @dataclass(frozen=True)

@@ -26,16 +26,16 @@ import bisect
 import os
 import re
 from dataclasses import dataclass, field, replace
-from importlib import resources
 from pathlib import Path
 from typing import Optional, Sequence
 
 from plcbuilder.diagnostics import Diagnostic, Related, Span, error, warning
+from plcbuilder.lang.builtin_headers import (BUILTIN_PREFIX, builtin_header,  # noqa: F401
+                                             builtin_header_names)
 from plcbuilder.lang.builtins import KEYWORDS
 from plcbuilder.lang.source import SourceFile, SourceSet, normalise, read_source
 from plcbuilder.lang.tokens import Tok, Tokenizer
 
-BUILTIN_PREFIX = "<builtin>/"
 MAX_INCLUDE_DEPTH = 32
 MAX_TOKENS = 200_000
 MAX_EXPANSION = 1_000_000
@@ -66,27 +66,6 @@ class Preprocessed:
     includes: list[str]                        # display names of headers read, in order
     block_comments: list[Span] = field(default_factory=list)   # for --strict
     directives: list[tuple[str, Span]] = field(default_factory=list)   # for --strict
-
-
-def builtin_header(name: str) -> Optional[str]:
-    """The text of a built-in header (resources/include/NAME), or None."""
-    if "/" in name or "\\" in name or name.startswith("."):
-        return None
-    try:
-        ref = resources.files("plcbuilder") / "resources" / "include" / name
-        if ref.is_file():
-            return normalise(ref.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError):
-        return None
-    return None
-
-
-def builtin_header_names() -> list[str]:
-    try:
-        d = resources.files("plcbuilder") / "resources" / "include"
-        return sorted(p.name for p in d.iterdir() if p.name.endswith(".h"))
-    except OSError:
-        return []
 
 
 class TokenCache:

@@ -33,13 +33,8 @@ from plcbuilder.lang.source import MAX_SOURCE_BYTES, normalise
 from plcbuilder.lang.tokens import Tok, Tokenizer, parse_number
 
 # What a completion item is.
-KEYWORD = "keyword"
-FUNCTION = "function"
-PREDEFINED_VARIABLE = "predefined"
-DEFINE = "define"
-PROCEDURE = "procedure"
-VARIABLE = "variable"
-CONSTANT = "constant"
+from plcbuilder.lang.kinds import (CONSTANT, DEFINE, FUNCTION, KEYWORD,  # noqa: E402,F401
+                                   PREDEFINED_VARIABLE, PROCEDURE, VARIABLE)
 
 #: The headers whose defines are always offered (the default machine's wiring).
 DEFAULT_HEADERS = ("pins.h",)

@@ -58,7 +58,7 @@ from plcbuilder._support.toml_errors import TomlLocator, decode_error
 from plcbuilder._support.toml_errors import loads as toml_loads
 from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.program import Kind
-from plcbuilder.image.manifest import MAX_LIMIT, Limits
+from plcbuilder.image.limits import MAX_LIMIT, Limits
 from plcbuilder.lang.options import CompileOptions
 
 SETTINGS_FILE = "plcbuilder.toml"

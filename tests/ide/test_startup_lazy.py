@@ -27,7 +27,9 @@ NOT_AT_FIRST_PAINT = ("lark", "plcbuilder.lang.pipeline", "pyside6_scintilla", "
                       "plcbuilder.link.process", "plcbuilder.controller.events", "pyqtgraph",
                       "numpy", "plcbuilder.ide.help", "plcbuilder.ide.build_panel",
                       "plcbuilder.ide.panels.tests", "plcbuilder.ide.panels.register_browser",
-                      "plcbuilder.testing.spec")
+                      "plcbuilder.testing.spec", "plcbuilder.lang.preprocess",
+                      "plcbuilder.lang.symbols", "plcbuilder.ide.completion",
+                      "plcbuilder.image.manifest", "plcbuilder.image.romfs")
 
 _PROBE = r"""
 import sys

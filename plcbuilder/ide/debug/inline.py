@@ -10,7 +10,7 @@ from __future__ import annotations
 import re
 from typing import Mapping, Optional
 
-from plcbuilder.lang.symbols import KEYWORDS
+from plcbuilder.lang.builtins import KEYWORDS
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _STRING_OR_COMMENT = re.compile(r'"(?:[^"\\]|\\.)*"|//.*')

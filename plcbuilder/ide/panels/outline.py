@@ -7,7 +7,7 @@ short pause in typing)."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtGui import QColor, QFont, QIcon, QImage, QPixmap
@@ -15,13 +15,16 @@ from PySide6.QtWidgets import QLabel, QTreeWidget, QTreeWidgetItem, QVBoxLayout,
 
 from plcbuilder.ide.editor.marks import (KIND_DEFINE, KIND_LOOK, KIND_PROCEDURE, KIND_VARIABLE,
                                          rgba_image)
-from plcbuilder.lang import symbols as lang_symbols
+from plcbuilder.lang import kinds
+
+if TYPE_CHECKING:
+    from plcbuilder.lang.symbols import OutlineItem
 
 ROLE_ITEM = Qt.ItemDataRole.UserRole + 1
 #: The outline's groups: (kind, title, the editor's completion kind for the icon)
-GROUPS = ((lang_symbols.PROCEDURE, "Procedures", KIND_PROCEDURE),
-          (lang_symbols.DEFINE, "Defines", KIND_DEFINE),
-          (lang_symbols.VARIABLE, "Variables", KIND_VARIABLE))
+GROUPS = ((kinds.PROCEDURE, "Procedures", KIND_PROCEDURE),
+          (kinds.DEFINE, "Defines", KIND_DEFINE),
+          (kinds.VARIABLE, "Variables", KIND_VARIABLE))
 #: Texts larger than this are not outlined (reading their names would hold up typing).
 MAX_OUTLINE_CHARS = 200_000
 
@@ -42,7 +45,7 @@ class OutlinePanel(QWidget):
     def __init__(self, parent=None, delay_ms: int = 400):
         super().__init__(parent)
         self.editor = None
-        self.items: list[lang_symbols.OutlineItem] = []
+        self.items: list[OutlineItem] = []
         self._icons = {kind: _kind_icon(k) for kind, _t, k in GROUPS}
         self.note = QLabel("No file open", self)
         self.note.setContentsMargins(6, 3, 6, 3)
@@ -97,6 +100,7 @@ class OutlinePanel(QWidget):
             self.note.show()
             return
         text = ed.text()
+        from plcbuilder.lang import symbols as lang_symbols    # (not needed to start up)
         idx = lang_symbols.index(text, ed.path)
         self.items = idx.outline()
         bold = QFont(self.tree.font())
@@ -110,7 +114,7 @@ class OutlinePanel(QWidget):
             group.setFlags(group.flags() & ~Qt.ItemFlag.ItemIsSelectable)
             self.tree.addTopLevelItem(group)
             for it in members:
-                label = f"{it.name}()" if kind == lang_symbols.PROCEDURE else it.name
+                label = f"{it.name}()" if kind == kinds.PROCEDURE else it.name
                 child = QTreeWidgetItem([label, it.detail])
                 child.setIcon(0, self._icons[kind])
                 child.setData(0, ROLE_ITEM, it)
@@ -135,11 +139,11 @@ class OutlinePanel(QWidget):
             group = self.tree.topLevelItem(group_i)
             for i in range(group.childCount()):
                 child = group.child(i)
-                it: lang_symbols.OutlineItem = child.data(0, ROLE_ITEM)
-                if it.line == line and it.kind != lang_symbols.PROCEDURE:
+                it: OutlineItem = child.data(0, ROLE_ITEM)
+                if it.line == line and it.kind != kinds.PROCEDURE:
                     best = child
                     break
-                if it.kind == lang_symbols.PROCEDURE and it.line <= line <= it.end_line \
+                if it.kind == kinds.PROCEDURE and it.line <= line <= it.end_line \
                         and best is None:
                     best = child
             if best is not None and best.data(0, ROLE_ITEM).line == line:
@@ -155,7 +159,7 @@ class OutlinePanel(QWidget):
         finally:
             self._following = False
 
-    def selected(self) -> Optional[lang_symbols.OutlineItem]:
+    def selected(self) -> Optional[OutlineItem]:
         item = self.tree.currentItem()
         return item.data(0, ROLE_ITEM) if item is not None else None
 
