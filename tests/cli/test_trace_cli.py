@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 
 import pytest
-from vcdvcd import VCDVCD
+from tests.vcd_reader import VCDVCD
 
 from plcbuilder.cli.main import main
 

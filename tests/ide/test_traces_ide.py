@@ -8,7 +8,7 @@ import pytest
 pytest.importorskip("PySide6")
 
 from PySide6 import QtCore, QtWidgets  # noqa: E402
-from vcdvcd import VCDVCD  # noqa: E402
+from tests.vcd_reader import VCDVCD  # noqa: E402
 
 from plcbuilder import api  # noqa: E402
 from plcbuilder.ide.panels import RunPanels  # noqa: E402

@@ -8,7 +8,7 @@ import json
 import zipfile
 
 import pytest
-from vcdvcd import VCDVCD
+from tests.vcd_reader import VCDVCD
 
 from plcbuilder import api
 from plcbuilder.controller.history import History
