@@ -249,7 +249,7 @@ class Client:
             raise LinkError(str(exc)) from None
         try:
             with self._send_lock:
-                self._sock.sendall(frame)
+                self._sock.sendall(frame, protocol.NOSIGNAL)
         except OSError as exc:
             with self._lock:
                 self._pending.pop(mid, None)

@@ -87,6 +87,10 @@ MAX_HELLO_FRAME = 1024
 #: Changes (and events) in one telemetry frame at most.
 TELEMETRY_PER_FRAME = 4000
 #: Largest frame payload accepted, in bytes (an image of MAX_IMAGE bytes fits as base64).
+#: send() and sendall() flags for every socket of the link: a peer that has gone
+#: is an error (EPIPE), never SIGPIPE, whatever the process does with that signal
+NOSIGNAL = getattr(socket, "MSG_NOSIGNAL", 0)
+
 MAX_FRAME = 4 * 1024 * 1024
 #: Largest image accepted by upload, in bytes (before base64).
 MAX_IMAGE = (MAX_FRAME - 4096) // 4 * 3
@@ -341,7 +345,7 @@ class FrameDecoder:
 # ------------------------------------------------------------------ blocking helpers
 
 def send_msg(sock: socket.socket, msg: dict, max_frame: int = MAX_FRAME) -> None:
-    sock.sendall(encode_frame(msg, max_frame))
+    sock.sendall(encode_frame(msg, max_frame), NOSIGNAL)
 
 
 def _recv_exact(sock: socket.socket, n: int) -> bytes:

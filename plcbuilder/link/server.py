@@ -34,6 +34,7 @@ from plcbuilder.link import protocol
 from plcbuilder.link.pacing import Simulation
 from plcbuilder.link.protocol import (MAX_FRAME, PROTOCOL_VERSION, REQUESTS,
                                       ErrorCode, FrameDecoder, ProtocolError, encode_frame)
+from plcbuilder.link.protocol import NOSIGNAL
 from plcbuilder.link.protocol import debug as _debug
 from plcbuilder.link.service import Refused, Service, Session
 
@@ -224,7 +225,7 @@ class Server:
 
     def _wake(self) -> None:
         try:
-            self._wake_w.send(b"x")
+            self._wake_w.send(b"x", NOSIGNAL)
         except OSError:
             pass
 
@@ -350,7 +351,8 @@ class Server:
                 self.stats["busy"] += 1
                 try:
                     sock.send(encode_frame({"type": "error", "id": None, "code": ErrorCode.BUSY,
-                                            "reason": f"too many clients ({self.max_clients})"}))
+                                            "reason": f"too many clients ({self.max_clients})"}),
+                              NOSIGNAL)
                 except OSError:
                     pass
                 sock.close()
@@ -426,7 +428,7 @@ class Server:
         _debug(f"closing {conn.peer}: {reason}")
         try:
             conn.sock.send(encode_frame({"type": "error", "id": None, "code": code,
-                                         "reason": reason}))
+                                         "reason": reason}), NOSIGNAL)
         except OSError:
             pass
         self._drop(conn)
@@ -453,9 +455,10 @@ class Server:
                     c.sock.setblocking(True)
                     c.sock.settimeout(0.2)
                     if c.out:
-                        c.sock.sendall(bytes(c.out))
+                        c.sock.sendall(bytes(c.out), NOSIGNAL)
                     if c.authed:
-                        c.sock.sendall(encode_frame({"type": "bye", "reason": reason}))
+                        c.sock.sendall(encode_frame({"type": "bye", "reason": reason}),
+                                       NOSIGNAL)
                 except OSError:
                     pass
                 self._drop(c)
@@ -662,7 +665,7 @@ class Server:
     def _write(self, conn: _Conn) -> None:
         while conn.out:
             try:
-                n = conn.sock.send(conn.out[:1 << 20])
+                n = conn.sock.send(conn.out[:1 << 20], NOSIGNAL)
             except (BlockingIOError, InterruptedError):
                 return
             except OSError:

@@ -29,6 +29,7 @@ from typing import Callable
 from plcbuilder.controller import abi
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.link.pacing import SimulationDown
+from plcbuilder.link.protocol import NOSIGNAL
 
 __all__ = ["ServerApi", "COMMANDS", "DEFAULT_PORT"]
 
@@ -333,7 +334,7 @@ class ServerApi:
             if len(self._clients) >= self.max_clients:
                 try:
                     sock.send(f"ERROR too many Server API clients ({self.max_clients})\r\n"
-                              .encode())
+                              .encode(), NOSIGNAL)
                 except OSError:
                     pass
                 sock.close()
@@ -434,7 +435,7 @@ class ServerApi:
     def _write(self, client: _Client) -> None:
         while client.out:
             try:
-                n = client.sock.send(client.out[:65536])
+                n = client.sock.send(client.out[:65536], NOSIGNAL)
             except (BlockingIOError, InterruptedError):
                 return
             except OSError:

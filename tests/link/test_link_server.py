@@ -390,3 +390,37 @@ def test_a_big_burst_of_events_arrives_whole_in_several_frames(client):
         if prints >= 10_000:
             break
     assert prints == 10_000 and frames >= 3
+
+
+def test_a_client_gone_is_an_error_not_sigpipe_even_where_sigpipe_kills():
+    """The link sends with MSG_NOSIGNAL: a peer that went away mid-telemetry is
+    an EPIPE the server handles, even in a process where SIGPIPE has its
+    default action (an embedding program's, or one a library changed: the
+    signal would end the process without a word)."""
+    import subprocess
+    import sys
+    code = r'''
+import signal, socket, struct, time
+signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+from plcbuilder.link.client import Client
+from plcbuilder.link.server import ControllerServer
+from tests.link.linkkit import TOGGLE, compile_programs, image_of
+srv = ControllerServer(port=0, speed="max", image=image_of(compile_programs(
+    ["TOGGLE"], overrides=TOGGLE)), frame_timeout=0.2, hello_timeout=1.0)
+srv.start()
+c = Client.connect(*srv.address, srv.token, timeout=10.0)
+c.subscribe(lambda batch: None)
+c.start("TOGGLE")
+time.sleep(0.2)
+# the server's side of the connection can no longer write (as after a peer's
+# reset): its next send is EPIPE, which without MSG_NOSIGNAL raises SIGPIPE
+for conn in list(srv.server._conns.values()):
+    conn.sock.shutdown(socket.SHUT_WR)
+time.sleep(0.5)
+c.close()
+print("alive")
+srv.close()
+'''
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=120, cwd=str(__import__("pathlib").Path(__file__).parents[2]))
+    assert r.returncode == 0 and "alive" in r.stdout, (r.returncode, r.stderr[-2000:])
