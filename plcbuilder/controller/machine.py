@@ -30,6 +30,7 @@ Inputs that the machine file does not wire read the project's IO.DAT preset
 
 from __future__ import annotations
 
+import struct
 from typing import Callable, Optional
 
 from plcbuilder.bytecode import abi, softmc
@@ -48,7 +49,8 @@ STOP_MESSAGES = frozenset(abi.PLCCMD[n] for n in (
     "PLCCMD_MOTION_ABORT", "PLCCMD_MOTION_BREAK"))
 
 _M32 = 0xFFFFFFFF
-_WORD_SHIFTS = tuple(range(0, 256, 32))
+_M256 = (1 << 256) - 1
+_WORDS = struct.Struct("<8I")              # 8 words of 32 pins, from 32 little-endian bytes
 
 
 class Machine(MachineForces):
@@ -351,7 +353,7 @@ class Machine(MachineForces):
         """The 8 words of 32 pins of ``bits`` (the same tuple while they do not change)."""
         seen = self._words.get(kind)
         if seen is None or seen[0] != bits:
-            seen = self._words[kind] = (bits, tuple((bits >> k) & _M32 for k in _WORD_SHIFTS))
+            seen = self._words[kind] = (bits, _WORDS.unpack((bits & _M256).to_bytes(32, "little")))
         return seen[1]
 
     def outputs_on(self) -> list[int]:
