@@ -624,7 +624,7 @@ class PLC:
         rec = self.record_samples
         every = not self.sample_changes_only           # a sample every tick
         last = self._last_row
-        last_f, last_p, last_code = self._row_state(last, name)
+        last_f, last_p = self._row_state(last, name, every)
         while True:
             stop = min(end, t + (grid - t) % SOFTWARE_PERIOD_MS)
             at = hw.at
@@ -639,15 +639,19 @@ class PLC:
                 code = slots[message_slot]
                 if code:
                     send(hw, code)
-                if rec and (every or code or last_code or machine._sample is not last_f
-                            or slots[proc_slot] != last_p):
+                    if rec:
+                        p = slots[proc_slot]
+                        last = (t, name, p, code, fields())
+                        add_sample(last)
+                        last_f, last_p = _NO_ROW, p       # the next tick's goes too
+                elif rec and (machine._sample is not last_f or slots[proc_slot] != last_p):
                     # machine._sample is the cached sample_fields() dict (None once
                     # something changed): no call on a tick where nothing did
                     p = slots[proc_slot]
                     f = fields()
-                    last = (t, name, p, code, f)
+                    last = (t, name, p, 0, f)
                     add_sample(last)
-                    last_f, last_p, last_code = f, p, code
+                    last_f, last_p = (_NO_ROW if every else f), p
                 t += 1
                 if notes_pending or not machine.quiet:
                     notes = advance()
@@ -662,7 +666,7 @@ class PLC:
             if not self._tick(t, software=True):
                 return t
             last = self._last_row
-            last_f, last_p, last_code = self._row_state(last, name)
+            last_f, last_p = self._row_state(last, name, every)
             t += 1
             if self.hw is not hw or hw.resume is not resume or self._due_hw or self.bindings:
                 return t
@@ -705,10 +709,13 @@ class PLC:
         return t
 
     @staticmethod
-    def _row_state(last: tuple, name: str) -> tuple:
-        """(fields, proc, message) of the last recorded row, as the hardware fast
-        path compares them; fields that match nothing when it was another procedure's."""
-        return (last[4] if last[1] == name else _NO_ROW), last[2], last[3]
+    def _row_state(last: tuple, name: str, every: bool) -> tuple:
+        """(fields, proc) of the last recorded row, as the hardware fast path
+        compares them: fields that match nothing when it was another
+        procedure's, when it sent a message (the next tick's row says the
+        message is 0 again) or when every tick is recorded."""
+        same = last[1] == name and not last[3] and not every
+        return (last[4] if same else _NO_ROW), last[2]
 
     def _same_row(self, running, proc, fields) -> bool:
         """Whether a sample of these values (no message) equals the last recorded one."""

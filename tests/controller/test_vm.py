@@ -32,6 +32,8 @@ class RecordingMachine:
     """A machine that records what the PLC does (for argument order)."""
 
     input_count = output_count = 64
+    _sample = None          # Machine's cached sample (None: changed since), which the PLC reads
+    quiet = False
 
     def __init__(self, plain=True):
         self.calls = []
