@@ -492,6 +492,7 @@ def sample_from_row(row: Iterable, fields: Iterable[str] = SAMPLE_FIELDS) -> Sam
 
 
 _MACHINE_FIELDS = SAMPLE_FIELDS[4:]      # inputs .. velocities: the machine's sample dict
+_MACHINE_INDEXED = tuple(enumerate(_MACHINE_FIELDS, 4))
 _DEFAULTS = {"t_ms": 0, "running": None, "proc": 0, "message": 0}
 
 
@@ -509,22 +510,30 @@ class ChangeEncoder:
 
     def encode(self, row: tuple) -> dict:
         t, running, proc, message, fields = row
-        head = (running, proc, message)
         prev = self._prev
         if prev is None:
             d = {1: running, 2: proc, 3: message}
-            for i, name in enumerate(_MACHINE_FIELDS, 4):
+            for i, name in _MACHINE_INDEXED:
                 d[i] = fields.get(name, ())
         else:
-            d = {i: v for i, (v, p) in enumerate(zip(head, prev), 1) if v != p}
+            d = {}
+            if running != prev[0]:
+                d[1] = running
+            if proc != prev[1]:
+                d[2] = proc
+            if message != prev[2]:
+                d[3] = message
             pf = self._prev_fields
             if fields is not pf:
-                for i, name in enumerate(_MACHINE_FIELDS, 4):
-                    v = fields.get(name, ())
-                    if v != pf.get(name, ()):
+                # the machine hands out the same tuple for a part that did not
+                # change: identity first, values only where it differs
+                get, pget = fields.get, pf.get
+                for i, name in _MACHINE_INDEXED:
+                    v, pv = get(name, ()), pget(name, ())
+                    if v is not pv and v != pv:
                         d[i] = v
         d[0] = t
-        self._prev, self._prev_fields = head, fields
+        self._prev, self._prev_fields = (running, proc, message), fields
         return d
 
 
