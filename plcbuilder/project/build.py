@@ -191,7 +191,9 @@ class ProcedureBuild:
 
 
 class _Packed(tuple):
-    """(packed bytes, errors, warnings): diagnostics already packed (by _pack)."""
+    """(packed, errors, warnings): diagnostics already packed (by _pack), or the
+    rows of the cache file as it was read (:func:`_cached`: that document is in
+    memory for the build anyway, so they are shared, not packed again)."""
 
 
 def _pack(rows_json: str, errors: int, warnings: int, lines=None) -> _Packed:
@@ -203,7 +205,12 @@ def _pack(rows_json: str, errors: int, warnings: int, lines=None) -> _Packed:
     if isinstance(lines, dict):
         lines = [[f, n, text] for (f, n), text in lines.items()]
     text = '{"d":' + rows_json + ',"l":' + _dumps(lines or []) + "}"
-    return _Packed((zlib.compress(text.encode("utf-8")), errors, warnings))
+    return _Packed((zlib.compress(text.encode("utf-8"), 1), errors, warnings))
+
+
+def _cached(rows: list) -> _Packed:
+    """Diagnostics rows as the cache file holds them (checked by the caller)."""
+    return _Packed((rows if rows else b"", *_counts(rows)))
 
 
 def _counts(rows: list) -> tuple[int, int]:
@@ -211,7 +218,9 @@ def _counts(rows: list) -> tuple[int, int]:
             sum(1 for r in rows if r["severity"] == Severity.WARNING))
 
 
-def _unpack(packed: bytes) -> tuple[list, list]:
+def _unpack(packed) -> tuple[list, list]:
+    if isinstance(packed, list):                 # a cached procedure's rows (_cached)
+        return packed, []
     if not packed:
         return [], []
     doc = json.loads(zlib.decompress(packed))
@@ -829,7 +838,10 @@ class _Cache:
             return None
         try:
             rows = entry["diagnostics"]
-            diags = [_diag_from_json(d) for d in rows]      # checks them
+            if type(rows) is not list:
+                return None
+            for row in rows:
+                _check_row(row)
             size, crc = entry.get("size"), entry.get("crc32")
             path = None
             if entry.get("bin"):
@@ -849,7 +861,7 @@ class _Cache:
                         return None
                     del data
                     entry = dict(entry, bin_stat=stat)
-            elif any(d.is_error for d in diags):
+            elif _counts(rows)[0]:
                 size = crc = None
             else:
                 return None
@@ -857,8 +869,8 @@ class _Cache:
             return None
         self.procs[cache_id] = entry
         # only name, size and CRC are kept: the bytes are read from build/ when needed
-        return ProcedureBuild(proc, _pack(_dumps(rows), *_counts(rows)), size, options.limit,
-                              crc, True, None, None, path)
+        return ProcedureBuild(proc, _cached(rows), size, options.limit, crc, True, None, None,
+                              path)
 
     def compiled(self, pb: ProcedureBuild, key: Optional[str], rows_json: str) -> None:
         """A procedure compiled now: write its binary (or remove the old one)
@@ -917,7 +929,7 @@ class _RawJSON(bytes):
 
     @classmethod
     def packed(cls, text: str) -> "_RawJSON":
-        return cls(zlib.compress(text.encode("utf-8")))
+        return cls(zlib.compress(text.encode("utf-8"), 1))
 
     def text(self) -> str:
         return zlib.decompress(self).decode("utf-8")
@@ -996,6 +1008,30 @@ def _diag_from_json(v: dict) -> Diagnostic:
     return Diagnostic(Severity(v["severity"]), v["code"], v["message"], _span_from_json(v["span"]),
                       tuple(str(h) for h in v["hints"]),
                       tuple(Related(_span_from_json(s), str(m)) for s, m in v["related"]))
+
+
+_SEVERITIES = frozenset(int(s) for s in Severity)
+
+
+def _check_row(v) -> None:
+    """Raise ValueError unless ``v`` is a diagnostic row as ``_diag_to_json``
+    makes it (what ``_diag_from_json`` reads), without making the objects."""
+    if type(v) is not dict or v.get("severity") not in _SEVERITIES \
+            or type(v.get("code")) is not str or type(v.get("message")) is not str \
+            or type(v.get("hints")) is not list or type(v.get("related")) is not list \
+            or not all(type(h) is str for h in v["hints"]):
+        raise ValueError("bad diagnostic")
+    _check_span(v.get("span"))
+    for rel in v["related"]:
+        if type(rel) is not list or len(rel) != 2 or type(rel[1]) is not str:
+            raise ValueError("bad diagnostic")
+        _check_span(rel[0])
+
+
+def _check_span(v) -> None:
+    if v is not None and (type(v) is not list or len(v) != 5 or type(v[0]) is not str
+                          or not all(type(x) is int for x in v[1:])):
+        raise ValueError("bad span")
 
 
 def _disk_line(file: str, line: int) -> Optional[str]:

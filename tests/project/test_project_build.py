@@ -431,3 +431,24 @@ def test_counts_and_packed_diagnostics_agree(example):
             assert pb.warnings == sum(d.severity == 2 for d in ds)
         assert r.error_count == sum(d.is_error for d in r.all_diagnostics)
         assert r.warning_count == len(r.all_diagnostics) - r.error_count
+
+
+@pytest.mark.parametrize("row", [
+    {"severity": 2, "code": "x", "message": "m", "span": ["f", 1, 1, 1], "hints": [],
+     "related": []},
+    {"severity": 2, "code": "x", "message": "m", "span": None, "hints": [3], "related": []},
+    {"severity": 2, "code": "x", "message": "m", "span": None, "hints": [],
+     "related": [[None]]},
+    {"severity": 9, "code": "x", "message": "m", "span": None, "hints": [], "related": []},
+    {"severity": 2, "code": None, "message": "m", "span": None, "hints": [], "related": []},
+    "not a row"])
+def test_a_damaged_diagnostic_in_the_cache_compiles_again(example, row):
+    """A cached procedure's diagnostics are checked when read (and decoded only
+    when asked for): a damaged one makes that procedure compile again."""
+    build_project(example)
+    doc = json.loads((example.build_dir / CACHE_FILE).read_text())
+    doc["procedures"]["hardware/M08"]["diagnostics"] = [row]
+    (example.build_dir / CACHE_FILE).write_text(json.dumps(doc))
+    r = build_project(example)
+    assert (r.compiled, r.reused) == (1, 11) and not r.get("M08").cached
+    assert all(isinstance(pb.diagnostics, list) for pb in r.procedures)
