@@ -1,7 +1,10 @@
 import pytest
 
+from plcbuilder.controller.controller import Controller
 from plcbuilder.link.client import Client
+from plcbuilder.link.pacing import Simulation
 from plcbuilder.link.server import ControllerServer
+from plcbuilder.link.service import Service
 from tests.link.linkkit import compile_programs, image_of
 
 
@@ -19,6 +22,17 @@ def programs():
 @pytest.fixture(scope="session")
 def image(programs):
     return image_of(programs)
+
+
+@pytest.fixture
+def paused(image):
+    """A service over a paused simulation thread (time moves only by 'step')."""
+    sim = Simulation(Controller(), "pause")
+    svc = Service(sim, controller_factory=Controller)
+    svc.load_image(image)
+    sim.start()
+    yield svc
+    sim.stop()
 
 
 @pytest.fixture

@@ -1,5 +1,6 @@
 """Helpers for the link tests (and tests/cli/test_link_cli.py): real compiled
-procedures, a real image, servers on 127.0.0.1 port 0, raw sockets."""
+procedures, a real image, servers on 127.0.0.1 port 0, raw sockets, requests
+straight to a service."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from plcbuilder import api
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.image.manifest import write_image
 from plcbuilder.link import protocol
+from plcbuilder.link.service import Session
 
 SOURCES = {
     # name: (kind, source)
@@ -45,6 +47,11 @@ def compile_programs(names=None, overrides: Optional[dict] = None, code_limit=No
 
 def image_of(programs) -> bytes:
     return write_image([(p.name, p.kind, p.to_bytes()) for p in programs])
+
+
+def req(svc, mtype, **fields):
+    """A request of type mtype straight to a Service (no socket), its answer."""
+    return svc.dispatch({"type": mtype, "id": 1, **fields}, Session())
 
 
 def frame(payload: bytes) -> bytes:
@@ -97,3 +104,4 @@ def wait_for(pred, timeout: float = 10.0, interval: float = 0.001):
         if time.monotonic() > deadline:
             raise AssertionError("condition not met in time")
         time.sleep(interval)
+

@@ -2,26 +2,11 @@
 
 import pytest
 
-from plcbuilder.controller.controller import Controller
 from plcbuilder.controller.events import Forces
 from plcbuilder.link.client import RefusedError
-from plcbuilder.link.pacing import Simulation
 from plcbuilder.link.protocol import BadRequest
-from plcbuilder.link.service import Refused, Service, Session
-
-
-@pytest.fixture
-def paused(image):
-    sim = Simulation(Controller(), "pause")
-    svc = Service(sim, controller_factory=Controller)
-    svc.load_image(image)
-    sim.start()
-    yield svc
-    sim.stop()
-
-
-def req(svc, mtype, **fields):
-    return svc.dispatch({"type": mtype, "id": 1, **fields}, Session())
+from plcbuilder.link.service import Refused
+from tests.link.linkkit import req
 
 
 def test_force_write_release_and_list_through_the_service(paused):

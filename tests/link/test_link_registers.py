@@ -4,29 +4,13 @@ IDE's register browser shows for the rows on screen)."""
 import pytest
 
 from plcbuilder.bytecode import abi
-from plcbuilder.controller.controller import Controller
 from plcbuilder.link import protocol
-from plcbuilder.link.pacing import Simulation
 from plcbuilder.link.protocol import BadRequest
-from plcbuilder.link.service import Service, Session
-
-
-@pytest.fixture
-def paused(image):
-    sim = Simulation(Controller(), "pause")
-    svc = Service(sim, controller_factory=Controller)
-    svc.load_image(image)
-    sim.start()
-    yield svc
-    sim.stop()
-
-
-def req(svc, **fields):
-    return svc.dispatch({"type": "registers", "id": 1, **fields}, Session())
+from tests.link.linkkit import req
 
 
 def test_registers_reads_values_in_the_order_asked(paused):
-    r = req(paused, addresses=[abi.MOTION_CODE, 12345, abi.GVAR_HW_PWM0])
+    r = req(paused, "registers", addresses=[abi.MOTION_CODE, 12345, abi.GVAR_HW_PWM0])
     assert r["addresses"] == [abi.MOTION_CODE, 12345, abi.GVAR_HW_PWM0]
     assert r["values"] == [abi.MOTION_CODE_IDLE, 0, 0]
 
@@ -35,9 +19,9 @@ def test_registers_refuses_what_is_not_a_short_list_of_integers(paused):
     for bad in ("6060", [6060, "x"], [True], list(range(protocol.MAX_REGISTERS + 1)),
                 [1 << 40]):
         with pytest.raises(BadRequest):
-            req(paused, addresses=bad)
+            req(paused, "registers", addresses=bad)
     with pytest.raises(BadRequest):
-        req(paused)
+        req(paused, "registers")
 
 
 def test_the_client_reads_registers(client):

@@ -12,22 +12,7 @@ from plcbuilder.link import protocol
 from plcbuilder.link.protocol import BadRequest, ProtocolError
 from plcbuilder.link.pacing import Simulation, TelemetryQueue
 from plcbuilder.link.service import Refused, Service, Session
-from tests.link.linkkit import compile_programs, image_of, wait_for
-
-
-@pytest.fixture
-def paused(image):
-    """A service over a paused simulation thread (time moves only by 'step')."""
-    sim = Simulation(Controller(), "pause")
-    svc = Service(sim, controller_factory=Controller)
-    svc.load_image(image)
-    sim.start()
-    yield svc
-    sim.stop()
-
-
-def req(svc, mtype, **fields):
-    return svc.dispatch({"type": mtype, "id": 1, **fields}, Session())
+from tests.link.linkkit import compile_programs, image_of, req, wait_for
 
 
 def test_upload_reports_procedures_with_sizes_and_crcs(image):
