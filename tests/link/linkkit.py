@@ -1,6 +1,6 @@
 """Helpers for the link tests (and tests/cli/test_link_cli.py): real compiled
 procedures, a real image, servers on 127.0.0.1 port 0, raw sockets, requests
-straight to a service."""
+straight to a service, notifications awaited."""
 
 from __future__ import annotations
 
@@ -47,6 +47,28 @@ def compile_programs(names=None, overrides: Optional[dict] = None, code_limit=No
 
 def image_of(programs) -> bytes:
     return write_image([(p.name, p.kind, p.to_bytes()) for p in programs])
+
+
+# M03 above has line 1 only; this one (M10 in counter_image) has lines to break on
+COUNTER = """main()
+{
+  n = 0;
+  do
+  {
+    n++;
+    portset(3);
+  }while(n < 100000);
+  exit(99);
+}
+"""
+
+
+def counter_image() -> bytes:
+    """An image of M05, LUBE and COUNTER as the hardware procedure M10."""
+    progs = compile_programs(["M05", "LUBE"], overrides={})
+    r = api.compile_source(COUNTER, "M10.plc", api.CompileOptions(kind=api.Kind.HARDWARE))
+    assert r.ok
+    return image_of([*progs, r.program])
 
 
 def req(svc, mtype, **fields):
@@ -105,3 +127,12 @@ def wait_for(pred, timeout: float = 10.0, interval: float = 0.001):
             raise AssertionError("condition not met in time")
         time.sleep(interval)
 
+
+def wait_note(c, kind: str, timeout: float = 10.0) -> dict:
+    """The next notification of this kind a Client receives (others are passed over)."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        note = c.next_notification(timeout=end - time.monotonic())
+        if note is not None and note["type"] == kind:
+            return note
+    raise AssertionError(f"no {kind} notification")

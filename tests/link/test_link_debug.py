@@ -12,30 +12,12 @@ import pytest
 from plcbuilder import api
 from plcbuilder.link.client import Client, RefusedError
 from plcbuilder.link.server import ControllerServer
-from tests.link.linkkit import compile_programs, image_of
-
-# M03 of linkkit: line 1 only; this one has lines to break on
-COUNTER = """main()
-{
-  n = 0;
-  do
-  {
-    n++;
-    portset(3);
-  }while(n < 100000);
-  exit(99);
-}
-"""
-
+from tests.link.linkkit import counter_image, wait_note
 
 @pytest.fixture
 def served():
-    progs = compile_programs(["M05", "LUBE"], overrides={})
-    r = api.compile_source(COUNTER, "M10.plc", api.CompileOptions(kind=api.Kind.HARDWARE))
-    assert r.ok
-    srv = ControllerServer(port=0, speed="factor", factor=50.0,
-                           image=image_of([*progs, r.program]), frame_timeout=0.2,
-                           hello_timeout=1.0)
+    srv = ControllerServer(port=0, speed="factor", factor=50.0, image=counter_image(),
+                           frame_timeout=0.2, hello_timeout=1.0)
     srv.sim.batch = 0.001
     srv.start()
     c = Client.connect(*srv.address, srv.token, timeout=10.0)
@@ -43,15 +25,6 @@ def served():
     yield srv, c
     c.close()
     srv.close()
-
-
-def _wait_note(c: Client, kind: str, timeout: float = 10.0) -> dict:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        note = c.next_notification(timeout=end - time.monotonic())
-        if note is not None and note["type"] == kind:
-            return note
-    raise AssertionError(f"no {kind} notification")
 
 
 def test_a_breakpoint_halts_and_the_server_sends_halted_with_the_state(served):
@@ -63,7 +36,7 @@ def test_a_breakpoint_halts_and_the_server_sends_halted_with_the_state(served):
     assert answer == [{"id": answer[0]["id"], "file": "M10.plc", "line": 6, "verified": True,
                        "reason": None}]
     c.start("M10")
-    note = _wait_note(c, "halted")
+    note = wait_note(c, "halted")
     st = note["state"]
     assert st["reason"] == "breakpoint" and st["procedure"] == "M10" and st["line"] == 6
     m10 = next(p for p in st["procedures"] if p["name"] == "M10")
@@ -77,7 +50,7 @@ def test_while_halted_time_stands_still_and_requests_are_answered(served):
     srv, c = served
     c.set_breakpoints("M10.plc", [{"line": 7}])
     c.start("M10")
-    _wait_note(c, "halted")
+    wait_note(c, "halted")
     t0 = c.state().t_ms
     time.sleep(0.3)                                # 50x: 15 s of simulated time if it ran
     assert c.state().t_ms == t0
@@ -90,10 +63,10 @@ def test_continue_resumes_and_halts_again_next_tick(served):
     srv, c = served
     c.set_breakpoints("M10.plc", [{"line": 6}])
     c.start("M10")
-    first = _wait_note(c, "halted")["state"]
+    first = wait_note(c, "halted")["state"]
     c.debug_continue()
-    assert _wait_note(c, "resumed")["t_ms"] >= first["t_ms"]
-    second = _wait_note(c, "halted")["state"]
+    assert wait_note(c, "resumed")["t_ms"] >= first["t_ms"]
+    second = wait_note(c, "halted")["state"]
     assert second["t_ms"] == first["t_ms"] + 1
     vars2 = next(p for p in second["procedures"] if p["name"] == "M10")["vars"]
     assert vars2["n"] == 1
@@ -104,7 +77,7 @@ def test_step_over_and_step_tick(served):
     srv, c = served
     c.set_breakpoints("M10.plc", [{"line": 6}])
     c.start("M10")
-    st = _wait_note(c, "halted")["state"]
+    st = wait_note(c, "halted")["state"]
     c.set_breakpoints("M10.plc", [])
     r = c.debug_step("over")
     assert r["halted"]["reason"] == "step" and r["halted"]["line"] == 7
@@ -122,9 +95,9 @@ def test_pause_halts_between_ticks_and_run_to_line(served):
     assert r["halted"]["reason"] == "pause" and r["halted"]["procedure"] is None
     m10 = next(p for p in r["halted"]["procedures"] if p["name"] == "M10")
     assert m10["line"] == 8 and m10["at_loop_end"] is True
-    _wait_note(c, "halted")                        # (the pause's)
+    wait_note(c, "halted")                        # (the pause's)
     c.debug_run_to("M10.plc", 7)                   # runs on, halts at the next tick
-    st = _wait_note(c, "halted")["state"]
+    st = wait_note(c, "halted")["state"]
     assert st["reason"] == "step" and st["line"] == 7
 
 
@@ -137,7 +110,7 @@ def test_a_condition_travels_compiled(served):
     assert isinstance(code, bytes)
     c.set_breakpoints("M10.plc", [{"line": 7, "condition": {"text": "n == 5", "code": code}}])
     c.start("M10")
-    st = _wait_note(c, "halted")["state"]
+    st = wait_note(c, "halted")["state"]
     assert next(p for p in st["procedures"] if p["name"] == "M10")["vars"]["n"] == 5
 
 

@@ -7,30 +7,13 @@ import time
 
 import pytest
 
-from plcbuilder import api
 from plcbuilder.controller.controller import Controller
 from plcbuilder.link.client import Client, RefusedError
 from plcbuilder.link.server import ControllerServer
-from tests.link.linkkit import compile_programs, image_of
-
-COUNTER = """main()
-{
-  n = 0;
-  do
-  {
-    n++;
-    portset(3);
-  }while(n < 100000);
-  exit(99);
-}
-"""
-
+from tests.link.linkkit import counter_image, wait_note
 
 def _serve(**kw):
-    progs = compile_programs(["M05", "LUBE"], overrides={})
-    r = api.compile_source(COUNTER, "M10.plc", api.CompileOptions(kind=api.Kind.HARDWARE))
-    assert r.ok
-    srv = ControllerServer(port=0, speed="pause", image=image_of([*progs, r.program]),
+    srv = ControllerServer(port=0, speed="pause", image=counter_image(),
                            frame_timeout=0.2, hello_timeout=1.0, **kw)
     srv.start()
     return srv, Client.connect(*srv.address, srv.token, timeout=10.0)
@@ -43,15 +26,6 @@ def served():
     yield srv, c
     c.close()
     srv.close()
-
-
-def _halted_note(c: Client, timeout: float = 10.0) -> dict:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        note = c.next_notification(timeout=end - time.monotonic())
-        if note is not None and note["type"] == "halted":
-            return note
-    raise AssertionError("no halted notification")
 
 
 def _n(state: dict) -> int:
@@ -69,7 +43,7 @@ def test_step_back_a_tick_and_a_statement_and_run_back(served):
     assert answer["t_ms"] == before.t_ms - 1
     assert answer["halted"]["reason"] == "step"
     assert _n(answer["halted"]) == 39                 # M10 ran 40 ticks: n++ each
-    assert _halted_note(c)["state"]["t_ms"] == answer["t_ms"]
+    assert wait_note(c, "halted")["state"]["t_ms"] == answer["t_ms"]
     assert srv.controller.t_ms == answer["t_ms"]          # the new controller took over
     c.set_breakpoints("M10.plc", [{"line": 6}])
     c.debug_continue()
