@@ -2,12 +2,37 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from plcbuilder import api
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.controller.controller import Controller
 from plcbuilder.controller.events import Ended, Fault, Message, Note, Print, Started
 
 BACKENDS = ("fast", "reference")
+
+#: The example project the package ships (the debugger's and rewind's tests run it).
+EXAMPLE = Path(api.__file__).parent / "resources" / "example_project"
+
+#: A procedure with a loop and a call to break, step and step back in (M10 there).
+COUNT = """main()
+{
+  n = 0;
+
+  do
+  {
+    n++;
+    bump();
+  }while(n < 1000);
+  exit(99);
+}
+
+bump()
+{
+  total = total + n;
+}
+"""
+# lines: 3 n=0 | 7 n++ | 8 bump() | 9 while | 10 exit | 15 total=...
 
 
 def compile_proc(src: str, name: str = "M03", software: bool = False) -> Program:
@@ -43,5 +68,5 @@ def ended(events, name: str | None = None) -> Ended:
     return found[-1]
 
 
-__all__ = ["BACKENDS", "compile_proc", "controller", "run_hw", "of", "ended", "Ended", "Fault",
+__all__ = ["BACKENDS", "EXAMPLE", "COUNT", "compile_proc", "controller", "run_hw", "of", "ended", "Ended", "Fault",
            "Message", "Note", "Print", "Started", "Kind"]

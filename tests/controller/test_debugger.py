@@ -4,8 +4,6 @@ Every test runs on both backends."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 
 from plcbuilder import api
@@ -13,28 +11,7 @@ from plcbuilder.controller.controller import Controller
 from plcbuilder.controller.debugger import DebugError
 from plcbuilder.controller.events import Halted, Log, Resumed
 
-from tests.controller._sim import BACKENDS, compile_proc
-
-EXAMPLE = Path(api.__file__).parent / "resources" / "example_project"
-
-COUNT = """main()
-{
-  n = 0;
-
-  do
-  {
-    n++;
-    bump();
-  }while(n < 1000);
-  exit(99);
-}
-
-bump()
-{
-  total = total + n;
-}
-"""
-# lines: 3 n=0 | 7 n++ | 8 bump() | 9 while | 10 exit | 15 total=...
+from tests.controller._sim import BACKENDS, COUNT, EXAMPLE, compile_proc
 
 SOFT = "main(){ do { k++; } while(1); }"
 

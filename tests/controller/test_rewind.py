@@ -3,38 +3,15 @@ the state the forward run had there, tick for tick and statement for statement."
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 
 from plcbuilder import api
 from plcbuilder.controller.controller import Controller
 from plcbuilder.controller.rewind import Checkpoints, RewindError, run_back, step_back
 
-from tests.controller._sim import BACKENDS, compile_proc
+from tests.controller._sim import BACKENDS, COUNT, EXAMPLE, compile_proc
 
-EXAMPLE = Path(api.__file__).parent / "resources" / "example_project"
-
-COUNT = """main()
-{
-  n = 0;
-
-  do
-  {
-    n++;
-    bump();
-  }while(n < 1000);
-  exit(99);
-}
-
-bump()
-{
-  total = total + n;
-}
-"""
-# lines: 3 n=0 | 7 n++ | 8 bump() | 9 while | 10 exit | 15 total=...
 SOFT = "main(){ do { k++; if (k % 3 == 0) { portset(5); } else { portclr(5); } } while(1); }"
-
 
 
 def _example_programs():
