@@ -16,7 +16,7 @@ from plcbuilder.controller.machine import Machine
 from plcbuilder.controller.machine_config import ConfigError, parse_machine
 from plcbuilder.controller.pls import count_at, level
 
-from tests.controller._sim import BACKENDS, Note, Print, compile_proc, of
+from tests.controller._sim import BACKENDS, Note, Print, compile_proc, of, run_hw
 
 AXIS_X = """
 [axes.X]
@@ -212,16 +212,13 @@ main()
 }
 """
     cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [-50.0]\nenabled = true\n')
-    c = Controller(cfg, backend=backend)
-    c.load([compile_proc(src)])
-    c.start("M03")
-    c.run_until_idle(100)
+    c, events = run_hw(src, 100, backend, machine_config=cfg)
     v = c.variables()["M03"]
     assert v["var00"] == softmc.PLS_STATUS["PLS_REFUSED_ENABLED"]
     assert (v["var01"], v["var02"], v["var03"]) == (-5000, 1, 1)
     assert (v["var04"], v["var05"]) == (softmc.PLS_STATUS["PLS_OK"], 20000)
     assert v["var06"] == 1                          # disabling leaves the output as it is
-    notes = [n.text for n in of(c.drain_events(), Note)]
+    notes = [n.text for n in of(events, Note)]
     assert any("31110" in t and "refused" in t and "enabled" in t for t in notes)
 
 
@@ -252,17 +249,14 @@ main()
   exit(99);
 }
 """
-    c = Controller(machine(), backend=backend)
-    c.load([compile_proc(src)])
-    c.start("M03")
-    c.run_until_idle(100)
+    c, events = run_hw(src, 100, backend, machine_config=machine())
     v = c.variables()["M03"]
     bad = softmc.PLS_STATUS["PLS_BAD_POSITIONS"]
     assert (v["var00"], v["var01"]) == (bad, 0)
     assert v["var02"] == bad                        # spans 2.01 mm, repeat 1.5 mm
     assert (v["var03"], v["var04"]) == (0, 1)
     assert c.machine.vio.vouts_on() == []           # X at 0: below 1 mm, polarity 1 -> 0
-    notes = [n.text for n in of(c.drain_events(), Note)]
+    notes = [n.text for n in of(events, Note)]
     assert any("position 3 (300) is not above position 2 (300)" in t for t in notes)
 
 
@@ -299,10 +293,7 @@ main()
   exit(99);
 }
 """
-    c = Controller(machine(), backend=backend)
-    c.load([compile_proc(src)])
-    c.start("M03")
-    c.run_until_idle(100)
+    c, _ = run_hw(src, 100, backend, machine_config=machine())
     v = c.variables()["M03"]
     st = softmc.PLS_STATUS
     assert v["var00"] == 1010                       # one position at 0, polarity 1, rest 0
