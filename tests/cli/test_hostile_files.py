@@ -12,21 +12,12 @@ from pathlib import Path
 
 import pytest
 
-from plcbuilder.cli.main import main
+from tests.cli._run import run_cli as cli
 
 ROOT = Path(__file__).resolve().parents[2]
 OK = "main(){ exit(99); };\n"
 needs_fifo = pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
 needs_zero = pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="needs /dev/zero")
-
-
-def cli(capsys, *argv) -> tuple[int, str, str]:
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def plcbuilder(*argv, cwd=None, timeout=30, env=None) -> subprocess.CompletedProcess:

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from plcbuilder.cli.main import main
+from tests.cli._run import run_cli
 
 DELAY = "main(){ timer=10; do{timer--;}while(timer>0); exit(99); };\n"
 
@@ -19,15 +19,6 @@ def write(path: Path, text: str) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text, encoding="utf-8")
     return path
-
-
-def run_cli(capsys, *argv) -> tuple[int, str, str]:
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:           # argparse's own usage errors
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_json_output_is_one_object_with_the_spec_fields(tmp_path, capsys):

@@ -7,17 +7,8 @@ import json
 
 from junitparser import Error, Failure, JUnitXml
 
-from plcbuilder.cli.main import main
-
+from tests.cli._run import run_cli
 from tests.testing._proj import FAILING, PASSING, make_project
-
-def run_cli(capsys, *argv):
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_all_pass_exits_0(tmp_path, capsys):

@@ -6,21 +6,12 @@ import json
 from pathlib import Path
 
 import pytest
-from tests.vcd_reader import VCDVCD
 
-from plcbuilder.cli.main import main
+from tests.cli._run import run_cli
+from tests.vcd_reader import VCDVCD
 
 PULSE = ("main(){ timer=20; do{timer--;}while(timer>0); portset(3);"
          " timer=10; do{timer--;}while(timer>0); portclear(3); exit(99); };\n")
-
-
-def run_cli(capsys, *argv):
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture
