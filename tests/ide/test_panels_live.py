@@ -4,16 +4,12 @@ for it; a click on a fault opens its source line."""
 
 from __future__ import annotations
 
-import os
-
 import pytest
 
 pytest.importorskip("PySide6")
 
-from PySide6 import QtCore, QtWidgets  # noqa: E402
+from PySide6 import QtCore  # noqa: E402
 
-from plcbuilder.ide.connection import ControllerConnection  # noqa: E402
-from plcbuilder.ide.panels import RunPanels  # noqa: E402
 from plcbuilder.api import image_of as build_image  # noqa: E402
 from tests.ide._demo import DEMO_SOURCE  # noqa: E402
 from plcbuilder.ide.panels.log import CATEGORY, LINE, TEXT  # noqa: E402
@@ -56,35 +52,12 @@ main() {
 
 
 @pytest.fixture
-def live(qtbot):
-    win = QtWidgets.QMainWindow()
-    qtbot.addWidget(win)
-    conn = ControllerConnection()
-    panels = RunPanels(win, conn)
-    for d in panels.docks():
-        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
-    win.resize(1400, 900)
-    win.show()
-    conn.start_embedded()
-    try:
-        qtbot.waitUntil(lambda: conn.connected, timeout=WAIT)
-        conn.upload(build_image({"SPINDLE": SPINDLE, "WAITB": WAIT_BUTTON,
-                                 "DIVIDE": DIVIDE, "DEMO": DEMO_SOURCE}))
-        yield win, conn, panels
-    finally:
-        pid = conn.child_pid
-        conn.shutdown()
-        panels.shutdown()
-        if pid:
-            qtbot.waitUntil(lambda: _gone(pid), timeout=5000)
-
-
-def _gone(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    return False
+def live(live_run_panels):
+    """The live run panels with SPINDLE, WAITB, DIVIDE and DEMO uploaded."""
+    win, conn, panels = live_run_panels
+    conn.upload(build_image({"SPINDLE": SPINDLE, "WAITB": WAIT_BUTTON,
+                             "DIVIDE": DIVIDE, "DEMO": DEMO_SOURCE}))
+    return win, conn, panels
 
 
 def _log_texts(panels) -> list[str]:

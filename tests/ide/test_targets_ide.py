@@ -4,18 +4,14 @@ target's procedures with when they run; the run panels show its registers
 
 from __future__ import annotations
 
-import os
-
 import pytest
 
 pytest.importorskip("PySide6")
 
-from PySide6 import QtCore, QtWidgets  # noqa: E402
+from PySide6 import QtCore  # noqa: E402
 
 from plcbuilder import api  # noqa: E402
-from plcbuilder.ide.connection import ControllerConnection  # noqa: E402
 from plcbuilder.ide.main_window import MainWindow  # noqa: E402
-from plcbuilder.ide.panels import RunPanels  # noqa: E402
 from plcbuilder.ide.project_tree import ROLE_DESCRIPTION  # noqa: E402
 from plcbuilder.ide.settings import Settings  # noqa: E402
 from tests.controller._targets import compiled  # noqa: E402
@@ -75,38 +71,8 @@ def test_tree_shows_tgmotion_periods(window, tmp_path):
     assert "not in the program yet" in missing.toolTip(0)
 
 
-@pytest.fixture
-def live(qtbot):
-    win = QtWidgets.QMainWindow()
-    qtbot.addWidget(win)
-    conn = ControllerConnection()
-    panels = RunPanels(win, conn)
-    for d in panels.docks():
-        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
-    win.resize(1400, 900)
-    win.show()
-    conn.start_embedded()
-    try:
-        qtbot.waitUntil(lambda: conn.connected, timeout=WAIT)
-        yield win, conn, panels
-    finally:
-        pid = conn.child_pid
-        conn.shutdown()
-        panels.shutdown()
-        if pid:
-            qtbot.waitUntil(lambda: _gone(pid), timeout=5000)
-
-
-def _gone(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    return False
-
-
-def test_run_panels_show_huazhong_registers(qtbot, live):
-    win, conn, panels = live
+def test_run_panels_show_huazhong_registers(qtbot, live_run_panels):
+    win, conn, panels = live_run_panels
     panels.set_target("huazhong")
     panels.set_pin_names({0: "INPUT_HOME_X"}, {7: "OUTPUT_ALARM_LAMP"})
     assert panels.lanes.names["outputs"][7] == "Y0.7 OUTPUT_ALARM_LAMP"

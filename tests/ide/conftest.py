@@ -1,0 +1,50 @@
+"""Fixtures several IDE test files share. Qt is imported inside them, so that
+collecting a folder never needs it before a test module asks for it."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+WAIT = 15_000      # ms: generous bounds for a loaded machine; passing runs take far less
+
+
+def _gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+@pytest.fixture
+def live_run_panels(qtbot):
+    """(a plain main window, a ControllerConnection to a real embedded
+    controller, connected and empty, the RunPanels docked on it); at the end the
+    controller's child process is waited for until it is gone."""
+    from PySide6 import QtWidgets
+    from PySide6.QtCore import Qt
+
+    from plcbuilder.ide.connection import ControllerConnection
+    from plcbuilder.ide.panels import RunPanels
+
+    win = QtWidgets.QMainWindow()
+    qtbot.addWidget(win)
+    conn = ControllerConnection()
+    panels = RunPanels(win, conn)
+    for d in panels.docks():
+        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
+    win.resize(1400, 900)
+    win.show()
+    conn.start_embedded()
+    try:
+        qtbot.waitUntil(lambda: conn.connected, timeout=WAIT)
+        yield win, conn, panels
+    finally:
+        pid = conn.child_pid
+        conn.shutdown()
+        panels.shutdown()
+        if pid:
+            qtbot.waitUntil(lambda: _gone(pid), timeout=5000)
+
