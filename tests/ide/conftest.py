@@ -48,3 +48,24 @@ def live_run_panels(qtbot):
         if pid:
             qtbot.waitUntil(lambda: _gone(pid), timeout=5000)
 
+
+@pytest.fixture
+def live_example(qtbot, tmp_path, monkeypatch):
+    """(a main window that starts the embedded controller, the root of a fresh
+    example project, not opened yet); every message box answers No."""
+    from PySide6.QtWidgets import QMessageBox
+
+    from plcbuilder.ide.main_window import MainWindow
+    from plcbuilder.ide.settings import Settings
+    from plcbuilder.project.new import create_project
+
+    for name in ("warning", "question", "critical", "information"):
+        monkeypatch.setattr(QMessageBox, name, lambda *a, **k: QMessageBox.StandardButton.No)
+    root = create_project(tmp_path / "example", name="example").root
+    w = MainWindow(Settings(str(tmp_path / "settings.ini")), start_controller=True,
+                   debounce_ms=20)
+    qtbot.addWidget(w)
+    w.resize(1400, 900)
+    w.show()
+    yield w, root
+    w.shutdown()

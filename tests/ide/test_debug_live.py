@@ -6,14 +6,8 @@ ending, continue to the end."""
 
 from __future__ import annotations
 
-import pytest
-from PySide6.QtWidgets import QMessageBox
-
 from plcbuilder.controller import events as ev
 from plcbuilder.ide.actions import Act
-from plcbuilder.ide.main_window import MainWindow
-from plcbuilder.ide.settings import Settings
-from plcbuilder.project.new import create_project
 
 from tests.ide._debug import HOME_LINE, click_margin
 
@@ -23,28 +17,14 @@ FOUND = 34             # M80.plc: "        statez=1;" (the switch was found)
 HOME_Z_PIN = 2         # pins.h: INPUT_HOME_Z
 
 
-@pytest.fixture
-def live(qtbot, tmp_path, monkeypatch):
-    for name in ("warning", "question", "critical", "information"):
-        monkeypatch.setattr(QMessageBox, name, lambda *a, **k: QMessageBox.StandardButton.No)
-    root = create_project(tmp_path / "example", name="example").root
-    w = MainWindow(Settings(str(tmp_path / "settings.ini")), start_controller=True,
-                   debounce_ms=20)
-    qtbot.addWidget(w)
-    w.resize(1400, 900)
-    w.show()
-    events = []
-    yield w, root, events
-    w.shutdown()
-
-
 def _halted_at(w, line):
     st = w.debug.halted
     return st is not None and st.get("line") == line
 
 
-def test_halt_step_force_and_continue_in_m80(live, qtbot):
-    w, root, events = live
+def test_halt_step_force_and_continue_in_m80(live_example, qtbot):
+    w, root = live_example
+    events = []
     assert w.open_project(root)
     with qtbot.waitSignal(w.sig_build_finished, timeout=WAIT):
         assert w.build_all()

@@ -4,31 +4,11 @@ Over, then Debug › Step Back, Step Back 1 ms and Run Back (SPEC §7)."""
 
 from __future__ import annotations
 
-import pytest
-from PySide6.QtWidgets import QMessageBox
-
 from plcbuilder.ide.actions import Act
-from plcbuilder.ide.main_window import MainWindow
-from plcbuilder.ide.settings import Settings
-from plcbuilder.project.new import create_project
 
 from tests.ide._debug import HOME_LINE, click_margin
 
 WAIT = 30_000
-
-
-@pytest.fixture
-def live(qtbot, tmp_path, monkeypatch):
-    for name in ("warning", "question", "critical", "information"):
-        monkeypatch.setattr(QMessageBox, name, lambda *a, **k: QMessageBox.StandardButton.No)
-    root = create_project(tmp_path / "example", name="example").root
-    w = MainWindow(Settings(str(tmp_path / "settings.ini")), start_controller=True,
-                   debounce_ms=20)
-    qtbot.addWidget(w)
-    w.resize(1400, 900)
-    w.show()
-    yield w, root
-    w.shutdown()
 
 
 def _halted(w, line=None, reason=None, t_ms=None):
@@ -38,10 +18,10 @@ def _halted(w, line=None, reason=None, t_ms=None):
         (t_ms is None or st.get("t_ms") == t_ms)
 
 
-def test_step_back_step_back_a_tick_and_run_back_in_m80(live, qtbot):
+def test_step_back_step_back_a_tick_and_run_back_in_m80(live_example, qtbot):
     """SPEC §7: 'Step back (one tick, or one statement) and run back (to the
     previous breakpoint hit) work by deterministic re-execution from the recording'."""
-    w, root = live
+    w, root = live_example
     assert w.open_project(root)
     with qtbot.waitSignal(w.sig_build_finished, timeout=WAIT):
         assert w.build_all()
