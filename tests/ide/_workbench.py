@@ -1,7 +1,10 @@
 """Fixtures for the tests of the workbench's features (navigation, build
 insight, registers, help): a small project with a header of its own, a main
-window on it, and a fake controller connection that records requests."""
+window on it, and a fake controller connection that records requests. The
+pieces the main window's and the debugger's tests share are here too: the
+recorded message boxes, the recording connection, the windows made and shut."""
 
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -55,30 +58,38 @@ def make_project(root: Path) -> Path:
 
 
 class Prompts:
-    """QMessageBox's static functions, recorded and answered with a default."""
+    """Stands in for QMessageBox's static functions: records every prompt and
+    answers from a queue (or with a safe default)."""
 
     def __init__(self, monkeypatch):
         self.calls = []
+        self.answers = []
         for name, default in (("warning", SB.Discard), ("question", SB.No),
                               ("critical", SB.Ok), ("information", SB.Ok)):
             monkeypatch.setattr(QMessageBox, name, self._make(name, default))
+        monkeypatch.setattr(QMessageBox, "about", lambda *a, **k: self.calls.append(("about", a[2])))
 
     def _make(self, name, default):
         def prompt(parent, title, text, *args, **kw):
             self.calls.append((name, title, text))
-            return default
+            return self.answers.pop(0) if self.answers else default
         return prompt
 
+    def titles(self):
+        return [c[1] for c in self.calls]
 
-class FakeConnection(QObject):
-    """A controller connection that records what it is asked."""
+
+class RecordingConnection(QObject):
+    """The controller connection's interface with no controller behind it: its
+    signals, and each request named in VERBS recorded in ``calls``."""
     sig_connected = Signal(str)
     sig_disconnected = Signal(str)
     sig_state = Signal(object, int)
     sig_events = Signal(list)
     sig_samples = Signal(list)
     sig_error = Signal(str)
-    sig_registers = Signal(object)
+    VERBS = ("start_embedded", "connect_to", "upload", "start", "stop", "set_input",
+             "set_adc", "set_speed", "reset", "shutdown")
 
     def __init__(self):
         super().__init__()
@@ -87,10 +98,46 @@ class FakeConnection(QObject):
         self.embedded = True
 
     def __getattr__(self, name):
-        if name in ("start_embedded", "connect_to", "upload", "start", "stop", "set_input",
-                    "set_adc", "set_speed", "reset", "shutdown", "request_registers"):
+        if name in self.VERBS:
             return lambda *a: self.calls.append((name,) + a)
         raise AttributeError(name)
+
+
+class FakeConnection(RecordingConnection):
+    """A controller connection that records what it is asked, the register
+    browser's request among it."""
+    sig_registers = Signal(object)
+    VERBS = RecordingConnection.VERBS + ("request_registers",)
+
+
+@contextmanager
+def windows(qtbot, settings: Settings, size: tuple[int, int]):
+    """make(**kw): a shown MainWindow of this size on these settings (or
+    kw's "settings"), with no controller and a 20 ms debounce unless kw says
+    otherwise; every window made is shut down at the end."""
+    made = []
+
+    def make(**kw):
+        kw.setdefault("start_controller", False)
+        kw.setdefault("debounce_ms", 20)
+        w = MainWindow(kw.pop("settings", settings), **kw)
+        qtbot.addWidget(w)
+        w.resize(*size)
+        w.show()
+        made.append(w)
+        return w
+    yield make
+    for w in made:
+        w.shutdown()
+
+
+def settings_in(tmp_path: Path) -> Settings:
+    return Settings(str(tmp_path / "config" / "settings.ini"))
+
+
+@pytest.fixture
+def settings(tmp_path):
+    return settings_in(tmp_path)
 
 
 @pytest.fixture
@@ -105,20 +152,8 @@ def project(tmp_path):
 
 @pytest.fixture
 def make_window(qtbot, tmp_path, prompts):
-    made = []
-
-    def make(**kw):
-        kw.setdefault("start_controller", False)
-        kw.setdefault("debounce_ms", 20)
-        w = MainWindow(Settings(str(tmp_path / "config" / "settings.ini")), **kw)
-        qtbot.addWidget(w)
-        w.resize(1300, 850)
-        w.show()
-        made.append(w)
-        return w
-    yield make
-    for w in made:
-        w.shutdown()
+    with windows(qtbot, settings_in(tmp_path), (1300, 850)) as make:
+        yield make
 
 
 @pytest.fixture

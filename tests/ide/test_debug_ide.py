@@ -9,7 +9,7 @@ import zlib
 
 import pytest
 import shiboken6
-from PySide6.QtCore import QObject, Qt, QTimer, Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtGui import QKeySequence
 from PySide6.QtWidgets import QDialog, QMessageBox
 
@@ -20,22 +20,17 @@ from plcbuilder.ide.debug.inline import inline_values, names_on_lines
 from plcbuilder.ide.editor import (MK_BREAKPOINT, MK_BREAKPOINT_CONDITIONAL,
                                    MK_BREAKPOINT_DISABLED, MK_BREAKPOINT_UNVERIFIED,
                                    MK_LOGPOINT, MK_WAIT)
-from plcbuilder.ide.main_window import MainWindow
 from plcbuilder.ide.settings import Settings
 from plcbuilder.link.client import ControllerStatus
 from plcbuilder.project.new import create_project
 
+from tests.ide import _workbench
 from tests.ide._debug import HOME_LINE, click_margin
+from tests.ide._workbench import RecordingConnection, windows
 
 
-class DebugConnection(QObject):
+class DebugConnection(RecordingConnection):
     """The ControllerConnection interface with the debugger's requests."""
-    sig_connected = Signal(str)
-    sig_disconnected = Signal(str)
-    sig_state = Signal(object, int)
-    sig_events = Signal(list)
-    sig_samples = Signal(list)
-    sig_error = Signal(str)
     sig_result = Signal(str, dict)
     sig_variables = Signal(object)
     sig_note = Signal(str)
@@ -45,23 +40,15 @@ class DebugConnection(QObject):
     sig_breakpoints_refused = Signal(str, str)
     sig_forces_changed = Signal(list)
     sig_log = Signal(object)
+    VERBS = RecordingConnection.VERBS + (
+        "request_variables", "set_breakpoints", "debug_continue", "debug_pause", "debug_step",
+        "debug_run_to", "request_debug_state", "write", "force", "release", "release_all",
+        "request_forces", "send_event")
 
     def __init__(self):
         super().__init__()
-        self.calls: list[tuple] = []
-        self.connected = False
         self.debugger = True
-        self.embedded = True
         self.last_state = ControllerStatus()
-
-    def __getattr__(self, name):
-        if name in ("start_embedded", "connect_to", "upload", "start", "stop", "set_input",
-                    "set_adc", "set_speed", "reset", "shutdown", "request_variables",
-                    "set_breakpoints", "debug_continue", "debug_pause", "debug_step",
-                    "debug_run_to", "request_debug_state", "write", "force", "release",
-                    "release_all", "request_forces", "send_event"):
-            return lambda *a: self.calls.append((name,) + a)
-        raise AttributeError(name)
 
     def named(self, name):
         return [c for c in self.calls if c[0] == name]
@@ -71,9 +58,7 @@ class DebugConnection(QObject):
         self.sig_connected.emit("127.0.0.1:5999")
 
 
-@pytest.fixture
-def settings(tmp_path):
-    return Settings(str(tmp_path / "config" / "settings.ini"))
+settings = _workbench.settings
 
 
 @pytest.fixture
@@ -92,20 +77,11 @@ def no_prompts(monkeypatch):
 
 @pytest.fixture
 def make_window(qtbot, settings, no_prompts):
-    made = []
-
-    def make(conn=None, **kw):
-        conn = conn or DebugConnection()
-        w = MainWindow(kw.pop("settings", settings), connection=conn, start_controller=True,
-                       debounce_ms=20)
-        qtbot.addWidget(w)
-        w.resize(1300, 850)
-        w.show()
-        made.append(w)
-        return w, conn
-    yield make
-    for w in made:
-        w.shutdown()
+    with windows(qtbot, settings, (1300, 850)) as make_main:
+        def make(conn=None, **kw):
+            conn = conn or DebugConnection()
+            return make_main(connection=conn, start_controller=True, **kw), conn
+        yield make
 
 
 def open_m80(w, example):

@@ -8,13 +8,14 @@ from PySide6.QtWidgets import QApplication
 
 from plcbuilder.ide.main_window import MainWindow
 from plcbuilder.link.client import ControllerStatus
-from tests.ide.test_main_window import FakeConnection, make_project
+from tests.ide._workbench import RecordingConnection
+from tests.ide.test_main_window import make_project
 
 
 @pytest.fixture
 def runwin(qtbot, tmp_path, prompts_off):
     from plcbuilder.ide.settings import Settings
-    conn = FakeConnection()
+    conn = RecordingConnection()
     w = MainWindow(Settings(str(tmp_path / "cfg" / "settings.ini")), connection=conn,
                    start_controller=True, debounce_ms=20)
     qtbot.addWidget(w)

@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 
 import pytest
-from PySide6.QtCore import QObject, Qt, Signal
+from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QDialog, QMessageBox
 
 from plcbuilder.ide import dialogs
@@ -14,6 +14,9 @@ from plcbuilder.ide.editor import IND_ERROR, IND_WARNING, MK_ERROR
 from plcbuilder.ide.main_window import Act, MainWindow
 from plcbuilder.ide.settings import Preferences, Settings
 from plcbuilder.link.client import ControllerStatus
+
+from tests.ide import _workbench
+from tests.ide._workbench import RecordingConnection, settle, windows
 
 SB = QMessageBox.StandardButton
 
@@ -59,58 +62,7 @@ def make_project(root: Path) -> Path:
     return root
 
 
-class Prompts:
-    """Stands in for QMessageBox's static functions: records every prompt and
-    answers from a queue (or with a safe default)."""
-
-    def __init__(self, monkeypatch):
-        self.calls = []
-        self.answers = []
-        for name, default in (("warning", SB.Discard), ("question", SB.No),
-                              ("critical", SB.Ok), ("information", SB.Ok)):
-            monkeypatch.setattr(QMessageBox, name, self._make(name, default))
-        monkeypatch.setattr(QMessageBox, "about", lambda *a, **k: self.calls.append(("about", a[2])))
-
-    def _make(self, name, default):
-        def prompt(parent, title, text, *args, **kw):
-            self.calls.append((name, title, text))
-            return self.answers.pop(0) if self.answers else default
-        return prompt
-
-    def titles(self):
-        return [c[1] for c in self.calls]
-
-
-class FakeConnection(QObject):
-    """The connection interface of part B, recording what the window asks."""
-    sig_connected = Signal(str)
-    sig_disconnected = Signal(str)
-    sig_state = Signal(object, int)
-    sig_events = Signal(list)
-    sig_samples = Signal(list)
-    sig_error = Signal(str)
-
-    def __init__(self):
-        super().__init__()
-        self.calls = []
-        self.connected = False
-        self.embedded = True
-
-    def __getattr__(self, name):
-        if name in ("start_embedded", "connect_to", "upload", "start", "stop", "set_input",
-                    "set_adc", "set_speed", "reset", "shutdown"):
-            return lambda *a: self.calls.append((name,) + a)
-        raise AttributeError(name)
-
-
-@pytest.fixture
-def prompts(monkeypatch):
-    return Prompts(monkeypatch)
-
-
-@pytest.fixture
-def settings(tmp_path):
-    return Settings(str(tmp_path / "config" / "settings.ini"))
+prompts, settings = _workbench.prompts, _workbench.settings
 
 
 @pytest.fixture
@@ -120,30 +72,13 @@ def project(tmp_path):
 
 @pytest.fixture
 def make_window(qtbot, settings, prompts):
-    made = []
-
-    def make(**kw):
-        kw.setdefault("start_controller", False)
-        kw.setdefault("debounce_ms", 20)
-        w = MainWindow(kw.pop("settings", settings), **kw)
-        qtbot.addWidget(w)
-        w.resize(1200, 800)
-        w.show()
-        made.append(w)
-        return w
-    yield make
-    for w in made:
-        w.shutdown()
+    with windows(qtbot, settings, (1200, 800)) as make:
+        yield make
 
 
 @pytest.fixture
 def win(make_window):
     return make_window()
-
-
-def settle(qtbot, w):
-    qtbot.waitUntil(lambda: not w.busy(), timeout=10000)
-    qtbot.wait(10)
 
 
 # ------------------------------------------------------------------ project
@@ -520,7 +455,7 @@ def test_close_project_shows_the_welcome_page(win, project):
 # --------------------------------------------------------------- run side
 @pytest.fixture
 def runwin(make_window, project):
-    conn = FakeConnection()
+    conn = RecordingConnection()
     w = make_window(connection=conn, start_controller=True)
     w.open_project(project)
     return w, conn
@@ -715,7 +650,7 @@ def test_tab_menu_drop_and_status(win, project, qtbot):
 
 def test_run_panels_come_after_the_first_paint_and_work(make_window, project, qtbot, settings):
     from plcbuilder.controller import events as ev
-    conn = FakeConnection()
+    conn = RecordingConnection()
     w = MainWindow(settings, connection=conn, start_controller=True, debounce_ms=20)
     qtbot.addWidget(w)
     try:
