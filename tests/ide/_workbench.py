@@ -4,6 +4,8 @@ window on it, and a fake controller connection that records requests. The
 pieces the main window's and the debugger's tests share are here too: the
 recorded message boxes, the recording connection, the windows made and shut."""
 
+from __future__ import annotations
+
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -110,11 +112,17 @@ class FakeConnection(RecordingConnection):
     VERBS = RecordingConnection.VERBS + ("request_registers",)
 
 
+def answer_no(monkeypatch) -> None:
+    """Every message box (warning, question, critical, information) answers No, unseen."""
+    for name in ("warning", "question", "critical", "information"):
+        monkeypatch.setattr(QMessageBox, name, lambda *a, **k: SB.No)
+
+
 @contextmanager
-def windows(qtbot, settings: Settings, size: tuple[int, int]):
-    """make(**kw): a shown MainWindow of this size on these settings (or
-    kw's "settings"), with no controller and a 20 ms debounce unless kw says
-    otherwise; every window made is shut down at the end."""
+def windows(qtbot, settings: Settings, size: tuple[int, int] | None):
+    """make(**kw): a shown MainWindow of this size (None: as it comes) on these
+    settings (or kw's "settings"), with no controller and a 20 ms debounce
+    unless kw says otherwise; every window made is shut down at the end."""
     made = []
 
     def make(**kw):
@@ -122,7 +130,8 @@ def windows(qtbot, settings: Settings, size: tuple[int, int]):
         kw.setdefault("debounce_ms", 20)
         w = MainWindow(kw.pop("settings", settings), **kw)
         qtbot.addWidget(w)
-        w.resize(*size)
+        if size is not None:
+            w.resize(*size)
         w.show()
         made.append(w)
         return w

@@ -53,14 +53,12 @@ def live_run_panels(qtbot):
 def live_example(qtbot, tmp_path, monkeypatch):
     """(a main window that starts the embedded controller, the root of a fresh
     example project, not opened yet); every message box answers No."""
-    from PySide6.QtWidgets import QMessageBox
-
     from plcbuilder.ide.main_window import MainWindow
     from plcbuilder.ide.settings import Settings
     from plcbuilder.project.new import create_project
+    from tests.ide._workbench import answer_no
 
-    for name in ("warning", "question", "critical", "information"):
-        monkeypatch.setattr(QMessageBox, name, lambda *a, **k: QMessageBox.StandardButton.No)
+    answer_no(monkeypatch)
     root = create_project(tmp_path / "example", name="example").root
     w = MainWindow(Settings(str(tmp_path / "settings.ini")), start_controller=True,
                    debounce_ms=20)

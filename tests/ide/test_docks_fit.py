@@ -6,32 +6,25 @@ import pytest
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QApplication
 
-from plcbuilder.ide.main_window import MainWindow
+from plcbuilder.ide.settings import Settings
 from plcbuilder.link.client import ControllerStatus
-from tests.ide._workbench import RecordingConnection
+from tests.ide._workbench import RecordingConnection, answer_no, windows
 from tests.ide.test_main_window import make_project
 
 
 @pytest.fixture
 def runwin(qtbot, tmp_path, prompts_off):
-    from plcbuilder.ide.settings import Settings
     conn = RecordingConnection()
-    w = MainWindow(Settings(str(tmp_path / "cfg" / "settings.ini")), connection=conn,
-                   start_controller=True, debounce_ms=20)
-    qtbot.addWidget(w)
-    w.resize(1200, 800)
-    w.show()
-    qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
-    w.open_project(make_project(tmp_path / "proj"))
-    yield w, conn
-    w.shutdown()
+    with windows(qtbot, Settings(str(tmp_path / "cfg" / "settings.ini")), (1200, 800)) as make:
+        w = make(connection=conn, start_controller=True)
+        qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
+        w.open_project(make_project(tmp_path / "proj"))
+        yield w, conn
 
 
 @pytest.fixture
 def prompts_off(monkeypatch):
-    from PySide6.QtWidgets import QMessageBox
-    for name in ("warning", "question", "critical", "information"):
-        monkeypatch.setattr(QMessageBox, name, lambda *a, **k: QMessageBox.StandardButton.No)
+    answer_no(monkeypatch)
 
 
 def _settle(qtbot):

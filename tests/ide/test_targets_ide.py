@@ -11,10 +11,10 @@ pytest.importorskip("PySide6")
 from PySide6 import QtCore  # noqa: E402
 
 from plcbuilder import api  # noqa: E402
-from plcbuilder.ide.main_window import MainWindow  # noqa: E402
 from plcbuilder.ide.project_tree import ROLE_DESCRIPTION  # noqa: E402
 from plcbuilder.ide.settings import Settings  # noqa: E402
 from tests.controller._targets import compiled  # noqa: E402
+from tests.ide._workbench import windows  # noqa: E402
 from tests.link.linkkit import image_of  # noqa: E402
 
 Qt = QtCore.Qt
@@ -23,12 +23,8 @@ WAIT = 15_000
 
 @pytest.fixture
 def window(qtbot, tmp_path):
-    w = MainWindow(Settings(str(tmp_path / "cfg" / "s.ini")), start_controller=False,
-                   debounce_ms=20)
-    qtbot.addWidget(w)
-    w.show()
-    yield w
-    w.shutdown()
+    with windows(qtbot, Settings(str(tmp_path / "cfg" / "s.ini")), None) as make:
+        yield make()
 
 
 def _children(item) -> list[tuple[str, str]]:

@@ -6,17 +6,16 @@ main window)."""
 from __future__ import annotations
 
 import pytest
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtWidgets
 from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QMessageBox
 
 from plcbuilder.controller import events as ev
 
 from plcbuilder.ide.editor import MK_COVERED, MK_UNCOVERED
-from plcbuilder.ide.main_window import Act, MainWindow
+from plcbuilder.ide.main_window import Act
 from plcbuilder.ide.panels.tests import STATUS, TestsPanel
-from plcbuilder.ide.settings import Settings
 
+from tests.ide._workbench import RecordingConnection, answer_no, settings_in, windows
 from tests.testing._proj import FAILING, LONG_FAILING, PASSING, make_project
 
 @pytest.fixture
@@ -92,14 +91,9 @@ def test_without_a_project_nothing_runs(qtbot):
 
 @pytest.fixture
 def win(qtbot, tmp_path, monkeypatch):
-    for name in ("warning", "question", "critical", "information"):
-        monkeypatch.setattr(QMessageBox, name, lambda *a, **k: QMessageBox.StandardButton.No)
-    w = MainWindow(Settings(str(tmp_path / "config" / "settings.ini")), start_controller=False,
-                   debounce_ms=20)
-    qtbot.addWidget(w)
-    w.show()
-    yield w
-    w.shutdown()
+    answer_no(monkeypatch)
+    with windows(qtbot, settings_in(tmp_path), None) as make:
+        yield make()
 
 
 def marks(ed, marker):
@@ -161,27 +155,6 @@ def test_open_failing_run_is_for_a_selected_failing_test(qtbot, panel):
     assert not panel.running()
 
 
-class LiveConnection(QtCore.QObject):
-    """A controller connection that only sends what the test emits."""
-    sig_connected = QtCore.Signal(str)
-    sig_disconnected = QtCore.Signal(str)
-    sig_state = QtCore.Signal(object, int)
-    sig_events = QtCore.Signal(list)
-    sig_samples = QtCore.Signal(list)
-    sig_error = QtCore.Signal(str)
-
-    def __init__(self):
-        super().__init__()
-        self.connected = False
-        self.embedded = True
-
-    def __getattr__(self, name):
-        if name in ("start_embedded", "connect_to", "upload", "start", "stop", "set_input",
-                    "set_adc", "set_speed", "reset", "shutdown"):
-            return lambda *a: None
-        raise AttributeError(name)
-
-
 def live_sample(t):
     z = (0,) * 8
     return ev.Sample(t_ms=t, running="M03", proc=0, message=0, inputs=z, outputs=(1,) + z[1:],
@@ -190,17 +163,13 @@ def live_sample(t):
 
 @pytest.fixture
 def live_win(qtbot, tmp_path, monkeypatch):
-    for name in ("warning", "question", "critical", "information"):
-        monkeypatch.setattr(QMessageBox, name, lambda *a, **k: QMessageBox.StandardButton.No)
-    conn = LiveConnection()
-    w = MainWindow(Settings(str(tmp_path / "config" / "settings.ini")), connection=conn,
-                   start_controller=True, debounce_ms=20)
-    qtbot.addWidget(w)
-    w.resize(1200, 800)
-    w.show()
-    qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
-    yield w, conn
-    w.shutdown()
+    """A window whose connection only sends what the test emits."""
+    answer_no(monkeypatch)
+    conn = RecordingConnection()
+    with windows(qtbot, settings_in(tmp_path), (1200, 800)) as make:
+        w = make(connection=conn, start_controller=True)
+        qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
+        yield w, conn
 
 
 def test_open_failing_run_shows_it_in_the_run_panels_until_back_to_live(qtbot, live_win, tmp_path):
