@@ -109,13 +109,20 @@ def test_a_time_only_move_leaves_the_curves_data_alone(qtbot, tabbed, monkeypatc
     assert item.viewRect().right() == pytest.approx(lanes.offset - lanes._drawn_offset, abs=1e-6)
 
 
-def test_a_put_off_move_comes_back_when_due(qtbot, tabbed):
-    p, fake = tabbed
-    p.timebase.set_window(1.0)
+def _idle_history(p, fake, window_s: float, end_ms: int, step_ms: int) -> None:
+    """A window of window_s seconds on an idle controller (LUBE in software),
+    output 0 toggling every second from 0 to end_ms (a sample every step_ms),
+    drawn once."""
+    p.timebase.set_window(window_s)
     p._on_state(ControllerStatus(t_ms=0, running=None, software=("LUBE",), proc=0))
     fake.sig_samples.emit([sample(t, outputs=(t // 1000) & 1, running=None)
-                           for t in range(0, 2000, 10)])
+                           for t in range(0, end_ms, step_ms)])
     p.tick()
+
+
+def test_a_put_off_move_comes_back_when_due(qtbot, tabbed):
+    p, fake = tabbed
+    _idle_history(p, fake, 1.0, 2000, 10)
     lanes = p.lanes
     fake.sig_samples.emit([sample(2000, outputs=1, running=None)])     # only time advances
     lanes._last_move = 0.0
@@ -136,11 +143,7 @@ def test_a_put_off_move_comes_back_when_due(qtbot, tabbed):
 
 def test_less_than_a_pixel_does_not_move(qtbot, tabbed):
     p, fake = tabbed
-    p.timebase.set_window(60.0)
-    p._on_state(ControllerStatus(t_ms=0, running=None, software=("LUBE",), proc=0))
-    fake.sig_samples.emit([sample(t, outputs=(t // 1000) & 1, running=None)
-                           for t in range(0, 61000, 100)])
-    p.tick()
+    _idle_history(p, fake, 60.0, 61000, 100)
     lanes = p.lanes
     per_px = 60.0 / lanes.plot.getViewBox().width()
     assert per_px > 0.02
