@@ -7,10 +7,10 @@ from pathlib import Path
 from typing import Optional
 
 from PySide6.QtCore import Qt, QTimer, Signal
-from PySide6.QtWidgets import (QHBoxLayout, QMenu, QToolButton, QTreeWidget, QTreeWidgetItem,
-                               QVBoxLayout, QWidget)
+from PySide6.QtWidgets import QMenu, QTreeWidgetItem, QWidget
 
 from plcbuilder.ide.debug.breakpoints import Breakpoint, BreakpointStore
+from plcbuilder.ide.debug.list_panel import lay_out, list_tree, tool
 from plcbuilder.ide.icons import icon
 
 ROLE_BP = Qt.ItemDataRole.UserRole + 1
@@ -28,34 +28,19 @@ class BreakpointsPanel(QWidget):
     def __init__(self, store: BreakpointStore, parent: Optional[QWidget] = None):
         super().__init__(parent)
         self.store = store
-        self.tree = QTreeWidget(self)
-        self.tree.setObjectName("breakpointsList")
-        self.tree.setColumnCount(3)
-        self.tree.setHeaderLabels(["Breakpoint", "Line", "Details"])
-        self.tree.setRootIsDecorated(False)
+        self.tree = list_tree(self, "breakpointsList", ["Breakpoint", "Line", "Details"],
+                              self._menu)
         self.tree.setUniformRowHeights(True)
-        self.tree.setAlternatingRowColors(True)
-        self.tree.setSelectionMode(QTreeWidget.SelectionMode.ExtendedSelection)
-        self.tree.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
-        self.tree.customContextMenuRequested.connect(self._menu)
         self.tree.itemDoubleClicked.connect(self._activated)
         self.tree.itemChanged.connect(self._item_changed)
-        self.remove_button = _tool(self, "delete", "Remove the selected breakpoints (Delete)",
+        self.remove_button = tool(self, "delete", "Remove the selected breakpoints (Delete)",
                                    self.remove_selected)
-        self.remove_all_button = _tool(self, "clear", "Remove every breakpoint",
+        self.remove_all_button = tool(self, "clear", "Remove every breakpoint",
                                        self.store.clear)
-        self.toggle_all_button = _tool(self, "disconnected", "Enable or disable every breakpoint",
+        self.toggle_all_button = tool(self, "disconnected", "Enable or disable every breakpoint",
                                        self.toggle_all)
-        top = QHBoxLayout()
-        top.setContentsMargins(2, 2, 2, 2)
-        top.addStretch(1)
-        for b in (self.toggle_all_button, self.remove_button, self.remove_all_button):
-            top.addWidget(b)
-        lay = QVBoxLayout(self)
-        lay.setContentsMargins(0, 0, 0, 0)
-        lay.setSpacing(0)
-        lay.addLayout(top)
-        lay.addWidget(self.tree, 1)
+        lay_out(self, self.tree,
+                (self.toggle_all_button, self.remove_button, self.remove_all_button))
         self._filling = False
         self._changing = False          # in an item's own change (its checkbox)
         store.sig_changed.connect(lambda _p: self.refresh())
@@ -141,11 +126,3 @@ class BreakpointsPanel(QWidget):
         menu.addAction("Remove All", self.store.clear)
         menu.exec(self.tree.viewport().mapToGlobal(pos))
 
-
-def _tool(parent, ic: str, tip: str, slot) -> QToolButton:
-    b = QToolButton(parent)
-    b.setIcon(icon(ic))
-    b.setToolTip(tip)
-    b.setAutoRaise(True)
-    b.clicked.connect(lambda _c=False: slot())
-    return b

@@ -11,10 +11,10 @@ import re
 from typing import Optional
 
 from PySide6.QtCore import Qt, Signal
-from PySide6.QtWidgets import (QComboBox, QDialog, QDialogButtonBox, QFormLayout, QHBoxLayout,
-                               QLineEdit, QMenu, QSpinBox, QToolButton, QTreeWidget,
-                               QTreeWidgetItem, QVBoxLayout, QWidget)
+from PySide6.QtWidgets import (QComboBox, QDialog, QDialogButtonBox, QFormLayout, QLineEdit,
+                               QMenu, QSpinBox, QTreeWidgetItem, QWidget)
 
+from plcbuilder.ide.debug.list_panel import lay_out, list_tree, tool
 from plcbuilder.ide.icons import icon
 
 TARGET_RE = re.compile(r"(?:[A-Za-z_][A-Za-z0-9_]*\.[A-Za-z_][A-Za-z0-9_]*|"
@@ -42,15 +42,7 @@ class ForcesPanel(QWidget):
 
     def __init__(self, parent: Optional[QWidget] = None):
         super().__init__(parent)
-        self.tree = QTreeWidget(self)
-        self.tree.setObjectName("forcesList")
-        self.tree.setColumnCount(3)
-        self.tree.setHeaderLabels(["Forced", "Value", "Since"])
-        self.tree.setRootIsDecorated(False)
-        self.tree.setAlternatingRowColors(True)
-        self.tree.setSelectionMode(QTreeWidget.SelectionMode.ExtendedSelection)
-        self.tree.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
-        self.tree.customContextMenuRequested.connect(self._menu)
+        self.tree = list_tree(self, "forcesList", ["Forced", "Value", "Since"], self._menu)
         self.tree.itemDoubleClicked.connect(lambda item, _c: self.ask_force(item.text(0),
                                                                              item.text(1)))
         self.mode = QComboBox(self)
@@ -58,22 +50,14 @@ class ForcesPanel(QWidget):
         self.mode.addItem("Release restores the program's value", "restore")
         self.mode.setToolTip("What a release does: " + "; ".join(
             f"{k}: {v}" for k, v in RELEASE_MODES.items()))
-        self.add_button = _tool(self, "debug-force", "Force a variable, input, output, ADC, "
+        self.add_button = tool(self, "debug-force", "Force a variable, input, output, ADC, "
                                 "PWM, DAC or register…", lambda: self.ask_force())
-        self.release_button = _tool(self, "delete", "Release the selected forces",
+        self.release_button = tool(self, "delete", "Release the selected forces",
                                     self.release_selected)
-        self.release_all_button = _tool(self, "clear", "Release everything forced",
+        self.release_all_button = tool(self, "clear", "Release everything forced",
                                         lambda: self.sig_release_all.emit(self.release_mode()))
-        top = QHBoxLayout()
-        top.setContentsMargins(2, 2, 2, 2)
-        top.addWidget(self.mode, 1)
-        for b in (self.add_button, self.release_button, self.release_all_button):
-            top.addWidget(b)
-        lay = QVBoxLayout(self)
-        lay.setContentsMargins(0, 0, 0, 0)
-        lay.setSpacing(0)
-        lay.addLayout(top)
-        lay.addWidget(self.tree, 1)
+        lay_out(self, self.tree, (self.add_button, self.release_button, self.release_all_button),
+                lead=self.mode)
         self.forces: list[dict] = []
         self.show_forces([])
 
@@ -163,11 +147,3 @@ class ForceDialog(QDialog):
         self.buttons.button(QDialogButtonBox.StandardButton.Ok).setEnabled(ok)
         self.edit.setStyleSheet("" if ok or not self.edit.text() else "color: #c62828;")
 
-
-def _tool(parent, ic: str, tip: str, slot) -> QToolButton:
-    b = QToolButton(parent)
-    b.setIcon(icon(ic))
-    b.setToolTip(tip)
-    b.setAutoRaise(True)
-    b.clicked.connect(lambda _c=False: slot())
-    return b
