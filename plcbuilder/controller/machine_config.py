@@ -182,6 +182,33 @@ class _Reader:
                 hint = ", ".join(sorted(allowed))
                 raise self.error(path + (k,), f"unknown key (known keys here: {hint})")
 
+    def tables(self, data: Any, name: str, allowed: set[str], required: str):
+        """The array of tables ``[[name]]``, each as (index, path, table) with
+        its keys checked against ``allowed`` and ``required`` among them: the
+        array is checked now, each table as the caller comes to it."""
+        if not isinstance(data, list):
+            raise self.error((name,), f"expected an array of tables ([[{name}]])")
+        return self._entries(data, name, allowed, required)
+
+    def _entries(self, data: list, name: str, allowed: set[str], required: str):
+        for k, item in enumerate(data):
+            p = (name, k)
+            d = self.table(item, p)
+            self.known(d, p, allowed)
+            if required not in d:
+                raise self.error(p, f"missing key '{required}'")
+            yield k, p, d
+
+    def one_of(self, d: dict, path: tuple, choices: dict[str, str]) -> str:
+        """The one key of ``choices`` (key: what it gives) that ``d`` has;
+        none or more than one is an error naming them all."""
+        has = [w for w in choices if w in d]
+        if len(has) != 1:
+            named = [f"'{k}' ({what})" for k, what in choices.items()]
+            raise self.error(path, "give exactly one of " + ", ".join(named[:-1]) + " or "
+                             + named[-1] + (f"; found {', '.join(has)}" if has else ""))
+        return has[0]
+
     def integer(self, d: dict, key: str, path: tuple, default=None, lo=None, hi=None):
         if key not in d:
             return default
@@ -327,25 +354,14 @@ def parse_machine(text: str, name: str = "<machine>") -> MachineConfig:
 
     inputs = []
     seen: dict[int, int] = {}
-    in_list = data.get("inputs", [])
-    if not isinstance(in_list, list):
-        raise r.error(("inputs",), "expected an array of tables ([[inputs]])")
-    for k, item in enumerate(in_list):
-        p = ("inputs", k)
-        d = r.table(item, p)
-        r.known(d, p, _INPUT_KEYS)
-        if "pin" not in d:
-            raise r.error(p, "missing key 'pin'")
+    for k, p, d in r.tables(data.get("inputs", []), "inputs", _INPUT_KEYS, "pin"):
         pin = r.integer(d, "pin", p, None, 0, n_in - 1)
         if pin in seen:
             raise r.error(p + ("pin",), f"input {pin} is already wired (inputs[{seen[pin]}])")
         seen[pin] = k
-        has = [w for w in ("axis", "output", "value") if w in d]
-        if len(has) != 1:
-            raise r.error(p, "give exactly one of 'axis' (a position switch), 'output' "
-                             "(follows an output) or 'value' (a constant)"
-                             + (f"; found {', '.join(has)}" if has else ""))
-        kind = {"axis": "axis", "output": "output", "value": "constant"}[has[0]]
+        tied = r.one_of(d, p, {"axis": "a position switch", "output": "follows an output",
+                               "value": "a constant"})
+        kind = {"axis": "axis", "output": "output", "value": "constant"}[tied]
         common = dict(pin=pin, name=r.string(d, "name", p, ""),
                       active=r.integer(d, "active", p, 1, 0, 1),
                       hard_limit=r.boolean(d, "hard_limit", p, False))
@@ -378,16 +394,8 @@ def parse_machine(text: str, name: str = "<machine>") -> MachineConfig:
                                       **common))
 
     outputs = []
-    out_list = data.get("outputs", [])
-    if not isinstance(out_list, list):
-        raise r.error(("outputs",), "expected an array of tables ([[outputs]])")
     seen = {}
-    for k, item in enumerate(out_list):
-        p = ("outputs", k)
-        d = r.table(item, p)
-        r.known(d, p, {"pin", "name"})
-        if "pin" not in d:
-            raise r.error(p, "missing key 'pin'")
+    for k, p, d in r.tables(data.get("outputs", []), "outputs", {"pin", "name"}, "pin"):
         pin = r.integer(d, "pin", p, None, 0, n_out - 1)
         if pin in seen:
             raise r.error(p + ("pin",), f"output {pin} is already named (outputs[{seen[pin]}])")
@@ -395,16 +403,8 @@ def parse_machine(text: str, name: str = "<machine>") -> MachineConfig:
         outputs.append(OutputConfig(pin=pin, name=r.string(d, "name", p, "")))
 
     adcs = []
-    adc_list = data.get("adc", [])
-    if not isinstance(adc_list, list):
-        raise r.error(("adc",), "expected an array of tables ([[adc]])")
     seen = {}
-    for k, item in enumerate(adc_list):
-        p = ("adc", k)
-        d = r.table(item, p)
-        r.known(d, p, _ADC_KEYS)
-        if "channel" not in d:
-            raise r.error(p, "missing key 'channel'")
+    for k, p, d in r.tables(data.get("adc", []), "adc", _ADC_KEYS, "channel"):
         ch = r.integer(d, "channel", p, None, 0, ADC_CHANNELS - 1)
         if ch in seen:
             raise r.error(p + ("channel",), f"ADC{ch} already has a source (adc[{seen[ch]}])")

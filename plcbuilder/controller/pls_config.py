@@ -52,25 +52,16 @@ class PlsConfig:
 def parse_pls(r, data: Any, axes, n_out: int) -> tuple[PlsConfig, ...]:
     """The ``[[pls]]`` tables; ``r`` is machine_config's reader, ``axes`` the
     configured axes, ``n_out`` the number of outputs."""
-    if not isinstance(data, list):
-        raise r.error(("pls",), "expected an array of tables ([[pls]])")
+    entries = r.tables(data, "pls", PLS_KEYS, "axis")
     if len(data) > softmc.PLS_COUNT_MAX:
         raise r.error(("pls", softmc.PLS_COUNT_MAX),
                       f"at most {softmc.PLS_COUNT_MAX} programmable limit switches")
     out = []
-    for k, item in enumerate(data):
-        p = ("pls", k)
-        d = r.table(item, p)
-        r.known(d, p, PLS_KEYS)
-        if "axis" not in d:
-            raise r.error(p, "missing key 'axis'")
+    for k, p, d in entries:
         ax = r.string(d, "axis", p, choices=AXES)
         if ax not in axes:
             raise r.error(p + ("axis",), f"axis {ax} is not configured in [axes.{ax}]")
-        has = [w for w in ("output", "vout") if w in d]
-        if len(has) != 1:
-            raise r.error(p, "give exactly one of 'output' (a physical output) or 'vout' "
-                             "(a virtual output 1..32)" + (f"; found {', '.join(has)}" if has else ""))
+        r.one_of(d, p, {"output": "a physical output", "vout": "a virtual output 1..32"})
         output = r.integer(d, "output", p, None, 0, n_out - 1)
         vout = r.integer(d, "vout", p, None, 1, softmc.VIRTUAL_BITS)
         positions = _positions(r, d, p)
