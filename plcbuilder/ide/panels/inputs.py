@@ -197,36 +197,32 @@ class InputsPanel(QtWidgets.QWidget):
 
     def pin_menu(self, pin: int) -> QtWidgets.QMenu:
         """The right-click menu of an input pin (built, not shown: tests use it)."""
-        menu = QtWidgets.QMenu(self)
         t = f"in {pin}"
-        forced = pin in self.forced_pins
-        for text, obj, slot, on in (
-                ("Force On (1)", "force_on", lambda: self.sig_force.emit(t, 1), True),
-                ("Force Off (0)", "force_off", lambda: self.sig_force.emit(t, 0), True),
-                ("Release (keep the value)", "release_keep",
-                 lambda: self.sig_release.emit(t, "keep"), forced),
-                ("Release (back to the machine's wiring)", "release_restore",
-                 lambda: self.sig_release.emit(t, "restore"), forced)):
-            act = menu.addAction(text, slot)
-            act.setObjectName(obj)
-            act.setEnabled(on and self.grid_host.isEnabled())
-        return menu
+        return self._force_menu(t, pin in self.forced_pins, self.grid_host.isEnabled(), (
+            ("Force On (1)", "force_on", lambda: self.sig_force.emit(t, 1)),
+            ("Force Off (0)", "force_off", lambda: self.sig_force.emit(t, 0))))
 
     def adc_menu(self, ch: int) -> QtWidgets.QMenu:
         """The right-click menu of an ADC channel."""
-        menu = QtWidgets.QMenu(self)
         t = f"adc {ch}"
-        forced = ch in self.forced_adc
+        return self._force_menu(t, ch in self.forced_adc, self.spins[ch].isEnabled(), (
+            (f"Force ADC{ch} at {self.spins[ch].value()}", "force",
+             lambda: self.sig_force.emit(t, self.spins[ch].value())),))
+
+    def _force_menu(self, t: str, forced: bool, enabled: bool, forces) -> QtWidgets.QMenu:
+        """A menu of ``forces`` ((text, object name, slot) each) and the two
+        releases of target ``t`` (only while it is forced); nothing is enabled
+        while ``enabled`` is not."""
+        menu = QtWidgets.QMenu(self)
         for text, obj, slot, on in (
-                (f"Force ADC{ch} at {self.spins[ch].value()}", "force",
-                 lambda: self.sig_force.emit(t, self.spins[ch].value()), True),
+                *((text, obj, slot, True) for text, obj, slot in forces),
                 ("Release (keep the value)", "release_keep",
                  lambda: self.sig_release.emit(t, "keep"), forced),
                 ("Release (back to the machine's wiring)", "release_restore",
                  lambda: self.sig_release.emit(t, "restore"), forced)):
             act = menu.addAction(text, slot)
             act.setObjectName(obj)
-            act.setEnabled(on and self.spins[ch].isEnabled())
+            act.setEnabled(on and enabled)
         return menu
 
     def set_enabled(self, on: bool) -> None:
