@@ -342,6 +342,30 @@ class FrameDecoder:
         return len(self._buf) > self._pos or self._need is not None
 
 
+# -------------------------------------------------------------- non-blocking helpers
+
+def accept_all(lsock: socket.socket):
+    """Each connection waiting on a non-blocking listening socket, made
+    non-blocking itself, with its peer as ``host:port``: (socket, peer). Ends
+    when none is waiting (or accept fails)."""
+    while True:
+        try:
+            sock, addr = lsock.accept()
+        except OSError:                 # BlockingIOError and InterruptedError among them
+            return
+        sock.setblocking(False)
+        yield sock, (f"{addr[0]}:{addr[1]}" if isinstance(addr, tuple) else str(addr))
+
+
+def refuse(sock: socket.socket, data: bytes) -> None:
+    """Send ``data`` (the reason) if the socket takes it at once, then close it."""
+    try:
+        sock.send(data, NOSIGNAL)
+    except OSError:
+        pass
+    sock.close()
+
+
 # ------------------------------------------------------------------ blocking helpers
 
 def send_msg(sock: socket.socket, msg: dict, max_frame: int = MAX_FRAME) -> None:

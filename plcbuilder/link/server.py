@@ -34,7 +34,7 @@ from plcbuilder.link import protocol
 from plcbuilder.link.pacing import Simulation
 from plcbuilder.link.protocol import (MAX_FRAME, PROTOCOL_VERSION, REQUESTS,
                                       ErrorCode, FrameDecoder, ProtocolError, encode_frame)
-from plcbuilder.link.protocol import NOSIGNAL
+from plcbuilder.link.protocol import NOSIGNAL, accept_all, refuse
 from plcbuilder.link.protocol import debug as _debug
 from plcbuilder.link.service import Refused, Service, Session
 
@@ -333,29 +333,16 @@ class Server:
 
     # ---------------------------------------------------------------- connections
     def _accept(self) -> None:
-        while True:
-            try:
-                sock, addr = self._lsock.accept()
-            except (BlockingIOError, InterruptedError):
-                return
-            except OSError:
-                return
+        for sock, peer in accept_all(self._lsock):
             self.stats["accepted"] += 1
-            sock.setblocking(False)
             try:
                 sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
             except OSError:
                 pass
-            peer = f"{addr[0]}:{addr[1]}" if isinstance(addr, tuple) else str(addr)
             if self.clients >= self.max_clients or self._stopping:
                 self.stats["busy"] += 1
-                try:
-                    sock.send(encode_frame({"type": "error", "id": None, "code": ErrorCode.BUSY,
-                                            "reason": f"too many clients ({self.max_clients})"}),
-                              NOSIGNAL)
-                except OSError:
-                    pass
-                sock.close()
+                refuse(sock, encode_frame({"type": "error", "id": None, "code": ErrorCode.BUSY,
+                                           "reason": f"too many clients ({self.max_clients})"}))
                 continue
             while len(self._unauthed) >= self.max_unauthed:
                 # Make room: the oldest connection without a hello goes, so that a

@@ -29,7 +29,7 @@ from typing import Callable
 from plcbuilder.controller import abi
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.link.pacing import SimulationDown
-from plcbuilder.link.protocol import NOSIGNAL
+from plcbuilder.link.protocol import NOSIGNAL, accept_all, refuse
 
 __all__ = ["ServerApi", "COMMANDS", "DEFAULT_PORT"]
 
@@ -322,24 +322,12 @@ class ServerApi:
 
     # ------------------------------------------------------------ connections
     def _on_accept(self, _sock, _mask) -> None:
-        while True:
-            try:
-                sock, addr = self._lsock.accept()
-            except (BlockingIOError, InterruptedError):
-                return
-            except OSError:
-                return
+        for sock, peer in accept_all(self._lsock):
             self.stats["accepted"] += 1
-            sock.setblocking(False)
             if len(self._clients) >= self.max_clients:
-                try:
-                    sock.send(f"ERROR too many Server API clients ({self.max_clients})\r\n"
-                              .encode(), NOSIGNAL)
-                except OSError:
-                    pass
-                sock.close()
+                refuse(sock, f"ERROR too many Server API clients ({self.max_clients})\r\n"
+                       .encode())
                 continue
-            peer = f"{addr[0]}:{addr[1]}" if isinstance(addr, tuple) else str(addr)
             client = _Client(sock, peer)
             self._clients[sock.fileno()] = client
             self._update(client)
