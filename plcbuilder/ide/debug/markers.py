@@ -9,7 +9,6 @@ breakpoint markers moved to.
 
 from __future__ import annotations
 
-import ctypes
 from typing import Iterable, Optional
 
 from PySide6.QtCore import QPointF, Qt
@@ -20,7 +19,6 @@ from plcbuilder.ide.debug.breakpoints import Breakpoint
 from plcbuilder.ide.editor import (MK_BREAKPOINT, MK_BREAKPOINT_CONDITIONAL,
                                    MK_BREAKPOINT_DISABLED, MK_BREAKPOINT_UNVERIFIED, MK_EXEC,
                                    MK_EXEC_LINE, MK_FRAME_LINE, MK_LOGPOINT, MK_WAIT, MK_WAIT_LINE)
-from plcbuilder.ide.editor.style import M
 
 BREAKPOINT_RED = "#e51400"
 EXEC_YELLOW = "#f2c200"
@@ -100,7 +98,6 @@ class EditorMarks:
     def __init__(self, editor):
         self.editor = editor
         self._handles: dict[int, Breakpoint] = {}    # marker handle -> breakpoint
-        self._images: list = []
         self.inline: dict[int, str] = {}             # 1-based line -> inline text shown
         self._caret_back = None                       # the caret line's colour while hidden
         self._define()
@@ -109,13 +106,7 @@ class EditorMarks:
     def _define(self) -> None:
         ed = self.editor
         for mk, kind in _IMAGES.items():
-            data = marker_image(kind)
-            buf = (ctypes.c_ubyte * len(data)).from_buffer_copy(data)
-            self._images.append(buf)
-            ed.send(M.RGBAImageSetWidth, SIZE)
-            ed.send(M.RGBAImageSetHeight, SIZE)
-            ed.send(M.RGBAImageSetScale, 100)
-            ed.send(M.MarkerDefineRGBAImage, mk, ctypes.addressof(buf))
+            ed.define_rgba_marker(mk, marker_image(kind), SIZE)
         for mk in LINE_BACKS:
             ed.markerDefine(mk, int(Scintilla.MarkerSymbol.Background))
         self.apply_theme(dark=False)

@@ -209,8 +209,8 @@ class CodeEditor(SearchMixin, DiagnosticsMixin, KeysMixin, ScintillaEdit):
         for num, sym in folders.items():
             self.markerDefine(num, int(getattr(Scintilla.MarkerSymbol, sym)))
         # diagnostics markers (drawn icons) and indicators
-        self._define_rgba_marker(MK_ERROR, marker_image("error"))
-        self._define_rgba_marker(MK_WARNING, marker_image("warning"))
+        self.define_rgba_marker(MK_ERROR, marker_image("error"))
+        self.define_rgba_marker(MK_WARNING, marker_image("warning"))
         self.markerDefine(MK_CURRENT, int(Scintilla.MarkerSymbol.Background))
         self.indicSetStyle(IND_ERROR, int(Scintilla.IndicatorStyle.Squiggle))
         self.indicSetStyle(IND_WARNING, int(Scintilla.IndicatorStyle.Squiggle))
@@ -240,20 +240,21 @@ class CodeEditor(SearchMixin, DiagnosticsMixin, KeysMixin, ScintillaEdit):
         self.assignCmdKey(ord("K") | ((ctrl | shift) << 16), int(M.LineDelete))
         self.clearCmdKey(ord("/") | (ctrl << 16))      # Ctrl+/ is the window's comment toggle
 
-    def _define_rgba_marker(self, marker: int, data: bytes, size: int = 14) -> None:
-        buf = (ctypes.c_ubyte * len(data)).from_buffer_copy(data)
-        self._images.append(buf)
-        self.send(M.RGBAImageSetWidth, size)
-        self.send(M.RGBAImageSetHeight, size)
-        self.send(M.RGBAImageSetScale, 100)
-        self.send(M.MarkerDefineRGBAImage, marker, ctypes.addressof(buf))
+    def define_rgba_marker(self, marker: int, data: bytes, size: int = 14) -> None:
+        """Marker ``marker`` drawn as an RGBA image of size × size pixels."""
+        self._send_rgba(M.MarkerDefineRGBAImage, marker, data, size, scale=True)
 
     def _register_rgba(self, kind: int, data: bytes, size: int = 14) -> None:
+        self._send_rgba(M.RegisterRGBAImage, kind, data, size, scale=False)
+
+    def _send_rgba(self, message, n: int, data: bytes, size: int, scale: bool) -> None:
         buf = (ctypes.c_ubyte * len(data)).from_buffer_copy(data)
         self._images.append(buf)
         self.send(M.RGBAImageSetWidth, size)
         self.send(M.RGBAImageSetHeight, size)
-        self.send(M.RegisterRGBAImage, kind, ctypes.addressof(buf))
+        if scale:
+            self.send(M.RGBAImageSetScale, 100)
+        self.send(message, n, ctypes.addressof(buf))
 
     def apply_prefs(self, prefs: EditorPrefs) -> None:
         """Font, tabs, theme and the other preferences."""
