@@ -431,7 +431,7 @@ class DebugSession(QObject):
             marks.show_inline({})
         lines = exec_lines or wait_lines
         if scroll and lines:
-            _scroll_to(ed, lines[0])
+            ed.scroll_to_line(lines[0])
 
     def _update_watch(self, current: Optional[str] = None) -> None:
         panels = getattr(self.win, "run_panels", None)
@@ -548,17 +548,6 @@ class DebugSession(QObject):
         if self.halted is not None:
             for ed in self.win.editors():
                 self._show_in(ed)
-
-
-def _scroll_to(ed, line: int) -> None:
-    """Bring a line into view (in the middle when it was off screen) without
-    moving the caret."""
-    ed.ensureVisible(line - 1)
-    first = ed.firstVisibleLine()
-    visible = ed.visibleFromDocLine(line - 1)
-    on_screen = ed.linesOnScreen()
-    if not first <= visible < first + max(on_screen - 1, 1):
-        ed.setFirstVisibleLine(max(0, visible - on_screen // 3))
 
 
 def _single_shot(parent, ms: int, slot) -> QTimer:

@@ -339,17 +339,22 @@ class CodeEditor(SearchMixin, DiagnosticsMixin, KeysMixin, ScintillaEdit):
             self.setMarginWidthN(MARGIN_NUMBERS, width + 4)
 
 
-    def goto_line(self, line: int, col: int = 1, *, select_word: bool = False) -> None:
-        """Move the caret to 1-based (line, col), unfold it, and scroll it into
-        the middle of the view when it was off screen."""
-        line = max(1, min(line, self.lineCount()))
-        pos = self.position_of(line, col)
+    def scroll_to_line(self, line: int) -> None:
+        """Bring 1-based ``line`` into view (unfolded, and in the middle of the
+        view when it was off screen) without moving the caret."""
         self.ensureVisible(line - 1)
         first = self.firstVisibleLine()
         visible = self.visibleFromDocLine(line - 1)
         on_screen = self.linesOnScreen()
         if not first <= visible < first + max(on_screen - 1, 1):
             self.setFirstVisibleLine(max(0, visible - on_screen // 3))
+
+    def goto_line(self, line: int, col: int = 1, *, select_word: bool = False) -> None:
+        """Move the caret to 1-based (line, col), unfold it, and scroll it into
+        the middle of the view when it was off screen."""
+        line = max(1, min(line, self.lineCount()))
+        pos = self.position_of(line, col)
+        self.scroll_to_line(line)
         self.gotoPos(pos)
         if select_word:
             s, e, w = self.word_at(pos)
