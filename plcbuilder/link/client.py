@@ -532,15 +532,19 @@ class Client:
         self.close_reason = str(msg.get("reason", "the controller said bye"))
 
     def _notify(self, msg: dict) -> None:
-        cb = self.notification_callback
+        self._deliver(self.notification_callback, msg, self._notes)
+
+    def _deliver(self, cb, item, waiting: deque) -> None:
+        """``item`` to the callback when there is one (a bug in it is printed,
+        not raised), else onto ``waiting`` for next_notification()/next_telemetry()."""
         if cb is not None:
             try:
-                cb(msg)
+                cb(item)
             except Exception:  # noqa: BLE001 - a callback bug must not stop the reader
                 traceback.print_exc(file=sys.stderr)
             return
         with self._batch_ready:
-            self._notes.append(msg)
+            waiting.append(item)
             self._batch_ready.notify_all()
 
     def on_halted(self, msg: dict) -> None:
@@ -566,13 +570,4 @@ class Client:
         batch = Telemetry(t_ms=t_ms if type(t_ms) is int else 0, samples=samples, events=events,
                           missed=missed,
                           missed_events=missed_events if type(missed_events) is int else 0)
-        cb = self._callback
-        if cb is not None:
-            try:
-                cb(batch)
-            except Exception:  # noqa: BLE001 - a callback bug must not stop the reader
-                traceback.print_exc(file=sys.stderr)
-            return
-        with self._batch_ready:
-            self._batches.append(batch)
-            self._batch_ready.notify_all()
+        self._deliver(self._callback, batch, self._batches)
