@@ -7,9 +7,9 @@ does not load the compiler.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
 
+from plcbuilder._support.lazy import lazy_names
 from plcbuilder.project.model import Procedure, Project, ProjectError, Settings, parse_settings
 
 if TYPE_CHECKING:
@@ -19,14 +19,5 @@ if TYPE_CHECKING:
 __all__ = ["BuildResult", "ProcedureBuild", "Procedure", "Project", "ProjectError", "Settings",
            "build_project", "create_project", "parse_settings"]
 
-_LAZY = {"BuildResult": "plcbuilder.project.build", "ProcedureBuild": "plcbuilder.project.build",
-         "build_project": "plcbuilder.project.build", "create_project": "plcbuilder.project.new"}
-
-
-def __getattr__(name: str):
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_names(__name__, {"BuildResult": "build", "ProcedureBuild": "build",
+                                     "build_project": "build", "create_project": "new"})

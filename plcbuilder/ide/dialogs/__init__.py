@@ -8,7 +8,7 @@ result, or None when cancelled; tests drive the widgets and call
 ``accept()`` through a patched ``exec``.
 """
 
-import importlib
+from plcbuilder._support.lazy import lazy_names
 
 # Each name loads its module when first used (PEP 562): the main window opens
 # without building the dialogs' classes (nor Qt's for them).
@@ -17,13 +17,7 @@ _WHERE = {"GoToLineDialog": "files", "HeaderNameDialog": "files",
           "PreferencesDialog": "preferences", "ConnectDialog": "run", "StartDialog": "run"}
 
 
-def __getattr__(name: str):
-    module = _WHERE.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_names(__name__, _WHERE)
 
 
 def __dir__() -> list:

@@ -16,23 +16,16 @@ Positions: Scintilla counts UTF-8 bytes, Python and the diagnostics count
 characters. Every conversion goes through :mod:`plcbuilder.ide.offsets`.
 """
 
-import importlib
 import sys
+
+from plcbuilder._support.lazy import lazy_names
 
 # The names load their module on first use (PEP 562): ``file_key`` or the
 # marker numbers do not load Scintilla, pygments and the editor widget, which
-# the main window does not need before its first paint (the first editor does).
+# the main window does not need before its first paint (the first editor does);
+# a name of __all__ not here comes from .marks.
 _WHERE = {"file_key": "files", "normalise_newlines": "files", "same_file": "files",
           "CodeEditor": "widget"}
-
-
-def __getattr__(name: str):
-    module = _WHERE.get(name, "marks" if name in __all__ else None)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
 
 
 def is_editor(widget) -> bool:
@@ -53,3 +46,5 @@ __all__ = ["CodeEditor", "EditorPrefs", "default_font_family", "file_key", "is_e
            "MK_BREAKPOINT", "MK_BREAKPOINT_CONDITIONAL", "MK_BREAKPOINT_DISABLED",
            "MK_BREAKPOINT_UNVERIFIED", "MK_EXEC", "MK_EXEC_LINE", "MK_FRAME_LINE", "MK_LOGPOINT",
            "MK_WAIT", "MK_WAIT_LINE"]
+
+__getattr__ = lazy_names(__name__, {**{name: "marks" for name in __all__}, **_WHERE})

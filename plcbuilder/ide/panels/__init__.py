@@ -11,14 +11,8 @@ the IDE needs only once its window is painted.
 
 from __future__ import annotations
 
-import importlib
+from plcbuilder._support.lazy import lazy_names
 
 __all__ = ["RunPanels", "pin_names_from_defines", "pin_names_from_header", "default_pin_names"]
 
-
-def __getattr__(name: str):
-    if name in __all__:
-        value = getattr(importlib.import_module("plcbuilder.ide.panels.runpanels"), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_names(__name__, {name: "runpanels" for name in __all__})
