@@ -196,14 +196,11 @@ class Workbench(QObject):
         ed = self.win.editor_for(path)
         if ed is not None:
             return ed.line_text(line - 1)
-        from plcbuilder.lang.builtin_headers import BUILTIN_PREFIX, builtin_header
-        if path.startswith(BUILTIN_PREFIX):
-            text = builtin_header(path[len(BUILTIN_PREFIX):])
-        else:
-            try:
-                text = read_bounded(path, MAX_SOURCE).decode("utf-8", "replace")
-            except OSError:
-                return None
+        from plcbuilder.lang.builtin_headers import source_text
+        try:
+            text = source_text(path, MAX_SOURCE)
+        except OSError:
+            return None
         lines = (text or "").split("\n")
         return lines[line - 1] if 1 <= line <= len(lines) else None
 

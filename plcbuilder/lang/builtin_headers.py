@@ -7,7 +7,8 @@ from __future__ import annotations
 from importlib import resources
 from typing import Optional
 
-from plcbuilder.lang.source import normalise
+from plcbuilder._support.files import read_bounded
+from plcbuilder.lang.source import MAX_SOURCE_BYTES, normalise
 
 BUILTIN_PREFIX = "<builtin>/"
 
@@ -31,3 +32,13 @@ def builtin_header_names() -> list[str]:
         return sorted(p.name for p in d.iterdir() if p.name.endswith(".h"))
     except OSError:
         return []
+
+
+def source_text(name: str, limit: int = MAX_SOURCE_BYTES) -> Optional[str]:
+    """The text of a file as diagnostics name it: a built-in header
+    (``<builtin>/NAME``; None when there is no such header) or a file on disk
+    (at most ``limit`` bytes, what is not UTF-8 replaced). Reading the disk
+    raises OSError as :func:`read_bounded` does."""
+    if name.startswith(BUILTIN_PREFIX):
+        return builtin_header(name[len(BUILTIN_PREFIX):])
+    return read_bounded(name, limit).decode("utf-8", "replace")

@@ -29,9 +29,8 @@ from typing import Mapping, Optional, Sequence
 from plcbuilder.bytecode import abi
 from plcbuilder.diagnostics import Span
 from plcbuilder.lang.builtins import FUNCTIONS, KEYWORDS, PREDEFINED
-from plcbuilder._support.files import read_bounded
-from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
-from plcbuilder.lang.source import MAX_SOURCE_BYTES
+from plcbuilder.lang.builtin_headers import source_text
+from plcbuilder.lang.preprocess import BUILTIN_PREFIX
 from plcbuilder.lang.symbols import DEFINE, PROCEDURE, VARIABLE, SymbolIndex, index, tokens_of
 
 BUILTIN = "built-in"
@@ -144,13 +143,10 @@ def _header_procedure(name: str, idx: SymbolIndex, sources: Mapping[str, str],
     for header in idx.includes:
         text = next((t for p, t in sources.items() if _same_file(p, header)), None)
         if text is None:
-            if header.startswith(BUILTIN_PREFIX):
-                text = builtin_header(header[len(BUILTIN_PREFIX):])
-            else:
-                try:
-                    text = read_bounded(header, MAX_SOURCE_BYTES).decode("utf-8", "replace")
-                except OSError:
-                    text = None
+            try:
+                text = source_text(header)
+            except OSError:
+                text = None
         if text:
             sym = _index(header, text, include_dirs).procedures.get(name)
             if sym is not None:

@@ -74,7 +74,8 @@ from plcbuilder.image.manifest import ImageError, Limits, iter_image, valid_name
 from plcbuilder.lang import pipeline as _compiler
 from plcbuilder.lang.pipeline import CompileOptions, compile_file, compile_source
 from plcbuilder.lang.source import MAX_SOURCE_BYTES
-from plcbuilder.lang.preprocess import BUILTIN_PREFIX, builtin_header
+from plcbuilder.lang.builtin_headers import source_text
+from plcbuilder.lang.preprocess import builtin_header
 from plcbuilder._support.files import atomic_write, read_bounded, remove_temp_files
 from plcbuilder.project.model import Procedure, Project
 
@@ -1037,10 +1038,7 @@ def _check_span(v) -> None:
 def _disk_line(file: str, line: int) -> Optional[str]:
     """A line of a file as diagnostics name it (a path, or a built-in header)."""
     try:
-        if file.startswith(BUILTIN_PREFIX):
-            text = builtin_header(file[len(BUILTIN_PREFIX):])
-        else:
-            text = read_bounded(file, MAX_SOURCE_BYTES).decode("utf-8", "replace")
+        text = source_text(file)
     except (OSError, ValueError):
         return None
     if text is None:
