@@ -357,6 +357,23 @@ def accept_all(lsock: socket.socket):
         yield sock, (f"{addr[0]}:{addr[1]}" if isinstance(addr, tuple) else str(addr))
 
 
+def send_pending(sock: socket.socket, out: bytearray, chunk: int) -> bool:
+    """Send what ``out`` holds, at most ``chunk`` bytes a call, taking what went
+    out off its front, until it is empty or the socket would block. False when
+    the connection failed (the caller drops it)."""
+    while out:
+        try:
+            n = sock.send(out[:chunk], NOSIGNAL)
+        except (BlockingIOError, InterruptedError):
+            return True
+        except OSError:
+            return False
+        if n <= 0:
+            return True
+        del out[:n]
+    return True
+
+
 def refuse(sock: socket.socket, data: bytes) -> None:
     """Send ``data`` (the reason) if the socket takes it at once, then close it."""
     try:

@@ -34,7 +34,7 @@ from plcbuilder.link import protocol
 from plcbuilder.link.pacing import Simulation
 from plcbuilder.link.protocol import (MAX_FRAME, PROTOCOL_VERSION, REQUESTS,
                                       ErrorCode, FrameDecoder, ProtocolError, encode_frame)
-from plcbuilder.link.protocol import NOSIGNAL, accept_all, refuse
+from plcbuilder.link.protocol import NOSIGNAL, accept_all, refuse, send_pending
 from plcbuilder.link.protocol import debug as _debug
 from plcbuilder.link.service import Refused, Service, Session
 
@@ -650,17 +650,8 @@ class Server:
             self._update(conn)
 
     def _write(self, conn: _Conn) -> None:
-        while conn.out:
-            try:
-                n = conn.sock.send(conn.out[:1 << 20], NOSIGNAL)
-            except (BlockingIOError, InterruptedError):
-                return
-            except OSError:
-                self._drop(conn)
-                return
-            if n <= 0:
-                return
-            del conn.out[:n]
+        if not send_pending(conn.sock, conn.out, 1 << 20):
+            self._drop(conn)
 
     def _error(self, conn: _Conn, code: ErrorCode, reason: str, mid=None) -> None:
         self._send(conn, {"type": "error", "id": mid, "code": code, "reason": reason})

@@ -29,7 +29,7 @@ from typing import Callable
 from plcbuilder.controller import abi
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.link.pacing import SimulationDown
-from plcbuilder.link.protocol import NOSIGNAL, accept_all, refuse
+from plcbuilder.link.protocol import accept_all, refuse, send_pending
 
 __all__ = ["ServerApi", "COMMANDS", "DEFAULT_PORT"]
 
@@ -421,18 +421,10 @@ class ServerApi:
             self._drop(client)
 
     def _write(self, client: _Client) -> None:
-        while client.out:
-            try:
-                n = client.sock.send(client.out[:65536], NOSIGNAL)
-            except (BlockingIOError, InterruptedError):
-                return
-            except OSError:
-                self._drop(client)
-                return
-            if n <= 0:
-                return
-            del client.out[:n]
-        if client.closing and client not in self._ready:
+        if not send_pending(client.sock, client.out, 65536):
+            self._drop(client)
+            return
+        if not client.out and client.closing and client not in self._ready:
             self._drop(client)                   # it said all it had to say, and has it all
 
     def _update(self, client: _Client) -> None:
