@@ -10,8 +10,8 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
-from PySide6.QtCore import QObject, Signal
-from PySide6.QtWidgets import QMessageBox
+from PySide6.QtCore import QObject, Qt, Signal
+from PySide6.QtWidgets import QMainWindow, QMessageBox
 
 from plcbuilder.ide.main_window import MainWindow
 from plcbuilder.ide.settings import Settings
@@ -138,6 +138,20 @@ def windows(qtbot, settings: Settings, size: tuple[int, int] | None):
     yield make
     for w in made:
         w.shutdown()
+
+
+def docked_run_panels(qtbot, connection, size: tuple[int, int], **kw):
+    """RunPanels on ``connection`` (kw: RunPanels' own, as capacity) docked at
+    the bottom of a plain main window of this size, shown: (window, panels)."""
+    from plcbuilder.ide.panels import RunPanels    # pyqtgraph: only for who asks
+    win = QMainWindow()
+    qtbot.addWidget(win)
+    panels = RunPanels(win, connection, **kw)
+    for d in panels.docks():
+        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
+    win.resize(*size)
+    win.show()
+    return win, panels
 
 
 def settings_in(tmp_path: Path) -> Settings:

@@ -23,20 +23,11 @@ def live_run_panels(qtbot):
     """(a plain main window, a ControllerConnection to a real embedded
     controller, connected and empty, the RunPanels docked on it); at the end the
     controller's child process is waited for until it is gone."""
-    from PySide6 import QtWidgets
-    from PySide6.QtCore import Qt
-
     from plcbuilder.ide.connection import ControllerConnection
-    from plcbuilder.ide.panels import RunPanels
+    from tests.ide._workbench import docked_run_panels
 
-    win = QtWidgets.QMainWindow()
-    qtbot.addWidget(win)
     conn = ControllerConnection()
-    panels = RunPanels(win, conn)
-    for d in panels.docks():
-        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
-    win.resize(1400, 900)
-    win.show()
+    win, panels = docked_run_panels(qtbot, conn, (1400, 900))
     conn.start_embedded()
     try:
         qtbot.waitUntil(lambda: conn.connected, timeout=WAIT)

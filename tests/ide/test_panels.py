@@ -11,12 +11,13 @@ pytest.importorskip("PySide6")
 from PySide6 import QtCore, QtWidgets  # noqa: E402
 
 from plcbuilder.controller import events as ev  # noqa: E402
-from plcbuilder.ide.panels import (RunPanels, default_pin_names,  # noqa: E402
+from plcbuilder.ide.panels import (default_pin_names,  # noqa: E402
                                    pin_names_from_defines, pin_names_from_header)
 from plcbuilder.ide.panels.log import CATEGORY, TEXT, event_row  # noqa: E402
 from plcbuilder.ide.panels.model import RunModel  # noqa: E402
 from plcbuilder.ide.ringbuffer import RingBuffer  # noqa: E402
 from plcbuilder.link.client import ControllerStatus  # noqa: E402
+from tests.ide._workbench import docked_run_panels  # noqa: E402
 
 Qt = QtCore.Qt
 
@@ -63,13 +64,7 @@ def fake():
 
 @pytest.fixture
 def panels(qtbot, fake):
-    win = QtWidgets.QMainWindow()
-    qtbot.addWidget(win)
-    p = RunPanels(win, fake, capacity=2000)
-    for d in p.docks():
-        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
-    win.resize(1400, 900)
-    win.show()
+    _win, p = docked_run_panels(qtbot, fake, (1400, 900), capacity=2000)
     yield p
     p.shutdown()
 

@@ -7,16 +7,12 @@ import pytest
 
 pytest.importorskip("PySide6")
 
-from PySide6 import QtCore, QtWidgets  # noqa: E402
-
 from plcbuilder.controller.controller import Controller  # noqa: E402
 from plcbuilder.controller.machine_config import parse_machine  # noqa: E402
-from plcbuilder.ide.panels import RunPanels  # noqa: E402
 
 from tests.controller._sim import compile_proc  # noqa: E402
+from tests.ide._workbench import docked_run_panels  # noqa: E402
 from tests.ide.test_panels import FakeConnection  # noqa: E402
-
-Qt = QtCore.Qt
 
 MACHINE = """
 [axes.X]
@@ -59,13 +55,7 @@ main()
 @pytest.fixture
 def panels(qtbot):
     fake = FakeConnection()
-    win = QtWidgets.QMainWindow()
-    qtbot.addWidget(win)
-    p = RunPanels(win, fake, capacity=5000)
-    for d in p.docks():
-        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
-    win.resize(1200, 800)
-    win.show()
+    _win, p = docked_run_panels(qtbot, fake, (1200, 800), capacity=5000)
     yield p, fake
     p.shutdown()
 
