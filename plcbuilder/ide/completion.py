@@ -59,23 +59,12 @@ class HeaderDefines:
     a header re-read only when it changed."""
 
     def __init__(self):
-        self._cache: dict[str, tuple[float, dict]] = {}
+        self._cache = lang_symbols.HeaderCache()
 
     def defines(self, include_dirs: Iterable[Path]) -> dict[str, tuple[str, str, int]]:
         """{name: (value text, file, line)}."""
-        found = lang_symbols.header_defines(include_dirs, read=self._file)
+        found = lang_symbols.header_defines(include_dirs, read=self._cache.read)
         return {n: (s.value, s.span.file, s.span.line) for n, s in found.items()}
-
-    def _file(self, path: Path) -> dict:
-        try:
-            mtime = path.stat().st_mtime
-        except OSError:
-            return {}
-        hit = self._cache.get(str(path))
-        if hit is None or hit[0] != mtime:
-            hit = (mtime, lang_symbols.read_header(path))
-            self._cache[str(path)] = hit
-        return hit[1]
 
 
 def completions(prefix: str, *, kind: Kind = Kind.HARDWARE, text: str = "",

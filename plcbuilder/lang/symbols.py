@@ -320,6 +320,25 @@ def read_header(path: Path) -> dict[str, Symbol]:
     return file_defines(text, str(path))
 
 
+class HeaderCache:
+    """:func:`read_header` of a path, read again only when the file's
+    modification time changed ({} while the file cannot be looked at)."""
+
+    def __init__(self):
+        self._hits: dict[str, tuple[int, dict[str, Symbol]]] = {}
+
+    def read(self, path: Path) -> dict[str, Symbol]:
+        try:
+            stamp = path.stat().st_mtime_ns
+        except OSError:
+            return {}
+        hit = self._hits.get(str(path))
+        if hit is None or hit[0] != stamp:
+            hit = (stamp, read_header(path))
+            self._hits[str(path)] = hit
+        return hit[1]
+
+
 # ---------------------------------------------------------------- numbers
 def _context(before: list[Tok]) -> str:
     if len(before) < 2:

@@ -71,7 +71,7 @@ class Analysis:
         self.results: dict[str, CompileResult] = {}
         #: source uri (or "project:ROOT") -> {target uri: diagnostics}
         self._contrib: dict[str, dict[str, list[T.Diagnostic]]] = {}
-        self._headers: dict[str, tuple[int, dict]] = {}
+        self._headers = lang_symbols.HeaderCache()
         self._indexes: dict[str, tuple] = {}        # uri -> (text, include dirs, index)
         self._header_defs: dict[tuple, tuple] = {}   # include dirs -> (stamp, defines)
 
@@ -309,15 +309,7 @@ class Analysis:
         doc = self._by_path.get(_key(path))
         if doc is not None:
             return lang_symbols.file_defines(doc.text, str(path))
-        try:
-            stamp = path.stat().st_mtime_ns
-        except OSError:
-            return {}
-        hit = self._headers.get(str(path))
-        if hit is None or hit[0] != stamp:
-            hit = (stamp, lang_symbols.read_header(path))
-            self._headers[str(path)] = hit
-        return hit[1]
+        return self._headers.read(path)
 
 
 def _key(p: Path) -> Path:
