@@ -275,11 +275,12 @@ class TraceTools(QtCore.QObject):
 
     def session_trace(self) -> api.Trace:
         """The session's history as a trace, without the pins and channels that
-        never changed from 0."""
+        never changed from 0 (a watched variable stays, 0 or not)."""
         tr = self.session.snapshot(meta={"source": "PLC Builder IDE session"})
+        keep = {"proc", "message", "running", *variables_of(tr)}
         for name in list(tr.signals):
             kind, changes = tr.signals[name]
-            if name not in ("proc", "message", "running") and \
+            if name not in keep and \
                     all(v == 0 for _t, v in changes) and len(changes) <= 1:
                 del tr.signals[name]
         return tr
