@@ -1,5 +1,6 @@
-"""A trace as the controller's per-tick samples and events, for the run panels
-(which show a reopened trace, or a capture, as they show a live controller)."""
+"""A trace as the controller's per-tick samples and events, its watched
+variables and the bit its trigger watched, for the run panels (which show a
+reopened trace, or a capture, as they show a live controller)."""
 
 from __future__ import annotations
 

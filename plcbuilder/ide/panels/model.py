@@ -2,7 +2,8 @@
 
 Samples (:class:`plcbuilder.controller.events.Sample`) are parsed here, in
 batches, into preallocated numpy ring buffers; the plots only read views of
-them when the redraw timer fires. Message events are kept in a bounded list. No Qt.
+them when the redraw timer fires. Message events are kept in a bounded list, the
+watched variables' values (``Watched`` events) in :mod:`.watched`. No Qt.
 
 The controller sends only the ticks where something changed (each sample holds
 until the next); :class:`StepSamples` turns those changes into the points a

@@ -140,6 +140,7 @@ class AnalogPanel(TimePanel):
         plot.setMinimumHeight(-1 if shown else 0)          # -1: its own minimum again
         plot.setMaximumHeight(QWIDGETSIZE_MAX if shown else 0)
         self.widget.ci.layout.setRowStretchFactor(2, 2 if shown else 0)
+        self.in_plot.getAxis("bottom").showLabel(not shown)     # "time (s)" once, at the bottom
 
     def _draw_variables(self, t0: float, t1: float) -> None:
         """Each watched variable that is a number as a step curve (its own
