@@ -119,6 +119,15 @@ def test_watched_events_draw_a_lane_and_a_step_curve(qtbot, panels, fake):
     x, y = _lane(lanes, SENS)
     assert y.tolist()[-3:] == [1, 0, 0] and x[-2] == pytest.approx(0.995)
 
+    # a variable's lane has the lane menu's Remove (no force: it is not a pin)
+    lanes.force_menu = lambda menu, lane: menu.addAction(f"Force {lane}")
+    texts = [a.text() for a in lanes.build_menu(SENS).actions()]
+    assert "Remove lane M80.sens" in texts and not any("Force" in t for t in texts)
+    lanes.remove_lane(*SENS)
+    assert SENS not in lanes.lanes()
+    lanes.reset_lanes()
+    assert SENS in lanes.lanes()
+
     # Clear forgets them, and the variables' plot gives its room back
     panels.clear()
     panels.tick()
