@@ -144,6 +144,11 @@ _PROC_NAMES = {"plc_proc_idle": 0, **abi.PROC}
 _MESSAGE_NAMES = {**abi.PLC_BROADCAST, **abi.PLC_MESSAGE, **abi.PLCCMD}
 
 
+def is_variable(signal: str) -> bool:
+    """Whether a history signal is a watched variable (``PROC.var``)."""
+    return bool(_VAR.match(str(signal)))
+
+
 def watched_variables(trigger: Trigger) -> list[str]:
     """The variables the history must record for this trigger."""
     return [trigger.signal] if trigger.signal and _VAR.match(trigger.signal) else []

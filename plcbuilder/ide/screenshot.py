@@ -156,11 +156,25 @@ def _show_traces(win, traces: tuple) -> bool:
     # the plots are the picture: give their dock most of the window
     for key in ("inputs", "watch"):
         panels.dock(key).hide()
-    if len(traces) > 1:                 # the cursors read both traces
+    watched = bool(len(panels.model.watched))
+    if watched:
+        # its variables: lanes above the pins, and curves under PWM/DAC/ADC: that
+        # dock under the lanes, the bottom docks out of the way to make room
+        analog = panels.dock("analog")
+        win.removeDockWidget(analog)
+        win.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, analog, Qt.Orientation.Vertical)
+        analog.show()
+        for dock in (win.problems_dock, win.build_dock, win.tests_dock, panels.dock("log")):
+            dock.hide()
+    if len(traces) > 1 or watched:      # the cursors read both traces, or the variables
         panels.dock("cursors").show()
         panels.dock("cursors").raise_()
         panels.cursor_table.toggle.setChecked(True)
     win.resizeDocks([outputs], [int(win.width() * 0.62)], Qt.Orientation.Horizontal)
+    if watched:
+        h = win.height()
+        win.resizeDocks([outputs, panels.dock("cursors"), panels.dock("analog")],
+                        [int(h * 0.34), int(h * 0.14), int(h * 0.52)], Qt.Orientation.Vertical)
     return True
 
 

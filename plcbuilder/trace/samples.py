@@ -1,5 +1,6 @@
-"""A trace as the controller's per-tick samples and events, for the run panels
-(which show a reopened trace, or a capture, as they show a live controller)."""
+"""A trace as the controller's per-tick samples and events, its watched
+variables and the bit its trigger watched, for the run panels (which show a
+reopened trace, or a capture, as they show a live controller)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ from typing import Optional
 
 from plcbuilder.controller.events import Sample, from_dict
 from plcbuilder.controller.history import AXES, TEXT, Trace
+from plcbuilder.controller.trigger import TriggerError, is_variable, parse_trigger
 
 WORDS = 8
 
@@ -57,6 +59,27 @@ def to_samples(trace: Trace) -> list[Sample]:
             tuple(value(f"adc {n}") for n in range(8)),
             tuple(value(f"axis {a}") for a in AXES), (0,) * len(AXES)))
     return out
+
+
+def variables_of(trace: Trace) -> dict[str, list[tuple[int, int]]]:
+    """The trace's watched variables (its ``PROC.var`` signals): name -> changes,
+    over the trace's span."""
+    return {name: [(t, v) for t, v in ch if trace.t_start <= t <= trace.t_end]
+            for name, (kind, ch) in trace.signals.items()
+            if kind != TEXT and is_variable(name)}
+
+
+def trigger_bits(trace: Trace) -> dict[str, int]:
+    """The variable bit a capture's trigger watched (``M80.var03 bit 2 rise``
+    gives ``{"M80.var03": 2}``); empty for any other trace."""
+    spec = (trace.meta.get("trigger") or {}).get("spec")
+    if not spec:
+        return {}
+    try:
+        trig = parse_trigger(spec)
+    except TriggerError:
+        return {}
+    return {trig.signal: trig.bit} if trig.bit is not None and trig.signal else {}
 
 
 def events_of(trace: Trace) -> list:

@@ -110,3 +110,28 @@ def test_screenshot_of_two_traces_compared(tmp_path):
     assert QImage(str(out)).width() >= 1000
     proc, _out = shot("a.plctrace", "bad.plctrace")
     assert proc.returncode == 1 and "not a trace file" in proc.stderr
+
+
+def test_screenshot_of_a_trace_with_a_watched_variable(tmp_path):
+    """docs/images/watched-variables.png: a trace whose M80.sens rises at its
+    trigger is pictured with the variable's lane, in the variables' colour."""
+    from plcbuilder import api
+    from plcbuilder.ide.panels.style import LIGHT_PLOTS
+    project = make_project(tmp_path / "proj")
+    trace = api.Trace(0, 99, {"in 2": ("bit", [(0, 0), (40, 1)]),
+                              "M80.sens": ("int", [(0, 0), (40, 1)]),
+                              "M80.statez": ("int", [(0, 0), (40, 1), (70, 2)])},
+                      meta={"trigger": {"spec": "M80.sens bit 0 rise", "t_ms": 40,
+                                        "pre_ms": 40, "post_ms": 59, "mode": "single"}})
+    api.save_trace(trace, tmp_path / "cap.plctrace")
+    out = tmp_path / "watched.png"
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
+    proc = subprocess.run([sys.executable, "-m", "plcbuilder", "gui", str(project),
+                           "--screenshot", str(out), "--after", "50", "--settings",
+                           str(tmp_path / "s.ini"), "--trace", str(tmp_path / "cap.plctrace")],
+                          capture_output=True, text=True, cwd=ROOT, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    image = QImage(str(out))
+    lane = sum(image.pixelColor(x, y).name() == LIGHT_PLOTS.variable
+               for y in range(0, image.height(), 1) for x in range(0, image.width(), 2))
+    assert lane > 50

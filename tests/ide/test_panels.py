@@ -476,7 +476,7 @@ def test_lanes_are_one_curve_that_keeps_every_edge(qtbot, panels, fake):
     assert lanes.lanes() == [("outputs", 0), ("outputs", 1), ("outputs", 5)]
     x, y = lanes.merged_data("outputs")
     items = [i for i in lanes.plot.listDataItems() if isinstance(i, type(lanes._items["outputs"]))]
-    assert len(items) == 3                   # outputs, virtual outputs, inputs: one curve each
+    assert len(items) == 4      # outputs, virtual outputs, inputs, variables: one curve each
     t = np.arange(300) / 1000.0 - lanes.offset
     for pin, period in ((0, 1), (1, 2)):
         base = lanes._lane_y[("outputs", pin)]

@@ -3,8 +3,9 @@
 :class:`Cursors` puts two draggable vertical lines, A and B, on every time
 plot of the run panels (they move together on all of them) and keeps their
 absolute times; :class:`CursorTable` lists Δt and, for every signal the panels
-show (proc, message, the outputs and inputs that change, the PWM/DAC/ADC
-channels in use, the axes that move), its value at A, at B, and B − A.
+show (proc, message, the watched variables, the outputs and inputs that
+change, the PWM/DAC/ADC channels in use, the axes that move), its value at A,
+at B, and B − A.
 """
 
 from __future__ import annotations
@@ -170,6 +171,21 @@ class CursorTable(QtWidgets.QWidget):
         row("proc", field("proc"), numeric=False, show=_proc)
         row("message", field("message"), numeric=False)
         lanes = self.panels.lanes
+        # the watched variables: each one's value, and a trigger's bit of it
+        names = m.watched.names()
+        if o is not None:
+            names += [n for n in o.watched.names() if n not in names]
+        bits = {**(o.watched.bits if o is not None else {}), **m.watched.bits}
+        for name in names:
+            def var(s, name=name):
+                return None if s is None else s["watched"].get(name)
+            row(name, var)
+            label = lanes.lane_label("vars", (name, bits.get(name, 0)))
+            if name in bits and label != name:
+                def var_bit(s, name=name, b=bits[name]):
+                    v = var(s, name)
+                    return None if v is None else (v >> b) & 1
+                row(label, var_bit)
         for kind, key in (("outputs", "outputs"), ("inputs", "inputs")):
             pins = set(m.active_outputs if kind == "outputs" else m.active_inputs)
             if o is not None:

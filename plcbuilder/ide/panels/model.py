@@ -2,7 +2,8 @@
 
 Samples (:class:`plcbuilder.controller.events.Sample`) are parsed here, in
 batches, into preallocated numpy ring buffers; the plots only read views of
-them when the redraw timer fires. Message events are kept in a bounded list. No Qt.
+them when the redraw timer fires. Message events are kept in a bounded list, the
+watched variables' values (``Watched`` events) in :mod:`.watched`. No Qt.
 
 The controller sends only the ticks where something changed (each sample holds
 until the next); :class:`StepSamples` turns those changes into the points a
@@ -21,6 +22,7 @@ import numpy as np
 from plcbuilder.api import abi
 from plcbuilder.api import events as ev
 from plcbuilder.ide.panels.steps import StepSamples  # noqa: F401 - part of this module's API
+from plcbuilder.ide.panels.watched import WatchedVariables
 from plcbuilder.ide.ringbuffer import RingBuffer
 
 __all__ = ["RunModel", "StepSamples", "MessageRow", "decode_message", "ANALOG_NAMES", "AXES", "WORDS", "PINS"]
@@ -136,6 +138,8 @@ class RunModel:
         self.messages: list[MessageRow] = []       # oldest first, at most message_limit
         self.message_times: list[float] = []       # their times in seconds (for bisect)
         self.message_version = 0
+        #: the watched variables' changes (``Watched`` events, a trace's PROC.var)
+        self.watched = WatchedVariables(self.capacity)
         self.version = 0
         self.last_sample: Optional[ev.Sample] = None
         self.running: Optional[str] = None
@@ -162,6 +166,7 @@ class RunModel:
         self.messages.clear()
         self.message_times.clear()
         self.message_version += 1
+        self.watched.clear()
         self.last_sample = None
         self.running = None
         self.epoch = getattr(self, "epoch", -1) + 1
@@ -186,12 +191,14 @@ class RunModel:
         self.vouts = RingBuffer(capacity, 1, np.uint32)
         self.analog = RingBuffer(capacity, 24, np.float64)
         self.axes = RingBuffer(capacity, 2 * len(AXES), np.float64)
+        self.watched.capacity = capacity
         self.clear()
 
     def sample_at(self, t: float) -> Optional[dict]:
         """Every value the model holds at time ``t`` (seconds): the newest kept
         sample at or before it, as {"t", "proc", "message", "inputs", "outputs",
-        "analog", "positions"}; None before the first sample."""
+        "analog", "positions", "watched"} ("watched": each watched variable's
+        value then, None before its first); None before the first sample."""
         times = self.time.view()
         i = int(np.searchsorted(times, t + 1e-9, side="right")) - 1
         if i < 0:
@@ -202,13 +209,26 @@ class RunModel:
                 "inputs": [int(self.inputs.view(w)[i]) for w in range(WORDS)],
                 "outputs": [int(self.outputs.view(w)[i]) for w in range(WORDS)],
                 "analog": [float(self.analog.view(c)[i]) for c in range(24)],
-                "positions": [float(self.axes.view(c)[i]) for c in range(na)]}
+                "positions": [float(self.axes.view(c)[i]) for c in range(na)],
+                "watched": {name: self.watched.value_at(name, t) for name in self.watched.names()}}
 
     @property
     def t_end(self) -> float:
         """The newest sample's time in seconds (0 when empty)."""
         last = self.time.latest()
         return float(last[0]) if last is not None else 0.0
+
+    def set_watched(self, changes: dict, bits: Optional[dict] = None) -> None:
+        """A trace's watched variables (``{name: [(t_ms, value), …]}``) and the
+        bit its trigger watched (``{name: bit}``), instead of what was kept."""
+        self.watched.set_bits(bits or {})
+        self.watched.set_changes(changes)
+        self.version += 1
+
+    def set_watch_bits(self, bits: dict) -> None:
+        """The bit a trigger watches of a variable (``{name: bit}``): its lane."""
+        if self.watched.set_bits(bits):
+            self.version += 1
 
     # ----------------------------------------------------------------- ingest
     def add_samples(self, samples: Iterable[ev.Sample]) -> None:
@@ -272,8 +292,11 @@ class RunModel:
         self.version += 1
 
     def add_events(self, events: Iterable) -> list[MessageRow]:
-        """Keep the message events (the log panel keeps the rest); returns the
-        new message rows."""
+        """Keep the message events and the watched variables' values (the log
+        panel keeps the rest); returns the new message rows."""
+        events = list(events)
+        if self.watched.add_events(events):
+            self.version += 1
         new: list[MessageRow] = []
         for e in events:
             if isinstance(e, ev.Message):

@@ -262,16 +262,21 @@ class RunPanels(QtCore.QObject):
 
     def show_recorded(self, name: str, samples: list, events: list,
                       failing_ms: Optional[int] = None, text: Optional[str] = None,
-                      marker_label: Optional[str] = None) -> None:
+                      marker_label: Optional[str] = None, variables: Optional[dict] = None,
+                      bits: Optional[dict] = None) -> None:
         """Show a recorded test run (or a trace: ``text`` says what it is)
         instead of the live telemetry (which is not shown until
         :meth:`back_to_live`): its samples and events, the Proc and Outputs
         docks raised, not following, the failing tick (or the trigger) in view
-        with a line at it (labelled ``marker_label``). A comparison on show ends."""
+        with a line at it (labelled ``marker_label``). ``variables``: its
+        watched variables' changes (``{name: [(t_ms, value), …]}``), ``bits``
+        the bit its trigger watched of one (``{name: bit}``). A comparison on
+        show ends."""
         self.clear_comparison()
         self.recorded, self.failing_ms, self.held = name, failing_ms, 0
         self.model.resize(max(self.live_capacity, 2 * len(samples) + 16))
         self.model.add_samples(samples)
+        self.model.set_watched(variables or {}, bits)
         self._cleared()
         rows = self.model.add_events(events)
         if rows:
@@ -322,6 +327,7 @@ class RunPanels(QtCore.QObject):
             label.hide()
         self._remove_markers()
         self.model.resize(self.live_capacity)
+        self.model.set_watch_bits(self.traces.live_bits)
         self._cleared()
         self.timebase.set_follow(True)
         self.log.add_note("back to the live controller", "link")

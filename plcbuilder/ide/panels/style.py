@@ -180,12 +180,15 @@ class PlotColours:
     label_fill: tuple[int, int, int, int]
     #: the second trace of a comparison, drawn dashed over the first
     overlay: str = "#c2185b"
+    #: watched variables (``M80.sens``): their lanes, apart from the pins'
+    variable: str = "#a35200"
 
 
 LIGHT_PLOTS = PlotColours(BACKGROUND, AXIS, TEXT, GRID, LANE_BANDS, (255, 255, 255, 215),
-                          "#c8c8c8", (255, 255, 255, 200), "#c2185b")
+                          "#c8c8c8", (255, 255, 255, 200), "#c2185b", "#a35200")
 DARK_PLOTS = PlotColours("#1e1f22", "#9da0a6", "#dfe1e5", "#34363a", ("#26292e", "#212327"),
-                         (43, 45, 48, 215), "#4a4d52", (30, 31, 34, 200), "#f48fb1")
+                         (43, 45, 48, 215), "#4a4d52", (30, 31, 34, 200), "#f48fb1",
+                         "#ffb74d")
 
 
 def is_dark() -> bool:

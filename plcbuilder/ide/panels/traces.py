@@ -23,7 +23,7 @@ from plcbuilder.ide.docks import on_screen
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import PINS
 from plcbuilder.ide.panels.plots.overlay import comparison_of, step_samples
-from plcbuilder.trace.samples import events_of
+from plcbuilder.trace.samples import events_of, trigger_bits, variables_of
 
 Qt = QtCore.Qt
 Signal = QtCore.Signal
@@ -133,6 +133,8 @@ class TraceTools(QtCore.QObject):
         self.captures = 0
         #: the variables this trigger had the controller record (``watch``)
         self.watching: list[str] = []
+        #: the bit the last trigger armed watches of a variable (its lane live)
+        self.live_bits: dict[str, int] = {}
         self.bar = TriggerBar()
         self.bar.sig_arm.connect(self.arm)
         self.bar.sig_disarm.connect(self.disarm)
@@ -172,6 +174,10 @@ class TraceTools(QtCore.QObject):
             self.bar.set_state(str(exc), error=True, armed=False)
             return False
         names = api.watched_variables(trig)
+        self.live_bits = {trig.signal: trig.bit} if names and trig.bit is not None else {}
+        if self.panels.recorded is None:
+            self.panels.model.set_watch_bits(self.live_bits)
+            self.panels.wake()
         if names:
             # the telemetry has no variables: the controller records this one each
             # tick and sends its changes ("watch" events), which the session keeps
@@ -238,13 +244,17 @@ class TraceTools(QtCore.QObject):
                            f"{cap.t_start}..{cap.t_end} ms")
 
     # ---------------------------------------------------------------- show
-    def show(self, trace: api.Trace, title: str, marker_label: Optional[str] = None) -> None:
-        """Show a trace in the run panels instead of the live data."""
+    def show(self, trace: api.Trace, title: str, marker_label: Optional[str] = None,
+             bits: Optional[dict] = None) -> None:
+        """Show a trace in the run panels instead of the live data, its watched
+        variables too (the bit its trigger watched, or ``bits``, as a lane)."""
         samples = step_samples(trace)
         marker = (trace.meta.get("trigger") or {}).get("t_ms")
         self.shown = trace
         self.panels.show_recorded(title, samples, events_of(trace), marker,
-                                  text=f"showing {title}", marker_label=marker_label)
+                                  text=f"showing {title}", marker_label=marker_label,
+                                  variables=variables_of(trace),
+                                  bits=trigger_bits(trace) if bits is None else bits)
 
     def show_session(self) -> api.Trace:
         """Show the whole session so far in the run panels (every change since
@@ -265,11 +275,12 @@ class TraceTools(QtCore.QObject):
 
     def session_trace(self) -> api.Trace:
         """The session's history as a trace, without the pins and channels that
-        never changed from 0."""
+        never changed from 0 (a watched variable stays, 0 or not)."""
         tr = self.session.snapshot(meta={"source": "PLC Builder IDE session"})
+        keep = {"proc", "message", "running", *variables_of(tr)}
         for name in list(tr.signals):
             kind, changes = tr.signals[name]
-            if name not in ("proc", "message", "running") and \
+            if name not in keep and \
                     all(v == 0 for _t, v in changes) and len(changes) <= 1:
                 del tr.signals[name]
         return tr
@@ -337,7 +348,8 @@ class TraceTools(QtCore.QObject):
                                 base.events, meta)
         where = (f"first difference at {diff.t_ms / 1000:.3f} s" if diff.t_ms is not None
                  else "no difference")
-        self.show(shown_trace, base_name, marker_label="first difference")
+        self.show(shown_trace, base_name, marker_label="first difference",
+                  bits=trigger_bits(base))
         self.panels.compare(comparison_of(other, name, base_name, diff.t_ms))
         self.sig_note.emit(f"comparing {base_name} with {name}: {where}; "
                            + diff.text().replace("\n", "; "))

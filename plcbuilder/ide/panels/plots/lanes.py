@@ -1,5 +1,7 @@
-"""The logic-analyser lanes: digital inputs and outputs over time, and the
-softMC virtual outputs (``VOUT n``; a PLS's output shows on its output's lane)."""
+"""The logic-analyser lanes: digital inputs and outputs over time, the
+softMC virtual outputs (``VOUT n``; a PLS's output shows on its output's lane),
+and the watched variables that are bits (``M80.sens``, a trigger's
+``M80.var03 bit 2``), in a colour of their own above the pins."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ import pyqtgraph as pg  # noqa: E402,I001
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import PINS, RunModel
 from plcbuilder.ide.panels.plots import overlay
+from plcbuilder.ide.panels.watched import WatchedVariables, lane_label
 from plcbuilder.ide.panels.plots.timebase import (TimeBase, TimePanel, center_item, empty_text,
                                                   shift_item)
 
@@ -20,7 +23,9 @@ Qt = QtCore.Qt
 
 class LanesPanel(TimePanel):
     """A logic analyser: one lane per output that has been on (and per input
-    that changed, when shown), plus lanes the user pinned; named from pins.h."""
+    that changed, when shown), plus lanes the user pinned; named from pins.h.
+    A watched variable's bit has a lane of kind ``"vars"`` keyed
+    ``("vars", (name, bit))``, at the top."""
 
     LANE = 1.5          # lane pitch (a high level is 1)
 
@@ -41,8 +46,9 @@ class LanesPanel(TimePanel):
         self.widget.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
         self.widget.customContextMenuRequested.connect(self._context_menu)
         self.widget.setToolTip("Right-click to add or remove lanes")
-        # the lane bands, and a compared trace's colour
-        self.widget.theme_hooks = [lambda: self._relayout(self._lanes), self._restyle_other]
+        # the lane bands, the variables' and a compared trace's colour
+        self.widget.theme_hooks = [lambda: self._relayout(self._lanes), self._restyle_vars,
+                                   self._restyle_other]
         self._empty = empty_text(self.plot, "No output has changed yet.\n"
                                   "Right-click to add a lane.")
         self.names = {"inputs": {}, "outputs": {}, "vouts": {}}
@@ -52,11 +58,14 @@ class LanesPanel(TimePanel):
         # a curve per lane costs pyqtgraph a paint and a setData each
         self._items: dict[str, pg.PlotDataItem] = {
             kind: _merged_curve(self.plot, colour)
-            for kind, colour in (("outputs", style.OUTPUT_COLOUR),
+            for kind, colour in (("vars", style.plot_colours().variable),
+                                 ("outputs", style.OUTPUT_COLOUR),
                                  ("vouts", style.OUTPUT_COLOUR),
                                  ("inputs", style.INPUT_COLOUR))}
         self._blocks: dict[str, pg.BarGraphItem] = {}     # dense runs, filled
         self._drawn: dict[str, tuple] = {}     # kind -> what its curve was made from
+        self._drawn_watched = -1               # the model's watched.version drawn
+        self._var_labels: list[str] = []       # the variables' lane labels drawn
         self._lanes: list[tuple[str, int]] = []
         self._lane_y: dict[tuple[str, int], float] = {}
         self._bands: Optional[pg.BarGraphItem] = None
@@ -83,7 +92,12 @@ class LanesPanel(TimePanel):
         self._lanes = []                 # relabel on the next draw
         self._mark_dirty()
 
-    def lane_label(self, kind: str, pin: int) -> str:
+    def lane_label(self, kind: str, pin) -> str:
+        if kind == "vars":                       # pin is (name, bit)
+            var, bit = pin
+            o = self.comparison.model.watched if self.comparison is not None else None
+            binary = self.model.watched.is_binary(var) and (o is None or o.is_binary(var))
+            return lane_label(var, bit, binary)
         name = self.names[kind].get(pin)
         if kind == "vouts":                      # bit n-1 is VOUT.n
             tag, pin = "VOUT", pin + 1
@@ -116,9 +130,9 @@ class LanesPanel(TimePanel):
             self.pinned.append(key)
         self._mark_dirty()
 
-    def remove_lane(self, kind: str, pin: int) -> None:
-        """Hide this pin's lane (until it is pinned again)."""
-        key = (kind, int(pin))
+    def remove_lane(self, kind: str, pin) -> None:
+        """Hide this pin's (or variable's) lane (until it is pinned again, or Reset lanes)."""
+        key = (kind, pin if kind == "vars" else int(pin))
         if key in self.pinned:
             self.pinned.remove(key)
         self.hidden.add(key)
@@ -137,9 +151,13 @@ class LanesPanel(TimePanel):
         """The lanes shown, top to bottom."""
         m = self.model
         o = self.comparison.model if self.comparison is not None else None
+        variables = m.watched.lanes()
+        if o is not None:
+            variables += [v for v in o.watched.lanes() if v not in variables]
+        lanes = [("vars", v) for v in variables]
         outs = set(m.active_outputs) | {p for k, p in self.pinned if k == "outputs"}
         outs |= o.active_outputs if o is not None else set()
-        lanes = [("outputs", p) for p in sorted(outs)]
+        lanes += [("outputs", p) for p in sorted(outs)]
         vouts = set(m.active_vouts) | {p for k, p in self.pinned if k == "vouts"}
         lanes += [("vouts", p) for p in sorted(vouts)]
         if self.show_inputs.isChecked():
@@ -173,7 +191,10 @@ class LanesPanel(TimePanel):
 
     def draw(self, a: int, b: int, t0: float, t1: float) -> None:
         lanes = self.lanes()
-        if lanes != self._lanes:
+        # a variable's label says "bit N" once it is more than 0/1
+        var_labels = [self.lane_label(*k) for k in lanes if k[0] == "vars"]
+        if lanes != self._lanes or var_labels != self._var_labels:
+            self._var_labels = var_labels
             self._relayout(lanes)
         m = self.model
         t = m.time.view()[a:b] - self.offset
@@ -181,23 +202,23 @@ class LanesPanel(TimePanel):
         px = max(16, int(self.plot.getViewBox().width()))
         per_px = max((t1 - t0) / px, 1e-12)
         left = t0 - self.offset
+        self._drawn_watched = m.watched.version
         for kind, item in self._items.items():
             keys = [k for k in lanes if k[0] == kind]
             # the same samples, lanes, window and pixels as last drawn: the merged
             # curve and its blocks stand (only the paint is left)
             key = (m.epoch, m.time.total, a, b, self.offset, end, left, per_px, tuple(keys),
-                   tuple(self._lane_y.get(k) for k in keys))
+                   tuple(self._lane_y.get(k) for k in keys),
+                   m.watched.version if kind == "vars" else None)
             if self._drawn.get(kind) == key:
                 continue
             self._drawn[kind] = key
-            if not keys or not len(t):
+            if not keys or not (len(t) or kind == "vars"):
                 item.setData([], [])
                 self._set_blocks(kind, (), (), ())
                 continue
-            rb = m.words(kind)
-            x, y, connect, blocks = lane_path(rb.views()[:, a:b], [p for _, p in keys],
-                                              [self._lane_y[k] for k in keys], t, end, left,
-                                              per_px)
+            x, y, connect, blocks = self._path(m, kind, keys, a, b, t, end, t0, t1, left,
+                                               per_px)
             item.setData(x, y, connect=connect)
             self._set_blocks(kind, *blocks)
         if self.comparison is not None:
@@ -205,6 +226,32 @@ class LanesPanel(TimePanel):
         self._empty.setVisible(not lanes)
         if not lanes:
             center_item(self._empty, self.plot)
+
+    def _path(self, m: RunModel, kind: str, keys, a: int, b: int, t: np.ndarray, end: float,
+              t0: float, t1: float, left: float, per_px: float):
+        """:func:`lane_path` of the ``kind`` lanes ``keys`` of model ``m``: its
+        samples [a, b) at ``t`` for the pins, its changes over [t0, t1] for the
+        variables (held to ``end``, or to the model's end when not following)."""
+        ys = [self._lane_y[k] for k in keys]
+        if kind != "vars":
+            return lane_path(m.words(kind).views()[:, a:b], [p for _, p in keys], ys, t, end,
+                             left, per_px)
+        if not self._extend:
+            end = max(m.t_end, m.watched.t_end()) - self.offset
+        return variable_path(m.watched, [k[1] for k in keys], ys, t0, t1, self.offset, end,
+                             left, per_px)
+
+    def data_changed(self) -> bool:
+        return (self.model.watched.version != self._drawn_watched
+                or super().data_changed())
+
+    def _restyle_vars(self) -> None:
+        """The theme changed: the variables' lanes in its colour (items kept)."""
+        colour = style.plot_colours().variable
+        self._items["vars"].setPen(style.pen(colour))
+        block = self._blocks.get("vars")
+        if block is not None:
+            block.setOpts(brush=pg.mkBrush(colour))
 
     # ------------------------------------------------------- a compared trace
     #: where the compared trace's levels sit in a lane (its 0 and 1 a little
@@ -223,7 +270,7 @@ class LanesPanel(TimePanel):
         if comp is None:
             return
         colour = overlay.overlay_colour()
-        for kind in ("outputs", "inputs"):
+        for kind in ("vars", "outputs", "inputs"):
             item = _merged_curve(self.plot, colour)
             item.setPen(style.dashed_pen(colour))
             item.setZValue(5)
@@ -257,9 +304,8 @@ class LanesPanel(TimePanel):
                 item.setData([], [])
                 self._set_other_blocks(kind, ())
                 continue
-            ys = [self._lane_y[k] for k in keys]
-            x, y, connect, blocks = lane_path(o.words(kind).views()[:, a:b],
-                                              [p for _, p in keys], ys, t, t[-1], left, per_px)
+            x, y, connect, blocks = self._path(o, kind, keys, a, b, t, t[-1], t0, t1, left,
+                                               per_px)
             level = np.mod(y, self.LANE) > 0.5            # 1 where the path is high
             item.setData(x, y - level + lo + span * level, connect=connect)
             self._set_other_blocks(kind, blocks)
@@ -299,7 +345,8 @@ class LanesPanel(TimePanel):
                 item.hide()
             return
         if item is None:
-            colour = style.INPUT_COLOUR if kind == "inputs" else style.OUTPUT_COLOUR
+            colour = {"inputs": style.INPUT_COLOUR,
+                      "vars": style.plot_colours().variable}.get(kind, style.OUTPUT_COLOUR)
             item = pg.BarGraphItem(x0=x0, x1=x1, y0=y0, height=1.0, pen=pg.mkPen(None),
                                    brush=pg.mkBrush(colour))
             self.plot.addItem(item)
@@ -338,7 +385,7 @@ class LanesPanel(TimePanel):
     def build_menu(self, lane: Optional[tuple[str, int]] = None) -> QtWidgets.QMenu:
         menu = QtWidgets.QMenu(self)
         if lane is not None:
-            if self.force_menu is not None:
+            if self.force_menu is not None and lane[0] != "vars":
                 self.force_menu(menu, lane)
                 menu.addSeparator()
             act = menu.addAction(f"Remove lane {self.lane_label(*lane)}")
@@ -442,6 +489,27 @@ def lane_path(words: np.ndarray, pins, ys, t: np.ndarray, end: float, left: floa
     y += np.repeat(ys, counts)
     connect = np.ones(total, dtype=bool)
     connect[ends] = False
+    return x, y, connect, blocks
+
+
+def variable_path(watched: WatchedVariables, lanes, ys, t0: float, t1: float, offset: float,
+                  end: float, left: float, per_px: float):
+    """:func:`lane_path` for watched variables' bits: each lane ``(name, bit)``
+    from that variable's own changes over [t0, t1] (absolute seconds; x is
+    relative to ``offset``), held to ``end``; the lanes' paths joined."""
+    parts = []
+    for (name, bit), y0 in zip(lanes, ys):
+        times, values = watched.window(name, t0, t1)
+        if not len(times):
+            continue
+        words = (values & 0xFFFFFFFF).astype(np.uint32).reshape(1, -1)
+        t = times - offset
+        parts.append(lane_path(words, [bit], [y0], t, max(end, float(t[-1])), left, per_px))
+    if not parts:
+        empty = np.empty(0)
+        return empty, empty, np.empty(0, dtype=bool), (empty, empty, empty)
+    x, y, connect = (np.concatenate([p[i] for p in parts]) for i in range(3))
+    blocks = tuple(np.concatenate([p[3][i] for p in parts]) for i in range(3))
     return x, y, connect, blocks
 
 

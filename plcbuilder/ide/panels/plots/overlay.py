@@ -21,7 +21,7 @@ import pyqtgraph as pg  # noqa: E402,I001
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.steps import StepSamples
-from plcbuilder.trace.samples import to_samples
+from plcbuilder.trace.samples import to_samples, trigger_bits, variables_of
 
 
 @dataclass
@@ -44,6 +44,7 @@ def comparison_of(trace, name: str, base: str, t_ms: Optional[int]) -> Compariso
     samples = step_samples(trace)
     model = RunModel(max(16, len(samples) + 16))
     model.add_samples(samples)
+    model.set_watched(variables_of(trace), trigger_bits(trace))
     return Comparison(model, name, base, t_ms)
 
 
