@@ -71,6 +71,39 @@ def test_legends_leave_the_curves_free(qtbot):
     assert 1000 <= hi - (hi - lo) * share + 1e-6              # the data stays under the legend
 
 
+def test_an_empty_legend_draws_no_stray_box(qtbot):
+    """The PWM / DAC plot showed a small empty frame in its corner until the first
+    channel changed: a legend without rows paints nothing; with one, its frame."""
+    import pyqtgraph as pg
+    from PySide6 import QtGui
+
+    from plcbuilder.ide.panels import style
+
+    w = pg.PlotWidget()
+    qtbot.addWidget(w)
+    plot = w.getPlotItem()
+    lg = style.legend(plot, columns=2)
+    assert style.legend(plot) is lg and plot.legend is lg
+    w.resize(400, 300)
+    w.show()
+    qtbot.waitExposed(w)
+    qtbot.waitUntil(lambda: lg.boundingRect().width() > 0)    # laid out: an 18 px square
+
+    def painted() -> bool:
+        img = QtGui.QImage(64, 64, QtGui.QImage.Format.Format_ARGB32)
+        img.fill(0)
+        p = QtGui.QPainter(img)
+        lg.paint(p)
+        p.end()
+        return any(img.pixel(x, y) for x in range(64) for y in range(64))
+
+    assert not painted()
+    curve = plot.plot([0, 1], [0, 1], name="PWM0")            # a named curve: a legend row
+    assert len(lg.items) == 1 and painted()
+    lg.removeItem(curve)                                      # (a compared trace's row goes)
+    assert not painted()
+
+
 def test_the_name_check_shows_underscores_whole(qtbot):
     dlg = dialogs.ProcedureNameDialog(None, title="New Procedure", kind=Kind.SOFTWARE)
     qtbot.addWidget(dlg)

@@ -338,3 +338,26 @@ def test_a_variable_trigger_against_the_embedded_controller(qtbot, tmp_path):
         assert not bar.arm.isChecked() and panels.traces.watching == []
     finally:
         win.close()
+
+
+@pytest.mark.parametrize("width, rows", [(460, 2), (1400, 1)])
+def test_the_trigger_bar_flows_onto_two_rows_rather_than_squeeze_its_boxes(qtbot, width,
+                                                                           rows):
+    """In a narrow dock the spec, pre/post boxes and mode were squeezed to a few
+    letters each ('pre 10', 'Singl'); the bar now takes a second row instead, and
+    every box keeps the width its text needs."""
+    from plcbuilder.ide.panels.traces import TriggerBar
+
+    bar = TriggerBar()
+    qtbot.addWidget(bar)
+    bar.resize(width, 60)
+    bar.show()
+    qtbot.waitUntil(lambda: bar.two_rows is (rows == 2))
+    QtWidgets.QApplication.processEvents()
+    for box in (bar.pre, bar.post, bar.mode):
+        assert box.width() >= box.minimumSizeHint().width(), box
+        assert box.geometry().right() <= bar.width()
+    assert bar.spec.width() >= (150 if rows == 2 else bar.SPEC_ROOM - 10)
+    below = bar.pre.geometry().top() > bar.spec.geometry().bottom()
+    assert below is (rows == 2)
+    assert bar.sizeHint().height() > bar.spec.sizeHint().height() * (rows - 0.5)

@@ -129,12 +129,24 @@ def _tick_font() -> QtGui.QFont:
     return f
 
 
+class Legend(pg.LegendItem):
+    """A legend that draws no frame while it has no rows (an empty one showed as a
+    small stray box in the plot's corner until the first curve came)."""
+
+    def paint(self, p, *args):
+        if self.items:
+            super().paint(p, *args)
+
+
 def legend(plot: pg.PlotItem, columns: int = 1) -> pg.LegendItem:
-    c = plot_colours()
-    lg = plot.addLegend(offset=(8, 8), labelTextColor=c.text, labelTextSize="8pt",
-                        brush=pg.mkBrush(*c.legend_back), pen=pg.mkPen(c.legend_border),
-                        colCount=columns)
-    return lg
+    """The plot's legend (what ``addLegend`` makes, as a :class:`Legend`)."""
+    if plot.legend is None:
+        c = plot_colours()
+        plot.legend = Legend(offset=(8, 8), labelTextColor=c.text, labelTextSize="8pt",
+                             brush=pg.mkBrush(*c.legend_back),
+                             pen=pg.mkPen(c.legend_border), colCount=columns)
+        plot.legend.setParentItem(plot.vb)
+    return plot.legend
 
 
 def new_curve(plot: pg.PlotItem, c: str, name: str | None = None, width: float = LINE_WIDTH,

@@ -43,12 +43,19 @@ class TriggerBar(QtWidgets.QWidget):
     sig_session = Signal()
     """Show the whole session so far."""
 
+    #: below this many pixels for the spec, the bar flows onto two rows
+    SPEC_ROOM = 180
+
     def __init__(self, parent=None):
         super().__init__(parent)
-        lay = QtWidgets.QHBoxLayout(self)
-        lay.setContentsMargins(4, 0, 4, 2)
-        lay.setSpacing(4)
-        lay.addWidget(QtWidgets.QLabel("Trigger"))
+        outer = QtWidgets.QVBoxLayout(self)
+        outer.setContentsMargins(4, 0, 4, 2)
+        outer.setSpacing(2)
+        self._rows = (QtWidgets.QHBoxLayout(), QtWidgets.QHBoxLayout())
+        for row in self._rows:
+            row.setSpacing(4)
+            outer.addLayout(row)
+        self.label = QtWidgets.QLabel("Trigger")
         self.spec = QtWidgets.QLineEdit()
         self.spec.setPlaceholderText("out 7 rise")
         self.spec.setToolTip("What starts a capture: 'out 7 rise', 'in 3 fall', 'adc 0 up 1200', "
@@ -56,38 +63,68 @@ class TriggerBar(QtWidgets.QWidget):
                              "(see the manual, Traces)")
         self.spec.setMinimumWidth(60)
         self.spec.returnPressed.connect(lambda: self.arm.setChecked(True))
-        lay.addWidget(self.spec, 2)
         self.pre = self._ms("pre", 100, "Time kept before the trigger")
         self.post = self._ms("post", 500, "Time kept after the trigger")
-        lay.addWidget(self.pre)
-        lay.addWidget(self.post)
         self.mode = QtWidgets.QComboBox()
         for text, mode in MODES:
             self.mode.addItem(text, mode)
         self.mode.setToolTip("Single: one capture; Normal: re-arm after each; Auto: also "
                              "capture when no trigger came for pre + post")
-        lay.addWidget(self.mode)
         self.arm = style.small_button("Arm", "Wait for the trigger (Enter in the spec too)",
                                       True)
         self.arm.toggled.connect(self._armed)
-        lay.addWidget(self.arm)
         self.now = style.small_button("Now", "Trigger now: capture around this moment")
         self.now.clicked.connect(self.sig_now)
-        lay.addWidget(self.now)
         self.session = style.small_button("Session", "Show the whole session so far, from "
                                           "t = 0, in the panels (zoom and pan over all of it; "
                                           "Back to Live returns)")
         self.session.clicked.connect(self.sig_session)
-        lay.addWidget(self.session)
         self.state = QtWidgets.QLabel()
         self.state.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,
                                  QtWidgets.QSizePolicy.Policy.Preferred)
         self.state.setMinimumWidth(0)
-        lay.addWidget(self.state, 3)
-        # the bar never widens its dock: it takes the width there is
+        self.two_rows: Optional[bool] = None
+        self._flow(False)
+        # the bar never widens its dock: it takes the width there is, on two rows
+        # when one would squeeze the spec and the boxes
         self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,
                            QtWidgets.QSizePolicy.Policy.Fixed)
         self.setMinimumWidth(0)
+
+    def _one_row_width(self) -> int:
+        """The width every control needs on one row, with room for the spec."""
+        fixed = (self.label, self.pre, self.post, self.mode, self.arm, self.now, self.session)
+        spacing = self._rows[0].spacing() * (len(fixed) + 1)
+        margins = self.layout().contentsMargins()
+        return (sum(w.sizeHint().width() for w in fixed) + spacing + self.SPEC_ROOM
+                + margins.left() + margins.right())
+
+    def _flow(self, two_rows: bool) -> None:
+        """One row: everything side by side; two: the spec's row, then times and state."""
+        if two_rows == self.two_rows:
+            return
+        self.two_rows = two_rows
+        first, second = self._rows
+        for row in self._rows:
+            while row.count():
+                row.takeAt(0)
+        first.addWidget(self.label)
+        first.addWidget(self.spec, 2)
+        if two_rows:
+            for w in (self.mode, self.arm, self.now):
+                first.addWidget(w)
+            for w in (self.pre, self.post, self.session):
+                second.addWidget(w)
+            second.addWidget(self.state, 3)
+        else:
+            for w in (self.pre, self.post, self.mode, self.arm, self.now, self.session):
+                first.addWidget(w)
+            first.addWidget(self.state, 3)
+        self.updateGeometry()
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt's name
+        self._flow(event.size().width() < self._one_row_width())
+        super().resizeEvent(event)
 
     @staticmethod
     def _ms(prefix: str, value: int, tip: str) -> QtWidgets.QSpinBox:
