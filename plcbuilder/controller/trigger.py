@@ -11,7 +11,10 @@ Trigger specs (the command line's ``--trigger``, the IDE's trigger bar)::
     print              print = 20001                          (a print to a register)
 
 A crossing *up* is a change from below the level to the level or above; *down*
-from the level or above to below it. Numbers are decimal or 0x hex.
+from the level or above to below it. Numbers are decimal or 0x hex. In a
+session that starts at t = 0, outputs, PWM and DAC power on at 0, so what the
+first tick sets them to is an edge or a crossing; an input's first value comes
+from the machine's wiring and is not.
 
 :class:`Capturer` watches the history as it grows. In ``single`` mode it makes
 one capture, in ``normal`` it re-arms after each, and in ``auto`` it also
@@ -32,6 +35,9 @@ from plcbuilder.controller.history import History, Trace
 MODES = ("single", "normal", "auto")
 EDGES = ("rise", "fall", "edge")
 CROSSINGS = ("up", "down")
+#: signals a controller powers on at 0: what the first tick sets them to is a change
+#: (inputs are not: the machine's wiring gives them their value from the start)
+POWER_ON_OFF = ("out ", "pwm ", "dac ")
 
 
 class TriggerError(ValueError):
@@ -235,7 +241,10 @@ class Capturer:
         changes = sig.changes(start, None)
         if not changes:
             return None
-        prev = sig.value_at(changes[0][0] - 1)
+        first = changes[0][0]
+        prev = sig.value_at(first - 1)
+        if prev is None and first == 0 == h.t_start and tr.signal.startswith(POWER_ON_OFF):
+            prev = 0        # switched in the first tick: an edge from power-on's 0
         for t, v in changes:
             if self._fires(prev, v):
                 return t

@@ -48,6 +48,25 @@ def test_each_kind_of_trigger_fires_at_its_tick(spec, t):
         assert [c.meta["trigger"]["t_ms"] for c in cap.captures] == [t]
 
 
+@pytest.mark.parametrize("spec,t", [("out 3 rise", 0), ("dac 0 up 300", 0),
+                                    ("out 3 fall", 10)])
+def test_an_output_switched_in_the_first_tick_rises_from_power_on(spec, t):
+    """An output the first tick switches on is a rise at t = 0: outputs, PWM and DAC
+    power on at 0 ('run --start M03@0 --trigger "out 0 rise"' captured nothing)."""
+    c = api.Controller(api.default_machine())
+    r = api.compile_source("main(){ portset(3); gvarset(7270, 500); timer=10;"
+                           " do{timer--;}while(timer>0); portclear(3); exit(99); };\n",
+                           "M91.plc")
+    assert r.ok, r.diagnostics
+    c.load([r.program], autostart=False)
+    h = History(c.machine)
+    cap = Capturer(h, parse_trigger(spec), 0, 5)
+    run_session(c, Scenario([Action(0, "start", "M91", 0)]), 40,
+                history=h, capturer=cap)
+    assert h.t_start == 0
+    assert [c.meta["trigger"]["t_ms"] for c in cap.captures] == [t]
+
+
 def test_capture_holds_every_signal_over_pre_and_post_exactly():
     """SPEC §7: 'A capture holds every signal over [trigger − pre, trigger + post].'"""
     cap = _run("out 3 rise", pre=7, post=4)
