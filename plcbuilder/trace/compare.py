@@ -1,6 +1,7 @@
 """Comparing two traces: the first tick where they differ, and in what.
 
-Signals are compared by name over the time both traces cover; a signal that
+Signals are compared by name over the time both traces cover (two traces
+with no tick in common are not "the same": nothing could be compared); a signal that
 only one trace has is listed apart (``only_in_a``/``only_in_b``) and does not
 make them differ. The procedures' events (starts and ends, messages, prints,
 faults) are compared too: the first tick where they differ counts. Notes,
@@ -31,20 +32,33 @@ class Difference:
     only_in_a: list[str] = field(default_factory=list)
     only_in_b: list[str] = field(default_factory=list)
     span: tuple[int, int] = (0, 0)
+    #: the time each trace covers
+    spans: tuple[tuple[int, int], tuple[int, int]] = ((0, 0), (0, 0))
+
+    @property
+    def overlap(self) -> bool:
+        """Whether the traces have a tick in common (else nothing was compared)."""
+        return self.span[0] <= self.span[1]
 
     @property
     def same(self) -> bool:
-        return self.t_ms is None
+        """No difference over a common span; traces with no tick in common are not."""
+        return self.t_ms is None and self.overlap
 
     def to_dict(self) -> dict:
         return {"same": self.same, "t_ms": self.t_ms,
                 "signals": [{"name": n, "a": a, "b": b} for n, a, b in self.signals],
                 "events": self.events, "only_in_a": self.only_in_a,
-                "only_in_b": self.only_in_b, "span": list(self.span)}
+                "only_in_b": self.only_in_b, "span": list(self.span),
+                "overlap": self.overlap}
 
     def text(self) -> str:
         lo, hi = self.span
-        if self.same:
+        if not self.overlap:
+            (a0, a1), (b0, b1) = self.spans
+            head = (f"the traces have no tick in common (the first covers {a0}..{a1} ms, "
+                    f"the second {b0}..{b1} ms): nothing to compare")
+        elif self.same:
             head = f"the traces are the same from {lo} to {hi} ms"
         else:
             what = ", ".join(f"{n} ({a} / {b})" for n, a, b in self.signals)
@@ -85,7 +99,8 @@ def compare(a: Trace, b: Trace) -> Difference:
     lo, hi = max(a.t_start, b.t_start), min(a.t_end, b.t_end)
     names_a, names_b = set(a.signals), set(b.signals)
     diff = Difference(None, only_in_a=sorted(names_a - names_b),
-                      only_in_b=sorted(names_b - names_a), span=(lo, hi))
+                      only_in_b=sorted(names_b - names_a), span=(lo, hi),
+                      spans=((a.t_start, a.t_end), (b.t_start, b.t_end)))
     if hi < lo:
         return diff
     first: Optional[int] = None

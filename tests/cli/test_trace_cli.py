@@ -70,19 +70,10 @@ def test_compare_exit_status_says_whether_traces_differ(tmp_path, capsys, pulse)
     assert code == 1 and not d["same"] and d["t_ms"] == 0
 
 
-@pytest.mark.parametrize("args,why", [
-    (["--trigger", "out 3 rise"], "--trigger needs --capture"),
-    (["--capture", "x.plctrace"], "--capture needs --trigger"),
-    (["--trigger", "out 3 wobble", "--capture", "x.plctrace"], "unknown condition"),
-    (["--watch", "M90"], "PROC.var"), (["--watch", "M91.timer"], "no procedure named M91"),
-    (["--watch", "M90.nosuch"], "no variable named nosuch")])
-def test_bad_trace_options_are_usage_errors(tmp_path, capsys, pulse, args, why):
-    code, _out, err = run_cli(capsys, "run", pulse, *args)
-    assert code == 2 and why in err
-
-
-def test_trace_of_a_bad_file_is_a_clear_error(tmp_path, capsys):
-    bad = tmp_path / "bad.plctrace"
-    bad.write_text("nope")
-    code, _out, err = run_cli(capsys, "trace", "info", bad)
-    assert code == 2 and "not a trace file" in err
+def test_compare_of_traces_with_no_tick_in_common_exits_1(tmp_path, capsys, pulse):
+    early, late = tmp_path / "early.plctrace", tmp_path / "late.plctrace"
+    for path, trigger in ((early, "out 3 rise"), (late, "out 3 fall")):
+        assert run_cli(capsys, "run", pulse, "--trigger", trigger, "--pre", "0",
+                       "--post", "3", "--capture", path)[0] == 0      # 20..23, 30..33
+    code, out, _ = run_cli(capsys, "trace", "compare", early, late)
+    assert code == 1 and "no tick in common" in out, out

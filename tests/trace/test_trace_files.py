@@ -136,6 +136,24 @@ def test_csv_export_per_change_and_per_tick(tmp_path):
     assert by_t[20]["running"] == "M90"
 
 
+def test_traces_with_no_tick_in_common_are_not_the_same():
+    """Two captures of different moments (0..20 and 50..80 ms) have nothing to
+    compare: compare said 'the same from 50 to 20 ms' and exited 0."""
+    c = api.Controller(api.default_machine())
+    r = api.compile_source(PULSE, "M90.plc")
+    c.load([r.program], autostart=False)
+    h = History(c.machine)
+    run_session(c, Scenario([Action(10, "start", "M90", 0)]), 100, history=h)
+    early, late = h.snapshot(0, 20), h.snapshot(50, 80)
+    d = compare.compare(early, late)
+    assert not d.overlap and not d.same and d.t_ms is None
+    assert d.text().startswith("the traces have no tick in common (the first covers "
+                               "0..20 ms, the second 50..80 ms)")
+    assert d.to_dict()["same"] is False and d.to_dict()["overlap"] is False
+    touching = compare.compare(h.snapshot(0, 50), late)        # one tick in common
+    assert touching.overlap and touching.span == (50, 50)
+
+
 def test_export_to_a_folder_that_cannot_be_written_says_so(tmp_path):
     with pytest.raises(export.ExportError, match="cannot write"):
         export.export(_trace(), tmp_path / "no" / "x.vcd")
