@@ -60,6 +60,9 @@ class StatusBar(QStatusBar):
         self.time_label.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
         self.show_problem_counts(0, 0)
         self.set_connection_text("no controller", False)
+        self._message = ""
+        # a message's tooltip goes when the message does (its time ran out)
+        self.messageChanged.connect(lambda text: text or self.setToolTip(""))
 
     def show_problem_counts(self, e: int, w: int) -> None:
         self.problems_button.setIcon(icon("error" if e else "warning" if w else "ok"))
@@ -71,8 +74,35 @@ class StatusBar(QStatusBar):
         self.connection_label.setStyleSheet("color: #1a7f37;" if connected else "color: #6e7781;")
 
     def show_connected(self, address: str, embedded: bool) -> None:
-        self.set_connection_text(f"{'embedded ' if embedded else ''}controller {address}", True)
-        self.connection_label.setToolTip("The controller the IDE talks to")   # not the old reason
+        # the embedded controller's loopback port means nothing to a user: it is
+        # in the tooltip, and the room goes to the messages
+        self.set_connection_text("embedded controller" if embedded else f"controller {address}",
+                                 True)
+        self.connection_label.setToolTip(f"The controller the IDE talks to: {address}"
+                                         + (" (the IDE's own, a child process)" if embedded
+                                            else ""))
+
+    # ------------------------------------------------------------- messages
+    def showMessage(self, text: str, timeout: int = 0) -> None:  # noqa: N802 - Qt's name
+        """A message left of the labels: elided with "…" where it does not fit
+        (Qt cut it off mid-word), whole in the tooltip."""
+        self._message = text
+        shown = text
+        room = self._message_room()
+        if room > 0:
+            shown = self.fontMetrics().elidedText(text, Qt.TextElideMode.ElideRight, room)
+        self.setToolTip(text if shown != text else "")
+        super().showMessage(shown, timeout)
+
+    def clearMessage(self) -> None:  # noqa: N802 - Qt's name
+        self.setToolTip("")
+        super().clearMessage()
+
+    def _message_room(self) -> int:
+        """The width left of the first shown label, or 0 before the bar is laid out."""
+        lefts = [w.geometry().left() for w in (self.problems_button, self.connection_label)
+                 if w.isVisible() and w.geometry().width() > 0]
+        return (min(lefts) - 16) if lefts and self.isVisible() else 0
 
     def show_disconnected(self, reason: str) -> None:
         self.set_connection_text("disconnected", False)

@@ -526,7 +526,8 @@ def test_state_goes_to_the_status_bar(runwin, project):
     w, conn = runwin
     conn.connected = True
     conn.sig_connected.emit("127.0.0.1:5555")
-    assert "127.0.0.1:5555" in w.status.connection_label.text()
+    assert w.status.connection_label.text() == "● embedded controller"
+    assert "127.0.0.1:5555" in w.status.connection_label.toolTip()
     conn.sig_state.emit(ControllerStatus(t_ms=12345, running="M03", proc=70,
                                          proc_name="plc_proc_spindle"), 0)
     assert w.status.time_label.text() == "t = 12.345 s"
@@ -537,6 +538,39 @@ def test_state_goes_to_the_status_bar(runwin, project):
     assert w.status.proc_label.text() == "proc 33 plc_proc_probing"       # named by abi.proc_name
     conn.sig_disconnected.emit("gone")
     assert "disconnected" in w.status.connection_label.text()
+
+
+def test_a_long_status_message_is_elided_whole_in_its_tooltip(runwin, qtbot):
+    """'The controller had no image: loaded the p' was cut off mid-word under the
+    labels; a message that does not fit ends in '…' and the tooltip has it whole."""
+    w, conn = runwin
+    w.resize(1200, 800)
+    conn.connected = True
+    conn.sig_connected.emit("127.0.0.1:5555")
+    qtbot.wait(50)
+    sb = w.status
+    text = ("The controller had no image: loaded the project's build/eeprom.rom — it is older "
+            "than the sources: Build All (Ctrl+B) to update it")
+    sb.showMessage(text, 10000)
+    shown = sb.currentMessage()
+    assert shown != text and shown.endswith("…") and text.startswith(shown[:-1])
+    assert sb.fontMetrics().horizontalAdvance(shown) <= sb.problems_button.geometry().left()
+    assert sb.toolTip() == text
+    sb.showMessage("Saved", 3000)                       # fits: as it is, no tooltip
+    assert sb.currentMessage() == "Saved" and sb.toolTip() == ""
+    sb.clearMessage()
+    assert sb.toolTip() == ""
+
+
+def test_the_embedded_controller_keeps_its_port_in_the_tooltip(qtbot):
+    from plcbuilder.ide.status_bar import StatusBar
+    sb = StatusBar()
+    qtbot.addWidget(sb)
+    sb.show_connected("127.0.0.1:41543", embedded=True)
+    assert sb.connection_label.text() == "● embedded controller"
+    assert "127.0.0.1:41543" in sb.connection_label.toolTip()
+    sb.show_connected("10.0.0.5:4267", embedded=False)
+    assert sb.connection_label.text() == "● controller 10.0.0.5:4267"
 
 
 def test_run_panels_are_docked_when_part_b_is_there(runwin, qtbot):
