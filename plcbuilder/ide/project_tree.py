@@ -91,7 +91,7 @@ def target_outline(project: Project) -> list[tuple[str, str]]:
     return []
 
 
-_TARGET_LABEL = {"huazhong": "Huazhong PLC", "tgmotion": "TG Motion PLC"}
+TARGET_LABEL = {"huazhong": "Huazhong PLC", "tgmotion": "TG Motion PLC"}
 
 
 def header_template(name: str) -> str:
@@ -189,7 +189,7 @@ class ProjectTree(QWidget):
         f.setBold(True)
         root.setFont(0, f)
         target = p.settings.target
-        hw = self._item(root, _TARGET_LABEL.get(target, "Hardware PLC"), "folder-hw", W_HW_FOLDER,
+        hw = self._item(root, TARGET_LABEL.get(target, "Hardware PLC"), "folder-hw", W_HW_FOLDER,
                         str(p.hardware_dir))
         hw.setToolTip(0, "hardware/: procedures run by the controller's PLC core, 1 ms ticks; "
                          "an M-code starts the procedure of its name" if target == "mycnc" else

@@ -83,8 +83,15 @@ class WelcomePage(QWidget):
             p = project
             hw = len(p.procedures(Kind.HARDWARE))
             sw = len(p.procedures(Kind.SOFTWARE))
+            what = f"{hw} hardware and {sw} software procedures."
+            from plcbuilder.ide.project_tree import TARGET_LABEL, target_outline
+            outline = target_outline(p)
+            if outline:
+                # a target's one source holds its procedures (docs/targets.md)
+                names = ", ".join(f"{name}()" for name, _when in outline)
+                what = f"{TARGET_LABEL.get(p.target, p.target)}: {names}."
             self.welcome_text.setText(
-                f"<b>{p.name}</b> — {p.root}<br>{hw} hardware and {sw} software procedures."
+                f"<b>{p.name}</b> — {p.root}<br>{what}"
                 "<br><br>Open a procedure from the <b>Project</b> panel, or press "
                 "<b>Ctrl+B</b> to build them all.")
             self.welcome_new.show()
