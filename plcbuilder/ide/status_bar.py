@@ -94,6 +94,14 @@ class StatusBar(QStatusBar):
         self.setToolTip(text if shown != text else "")
         super().showMessage(shown, timeout)
 
+    def currentMessage(self) -> str:  # noqa: N802 - Qt's name
+        """The message on show, whole (even where it shows elided)."""
+        return self._message if super().currentMessage() else ""
+
+    def shown_message(self) -> str:
+        """The message as the bar shows it (elided where it does not fit)."""
+        return super().currentMessage()
+
     def clearMessage(self) -> None:  # noqa: N802 - Qt's name
         self.setToolTip("")
         super().clearMessage()

@@ -552,14 +552,15 @@ def test_a_long_status_message_is_elided_whole_in_its_tooltip(runwin, qtbot):
     text = ("The controller had no image: loaded the project's build/eeprom.rom — it is older "
             "than the sources: Build All (Ctrl+B) to update it")
     sb.showMessage(text, 10000)
-    shown = sb.currentMessage()
+    shown = sb.shown_message()
     assert shown != text and shown.endswith("…") and text.startswith(shown[:-1])
+    assert sb.currentMessage() == text
     assert sb.fontMetrics().horizontalAdvance(shown) <= sb.problems_button.geometry().left()
     assert sb.toolTip() == text
     sb.showMessage("Saved", 3000)                       # fits: as it is, no tooltip
-    assert sb.currentMessage() == "Saved" and sb.toolTip() == ""
+    assert sb.shown_message() == sb.currentMessage() == "Saved" and sb.toolTip() == ""
     sb.clearMessage()
-    assert sb.toolTip() == ""
+    assert sb.toolTip() == "" and sb.currentMessage() == ""
 
 
 def test_the_embedded_controller_keeps_its_port_in_the_tooltip(qtbot):
