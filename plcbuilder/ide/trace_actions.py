@@ -64,58 +64,44 @@ def open_trace(win, path: Optional[str] = None) -> bool:
     return True
 
 
-def save_trace(win, path: Optional[str] = None) -> bool:
+def _write_file(win, title: str, filters: str, suffix_of, path: Optional[str], write,
+                error: type, done: str) -> bool:
+    """Ask for a file (unless given one) and ``write(tools, path, chosen filter)``;
+    an ``error`` says so in a message box, success in the status bar."""
     tools = _tools(win)
     if tools is None:
         return False
+    chosen = ""
     if path is None:
-        path, _ = _ask(win, "Save Trace", TRACE_FILTER, True, lambda _c: ".plctrace")
+        path, chosen = _ask(win, title, filters, True, suffix_of)
         if path is None:
             return False
     try:
-        tools.save(path)
-    except api.TraceFileError as exc:
-        _failed(win, "Save Trace", exc)
+        write(tools, path, chosen)
+    except error as exc:
+        _failed(win, title, exc)
         return False
-    win.statusBar().showMessage(f"Saved {path}", 5000)
+    win.statusBar().showMessage(f"{done} {path}", 5000)
     return True
+
+
+def save_trace(win, path: Optional[str] = None) -> bool:
+    return _write_file(win, "Save Trace", TRACE_FILTER, lambda _c: ".plctrace", path,
+                       lambda tools, p, _c: tools.save(p), api.TraceFileError, "Saved")
 
 
 def export_trace(win, path: Optional[str] = None, per_tick: bool = False) -> bool:
-    tools = _tools(win)
-    if tools is None:
-        return False
-    if path is None:
-        path, chosen = _ask(win, "Export Trace", EXPORT_FILTER, True,
-                            lambda c: ".vcd" if "VCD" in c else ".csv")
-        if path is None:
-            return False
-        per_tick = "per tick" in chosen
-    try:
-        tools.export(path, per_tick=per_tick)
-    except api.ExportError as exc:
-        _failed(win, "Export Trace", exc)
-        return False
-    win.statusBar().showMessage(f"Exported {path}", 5000)
-    return True
+    return _write_file(win, "Export Trace", EXPORT_FILTER,
+                       lambda c: ".vcd" if "VCD" in c else ".csv", path,
+                       lambda tools, p, c: tools.export(p, per_tick=("per tick" in c) if c
+                                                        else per_tick),
+                       api.ExportError, "Exported")
 
 
 def export_plot(win, path: Optional[str] = None) -> bool:
-    tools = _tools(win)
-    if tools is None:
-        return False
-    if path is None:
-        path, _ = _ask(win, "Export Plot Image", IMAGE_FILTER, True,
-                       lambda c: ".svg" if "SVG" in c else ".png")
-        if path is None:
-            return False
-    try:
-        tools.export_image(path)
-    except api.ExportError as exc:
-        _failed(win, "Export Plot Image", exc)
-        return False
-    win.statusBar().showMessage(f"Exported {path}", 5000)
-    return True
+    return _write_file(win, "Export Plot Image", IMAGE_FILTER,
+                       lambda c: ".svg" if "SVG" in c else ".png", path,
+                       lambda tools, p, _c: tools.export_image(p), api.ExportError, "Exported")
 
 
 def compare_trace(win, path: Optional[str] = None):

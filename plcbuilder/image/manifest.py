@@ -34,7 +34,7 @@ import json
 import re
 import zlib
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, Iterator, Sequence, Union
+from typing import Callable, Iterable, Iterator, Mapping, Optional, Sequence, Union
 
 from plcbuilder._support.strictjson import strict_json_loads
 from plcbuilder.bytecode.program import Kind, LoadError, Program
@@ -189,11 +189,18 @@ def write_image(programs: Sequence[ProgramInput], limits: Limits | None = None) 
     return b"".join(iter_image(programs, limits))
 
 
-def iter_image(programs: Sequence[ProgramInput], limits: Limits | None = None) -> Iterator[bytes]:
+def iter_image(programs: Sequence[ProgramInput], limits: Limits | None = None,
+               checked: Optional[Mapping[str, tuple[Kind, int, int]]] = None
+               ) -> Iterator[bytes]:
     """write_image's image as chunks in order, for writing straight to a file:
     with binaries given as functions, no binary is held longer than it takes to
     check or write it. Every check is done before the first chunk; a binary
-    that reads otherwise the second time raises ImageError while writing."""
+    that reads otherwise the second time raises ImageError while writing.
+
+    ``checked`` names binaries the caller's compiler made just now: name ->
+    (kind, CRC-32, code size). A binary of that name, kind and CRC is not
+    decoded again (Build All's own output; the controller still checks every
+    binary it loads); any other is loaded and checked in full."""
     limits = limits or Limits()
     limits.check()
     if len(programs) > MAX_PROCEDURES:
@@ -222,8 +229,12 @@ def iter_image(programs: Sequence[ProgramInput], limits: Limits | None = None) -
         if not isinstance(data, (bytes, bytearray)):
             raise ImageError(f"procedure {name}: the binary must be bytes")
         data = bytes(data)
-        code_size = _load(name, kind, data).code_size    # the decoded program is not kept
         crc = zlib.crc32(data)
+        known = checked.get(name) if checked else None
+        if known is not None and known[0] is kind and known[1] == crc:
+            code_size = known[2]
+        else:
+            code_size = _load(name, kind, data).code_size    # the decoded program is not kept
         stored = LazyFile(len(data), _reread(name, read, crc)) if read is not None else data
         rows.append((name, kind, stored, code_size, len(data), crc))
     rows.sort(key=lambda r: r[0])

@@ -297,3 +297,20 @@ def test_a_binary_that_changes_between_check_and_write_is_refused(sample_program
     lazy = [(name, kind, lambda: next(answers))]
     with pytest.raises(ImageError, match=f"{name}.bin changed while the image was written"):
         b"".join(iter_image(lazy))
+
+
+def test_checked_binaries_are_taken_on_their_crc_others_are_loaded(sample_programs):
+    """iter_image's ``checked``: a binary of that name, kind and CRC goes in on
+    the code size given; a CRC or kind that differs is loaded and checked."""
+    from plcbuilder.image.manifest import iter_image
+    name, kind, data = sample_programs[0]
+    full = write_image(sample_programs)
+    size = read_image(full).get(name).code_size
+    ok = {name: (Kind(kind), zlib.crc32(data), size)}
+    assert b"".join(iter_image(sample_programs, None, ok)) == full
+    broken = [(name, kind, data[:20])] + list(sample_programs[1:])          # cut short
+    with pytest.raises(ImageError, match=f"procedure {name}: {name}.bin does not load"):
+        b"".join(iter_image(broken, None, ok))                               # CRC differs
+    other = Kind.SOFTWARE if Kind(kind) is Kind.HARDWARE else Kind.HARDWARE
+    with pytest.raises(ImageError, match="the manifest says"):
+        b"".join(iter_image([(name, other, data)], None, ok))                # kind differs

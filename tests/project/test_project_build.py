@@ -378,14 +378,38 @@ def test_builds_keep_no_binary_bytes_in_memory(example):
             assert pb.program().name == pb.name
 
 
+def test_the_image_of_binaries_compiled_now_is_made_without_decoding_them_again(example,
+                                                                               monkeypatch):
+    """A cold Build All spent a tenth of its time decoding its own binaries again
+    for the image: those it compiled now go in on their CRC and code size; the
+    image is the one a full check makes, and a cached binary is still decoded."""
+    from plcbuilder.image import manifest, write_image
+    loads = []
+    real = manifest._load
+    monkeypatch.setattr(manifest, "_load", lambda n, k, d: loads.append(n) or real(n, k, d))
+    r = build_project(example)
+    assert r.ok and r.image_written and loads == []
+    binaries = [(pb.name, pb.kind, pb.binary) for pb in r.procedures]
+    for pb in r.procedures:
+        assert pb.size == Program.from_bytes(pb.binary).code_size
+    assert example.image_path.read_bytes() == write_image(binaries)     # (this one decodes)
+    loads.clear()
+    (example.hardware_dir / "M05.plc").write_text(
+        (example.hardware_dir / "M05.plc").read_text() + "\n")
+    example.image_path.unlink()
+    r = build_project(example)
+    assert r.image_written and not r.get("M05").cached
+    assert sorted(loads) == sorted(pb.name for pb in r.procedures if pb.cached)
+
+
 def test_a_binary_changed_after_compiling_does_not_go_into_the_image(example, monkeypatch):
     """The image is made from build/'s binaries as compiled, or not at all."""
     from plcbuilder.project import build as build_mod
     real = build_mod.iter_image
 
-    def tampered(programs, limits=None):
+    def tampered(programs, *args):
         (example.build_dir / "M03.bin").write_bytes(b"changed")
-        return real(programs, limits)
+        return real(programs, *args)
 
     monkeypatch.setattr(build_mod, "iter_image", tampered)
     r = build_project(example)
