@@ -4,16 +4,26 @@ loaded once each. An unknown name gives an empty icon, never an error."""
 from __future__ import annotations
 
 from functools import lru_cache
-from importlib import resources
+from pathlib import Path
 
 from PySide6.QtCore import QByteArray, QRectF, Qt
 from PySide6.QtGui import QIcon, QImage, QPainter, QPixmap
 
 ICON_DIR = ("resources", "icons")
+#: the icons' folder when the package is files on disk (it nearly always is);
+#: importlib.resources (a few ms to import) only for a package that is not
+_FOLDER = Path(__file__).resolve().parent.parent.joinpath(*ICON_DIR)
+
+
+def _ref(*parts: str):
+    if _FOLDER.is_dir():
+        return _FOLDER.joinpath(*parts)
+    from importlib import resources
+    return resources.files("plcbuilder").joinpath(*ICON_DIR, *parts)
 
 
 def icon_names() -> list[str]:
-    ref = resources.files("plcbuilder").joinpath(*ICON_DIR)
+    ref = _ref()
     try:
         return sorted(p.name[:-4] for p in ref.iterdir() if p.name.endswith(".svg"))
     except OSError:
@@ -22,7 +32,7 @@ def icon_names() -> list[str]:
 
 def icon_path(name: str) -> str:
     """A file path of an icon, for style sheets ('' when the package is not on disk)."""
-    ref = resources.files("plcbuilder").joinpath(*ICON_DIR, f"{name}.svg")
+    ref = _ref(f"{name}.svg")
     try:
         return str(ref).replace("\\", "/") if ref.is_file() else ""
     except (OSError, TypeError):
@@ -31,7 +41,7 @@ def icon_path(name: str) -> str:
 
 @lru_cache(maxsize=None)
 def svg_data(name: str) -> bytes:
-    ref = resources.files("plcbuilder").joinpath(*ICON_DIR, f"{name}.svg")
+    ref = _ref(f"{name}.svg")
     try:
         return ref.read_bytes()
     except (OSError, FileNotFoundError):

@@ -20,7 +20,6 @@ own line ends.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import time
@@ -40,6 +39,7 @@ INDEX = "index.json"
 
 
 def digest(data: bytes) -> str:
+    import hashlib              # (not before the window's first paint)
     return hashlib.sha256(data).hexdigest()
 
 
@@ -123,6 +123,7 @@ class RecoveryManager(QObject):
             d = digest(data)
             if self._written.get(key) == d and key in index:
                 continue
+            import hashlib
             name = hashlib.sha1(key.encode("utf-8", "surrogatepass")).hexdigest()[:16] + ".txt"
             try:
                 self.folder.mkdir(parents=True, exist_ok=True)

@@ -29,7 +29,8 @@ NOT_AT_FIRST_PAINT = ("lark", "plcbuilder.lang.pipeline", "pyside6_scintilla", "
                       "plcbuilder.ide.panels.tests", "plcbuilder.ide.panels.register_browser",
                       "plcbuilder.testing.spec", "plcbuilder.lang.preprocess",
                       "plcbuilder.lang.symbols", "plcbuilder.ide.completion",
-                      "plcbuilder.image.manifest", "plcbuilder.image.romfs")
+                      "plcbuilder.image.manifest", "plcbuilder.image.romfs", "hashlib",
+                      "plcbuilder.ide.debug.callstack", "plcbuilder.ide.debug.inline")
 
 _PROBE = r"""
 import sys
@@ -115,3 +116,29 @@ def test_no_application_style_sheet_and_the_editor_tabs_keep_their_look(qtbot, m
 def test_the_editor_package_still_gives_every_name(name):
     from plcbuilder.ide import editor
     assert getattr(editor, name) is not None
+
+
+def test_pysides_source_check_answers_as_its_own_without_inspect(monkeypatch):
+    """PySide's import hook read every later module's source through
+    inspect.getsource (20 ms of the IDE's start-up); the IDE's check reads the
+    file's bytes and gives the same answer for every module loaded."""
+    import inspect
+
+    import plcbuilder.ide  # noqa: F401 - puts the quicker check in place
+    feature = sys.modules.get("shibokensupport.feature")
+    if feature is None or not hasattr(feature, "_mod_uses_pyside"):
+        pytest.skip("this PySide has no such import hook")
+    quick = feature._mod_uses_pyside
+    original = getattr(quick, "original", None)
+    assert original is not None, "the IDE's check is not in place"
+    import os
+    mods = [m for m in list(sys.modules.values())
+            if str(getattr(m, "__file__", None)).endswith(".py") and os.path.isfile(m.__file__)]
+    assert len(mods) > 100
+    theirs = [original(m) for m in mods]
+    assert any(theirs) and not all(theirs)
+
+    def no_getsource(obj):
+        raise AssertionError(f"inspect.getsource({obj!r})")
+    monkeypatch.setattr(inspect, "getsource", no_getsource)
+    assert [quick(m) for m in mods] == theirs

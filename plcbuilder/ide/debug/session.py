@@ -20,8 +20,6 @@ from PySide6.QtCore import QObject, QTimer, Signal
 from PySide6.QtWidgets import QMenu
 
 from plcbuilder.ide.debug.breakpoints import Breakpoint, BreakpointStore
-from plcbuilder.ide.debug.callstack import frames_of, halted_text
-from plcbuilder.ide.debug.inline import hover_value, inline_values
 from plcbuilder.ide.editor import file_key
 
 SOURCE_SUFFIXES = (".plc", ".h")
@@ -374,6 +372,7 @@ class DebugSession(QObject):
             if ed is not None:
                 self._show_in(ed, scroll=True)
         self._update_watch()
+        from plcbuilder.ide.debug.callstack import halted_text
         self.sig_message.emit(halted_text(state), 0)
         self.sig_state_changed.emit()
 
@@ -406,6 +405,9 @@ class DebugSession(QObject):
         marks = getattr(ed, "debug_marks", None)
         if marks is None or self.halted is None:
             return
+        # loaded when first halted, not before the window's first paint
+        from plcbuilder.ide.debug.callstack import frames_of
+        from plcbuilder.ide.debug.inline import inline_values
         name, stem = Path(ed.path).name, Path(ed.path).stem
         exec_lines, wait_lines, frame_lines = [], [], []
         values = None
@@ -462,6 +464,7 @@ class DebugSession(QObject):
         text = base(ed, pos) if base is not None else None
         _s, _e, word = ed.word_at(pos)
         proc, values = self.values_for(ed)
+        from plcbuilder.ide.debug.inline import hover_value
         live = hover_value(word, values, proc or "", halted=self.halted is not None,
                            forced=f"{proc}.{word}" in self.forced_targets()) if proc else None
         if live and text:
