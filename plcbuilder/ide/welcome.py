@@ -81,8 +81,9 @@ class WelcomePage(QWidget):
             self.welcome_new.hide()
         else:
             p = project
-            hw = len(p.procedures(Kind.HARDWARE))
-            sw = len(p.procedures(Kind.SOFTWARE))
+            procs = p.procedures()                   # one listing of the folders
+            hw = sum(1 for pr in procs if pr.kind is Kind.HARDWARE)
+            sw = len(procs) - hw
             what = f"{hw} hardware and {sw} software procedures."
             from plcbuilder.ide.project_tree import TARGET_LABEL, target_outline
             outline = target_outline(p)
