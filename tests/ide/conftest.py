@@ -58,3 +58,29 @@ def live_example(qtbot, tmp_path, monkeypatch):
     w.show()
     yield w, root
     w.shutdown()
+
+
+@pytest.fixture
+def live_uploaded(qtbot, tmp_path):
+    """(a main window with its embedded controller, the example project open,
+    built and uploaded, the run panels made); the window is closed at the end."""
+    from plcbuilder.ide.main_window import MainWindow
+    from plcbuilder.ide.settings import Settings
+    from plcbuilder.project.new import create_project
+    create_project(tmp_path / "p")
+    win = MainWindow(Settings(str(tmp_path / "s.ini")), start_controller=True)
+    qtbot.addWidget(win)
+    win.show()
+    try:
+        win.open_project(str(tmp_path / "p"))
+        conn = win.connection
+        qtbot.waitUntil(lambda: conn.connected, timeout=30000)
+        panels = win.ensure_run_panels()
+        with qtbot.waitSignal(win.sig_build_finished, timeout=60000):
+            win.build_all()
+        with qtbot.waitSignal(conn.sig_result, timeout=30000,
+                              check_params_cb=lambda verb, _r: verb == "upload"):
+            win.run_actions.upload_image()
+        yield win, panels
+    finally:
+        win.close()

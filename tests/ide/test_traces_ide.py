@@ -300,44 +300,26 @@ def test_a_variable_trigger_needs_a_controller_that_records_variables(qtbot, pan
     assert not bar.arm.isChecked() and "not connected" in bar.state.text()
 
 
-def test_a_variable_trigger_against_the_embedded_controller(qtbot, tmp_path):
+def test_a_variable_trigger_against_the_embedded_controller(qtbot, live_uploaded):
     """SPEC §7: 'rising, falling or either edge of … a variable's bit' — with the
     IDE's embedded controller (a child process): the trigger bar arms on LUBE's
     timer, the controller records it, and the capture shows when it completes."""
-    from plcbuilder.ide.main_window import MainWindow
-    from plcbuilder.ide.settings import Settings
-    from plcbuilder.project.new import create_project
-    create_project(tmp_path / "p")
-    win = MainWindow(Settings(str(tmp_path / "s.ini")), start_controller=True)
-    qtbot.addWidget(win)
-    win.show()
-    try:
-        win.open_project(str(tmp_path / "p"))
-        conn = win.connection
-        qtbot.waitUntil(lambda: conn.connected, timeout=30000)
-        panels = win.ensure_run_panels()
-        with qtbot.waitSignal(win.sig_build_finished, timeout=60000):
-            win.build_all()
-        with qtbot.waitSignal(conn.sig_result, timeout=30000,
-                              check_params_cb=lambda verb, _r: verb == "upload"):
-            win.run_actions.upload_image()
-        bar = panels.traces.bar
-        bar.spec.setText("LUBE.timer bit 2 rise")       # LUBE counts its timer down each 100 ms
-        bar.pre.setValue(300)
-        bar.post.setValue(200)
-        qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
-        assert bar.arm.isChecked(), bar.state.text()
-        qtbot.waitUntil(lambda: panels.recorded is not None, timeout=30000)
-        cap = panels.traces.shown
-        t = cap.meta["trigger"]["t_ms"]
-        assert panels.failing_ms == t and cap.meta["trigger"]["spec"] == "LUBE.timer bit 2 rise"
-        assert (cap.value_at("LUBE.timer", t) >> 2) & 1 == 1
-        assert (cap.value_at("LUBE.timer", t - 1) >> 2) & 1 == 0
-        # post in full; pre as far back as the session goes
-        assert cap.t_end == t + 200 and cap.t_start == max(t - 300, panels.traces.session.t_start)
-        assert not bar.arm.isChecked() and panels.traces.watching == []
-    finally:
-        win.close()
+    _win, panels = live_uploaded
+    bar = panels.traces.bar
+    bar.spec.setText("LUBE.timer bit 2 rise")       # LUBE counts its timer down each 100 ms
+    bar.pre.setValue(300)
+    bar.post.setValue(200)
+    qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+    assert bar.arm.isChecked(), bar.state.text()
+    qtbot.waitUntil(lambda: panels.recorded is not None, timeout=30000)
+    cap = panels.traces.shown
+    t = cap.meta["trigger"]["t_ms"]
+    assert panels.failing_ms == t and cap.meta["trigger"]["spec"] == "LUBE.timer bit 2 rise"
+    assert (cap.value_at("LUBE.timer", t) >> 2) & 1 == 1
+    assert (cap.value_at("LUBE.timer", t - 1) >> 2) & 1 == 0
+    # post in full; pre as far back as the session goes
+    assert cap.t_end == t + 200 and cap.t_start == max(t - 300, panels.traces.session.t_start)
+    assert not bar.arm.isChecked() and panels.traces.watching == []
 
 
 @pytest.mark.parametrize("width, rows", [(460, 2), (1400, 1)])

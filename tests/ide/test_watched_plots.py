@@ -379,54 +379,37 @@ def test_the_variables_read_in_the_light_and_the_dark_theme(qtbot, panels, fake)
 
 
 # ---------------------------------------------------------- a live controller
-def test_a_capture_on_m80_sens_shows_it_rising_at_the_trigger(qtbot, tmp_path):
+def test_a_capture_on_m80_sens_shows_it_rising_at_the_trigger(qtbot, live_uploaded):
     """With the IDE's embedded controller: arm `M80.sens bit 0 rise`, start M80
     (homing Z): live, M80.sens has its lane while the controller records it;
     the capture shows it rising at the red trigger line, and the cursors read
     it 0 before and 1 after."""
-    from plcbuilder.ide.main_window import MainWindow
-    from plcbuilder.ide.settings import Settings
-    from plcbuilder.project.new import create_project
-    create_project(tmp_path / "p")
-    win = MainWindow(Settings(str(tmp_path / "s.ini")), start_controller=True)
-    qtbot.addWidget(win)
-    win.show()
-    try:
-        win.open_project(str(tmp_path / "p"))
-        conn = win.connection
-        qtbot.waitUntil(lambda: conn.connected, timeout=30000)
-        panels = win.ensure_run_panels()
-        with qtbot.waitSignal(win.sig_build_finished, timeout=60000):
-            win.build_all()
-        with qtbot.waitSignal(conn.sig_result, timeout=30000,
-                              check_params_cb=lambda verb, _r: verb == "upload"):
-            win.run_actions.upload_image()
-        bar = panels.traces.bar
-        bar.spec.setText("M80.sens bit 0 rise")
-        bar.pre.setValue(200)
-        bar.post.setValue(300)
-        qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
-        assert bar.arm.isChecked(), bar.state.text()
-        conn.start("M80", 0)
-        # live: the controller sends M80.sens (0 until Z reaches its home switch)
-        qtbot.waitUntil(lambda: panels.recorded is not None
-                        or SENS in panels.lanes.lanes(), timeout=30000)
-        assert panels.recorded is None
-        qtbot.waitUntil(lambda: panels.recorded is not None, timeout=60000)
-        t = panels.failing_ms
-        assert t is not None and panels.traces.shown.meta["trigger"]["spec"] == \
-            "M80.sens bit 0 rise"
-        panels.dock("outputs").raise_()
-        qtbot.waitUntil(lambda: on_screen(panels.lanes))
-        panels.tick()
-        lanes = panels.lanes
-        assert lanes.lanes()[0] == SENS and lanes.y_labels()[0] == "M80.sens"
-        x, y = _lane(lanes, SENS)
-        assert _rising_at(x, y) == [pytest.approx(t / 1000)]
-        assert ("inputs", 2) in lanes.lanes()          # INPUT_HOME_Z, which it reads
-        panels.dock("cursors").show()
-        panels.cursor_table.toggle.setChecked(True)
-        panels.cursors.set_times((t - 50) / 1000, (t + 10) / 1000)
-        assert _rows(panels)["M80.sens"][1:] == ("0", "1", "+1")
-    finally:
-        win.close()
+    win, panels = live_uploaded
+    conn = win.connection
+    bar = panels.traces.bar
+    bar.spec.setText("M80.sens bit 0 rise")
+    bar.pre.setValue(200)
+    bar.post.setValue(300)
+    qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+    assert bar.arm.isChecked(), bar.state.text()
+    conn.start("M80", 0)
+    # live: the controller sends M80.sens (0 until Z reaches its home switch)
+    qtbot.waitUntil(lambda: panels.recorded is not None
+                    or SENS in panels.lanes.lanes(), timeout=30000)
+    assert panels.recorded is None
+    qtbot.waitUntil(lambda: panels.recorded is not None, timeout=60000)
+    t = panels.failing_ms
+    assert t is not None and panels.traces.shown.meta["trigger"]["spec"] == \
+        "M80.sens bit 0 rise"
+    panels.dock("outputs").raise_()
+    qtbot.waitUntil(lambda: on_screen(panels.lanes))
+    panels.tick()
+    lanes = panels.lanes
+    assert lanes.lanes()[0] == SENS and lanes.y_labels()[0] == "M80.sens"
+    x, y = _lane(lanes, SENS)
+    assert _rising_at(x, y) == [pytest.approx(t / 1000)]
+    assert ("inputs", 2) in lanes.lanes()          # INPUT_HOME_Z, which it reads
+    panels.dock("cursors").show()
+    panels.cursor_table.toggle.setChecked(True)
+    panels.cursors.set_times((t - 50) / 1000, (t + 10) / 1000)
+    assert _rows(panels)["M80.sens"][1:] == ("0", "1", "+1")
