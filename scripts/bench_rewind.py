@@ -6,6 +6,7 @@ those ten minutes at Max speed (samples off), which is what running the
 recording again costs at least.
 
     PYTHONPATH=. .venv/bin/python scripts/bench_rewind.py [--minutes 10] [--repeat 3]
+    .venv/bin/python scripts/bench.py rewind            (ten minutes, three each)
 
 Goal: a step back answers in well under a second (issue 11: <= 0.5 s). Run
 back is timed with and without checkpoints, interleaved with the floor
@@ -73,10 +74,26 @@ def run_backs(back: Controller, pool: Checkpoints, minutes: float, repeat: int) 
         assert (a.t_ms, sa["line"], sa["procedure"]) == (b.t_ms, sb["line"], sb["procedure"])
     floor = statistics.median(floors)
     p, q = statistics.median(plain), statistics.median(pooled)
-    print(f"run back (from {back.t_ms} ms to the hit at {a.t_ms} ms, median of {repeat}, "
+    say(f"run back (from {back.t_ms} ms to the hit at {a.t_ms} ms, median of {repeat}, "
           f"floor {floor:.3f} s):")
-    print(f"  without checkpoints (from t = 0): {p:.3f} s ({p / floor:.2f}x the floor)")
-    print(f"  from checkpoints: {q:.3f} s ({q / floor:.2f}x the floor; goal < 0.5 s)")
+    say(f"  without checkpoints (from t = 0): {p:.3f} s ({p / floor:.2f}x the floor)")
+    say(f"  from checkpoints: {q:.3f} s ({q / floor:.2f}x the floor; goal < 0.5 s)")
+
+
+#: where the figures go: printed by main(), collected by run() (scripts/bench.py)
+say = print
+
+
+def run() -> list[str]:
+    """Section ``rewind`` of scripts/bench.py: the figures as lines."""
+    global say
+    lines: list[str] = []
+    say = lines.append
+    try:
+        figures(10.0, 3)
+    finally:
+        say = print
+    return lines
 
 
 def main(argv=None) -> int:
@@ -84,23 +101,28 @@ def main(argv=None) -> int:
     ap.add_argument("--minutes", type=float, default=10.0)
     ap.add_argument("--repeat", type=int, default=3, help="run backs timed each way (median)")
     args = ap.parse_args(argv)
-    c, floor = session(args.minutes)
-    print(f"session: {c.t_ms} ms simulated, {len(c.recorder.actions)} actions recorded; "
+    figures(args.minutes, args.repeat)
+    return 0
+
+
+def figures(minutes: float, repeat: int) -> None:
+    c, floor = session(minutes)
+    say(f"session: {c.t_ms} ms simulated, {len(c.recorder.actions)} actions recorded; "
           f"floor (simulating it at Max speed): {floor:.3f} s")
     pool = Checkpoints(Controller)
     t0 = time.perf_counter()
     while pool.work(c, 1.0):
         pass
-    print(f"checkpoints every {pool.every_ms // 1000} s (the last {pool.keep}), made in "
+    say(f"checkpoints every {pool.every_ms // 1000} s (the last {pool.keep}), made in "
           f"idle time: {time.perf_counter() - t0:.3f} s of work in all")
     t0 = time.perf_counter()
     back = step_back(c, Controller, "tick", pool)
     took = time.perf_counter() - t0
-    print(f"step back one tick, from a checkpoint: {took:.3f} s (goal < 0.5 s)")
+    say(f"step back one tick, from a checkpoint: {took:.3f} s (goal < 0.5 s)")
     t0 = time.perf_counter()
     back = step_back(c, Controller, "tick")
     took = time.perf_counter() - t0
-    print(f"step back one tick, without checkpoints: {took:.3f} s "
+    say(f"step back one tick, without checkpoints: {took:.3f} s "
           f"({took / floor:.2f}x the floor), now at {back.t_ms} ms")
     # LUBE (software) switches its pump on at line 12 and off at line 17, once a minute
     back.debugger.set_breakpoints("LUBE.plc", [{"line": 12}, {"line": 17}])
@@ -110,20 +132,19 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         while pool.work(back, 1.0):            # again: the breakpoints changed
             pass
-        print(f"checkpoints made again with these breakpoints: "
+        say(f"checkpoints made again with these breakpoints: "
               f"{time.perf_counter() - t0:.3f} s of work")
         t0 = time.perf_counter()
         step_back(back, Controller, "statement", pool)
         took = time.perf_counter() - t0
-        print(f"step back one statement (LUBE at {back.t_ms} ms), "
+        say(f"step back one statement (LUBE at {back.t_ms} ms), "
               f"from checkpoints: {took:.3f} s (goal < 0.5 s)")
         t0 = time.perf_counter()
         step_back(back, Controller, "statement")
         took = time.perf_counter() - t0
-        print(f"step back one statement, without checkpoints (two runs): {took:.3f} s "
+        say(f"step back one statement, without checkpoints (two runs): {took:.3f} s "
               f"({took / floor:.2f}x the floor)")
-        run_backs(back, pool, args.minutes, args.repeat)
-    return 0
+        run_backs(back, pool, minutes, repeat)
 
 
 if __name__ == "__main__":
