@@ -24,7 +24,7 @@ from plcbuilder.controller.events import Note, Started
 from plcbuilder.controller.plc import PLC, Process
 from plcbuilder.controller.targets import TargetConfig
 from plcbuilder.controller.targets.calls import CallResult, Entries, call
-from plcbuilder.controller.vm import Host, VMFault
+from plcbuilder.controller.vm import Host
 
 #: budget overruns listed in the report at most (each is counted all the same)
 MAX_BUDGET_ENTRIES = 1000
