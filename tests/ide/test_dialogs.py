@@ -156,6 +156,21 @@ def test_start_dialog_paths(qtbot):
     assert d.eparam() == -5
 
 
+@pytest.mark.parametrize("procs, row", [([("plc", Kind.HARDWARE)], False),
+                                        ([("Program", Kind.HARDWARE)], False),
+                                        ([("M03", Kind.HARDWARE), ("OFF", Kind.HARDWARE)], True)])
+def test_start_dialog_offers_m_codes_only_where_there_are_some(qtbot, procs, row):
+    """A Huazhong ('plc') or TG Motion ('Program') project has no M-code
+    procedure: the 'By M-code number' row (showing 'M0 no such procedure') is
+    not offered; picking by name works as before."""
+    d = dialogs.StartDialog(None, procs, procs[0][0], 0)
+    qtbot.addWidget(d)
+    d.show()
+    qtbot.waitExposed(d)
+    assert d.by_mcode.isVisible() is row and d.mcode_spin.isVisible() is row
+    assert d.selected() == procs[0][0] and d.start_button.isEnabled()
+
+
 def test_start_dialog_cancel(win, monkeypatch):
     driving(monkeypatch, dialogs.StartDialog, lambda d: None, REJECTED)
     assert dialogs.StartDialog.get_start(win, [("M03", Kind.HARDWARE)]) is None

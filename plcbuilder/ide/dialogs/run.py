@@ -83,6 +83,10 @@ class StartDialog(QDialog):
                 self.mcode_spin.setValue(int(m.group(1)))
                 self.mcode_spin.blockSignals(False)
         self.by_name.setChecked(True)
+        # no M-code procedure (a Huazhong or TG Motion project): no M-code row
+        if not any(re.fullmatch(r"M\d+", name) for name, _k in self.procedures):
+            for w in (self.by_mcode, self.mcode_spin, self.mcode_status):
+                w.hide()
         self._validate()
         # typing goes to the list at once (M8 jumps to M80), not to a radio button
         self.list.setFocus(Qt.FocusReason.OtherFocusReason)
