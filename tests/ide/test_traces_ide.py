@@ -139,6 +139,20 @@ def test_save_open_export_and_compare(qtbot, panels, fake, tmp_path):
     assert panels.failing_ms == 140
 
 
+def test_comparing_with_a_trace_of_other_ticks_says_so(qtbot, panels, fake, tmp_path):
+    """Two traces with no tick in common: the note said 'no difference'."""
+    _toggle(fake, 0, 300)
+    late = panels.traces.session.snapshot(200, 290)
+    api.save_trace(late, tmp_path / "late.plctrace")
+    panels.traces.open(tmp_path / "late.plctrace")
+    early = api.Trace(0, 100, {}, {}, [], {})
+    api.save_trace(early, tmp_path / "early.plctrace")
+    with qtbot.waitSignal(panels.traces.sig_note) as note:
+        diff = panels.traces.compare_with(tmp_path / "early.plctrace")
+    assert not diff.overlap and not diff.same
+    assert "no tick in common" in note.args[0] and "no difference" not in note.args[0]
+
+
 def test_a_bad_trace_file_is_refused_and_the_panels_stay(panels, fake, tmp_path):
     _toggle(fake, 0, 100)
     bad = tmp_path / "bad.plctrace"

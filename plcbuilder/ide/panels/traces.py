@@ -384,7 +384,7 @@ class TraceTools(QtCore.QObject):
         shown_trace = api.Trace(base.t_start, base.t_end, base.signals, base.strings,
                                 base.events, meta)
         where = (f"first difference at {diff.t_ms / 1000:.3f} s" if diff.t_ms is not None
-                 else "no difference")
+                 else "no difference" if diff.same else "no tick in common")
         self.show(shown_trace, base_name, marker_label="first difference",
                   bits=trigger_bits(base))
         self.panels.compare(comparison_of(other, name, base_name, diff.t_ms))
