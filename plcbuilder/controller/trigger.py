@@ -157,7 +157,7 @@ def is_variable(signal: str) -> bool:
 
 def watched_variables(trigger: Trigger) -> list[str]:
     """The variables the history must record for this trigger."""
-    return [trigger.signal] if trigger.signal and _VAR.match(trigger.signal) else []
+    return [trigger.signal] if trigger.signal and is_variable(trigger.signal) else []
 
 
 class Capturer:

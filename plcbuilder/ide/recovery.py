@@ -43,6 +43,12 @@ def digest(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
+def copy_name(key: str) -> str:
+    """The name of a file's recovery copy in the folder (from its file key)."""
+    import hashlib
+    return hashlib.sha1(key.encode("utf-8", "surrogatepass")).hexdigest()[:16] + ".txt"
+
+
 def encode_text(text: str, eol: str = "\n") -> bytes:
     if eol != "\n":
         text = text.replace("\n", eol)
@@ -123,8 +129,7 @@ class RecoveryManager(QObject):
             d = digest(data)
             if self._written.get(key) == d and key in index:
                 continue
-            import hashlib
-            name = hashlib.sha1(key.encode("utf-8", "surrogatepass")).hexdigest()[:16] + ".txt"
+            name = copy_name(key)
             try:
                 self.folder.mkdir(parents=True, exist_ok=True)
                 atomic_write(self.folder / name, data)

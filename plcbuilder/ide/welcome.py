@@ -10,6 +10,7 @@ from PySide6.QtWidgets import (QHBoxLayout, QLabel, QListWidget, QListWidgetItem
 
 from plcbuilder.api import Kind
 from plcbuilder.ide.icons import icon
+from plcbuilder.ide.project_tree import TARGET_LABEL, target_outline
 
 APP_NAME = "PLC Builder"
 
@@ -81,16 +82,15 @@ class WelcomePage(QWidget):
             self.welcome_new.hide()
         else:
             p = project
-            procs = p.procedures()                   # one listing of the folders
-            hw = sum(1 for pr in procs if pr.kind is Kind.HARDWARE)
-            sw = len(procs) - hw
-            what = f"{hw} hardware and {sw} software procedures."
-            from plcbuilder.ide.project_tree import TARGET_LABEL, target_outline
             outline = target_outline(p)
             if outline:
                 # a target's one source holds its procedures (docs/targets.md)
                 names = ", ".join(f"{name}()" for name, _when in outline)
                 what = f"{TARGET_LABEL.get(p.target, p.target)}: {names}."
+            else:
+                procs = p.procedures()                   # one listing of the folders
+                hw = sum(1 for pr in procs if pr.kind is Kind.HARDWARE)
+                what = f"{hw} hardware and {len(procs) - hw} software procedures."
             self.welcome_text.setText(
                 f"<b>{p.name}</b> — {p.root}<br>{what}"
                 "<br><br>Open a procedure from the <b>Project</b> panel, or press "

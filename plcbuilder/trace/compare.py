@@ -1,9 +1,9 @@
 """Comparing two traces: the first tick where they differ, and in what.
 
 Signals are compared by name over the time both traces cover (two traces
-with no tick in common are not "the same": nothing could be compared); a signal that
-only one trace has is listed apart (``only_in_a``/``only_in_b``) and does not
-make them differ. The procedures' events (starts and ends, messages, prints,
+with no tick in common are not "the same": nothing could be compared); a
+signal that only one trace has is listed apart (``only_in_a``/``only_in_b``)
+and does not make them differ. The procedures' events (starts and ends, messages, prints,
 faults) are compared too: the first tick where they differ counts. Notes,
 logpoint lines and the forces list are the tools' remarks, not what the
 procedures did, and are left out.
@@ -31,9 +31,14 @@ class Difference:
     events: bool = False
     only_in_a: list[str] = field(default_factory=list)
     only_in_b: list[str] = field(default_factory=list)
-    span: tuple[int, int] = (0, 0)
     #: the time each trace covers
     spans: tuple[tuple[int, int], tuple[int, int]] = ((0, 0), (0, 0))
+
+    @property
+    def span(self) -> tuple[int, int]:
+        """The time both cover (empty, start after end, when they have no tick in common)."""
+        (a0, a1), (b0, b1) = self.spans
+        return max(a0, b0), min(a1, b1)
 
     @property
     def overlap(self) -> bool:
@@ -96,11 +101,11 @@ def _first_change_difference(a: list, b: list, lo: int, hi: int) -> Optional[int
 
 def compare(a: Trace, b: Trace) -> Difference:
     """The first difference of ``a`` and ``b`` over the span both cover."""
-    lo, hi = max(a.t_start, b.t_start), min(a.t_end, b.t_end)
     names_a, names_b = set(a.signals), set(b.signals)
     diff = Difference(None, only_in_a=sorted(names_a - names_b),
-                      only_in_b=sorted(names_b - names_a), span=(lo, hi),
+                      only_in_b=sorted(names_b - names_a),
                       spans=((a.t_start, a.t_end), (b.t_start, b.t_end)))
+    lo, hi = diff.span
     if hi < lo:
         return diff
     first: Optional[int] = None
