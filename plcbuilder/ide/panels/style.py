@@ -138,14 +138,21 @@ class Legend(pg.LegendItem):
             super().paint(p, *args)
 
 
+def new_legend(plot: pg.PlotItem, offset: tuple[int, int], columns: int = 1) -> Legend:
+    """A :class:`Legend` in the theme's look on ``plot``'s view (a positive offset
+    from its top left corner, a negative one from the right)."""
+    c = plot_colours()
+    lg = Legend(offset=offset, labelTextColor=c.text, labelTextSize="8pt",
+                brush=pg.mkBrush(*c.legend_back), pen=pg.mkPen(c.legend_border),
+                colCount=columns)
+    lg.setParentItem(plot.vb)
+    return lg
+
+
 def legend(plot: pg.PlotItem, columns: int = 1) -> pg.LegendItem:
     """The plot's legend (what ``addLegend`` makes, as a :class:`Legend`)."""
     if plot.legend is None:
-        c = plot_colours()
-        plot.legend = Legend(offset=(8, 8), labelTextColor=c.text, labelTextSize="8pt",
-                             brush=pg.mkBrush(*c.legend_back),
-                             pen=pg.mkPen(c.legend_border), colCount=columns)
-        plot.legend.setParentItem(plot.vb)
+        plot.legend = new_legend(plot, (8, 8), columns)
     return plot.legend
 
 

@@ -25,6 +25,7 @@ from plcbuilder.ide.ringbuffer import RingBuffer
 
 __all__ = ["WatchedVariables", "lane_label"]
 
+
 class _Series:
     """One variable's changes: times (s) and values, oldest first."""
 

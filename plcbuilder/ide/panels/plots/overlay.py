@@ -55,10 +55,7 @@ def overlay_colour() -> str:
 
 def key(plot: pg.PlotItem, entries: list[tuple[QtGui.QPen, str]]) -> pg.LegendItem:
     """A legend in the plot's top right corner: each pen's line and its text."""
-    c = style.plot_colours()
-    lg = pg.LegendItem(offset=(-8, 8), labelTextColor=c.text, labelTextSize="8pt",
-                       brush=pg.mkBrush(*c.legend_back), pen=pg.mkPen(c.legend_border))
-    lg.setParentItem(plot.getViewBox())
+    lg = style.new_legend(plot, (-8, 8))
     lg.setZValue(40)
     for pen, text in entries:
         lg.addItem(pg.PlotDataItem(pen=pen), text)
