@@ -12,6 +12,7 @@ from tests.vcd_reader import VCDVCD  # noqa: E402
 
 from plcbuilder import api  # noqa: E402
 from plcbuilder.ide.panels import RunPanels  # noqa: E402
+from tests.ide._workbench import docked_run_panels  # noqa: E402
 from tests.ide.test_panels import FakeConnection, sample  # noqa: E402
 
 Qt = QtCore.Qt
@@ -24,15 +25,19 @@ def fake():
 
 @pytest.fixture
 def panels(qtbot, fake):
-    win = QtWidgets.QMainWindow()
-    qtbot.addWidget(win)
-    p = RunPanels(win, fake, capacity=500)
-    for d in p.docks():
-        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
-    win.resize(1400, 900)
-    win.show()
+    _win, p = docked_run_panels(qtbot, fake, (1400, 900), capacity=500)
     yield p
     p.shutdown()
+
+
+def arm(qtbot, bar, spec: str, pre=None, post=None) -> None:
+    """Type a trigger spec (and pre/post ms) in the trigger bar and press Arm."""
+    bar.spec.setText(spec)
+    if pre is not None:
+        bar.pre.setValue(pre)
+    if post is not None:
+        bar.post.setValue(post)
+    qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
 
 
 def _toggle(fake, t0: int, t1: int, pin: int = 3, period: int = 10) -> None:
@@ -60,10 +65,7 @@ def test_the_trigger_bar_captures_and_shows_the_capture(qtbot, panels, fake):
     IDE: a trigger bar on the run panels, the capture shown when it completes."""
     _toggle(fake, 900, 1005)                       # before arming: rises that do not count
     bar = panels.traces.bar
-    bar.spec.setText("out 3 rise")
-    bar.pre.setValue(15)
-    bar.post.setValue(25)
-    qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+    arm(qtbot, bar, "out 3 rise", 15, 25)
     assert bar.arm.isChecked() and "armed" in bar.state.text()
     assert panels.recorded is None
     _toggle(fake, 1010, 1100)                      # rises at 1010; complete by 1035
@@ -77,8 +79,7 @@ def test_the_trigger_bar_captures_and_shows_the_capture(qtbot, panels, fake):
 
 def test_a_bad_trigger_spec_says_why_and_stays_disarmed(qtbot, panels):
     bar = panels.traces.bar
-    bar.spec.setText("out 3 wobble")
-    qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+    arm(qtbot, bar, "out 3 wobble")
     assert not bar.arm.isChecked()
     assert "unknown condition" in bar.state.text()
 
@@ -175,27 +176,14 @@ def test_file_menu_has_the_trace_actions(qtbot, tmp_path, monkeypatch):
     win.close()
 
 
-def test_record_and_replay_a_session_in_the_ide(qtbot, tmp_path):
+def test_record_and_replay_a_session_in_the_ide(qtbot, tmp_path, live_uploaded):
     """SPEC §7: 'a session records everything done to the controller from outside
     … Replaying it with the same image and machine gives the identical trace' —
     Run › Save Session Recording and Run › Replay Session with the embedded
     controller: the replay's trace equals the session's, tick for tick."""
     from plcbuilder.ide import trace_actions
-    from plcbuilder.ide.main_window import MainWindow
-    from plcbuilder.ide.settings import Settings
-    from plcbuilder.project.new import create_project
-    create_project(tmp_path / "p")
-    win = MainWindow(Settings(str(tmp_path / "s.ini")), start_controller=True)
-    qtbot.addWidget(win)
-    win.show()
-    win.open_project(str(tmp_path / "p"))
+    win, panels = live_uploaded
     conn = win.connection
-    qtbot.waitUntil(lambda: conn.connected, timeout=30000)
-    panels = win.ensure_run_panels()
-    with qtbot.waitSignal(win.sig_build_finished, timeout=60000):
-        win.build_all()
-    win.run_actions.upload_image()
-    qtbot.wait(300)
     conn.start("M03", 12000)
     qtbot.wait(400)
     conn.set_input(4, 1)
@@ -219,7 +207,6 @@ def test_record_and_replay_a_session_in_the_ide(qtbot, tmp_path):
     # cover they are the same, tick for tick
     assert diff.same, diff.text()
     assert replay.t_end >= live.t_end - 50
-    win.close()
 
 
 def test_the_whole_session_shows_from_the_start(qtbot, panels, fake):
@@ -270,10 +257,7 @@ def test_a_trigger_on_a_variable_has_the_controller_record_it(qtbot):
     try:
         _toggle(fake, 0, 100)
         bar = panels.traces.bar
-        bar.spec.setText("M80.timer bit 1 rise")
-        bar.pre.setValue(10)
-        bar.post.setValue(20)
-        qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+        arm(qtbot, bar, "M80.timer bit 1 rise", 10, 20)
         assert bar.arm.isChecked() and "armed" in bar.state.text()
         assert fake.watches == [["M80.timer"]]
         _timer(fake, 100, 200)                # 60, 59, 58, …
@@ -298,8 +282,7 @@ def test_a_trigger_on_a_variable_has_the_controller_record_it(qtbot):
         assert fake.watches[-1] == [] and "not armed" in bar.state.text()
 
         # the controller refuses a variable it does not have: the bar says why
-        bar.spec.setText("M80.nope bit 0 rise")
-        qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+        arm(qtbot, bar, "M80.nope bit 0 rise")
         fake.sig_refused.emit("watch", "M80.nope: M80 has no variable named nope")
         assert not bar.arm.isChecked() and "no variable named nope" in bar.state.text()
         assert panels.traces.capturer is None
@@ -309,8 +292,7 @@ def test_a_trigger_on_a_variable_has_the_controller_record_it(qtbot):
 
 def test_a_variable_trigger_needs_a_controller_that_records_variables(qtbot, panels, fake):
     bar = panels.traces.bar
-    bar.spec.setText("M80.timer up 3")
-    qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+    arm(qtbot, bar, "M80.timer up 3")
     assert not bar.arm.isChecked() and "not connected" in bar.state.text()
 
 
@@ -320,10 +302,7 @@ def test_a_variable_trigger_against_the_embedded_controller(qtbot, live_uploaded
     timer, the controller records it, and the capture shows when it completes."""
     _win, panels = live_uploaded
     bar = panels.traces.bar
-    bar.spec.setText("LUBE.timer bit 2 rise")       # LUBE counts its timer down each 100 ms
-    bar.pre.setValue(300)
-    bar.post.setValue(200)
-    qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+    arm(qtbot, bar, "LUBE.timer bit 2 rise", 300, 200)       # LUBE counts its timer down each 100 ms
     assert bar.arm.isChecked(), bar.state.text()
     qtbot.waitUntil(lambda: panels.recorded is not None, timeout=30000)
     cap = panels.traces.shown

@@ -19,20 +19,15 @@ from plcbuilder.ide.docks import on_screen  # noqa: E402
 from plcbuilder.ide.panels import RunPanels, style  # noqa: E402
 from tests.ide.test_panels import FakeConnection, sample  # noqa: E402
 from tests.ide.test_panels_idle import tabbed  # noqa: E402,F401 - fixture
-from tests.ide.test_traces_ide import WatchingConnection  # noqa: E402
+from tests.ide._workbench import docked_run_panels  # noqa: E402
+from tests.ide.test_traces_ide import WatchingConnection, arm  # noqa: E402
 
 Qt = QtCore.Qt
 SENS = ("vars", ("M80.sens", 0))
 
 
 def _panels(qtbot, fake) -> RunPanels:
-    win = QtWidgets.QMainWindow()
-    qtbot.addWidget(win)
-    p = RunPanels(win, fake, capacity=2000)
-    for d in p.docks():
-        win.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, d)
-    win.resize(1600, 1000)
-    win.show()
+    win, p = docked_run_panels(qtbot, fake, (1600, 1000), capacity=2000)
     qtbot.waitExposed(win)
     p.window = win                    # (qtbot does not keep the window alive)
     return p
@@ -160,10 +155,7 @@ def test_a_variable_trigger_draws_its_bit_live_and_in_the_capture(qtbot):
     panels = _panels(qtbot, fake)
     try:
         bar = panels.traces.bar
-        bar.spec.setText("M80.var03 bit 2 rise")
-        bar.pre.setValue(50)
-        bar.post.setValue(60)
-        qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+        arm(qtbot, bar, "M80.var03 bit 2 rise", 50, 60)
         assert fake.watches == [["M80.var03"]]
 
         def var03(t0, t1):            # counts up one each 10 ms from t = 100
@@ -387,10 +379,7 @@ def test_a_capture_on_m80_sens_shows_it_rising_at_the_trigger(qtbot, live_upload
     win, panels = live_uploaded
     conn = win.connection
     bar = panels.traces.bar
-    bar.spec.setText("M80.sens bit 0 rise")
-    bar.pre.setValue(200)
-    bar.post.setValue(300)
-    qtbot.mouseClick(bar.arm, Qt.MouseButton.LeftButton)
+    arm(qtbot, bar, "M80.sens bit 0 rise", 200, 300)
     assert bar.arm.isChecked(), bar.state.text()
     conn.start("M80", 0)
     # live: the controller sends M80.sens (0 until Z reaches its home switch)
