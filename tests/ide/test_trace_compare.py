@@ -147,12 +147,17 @@ def test_compare_draws_the_other_trace_over_the_first_and_clears(runwin, qtbot, 
     assert not w.action(Act.CLEAR_COMPARISON).isEnabled()
 
 
-def test_back_to_live_ends_the_comparison(runwin, qtbot, files):
-    w, _conn = runwin
+def _opened_and_compared(qtbot, w, files):
+    """The first trace opened, the second compared with it, both drawn: the panels."""
     a, b = files
     trace_actions.open_trace(w, str(a))
     trace_actions.compare_trace(w, str(b))
-    panels = _drawn(qtbot, w)
+    return _drawn(qtbot, w)
+
+
+def test_back_to_live_ends_the_comparison(runwin, qtbot, files):
+    w, _conn = runwin
+    panels = _opened_and_compared(qtbot, w, files)
     panels.back_to_live()
     assert panels.comparison is None and panels.lanes.other_items == {}
     assert not w.action(Act.CLEAR_COMPARISON).isEnabled()
@@ -160,10 +165,7 @@ def test_back_to_live_ends_the_comparison(runwin, qtbot, files):
 
 def test_the_overlay_follows_the_theme(runwin, qtbot, files):
     w, _conn = runwin
-    a, b = files
-    trace_actions.open_trace(w, str(a))
-    trace_actions.compare_trace(w, str(b))
-    panels = _drawn(qtbot, w)
+    panels = _opened_and_compared(qtbot, w, files)
     try:
         w.apply_preferences(dataclasses.replace(w.prefs, theme="dark"))
         qtbot.waitUntil(lambda: panels.lanes.other_items["outputs"].opts["pen"].color().name()
