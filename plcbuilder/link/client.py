@@ -310,6 +310,7 @@ class Client:
         """(variables, the target's report: registers, calls, budget ({} on myCNC))."""
         answer = self.request("variables")
         return answer.get("variables", {}), answer.get("target", {})
+
     def watch(self, variables) -> list[str]:
         """Have the controller record these variables (``PROC.var``) every tick,
         as ``watch`` events in the telemetry; [] stops. Returns what it watches."""

@@ -86,11 +86,10 @@ PROTOCOL_VERSION = 2
 MAX_HELLO_FRAME = 1024
 #: Changes (and events) in one telemetry frame at most.
 TELEMETRY_PER_FRAME = 4000
-#: Largest frame payload accepted, in bytes (an image of MAX_IMAGE bytes fits as base64).
 #: send() and sendall() flags for every socket of the link: a peer that has gone
 #: is an error (EPIPE), never SIGPIPE, whatever the process does with that signal
 NOSIGNAL = getattr(socket, "MSG_NOSIGNAL", 0)
-
+#: Largest frame payload accepted, in bytes (an image of MAX_IMAGE bytes fits as base64).
 MAX_FRAME = 4 * 1024 * 1024
 #: Largest image accepted by upload, in bytes (before base64).
 MAX_IMAGE = (MAX_FRAME - 4096) // 4 * 3
@@ -343,6 +342,22 @@ class FrameDecoder:
 
 
 # -------------------------------------------------------------- non-blocking helpers
+
+def listening_socket(host: str, port: int, backlog: int) -> socket.socket:
+    """A non-blocking TCP socket listening on host:port (port 0: a free one)."""
+    family, _t, _p, _c, addr = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0]
+    lsock = socket.socket(family, socket.SOCK_STREAM)
+    try:
+        if os.name != "nt":       # (on Windows it would let two servers share the port)
+            lsock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        lsock.bind(addr)
+        lsock.listen(backlog)
+        lsock.setblocking(False)
+    except OSError:
+        lsock.close()
+        raise
+    return lsock
+
 
 def accept_all(lsock: socket.socket):
     """Each connection waiting on a non-blocking listening socket, made

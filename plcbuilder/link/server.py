@@ -34,7 +34,8 @@ from plcbuilder.link import protocol
 from plcbuilder.link.pacing import Simulation
 from plcbuilder.link.protocol import (MAX_FRAME, PROTOCOL_VERSION, REQUESTS,
                                       ErrorCode, FrameDecoder, ProtocolError, encode_frame)
-from plcbuilder.link.protocol import NOSIGNAL, accept_all, refuse, send_pending
+from plcbuilder.link.protocol import (NOSIGNAL, accept_all, listening_socket, refuse,
+                                      send_pending)
 from plcbuilder.link.protocol import debug as _debug
 from plcbuilder.link.service import Refused, Service, Session
 
@@ -42,22 +43,6 @@ __all__ = ["ConfigError", "ControllerServer", "Limits", "Server", "make_controll
 
 
 # ===================================================================== the network
-
-
-def listening_socket(host: str, port: int, backlog: int) -> socket.socket:
-    """A non-blocking TCP socket listening on host:port (port 0: a free one)."""
-    family, _t, _p, _c, addr = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0]
-    lsock = socket.socket(family, socket.SOCK_STREAM)
-    try:
-        if os.name != "nt":       # (on Windows it would let two servers share the port)
-            lsock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        lsock.bind(addr)
-        lsock.listen(backlog)
-        lsock.setblocking(False)
-    except OSError:
-        lsock.close()
-        raise
-    return lsock
 
 
 class _Conn:

@@ -29,7 +29,7 @@ from typing import Callable
 from plcbuilder.controller import abi
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.link.pacing import SimulationDown
-from plcbuilder.link.protocol import accept_all, refuse, send_pending
+from plcbuilder.link.protocol import accept_all, listening_socket, refuse, send_pending
 
 __all__ = ["ServerApi", "COMMANDS", "DEFAULT_PORT"]
 
@@ -284,7 +284,6 @@ class ServerApi:
 
     def __init__(self, sim, host: str = "127.0.0.1", port: int = DEFAULT_PORT):
         self.sim = sim
-        from plcbuilder.link.server import listening_socket
         lsock = self._lsock = listening_socket(host, port, 16)
         self.address: tuple[str, int] = lsock.getsockname()[:2]
         self._clients: dict[int, _Client] = {}
