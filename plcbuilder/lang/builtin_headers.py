@@ -13,12 +13,16 @@ from plcbuilder.lang.source import MAX_SOURCE_BYTES, normalise
 BUILTIN_PREFIX = "<builtin>/"
 
 
+def _folder():
+    return resources.files("plcbuilder") / "resources" / "include"
+
+
 def builtin_header(name: str) -> Optional[str]:
     """The text of a built-in header (resources/include/NAME), or None."""
     if "/" in name or "\\" in name or name.startswith("."):
         return None
     try:
-        ref = resources.files("plcbuilder") / "resources" / "include" / name
+        ref = _folder() / name
         if ref.is_file():
             return normalise(ref.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError):
@@ -28,8 +32,7 @@ def builtin_header(name: str) -> Optional[str]:
 
 def builtin_header_names() -> list[str]:
     try:
-        d = resources.files("plcbuilder") / "resources" / "include"
-        return sorted(p.name for p in d.iterdir() if p.name.endswith(".h"))
+        return sorted(p.name for p in _folder().iterdir() if p.name.endswith(".h"))
     except OSError:
         return []
 
