@@ -127,7 +127,7 @@ class AnalogPanel(TimePanel):
     def _var_end(self, m: RunModel) -> float:
         """Where a variable's last value is held to (x): the horizon while
         following, else the model's end."""
-        return self._extend or max(m.t_end, m.watched.t_end()) - self.offset
+        return self._extend or self.model_end(m)
 
     def _show_var_plot(self, shown: bool) -> None:
         """Show or hide the variables' plot. Hidden, its row takes no room (a

@@ -237,7 +237,7 @@ class LanesPanel(TimePanel):
             return lane_path(m.words(kind).views()[:, a:b], [p for _, p in keys], ys, t, end,
                              left, per_px)
         if not self._extend:
-            end = max(m.t_end, m.watched.t_end()) - self.offset
+            end = self.model_end(m)
         return variable_path(m.watched, [k[1] for k in keys], ys, t0, t1, self.offset, end,
                              left, per_px)
 

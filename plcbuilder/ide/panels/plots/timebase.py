@@ -261,6 +261,11 @@ class TimePanel(QtWidgets.QWidget):
             return np.append(y, y[-1])
         return y
 
+    def model_end(self, m) -> float:
+        """The x of model ``m``'s newest sample or watched variable's change (where
+        a watched variable's last value is held to when not following)."""
+        return max(m.t_end, m.watched.t_end()) - self.offset
+
     def watched(self) -> list:
         """The model's ring buffers this panel shows (a change in them redraws)."""
         return []
