@@ -10,6 +10,7 @@ import pyqtgraph as pg  # noqa: E402,I001
 
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import ANALOG_NAMES, RunModel
+from plcbuilder.ide.panels.plots import overlay
 from plcbuilder.ide.panels.plots.timebase import (TimeBase, TimePanel, YFit, center_item,
                                                   empty_text, shift_item)
 
@@ -163,11 +164,9 @@ class AnalogPanel(TimePanel):
                 item = curves.get(name)
                 if item is None:
                     colour = self._var_colour(name)
-                    item = curves[name] = style.new_curve(
-                        self.var_plot, colour, None if dashed else name, stepMode="right")
-                    if dashed:
-                        item.setPen(style.dashed_pen(colour))
-                        item.setZValue(5)
+                    item = curves[name] = (
+                        overlay.dashed_curve(self.var_plot, colour, stepMode="right") if dashed
+                        else style.new_curve(self.var_plot, colour, name, stepMode="right"))
                 times, values = model.watched.window(name, t0, t1)
                 x = times - self.offset
                 end = self._var_end(model)
@@ -216,9 +215,7 @@ class AnalogPanel(TimePanel):
         for col in o.active_analog():
             item = self.other_curves.get(col)
             if item is None:
-                item = style.new_curve(self._plot_of(col), _colour(col))
-                item.setPen(style.dashed_pen(_colour(col)))
-                item.setZValue(5)
+                item = overlay.dashed_curve(self._plot_of(col), _colour(col))
                 self.other_curves[col] = item
             y = o.analog.view(col)[a:b]
             item.setData(t, y)

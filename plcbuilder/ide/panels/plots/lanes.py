@@ -273,7 +273,7 @@ class LanesPanel(TimePanel):
         for kind in ("vars", "outputs", "inputs"):
             item = _merged_curve(self.plot, colour)
             item.setPen(style.dashed_pen(colour))
-            item.setZValue(5)
+            item.setZValue(overlay.OVERLAY_Z)
             self.other_items[kind] = item
         self.other_key = overlay.key(self.plot, overlay.key_entries(comp, style.OUTPUT_COLOUR))
 

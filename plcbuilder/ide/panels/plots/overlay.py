@@ -48,6 +48,18 @@ def comparison_of(trace, name: str, base: str, t_ms: Optional[int]) -> Compariso
     return Comparison(model, name, base, t_ms)
 
 
+#: the compared trace's lines above the first trace's
+OVERLAY_Z = 5
+
+
+def dashed_curve(plot: pg.PlotItem, colour: str, width: float = 1.6, **kw) -> pg.PlotDataItem:
+    """A curve of the compared trace: dashed, over the first trace's (kw: new_curve's)."""
+    item = style.new_curve(plot, colour, **kw)
+    item.setPen(style.dashed_pen(colour, width))
+    item.setZValue(OVERLAY_Z)
+    return item
+
+
 def overlay_colour() -> str:
     """The colour of the compared trace's lanes and proc, in the theme."""
     return style.plot_colours().overlay

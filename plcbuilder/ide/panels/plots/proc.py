@@ -114,9 +114,7 @@ class ProcPanel(TimePanel):
         if comp is None:
             return
         colour = overlay.overlay_colour()
-        self.other_curve = style.new_curve(self.plot, colour, stepMode="right")
-        self.other_curve.setPen(style.dashed_pen(colour, 2.0))
-        self.other_curve.setZValue(5)
+        self.other_curve = overlay.dashed_curve(self.plot, colour, 2.0, stepMode="right")
         self.other_key = overlay.key(self.plot, overlay.key_entries(comp, style.PROC_COLOUR))
 
     def _restyle_other(self) -> None:
