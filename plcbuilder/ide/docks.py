@@ -6,8 +6,36 @@ right: the plots (tabbed) over inputs and watch (tabbed).
 
 from __future__ import annotations
 
+from typing import Callable, Mapping, Optional
+
 from PySide6.QtCore import Qt, QTimer
-from PySide6.QtWidgets import QDockWidget
+from PySide6.QtWidgets import QDockWidget, QWidget
+
+
+class LazyPanels:
+    """The panels of docks that are hidden or tabbed away at start: each is made
+    by ``make(key)`` (which wires it and brings it up to date) the first time its
+    dock shows or :meth:`get` asks for it, and put in its dock; ``then(key)``
+    runs once it is there. Until then neither the panel nor its module is loaded
+    (the window's first paint does not wait for them)."""
+
+    def __init__(self, docks: Mapping[str, QDockWidget], make: Callable[[str], QWidget],
+                 then: Optional[Callable[[str], None]] = None):
+        self.docks = dict(docks)
+        self._make, self._then = make, then
+        self.made: dict[str, QWidget] = {}
+        for key, dock in self.docks.items():
+            dock.visibilityChanged.connect(lambda on, k=key: on and self.get(k))
+
+    def get(self, key: str) -> QWidget:
+        """The dock's panel, made now if it was not."""
+        panel = self.made.get(key)
+        if panel is None:
+            panel = self.made[key] = self._make(key)
+            self.docks[key].setWidget(panel)
+            if self._then is not None:
+                self._then(key)
+        return panel
 
 
 def build_docks(win) -> None:

@@ -27,7 +27,7 @@ from PySide6.QtWidgets import QMenu, QMessageBox
 from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.ide import actions as acts, code_bytes
 from plcbuilder.ide.actions import Act
-from plcbuilder.ide.docks import make_dock
+from plcbuilder.ide.docks import LazyPanels, make_dock
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.navigation import NavigationHistory
 from plcbuilder.ide.panels.outline import OutlinePanel
@@ -55,9 +55,8 @@ class Workbench(QObject):
         self.help_window: Optional[HelpWindow] = None
         self.show_bytes = False
         # the docks: the Outline now; the others (hidden until asked for) get
-        # their panel when first shown or used (see _panel)
+        # their panel when first shown or used (LazyPanels, below)
         self.outline = OutlinePanel(win)
-        self._panels: dict = {}
         self._root: Optional[Path] = None
         area = Qt.DockWidgetArea
         win.outline_dock = make_dock(win, "Outline", "outlineDock", self.outline,
@@ -89,42 +88,34 @@ class Workbench(QObject):
         win.problems_dock.raise_()
         for d in win.right_docks:
             d.raise_()
-        for key, dock in self._docks().items():
-            dock.visibilityChanged.connect(lambda on, k=key: on and self._panel(k))
+        self.panels = LazyPanels({"references": win.references_dock, "find": win.find_dock,
+                                  "disasm": win.disasm_dock, "registers": win.registers_dock},
+                                 self._make_panel, self._panel_made)
 
     # ============================================================ the docks
     @property
     def references(self):
         """The References dock's panel (made when first shown or used)."""
-        return self._panel("references")
+        return self.panels.get("references")
 
     @property
     def find_panel(self):
         """The Find in Files dock's panel."""
-        return self._panel("find")
+        return self.panels.get("find")
 
     @property
     def disasm(self):
         """The Disassembly dock's view."""
-        return self._panel("disasm")
+        return self.panels.get("disasm")
 
     @property
     def registers(self):
         """The Registers dock's browser."""
-        return self._panel("registers")
+        return self.panels.get("registers")
 
-    def _docks(self) -> dict:
-        w = self.win
-        return {"references": w.references_dock, "find": w.find_dock, "disasm": w.disasm_dock,
-                "registers": w.registers_dock}
-
-    def _panel(self, key: str):
-        """A dock's panel, made (and wired, and brought up to date) the first
-        time it shows or is used: until then the window neither builds it nor
-        loads its module (the first paint does not wait for them)."""
-        panel = self._panels.get(key)
-        if panel is not None:
-            return panel
+    def _make_panel(self, key: str):
+        """A dock's panel, wired and brought up to date (LazyPanels makes it the
+        first time it shows or is used)."""
         win = self.win
         if key == "references":
             from plcbuilder.ide.panels.results import ResultsPanel
@@ -143,16 +134,19 @@ class Workbench(QObject):
             panel.sig_insert.connect(self.insert_name)
             if win.connection is not None:
                 panel.set_connection(win.connection)
-        self._panels[key] = panel
         if key != "registers":
             panel.sig_open_location.connect(self.jump)
         if key in ("references", "find") and self._root is not None:
             panel.tree.root = self._root
-        self._docks()[key].setWidget(panel)
-        if key == "disasm":
-            win.disasm_dock.visibilityChanged.connect(lambda on: on and self.refresh_build_views())
-            self.refresh_build_views()
         return panel
+
+    def _panel_made(self, key: str) -> None:
+        """The disassembly, once in its dock, shows the current procedure (and
+        again each time it shows)."""
+        if key == "disasm":
+            self.win.disasm_dock.visibilityChanged.connect(
+                lambda on: on and self.refresh_build_views())
+            self.refresh_build_views()
 
     # ============================================================ files
     def project_files(self) -> list[Path]:
@@ -360,7 +354,7 @@ class Workbench(QObject):
         """The current procedure was checked again (or another editor came up):
         the disassembly and the byte margin follow."""
         ed = self.win.current_editor()
-        disasm = self._panels.get("disasm")      # (not made yet: it catches up when it is)
+        disasm = self.panels.made.get("disasm")   # (not made yet: it catches up when it is)
         if ed is None:
             if disasm is not None:
                 disasm.clear_view("No procedure open")
@@ -463,13 +457,13 @@ class Workbench(QObject):
         self.nav.clear()
         self._root = Path(root)
         for key in ("references", "find"):
-            panel = self._panels.get(key)
+            panel = self.panels.made.get(key)
             if panel is not None:
                 panel.tree.root = self._root
                 panel.tree.clear()
-        if "references" in self._panels:
+        if "references" in self.panels.made:
             self.references.summary.setText("Shift+F12 on a name lists where it is used")
-        if "find" in self._panels:
+        if "find" in self.panels.made:
             self.find_panel.summary.setText("")
 
     def on_current_changed(self, ed) -> None:

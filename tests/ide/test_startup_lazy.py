@@ -77,7 +77,7 @@ def test_hidden_and_tabbed_docks_get_their_panel_when_shown(qtbot, make_window, 
     _workbench.settle(qtbot, w)                        # ... then it runs
     assert w.lint.results
     wb, dbg = w.workbench, w.debug
-    assert wb._panels == {} and dbg._panels == {}
+    assert wb.panels.made == {} and dbg.panels.made == {}
     assert w._build_panel is None and w._tests_panel is None
     for dock in (w.find_dock, w.references_dock, w.disasm_dock, w.registers_dock,
                  w.callstack_dock, w.breakpoints_dock, w.forces_dock, w.build_dock,
@@ -86,10 +86,10 @@ def test_hidden_and_tabbed_docks_get_their_panel_when_shown(qtbot, make_window, 
     # shown: made, in its dock, up to date
     w.registers_dock.show()
     w.registers_dock.raise_()
-    qtbot.waitUntil(lambda: "registers" in wb._panels)
+    qtbot.waitUntil(lambda: "registers" in wb.panels.made)
     assert w.registers_dock.widget() is wb.registers and wb.registers.connection is conn
     w.callstack_dock.raise_()
-    qtbot.waitUntil(lambda: "callstack" in dbg._panels)
+    qtbot.waitUntil(lambda: "callstack" in dbg.panels.made)
     assert w.callstack_dock.widget() is dbg.call_stack
     w.tests_dock.raise_()
     qtbot.waitUntil(lambda: w._tests_panel is not None)

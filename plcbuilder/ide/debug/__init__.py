@@ -22,7 +22,7 @@ __all__ = ["DebugSession", "build_docks"]
 def build_docks(win) -> None:
     """Call Stack and Breakpoints (left, tabbed under the project) and Forces
     (right, beside the inputs and watch once the run docks are placed)."""
-    from plcbuilder.ide.docks import make_dock
+    from plcbuilder.ide.docks import LazyPanels, make_dock
     dbg = win.debug
     left = Qt.DockWidgetArea.LeftDockWidgetArea
     # empty: each gets its panel when it first shows (or the session uses it)
@@ -33,5 +33,5 @@ def build_docks(win) -> None:
     win.forces_dock = make_dock(win, "Forces", "forcesDock", None,
                                 Qt.DockWidgetArea.RightDockWidgetArea)
     win.callstack_dock.raise_()
-    for key, name in DOCKS.items():
-        getattr(win, name).visibilityChanged.connect(lambda on, k=key: on and dbg._panel(k))
+    dbg.panels = LazyPanels({key: getattr(win, name) for key, name in DOCKS.items()},
+                            dbg.make_panel)

@@ -14,13 +14,16 @@ from __future__ import annotations
 
 import base64
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 from PySide6.QtCore import QObject, QTimer, Signal
 from PySide6.QtWidgets import QMenu
 
 from plcbuilder.ide.debug.breakpoints import Breakpoint, BreakpointStore
 from plcbuilder.ide.editor import file_key
+
+if TYPE_CHECKING:
+    from plcbuilder.ide.docks import LazyPanels
 
 SOURCE_SUFFIXES = (".plc", ".h")
 #: The debug docks (the window's attribute) of the panels, by key.
@@ -50,7 +53,8 @@ class DebugSession(QObject):
         self._send_due: set[str] = set()
         self._send_timer = _single_shot(self, 0, self._send_pending)
         self._save_timer = _single_shot(self, SAVE_DELAY_MS, self.save)
-        self._panels: dict = {}           # the docks' panels, made when first shown or used
+        #: the docks' panels, made when first shown or used (debug.build_docks)
+        self.panels: Optional["LazyPanels"] = None
         self.store.sig_changed.connect(self._on_store_changed)
         win.tree.sig_file_renamed.connect(self.store.rename)
         win.tree.sig_file_deleted.connect(lambda p: self.store.clear(p))
@@ -74,24 +78,21 @@ class DebugSession(QObject):
     @property
     def call_stack(self):
         """The Call Stack dock's panel (made when first shown or used)."""
-        return self._panel("callstack")
+        return self.panels.get("callstack")
 
     @property
     def breakpoints_panel(self):
         """The Breakpoints dock's panel."""
-        return self._panel("breakpoints")
+        return self.panels.get("breakpoints")
 
     @property
     def forces_panel(self):
         """The Forces dock's panel."""
-        return self._panel("forces")
+        return self.panels.get("forces")
 
-    def _panel(self, key: str):
-        """A dock's panel, made, wired and brought up to date the first time it
-        shows or is used (the window's first paint does not wait for them)."""
-        panel = self._panels.get(key)
-        if panel is not None:
-            return panel
+    def make_panel(self, key: str):
+        """A dock's panel, wired and brought up to date (LazyPanels makes it the
+        first time it shows or is used)."""
         if key == "callstack":
             from plcbuilder.ide.debug.callstack import CallStackPanel
             panel = CallStackPanel()
@@ -109,15 +110,11 @@ class DebugSession(QObject):
             panel.sig_release.connect(self.release)
             panel.sig_release_all.connect(self.release_all)
             panel.show_forces(self.forces)
-        self._panels[key] = panel
-        dock = getattr(self.win, DOCKS[key], None)
-        if dock is not None:
-            dock.setWidget(panel)
         return panel
 
     def _made(self, key: str):
         """A dock's panel if it was made (None: it catches up when it is)."""
-        return self._panels.get(key)
+        return self.panels.made.get(key) if self.panels is not None else None
 
     # ================================================================ state
     @property
