@@ -141,7 +141,8 @@ def test_save_open_export_and_compare(qtbot, panels, fake, tmp_path):
 
 
 def test_comparing_with_a_trace_of_other_ticks_says_so(qtbot, panels, fake, tmp_path):
-    """Two traces with no tick in common: the note said 'no difference'."""
+    """Two traces with no tick in common: the note and the panels' banner said
+    'no difference'."""
     _toggle(fake, 0, 300)
     late = panels.traces.session.snapshot(200, 290)
     api.save_trace(late, tmp_path / "late.plctrace")
@@ -152,6 +153,8 @@ def test_comparing_with_a_trace_of_other_ticks_says_so(qtbot, panels, fake, tmp_
         diff = panels.traces.compare_with(tmp_path / "early.plctrace")
     assert not diff.overlap and not diff.same
     assert "no tick in common" in note.args[0] and "no difference" not in note.args[0]
+    banner = panels.banners[0].toolTip()               # "comparing … (dashed): …"
+    assert banner.startswith("comparing") and "no tick in common" in banner
 
 
 def test_a_bad_trace_file_is_refused_and_the_panels_stay(panels, fake, tmp_path):

@@ -342,10 +342,8 @@ class RunPanels(QtCore.QObject):
             panel.set_comparison(comparison)
         for link in self.compare_links:
             link.show()
-        where = (f"first difference at {comparison.t_ms / 1000:.3f} s"
-                 if comparison.t_ms is not None else "no difference")
         self._set_banner(f"comparing {comparison.base} (solid) with {comparison.name} "
-                         f"(dashed): {where}")
+                         f"(dashed): {comparison.where}")
         self.sig_comparison.emit(comparison.name)
         self.wake()
 

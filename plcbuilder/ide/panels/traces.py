@@ -387,7 +387,7 @@ class TraceTools(QtCore.QObject):
                  else "no difference" if diff.same else "no tick in common")
         self.show(shown_trace, base_name, marker_label="first difference",
                   bits=trigger_bits(base))
-        self.panels.compare(comparison_of(other, name, base_name, diff.t_ms))
+        self.panels.compare(comparison_of(other, name, base_name, where))
         self.sig_note.emit(f"comparing {base_name} with {name}: {where}; "
                            + diff.text().replace("\n", "; "))
         return diff

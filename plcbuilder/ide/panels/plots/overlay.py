@@ -1,8 +1,8 @@
 """A second trace drawn over the first (File › Compare with Trace…).
 
 :class:`Comparison` holds the other trace as a :class:`RunModel` of its own,
-the same arrays the panels draw the first one from, with its name and the
-first tick where the two differ. A time panel given one (``set_comparison``)
+the same arrays the panels draw the first one from, with its name and what
+the comparison found. A time panel given one (``set_comparison``)
 draws it over its own curves, dashed: the lanes in the theme's overlay colour
 inside each lane's band (a little inside the first trace's levels, so both
 show where they agree), each analog channel in its own colour, proc in the
@@ -30,7 +30,8 @@ class Comparison:
     model: RunModel
     name: str                    # the other trace (its file's name)
     base: str                    # the trace on show that it is compared with
-    t_ms: Optional[int]          # the first tick where they differ (None: the same)
+    where: str                   # what the comparison found: "first difference at
+                                 # 1.010 s", "no difference" or "no tick in common"
 
 
 def step_samples(trace) -> list:
@@ -40,12 +41,12 @@ def step_samples(trace) -> list:
     return StepSamples().feed(to_samples(trace), trace.t_end + 1)
 
 
-def comparison_of(trace, name: str, base: str, t_ms: Optional[int]) -> Comparison:
+def comparison_of(trace, name: str, base: str, where: str) -> Comparison:
     samples = step_samples(trace)
     model = RunModel(max(16, len(samples) + 16))
     model.add_samples(samples)
     model.set_watched(variables_of(trace), trigger_bits(trace))
-    return Comparison(model, name, base, t_ms)
+    return Comparison(model, name, base, where)
 
 
 #: the compared trace's lines above the first trace's
