@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Optional
 
-from PySide6.QtCore import Qt, Signal
+from PySide6.QtCore import QEvent, Qt, QTimer, Signal
 from PySide6.QtWidgets import QLabel, QStatusBar, QToolButton
 
 from plcbuilder import api
@@ -14,6 +14,10 @@ from plcbuilder.ide.icons import icon
 
 if TYPE_CHECKING:
     from plcbuilder.link.client import ControllerStatus
+
+
+#: what moves the edge of the room a message has
+_ROOM_EVENTS = (QEvent.Type.Move, QEvent.Type.Resize, QEvent.Type.Show, QEvent.Type.Hide)
 
 
 class StatusBar(QStatusBar):
@@ -60,9 +64,17 @@ class StatusBar(QStatusBar):
         self.time_label.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
         self.show_problem_counts(0, 0)
         self.set_connection_text("no controller", False)
-        self._message = ""
-        # a message's tooltip goes when the message does (its time ran out)
+        self._message = ""                  # the message, whole
+        self._shown = ""                    # ... as it shows (elided to the room there is)
+        # the message's time: kept here, so that fitting it again to a new width
+        # (showMessage again) does not start its time over
+        self._expire = QTimer(self)
+        self._expire.setSingleShot(True)
+        self._expire.timeout.connect(self.clearMessage)
+        # a message's tooltip goes when the message does
         self.messageChanged.connect(lambda text: text or self.setToolTip(""))
+        for w in (self.problems_button, self.connection_label):     # its room's edge
+            w.installEventFilter(self)
 
     def show_problem_counts(self, e: int, w: int) -> None:
         self.problems_button.setIcon(icon("error" if e else "warning" if w else "ok"))
@@ -85,14 +97,32 @@ class StatusBar(QStatusBar):
     # ------------------------------------------------------------- messages
     def showMessage(self, text: str, timeout: int = 0) -> None:  # noqa: N802 - Qt's name
         """A message left of the labels: elided with "…" where it does not fit
-        (Qt cut it off mid-word), whole in the tooltip."""
+        (Qt cut it off mid-word), whole in the tooltip; fitted again when the
+        room changes (the window is laid out, resized, a label grows)."""
         self._message = text
-        shown = text
+        self._fit()
+        if timeout > 0:
+            self._expire.start(timeout)
+        else:
+            self._expire.stop()
+
+    def _fit(self) -> None:
+        text = self._message
         room = self._message_room()
-        if room > 0:
-            shown = self.fontMetrics().elidedText(text, Qt.TextElideMode.ElideRight, room)
+        shown = self.fontMetrics().elidedText(text, Qt.TextElideMode.ElideRight, room) \
+            if room > 0 else text
         self.setToolTip(text if shown != text else "")
-        super().showMessage(shown, timeout)
+        self._shown = shown
+        if shown != super().currentMessage():
+            super().showMessage(shown)
+
+    def eventFilter(self, obj, e) -> bool:  # noqa: N802 - Qt's name
+        """The first labels moved (the bar was laid out, resized, a label grew):
+        the message on show is fitted to its new room."""
+        if e.type() in _ROOM_EVENTS and self._message \
+                and super().currentMessage() == self._shown:
+            self._fit()
+        return False
 
     def currentMessage(self) -> str:  # noqa: N802 - Qt's name
         """The message on show, whole (even where it shows elided)."""
@@ -103,6 +133,8 @@ class StatusBar(QStatusBar):
         return super().currentMessage()
 
     def clearMessage(self) -> None:  # noqa: N802 - Qt's name
+        self._message = self._shown = ""
+        self._expire.stop()
         self.setToolTip("")
         super().clearMessage()
 

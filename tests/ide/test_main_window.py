@@ -563,6 +563,33 @@ def test_a_long_status_message_is_elided_whole_in_its_tooltip(runwin, qtbot):
     assert sb.toolTip() == "" and sb.currentMessage() == ""
 
 
+def test_a_status_message_shown_before_the_layout_is_fitted_when_it_comes(qtbot):
+    """A message shown while the window was still being laid out (Build All's
+    at start) stayed cut off mid-word: it is fitted again when the bar gets its
+    width, and again when it narrows, keeping its time."""
+    from PySide6.QtWidgets import QMainWindow
+
+    from plcbuilder.ide.status_bar import StatusBar
+    win = QMainWindow()
+    qtbot.addWidget(win)
+    sb = StatusBar()
+    win.setStatusBar(sb)
+    text = "Build succeeded: up to date: /tmp/smoke/p_mycnc/build/eeprom.rom (6144 bytes) " * 2
+    sb.showMessage(text, 60000)                     # not shown yet: no room known
+    assert sb.shown_message() == text
+    win.resize(1200, 400)
+    win.show()
+    qtbot.waitExposed(win)
+    qtbot.waitUntil(lambda: sb.shown_message().endswith("…"))
+    wide = sb.shown_message()
+    assert sb.currentMessage() == text and sb.toolTip() == text and sb._expire.isActive()
+    win.resize(1050, 400)                           # (the labels take some 900 px)
+    qtbot.waitUntil(lambda: sb.shown_message() != wide)
+    assert sb.shown_message().endswith("…") and len(sb.shown_message()) < len(wide)
+    assert sb.fontMetrics().horizontalAdvance(sb.shown_message()) <= \
+        sb.problems_button.geometry().left()
+
+
 def test_the_embedded_controller_keeps_its_port_in_the_tooltip(qtbot):
     from plcbuilder.ide.status_bar import StatusBar
     sb = StatusBar()
