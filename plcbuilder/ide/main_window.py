@@ -510,6 +510,10 @@ class MainWindow(QMainWindow):
             if lower is not None:
                 self.tabifyDockWidget(lower, self.forces_dock)
                 self.run_docks["inputs"].raise_()
+        else:
+            # nothing can be forced without a controller: the editor gets the room
+            # (View › Forces still shows the dock)
+            self.forces_dock.hide()
         self.debug.wire_connection()
         run.wire_connection()
         actions.fill_view_menu(self)

@@ -601,6 +601,17 @@ def test_the_embedded_controller_keeps_its_port_in_the_tooltip(qtbot):
     assert sb.connection_label.text() == "● controller 10.0.0.5:4267"
 
 
+def test_without_a_controller_the_forces_dock_stays_out_of_the_way(win, project, qtbot):
+    """Nothing can be forced without a controller: the Forces dock does not
+    take a column beside the editor (View › Forces still shows it)."""
+    win.open_project(project)
+    qtbot.waitUntil(lambda: win._painted)
+    assert win.connection is None and not win.forces_dock.isVisible()
+    assert win.debug.panels.made == {}
+    win.forces_dock.toggleViewAction().trigger()
+    assert win.forces_dock.isVisible() and "forces" in win.debug.panels.made
+
+
 def test_run_panels_are_docked_when_part_b_is_there(runwin, qtbot):
     w, conn = runwin
     pytest.importorskip("plcbuilder.ide.panels")
