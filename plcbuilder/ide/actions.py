@@ -161,8 +161,8 @@ def build_actions(win) -> dict[str, QAction]:
     A(Act.FIND, "&Find…", lambda: win.show_find(False), "Ctrl+F", "find", "Find in the file")
     A(Act.REPLACE, "R&eplace…", lambda: win.show_find(True), "Ctrl+H", None,
       "Find and replace in the file")
-    A(Act.FIND_NEXT, "Find &Next", win.find_bar.find_next, "F3")
-    A(Act.FIND_PREVIOUS, "Find Pre&vious", win.find_bar.find_previous, "Shift+F3")
+    A(Act.FIND_NEXT, "Find &Next", lambda: win.find_bar.find_next(), "F3")
+    A(Act.FIND_PREVIOUS, "Find Pre&vious", lambda: win.find_bar.find_previous(), "Shift+F3")
     A(Act.GOTO_LINE, "&Go to Line…", win.goto_line_dialog, "Ctrl+G", "goto",
       "Go to a line of the file")
     A(Act.GOTO_DEFINITION, "Go to &Definition", ed(lambda e: win.goto_definition(

@@ -22,7 +22,6 @@ from plcbuilder._support.files import read_bounded
 from plcbuilder.api import Kind
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.editor import file_key, is_editor, normalise_newlines
-from plcbuilder.ide.editor.find_bar import FindReplaceBar
 from plcbuilder.ide.icons import icon, icon_path
 from plcbuilder.ide.recovery import (MAX_EDIT_BYTES, DiskWatcher, RecoveryManager, digest,
                                      encode_text,
@@ -106,8 +105,6 @@ class EditorStack(QWidget):
         self.tabs.setElideMode(Qt.TextElideMode.ElideNone)
         self.tabs.tabCloseRequested.connect(lambda i: self.close_editor(self.tabs.widget(i)))
         bar = self.tabs.tabBar()
-        bar.setStyleSheet(TAB_SHEET % {"close": icon_path("close"),
-                                       "close_hover": icon_path("close-hover")})
         bar.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
         bar.customContextMenuRequested.connect(self._tab_context_menu)
         bar.installEventFilter(self)
@@ -115,12 +112,23 @@ class EditorStack(QWidget):
         self.welcome = WelcomePage()
         self.stack.addWidget(self.welcome)
         self.stack.addWidget(self.tabs)
-        self.find_bar = FindReplaceBar(self)
-        self.find_bar.sig_message.connect(lambda m: self.sig_message.emit(m, 3000))
+        self._find_bar = None               # made when first opened (see find_bar)
         lay.addWidget(self.stack, 1)
-        lay.addWidget(self.find_bar)
 
     # ================================================================ public
+    @property
+    def find_bar(self):
+        """The find/replace bar under the editors, made the first time it is
+        opened or asked for (hidden until then: the first paint does not wait
+        for it)."""
+        if self._find_bar is None:
+            from plcbuilder.ide.editor.find_bar import FindReplaceBar
+            bar = self._find_bar = FindReplaceBar(self)        # hidden until opened
+            bar.sig_message.connect(lambda m: self.sig_message.emit(m, 3000))
+            self.layout().addWidget(bar)
+            bar.set_editor(self.current_editor())
+        return self._find_bar
+
     def editors(self) -> list[CodeEditor]:
         return [self.tabs.widget(i) for i in range(self.tabs.count())]
 
@@ -322,8 +330,8 @@ class EditorStack(QWidget):
         """The welcome page when no editor is open, the tabs otherwise."""
         has_tabs = self.tabs.count() > 0
         self.stack.setCurrentWidget(self.tabs if has_tabs else self.welcome)
-        if not has_tabs:
-            self.find_bar.hide()
+        if not has_tabs and self._find_bar is not None:
+            self._find_bar.hide()
         self.welcome.show_project(self.project)
 
     def show_find(self, replace: bool = False) -> None:
@@ -443,6 +451,7 @@ class EditorStack(QWidget):
         name = Path(path).name + (" (built-in)" if builtin else "")
         ic = "file-header" if path.endswith(".h") else (
             "file-plc-sw" if ed.kind is Kind.SOFTWARE else "file-plc" if ed.kind else "file")
+        self._style_tabs()
         idx = self.tabs.addTab(ed, icon(ic), name)
         self.tabs.setTabToolTip(idx, path)
         if not builtin:
@@ -451,6 +460,15 @@ class EditorStack(QWidget):
         ed.sig_text_changed.connect(lambda e=ed: self._update_tab(e))
         self.sig_editors_changed.emit()
         return ed
+
+    def _style_tabs(self) -> None:
+        """The tabs' own look, given with the first tab: a style sheet is
+        parsed and makes the widget draw through the style-sheet style, which
+        the window's first paint (the welcome page) need not wait for."""
+        bar = self.tabs.tabBar()
+        if not bar.styleSheet():
+            bar.setStyleSheet(TAB_SHEET % {"close": icon_path("close"),
+                                           "close_hover": icon_path("close-hover")})
 
     def _update_tab(self, ed: CodeEditor) -> None:
         i = self.tabs.indexOf(ed)
@@ -514,7 +532,8 @@ class EditorStack(QWidget):
 
     def _on_current_changed(self, _index: int) -> None:
         ed = self.current_editor()
-        self.find_bar.set_editor(ed)
+        if self._find_bar is not None:
+            self._find_bar.set_editor(ed)
         self.sig_current_changed.emit(ed)
 
     def _on_disk_changed(self, path: str) -> None:

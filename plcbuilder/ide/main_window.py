@@ -118,7 +118,7 @@ class MainWindow(QMainWindow):
         self.debug = debug.DebugSession(self)
         # the parts' widgets, by the names the window always had
         es = self.editor_stack
-        self.tabs, self.stack, self.find_bar = es.tabs, es.stack, es.find_bar
+        self.tabs, self.stack = es.tabs, es.stack
         self.welcome, self.welcome_recent = es.welcome, es.welcome.welcome_recent
         self.recovery, self.store = es.recovery, self.lint.store
 
@@ -156,6 +156,11 @@ class MainWindow(QMainWindow):
             self._tests_panel.set_project(project.root if project is not None else None)
         if self.run_panels is not None:
             self.run_panels.set_target(project.target if project is not None else "mycnc")
+
+    @property
+    def find_bar(self):
+        """The editors' find/replace bar (made when first used)."""
+        return self.editor_stack.find_bar
 
     @property
     def tests_panel(self):
@@ -200,7 +205,8 @@ class MainWindow(QMainWindow):
 
     def busy(self) -> bool:
         """Diagnostics or a build still on their way (tests and screenshots wait)."""
-        return self._lint_due or self.lint.busy() or self.run_actions.building()
+        return (self._lint_due or self.lint.busy() or self.run_actions.building()
+                or self.tree.describing())
 
     def is_modified(self, editor: CodeEditor) -> bool:
         return self.editor_stack.is_modified(editor)
@@ -314,6 +320,8 @@ class MainWindow(QMainWindow):
             self._build_panel.forget()           # not the previous project's build
         self.lint.clear()
         self.problems.set_root(project.root)
+        # the files' descriptions in the tree come after the window's first paint
+        self.tree.descriptions_held = self.isVisible() and not self._painted
         self.tree.set_project(project)
         self.settings.add_recent_project(project.root)
         actions.fill_recent_menu(self)
@@ -569,6 +577,7 @@ class MainWindow(QMainWindow):
         run panels."""
         self._painted = True
         startup_done()
+        self.tree.release_descriptions()
         if self._lint_due and not self._closing:
             self._lint_due = False
             self.lint.refresh_header_defines()

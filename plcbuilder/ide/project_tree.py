@@ -23,19 +23,22 @@ from typing import Optional
 
 from PySide6.QtCore import QFileSystemWatcher, Qt, QTimer, Signal
 from PySide6.QtGui import QAction, QBrush, QColor
-from PySide6.QtWidgets import (QAbstractItemView, QLabel, QMenu, QStyle, QStyledItemDelegate, QMessageBox, QTreeWidget,
+from PySide6.QtWidgets import (QAbstractItemView, QLabel, QMenu, QStyledItemDelegate, QMessageBox, QTreeWidget,
                                QTreeWidgetItem, QVBoxLayout, QWidget)
 
 from plcbuilder.api import Kind
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.icons import icon
+from plcbuilder.ide.looks import set_text_colour
 from plcbuilder._support.files import atomic_write
 from plcbuilder.project.model import Project
 
 ROLE_PATH = Qt.ItemDataRole.UserRole + 1
 ROLE_WHAT = Qt.ItemDataRole.UserRole + 2
 ROLE_DESCRIPTION = Qt.ItemDataRole.UserRole + 3
+#: descriptions read per turn of the event loop
+DESCRIBE_BATCH = 64
 
 # what an item is
 W_PROJECT = "project"
@@ -127,6 +130,11 @@ class ProjectTree(QWidget):
         self.before_file_change = None
         self._running: Optional[str] = None
         self._problems: dict[str, int] = {}      # file key -> 1 error, 2 warning
+        # the files' descriptions (first comments) are read after the tree is
+        # built, a batch per turn of the event loop; held while the window has
+        # not painted yet (see describing, release_descriptions)
+        self._undescribed: list[tuple[QTreeWidgetItem, Path, str]] = []
+        self.descriptions_held = False
         lay = QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
         self.tree = QTreeWidget(self)
@@ -144,7 +152,7 @@ class ProjectTree(QWidget):
         self.placeholder.setWordWrap(True)
         self.placeholder.setAlignment(Qt.AlignmentFlag.AlignTop | Qt.AlignmentFlag.AlignLeft)
         self.placeholder.setContentsMargins(10, 10, 10, 10)
-        self.placeholder.setStyleSheet("color: #8c959f;")
+        set_text_colour(self.placeholder, "#8c959f")
         lay.addWidget(self.tree)
         lay.addWidget(self.placeholder, 1)
         self.tree.hide()
@@ -178,6 +186,7 @@ class ProjectTree(QWidget):
         self._listing = listing
         expanded, selected = self._view_state()
         self.tree.setUpdatesEnabled(False)
+        self._undescribed = []                  # their items go with the clear
         self.tree.clear()
         p = self.project
         if p is None:
@@ -206,7 +215,7 @@ class ProjectTree(QWidget):
                 ("file-plc-sys" if proc.system else "file-plc-sw")
             it = self._item(parent, proc.name, ic, W_PROCEDURE, str(proc.path))
             it.setToolTip(0, str(proc.path))
-            self._describe(it, proc.path, proc.name)
+            self._undescribed.append((it, proc.path, proc.name))
             if outline and proc.kind is Kind.HARDWARE:
                 self._target_procedures(it, proc.path, outline)
         headers = self._item(root, "Headers", "folder", W_HEADERS, str(p.include_dir))
@@ -216,7 +225,7 @@ class ProjectTree(QWidget):
             names.add(h.name)
             it = self._item(headers, h.name, "file-header", W_HEADER, str(h))
             it.setToolTip(0, str(h))
-            self._describe(it, h, h.stem)
+            self._undescribed.append((it, h, h.stem))
         if "pins.h" not in names:
             it = self._item(headers, "pins.h (built-in)", "file-header", W_BUILTIN_HEADER, BUILTIN_PINS)
             it.setToolTip(0, "the built-in default pin map (read-only); copy it into include/ to edit")
@@ -239,6 +248,16 @@ class ProjectTree(QWidget):
         self._apply_decorations()
         self._restore_view_state(expanded, selected, first=not expanded)
         self.tree.setUpdatesEnabled(True)
+        self._describe_later()
+
+    def describing(self) -> bool:
+        """Whether descriptions are still to be read (tests and screenshots wait)."""
+        return bool(self._undescribed)
+
+    def release_descriptions(self) -> None:
+        """The window has painted: the held descriptions may be read now."""
+        self.descriptions_held = False
+        self._describe_later()
 
     def set_running(self, name: Optional[str]) -> None:
         """Mark the procedure that runs on the controller."""
@@ -424,12 +443,25 @@ class ProjectTree(QWidget):
             if not defined:
                 it.setForeground(0, QBrush(QColor("#9a9a9a")))
 
-    def _describe(self, item: QTreeWidgetItem, path: Path, name: str) -> None:
-        """The file's first comment, in grey beside its name ("spindle on, clockwise")."""
-        text = first_comment(path, name)
-        if text:
-            item.setData(0, ROLE_DESCRIPTION, text)
-            item.setToolTip(0, f"{path}\n{text}")
+    def _describe_later(self) -> None:
+        if self._undescribed and not self.descriptions_held:
+            batch = self._undescribed
+            QTimer.singleShot(0, self, lambda: self._describe_some(batch))
+
+    def _describe_some(self, batch: list) -> None:
+        """Read a batch of the files' first comments, in grey beside their names
+        ("spindle on, clockwise"); the rest on the next turn. A project of a
+        thousand procedures opens without waiting for a thousand reads, and
+        the window's first paint waits for none."""
+        if batch is not self._undescribed:
+            return                           # the tree was built again meanwhile
+        for item, path, name in batch[:DESCRIBE_BATCH]:
+            text = first_comment(path, name)
+            if text:
+                item.setData(0, ROLE_DESCRIPTION, text)
+                item.setToolTip(0, f"{path}\n{text}")
+        del batch[:DESCRIBE_BATCH]
+        self._describe_later()
 
     def _headers(self) -> list[Path]:
         d = self.project.include_dir if self.project else None
@@ -601,6 +633,9 @@ class _DescriptionDelegate(QStyledItemDelegate):
         desc = index.data(ROLE_DESCRIPTION)
         if not desc:
             return
+        # here, not at the top: the first use of QStyle from Python builds its
+        # enums (5 ms), and the window's first paint has no descriptions yet
+        from PySide6.QtWidgets import QStyle
         opt = option.__class__(option)
         self.initStyleOption(opt, index)
         style = opt.widget.style() if opt.widget else None

@@ -44,6 +44,19 @@ class Step(enum.Enum):
     BUILD_UPLOAD_START = "build, upload and start"
 
 
+class _DropDownCombo(QComboBox):
+    """A combo box whose list drops down below it: the style's own popup is
+    laid over the box around the current item, and in a toolbar at the top of
+    the screen its first items were above the screen's edge. The style sheet
+    that says so is set when the list first opens (one parsed at start-up
+    made the window's first paint wait)."""
+
+    def showPopup(self) -> None:  # noqa: N802 - Qt override
+        if not self.styleSheet():
+            self.setStyleSheet("QComboBox { combobox-popup: 0; }")
+        super().showPopup()
+
+
 class RunActions(QObject):
     """Build All, Upload, Start, Stop, the speed and the controller connection."""
 
@@ -94,15 +107,11 @@ class RunActions(QObject):
 
     def make_speed_combo(self, parent) -> QComboBox:
         """The speed box of the toolbar."""
-        self.speed_combo = QComboBox(parent)
+        self.speed_combo = _DropDownCombo(parent)
         self.speed_combo.setToolTip("Simulation speed: real time, 10× real time, as fast as "
                                     "possible, or paused")
         for label, mode in SPEEDS:
             self.speed_combo.addItem(label, mode)
-        # a list that drops down below the box: the style's own popup is laid
-        # over the box around the current item, and in a toolbar at the top of
-        # the screen its first items were above the screen's edge
-        self.speed_combo.setStyleSheet("QComboBox { combobox-popup: 0; }")
         self.speed_combo.currentIndexChanged.connect(
             lambda i: self.set_speed(self.speed_combo.itemData(i)))
         return self.speed_combo

@@ -11,6 +11,7 @@ from PySide6.QtWidgets import QLabel, QStatusBar, QToolButton
 
 from plcbuilder import api
 from plcbuilder.ide.icons import icon
+from plcbuilder.ide.looks import set_text_colour
 
 if TYPE_CHECKING:
     from plcbuilder.link.client import ControllerStatus
@@ -30,13 +31,14 @@ class StatusBar(QStatusBar):
         super().__init__(parent)
         sb = self
         sb.setSizeGripEnabled(True)
-        sb.setStyleSheet("QLabel { padding: 0 4px; }")
 
         def lab(name, tip, min_width=0):
             w = QLabel(self)
             w.setObjectName(name)
             w.setToolTip(tip)
-            w.setContentsMargins(6, 0, 6, 0)
+            # room either side (margins, not a style sheet: one makes the bar
+            # and every label in it draw through the style-sheet style)
+            w.setContentsMargins(10, 0, 10, 0)
             if min_width:
                 w.setMinimumWidth(min_width)
             sb.addPermanentWidget(w)
@@ -83,7 +85,7 @@ class StatusBar(QStatusBar):
 
     def set_connection_text(self, text: str, connected: bool) -> None:
         self.connection_label.setText(("● " if connected else "○ ") + text)
-        self.connection_label.setStyleSheet("color: #1a7f37;" if connected else "color: #6e7781;")
+        set_text_colour(self.connection_label, "#1a7f37" if connected else "#6e7781")
 
     def show_connected(self, address: str, embedded: bool) -> None:
         # the embedded controller's loopback port means nothing to a user: it is
@@ -148,7 +150,7 @@ class StatusBar(QStatusBar):
         self.set_connection_text("disconnected", False)
         self.connection_label.setToolTip(f"Disconnected: {reason}")
         self.running_label.setText("–")         # nothing is known to run any more
-        self.running_label.setStyleSheet("")
+        set_text_colour(self.running_label, None)
         self.proc_label.setText("")
 
     def show_state(self, st: ControllerStatus) -> None:
@@ -157,9 +159,7 @@ class StatusBar(QStatusBar):
         self.time_label.setText(f"t = {st.t_ms / 1000:.3f} s" if busy else f"t = {st.t_ms // 1000} s")
         running = st.running
         self.running_label.setText(f"▶ {running}" if running else "idle")
-        sheet = "color: #1a7f37; font-weight: 600;" if running else ""
-        if self.running_label.styleSheet() != sheet:      # a style sheet re-polishes: 5 Hz adds up
-            self.running_label.setStyleSheet(sheet)
+        set_text_colour(self.running_label, "#1a7f37" if running else None, bold=bool(running))
         name = st.proc_name or api.proc_name(st.proc)
         self.proc_label.setText(f"proc {st.proc}" + (f" {name}" if name else ""))
 
@@ -182,16 +182,13 @@ class StatusBar(QStatusBar):
         """A procedure's code size against its limit (no path: nothing)."""
         if path is None:
             self.size_label.setText("")
-            self.size_label.setStyleSheet("")
+            set_text_colour(self.size_label, None)
             return
         used = "-" if size is None else str(size)
         self.size_label.setText(f"{Path(path).stem}: {used}/{limit} bytes")
-        if size is None:
-            style = "color: #9a6700;"
-        elif size > limit:
-            style = "color: #d1242f; font-weight: 600;"
-        elif size > 0.9 * limit:
-            style = "color: #9a6700;"
+        if size is not None and limit is not None and size > limit:
+            set_text_colour(self.size_label, "#d1242f", bold=True)         # over the limit
+        elif size is None or (limit is not None and size > 0.9 * limit):
+            set_text_colour(self.size_label, "#9a6700")                    # unknown, or near it
         else:
-            style = ""
-        self.size_label.setStyleSheet(style)
+            set_text_colour(self.size_label, None)

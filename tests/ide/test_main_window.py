@@ -601,6 +601,40 @@ def test_the_embedded_controller_keeps_its_port_in_the_tooltip(qtbot):
     assert sb.connection_label.text() == "● controller 10.0.0.5:4267"
 
 
+def test_the_status_colours_come_through_the_palette_and_go_back_to_the_theme(qtbot):
+    """Green while a procedure runs, amber near the size limit, red and heavier
+    over it, the theme's own colour otherwise; given by the palette and font,
+    never a style sheet (a sheet re-polishes the label each time, and one set
+    at start-up made the first paint wait for the style-sheet parser)."""
+    from PySide6.QtGui import QPalette
+    from plcbuilder.ide.looks import is_bold, text_colour
+    from plcbuilder.ide.status_bar import StatusBar
+    sb = StatusBar()
+    qtbot.addWidget(sb)
+    theme = sb.size_label.palette().color(QPalette.ColorRole.WindowText).name()
+
+    def look(lab):
+        return (text_colour(lab), lab.palette().color(QPalette.ColorRole.WindowText).name(),
+                is_bold(lab), lab.styleSheet())
+
+    sb.show_state(ControllerStatus(t_ms=5, running="M03", proc=70))
+    assert look(sb.running_label) == ("#1a7f37", "#1a7f37", True, "")
+    sb.show_state(ControllerStatus(t_ms=9, running=None, proc=33))
+    assert look(sb.running_label) == (None, theme, False, "")
+    sb.show_size("hardware/M03.plc", 1100, 1000)
+    assert look(sb.size_label) == ("#d1242f", "#d1242f", True, "")
+    sb.show_size("hardware/M03.plc", 950, 1000)
+    assert look(sb.size_label) == ("#9a6700", "#9a6700", False, "")
+    sb.show_size("hardware/M03.plc", None, 1000)
+    assert look(sb.size_label)[0] == "#9a6700"
+    sb.show_size("hardware/M03.plc", 100, 1000)
+    assert look(sb.size_label) == (None, theme, False, "")
+    sb.show_connected("127.0.0.1:1", embedded=True)
+    assert text_colour(sb.connection_label) == "#1a7f37"
+    sb.show_disconnected("gone")
+    assert text_colour(sb.connection_label) == "#6e7781"
+
+
 def test_without_a_controller_the_forces_dock_stays_out_of_the_way(win, project, qtbot):
     """Nothing can be forced without a controller: the Forces dock does not
     take a column beside the editor (View › Forces still shows it)."""

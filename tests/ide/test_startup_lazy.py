@@ -13,7 +13,7 @@ import subprocess
 import sys
 
 import pytest
-from PySide6.QtWidgets import QApplication
+from PySide6.QtWidgets import QApplication, QWidget
 
 from plcbuilder.project.new import create_project
 from tests.ide import _workbench
@@ -44,6 +44,10 @@ class FirstPaint(QObject):
     def eventFilter(self, obj, ev):
         if ev.type() == QEvent.Type.Paint and not hasattr(self, "seen"):
             self.seen = sorted(m for m in %r if m in sys.modules)
+            import PySide6.QtWidgets as widgets
+            # resolved from Python, a Qt class builds all its enums: QStyle's take 5 ms
+            self.qstyle = "QStyle" in widgets.__dict__
+            self.described = win.tree.describing()
             QTimer.singleShot(0, app.quit)
         return False
 f = FirstPaint()
@@ -52,6 +56,7 @@ win.show()
 win.open_project(sys.argv[1])
 app.exec()
 print(f.seen, repr(app.styleSheet()))
+print(f.qstyle, f.described)
 win.shutdown()
 """ % (NOT_AT_FIRST_PAINT,)
 
@@ -64,6 +69,41 @@ def test_the_first_paint_waits_for_no_editor_link_or_compiler(tmp_path):
     assert r.returncode == 0, r.stderr
     # no application-wide style sheet: it makes every widget slower to build and paint
     assert r.stdout.split("\n")[0] == "[] ''", r.stdout
+    # QStyle is not used from Python before the first paint, and the tree's
+    # descriptions (which need it to be drawn) are still to be read then
+    assert r.stdout.split("\n")[1] == "False True", r.stdout
+
+
+def test_the_trees_descriptions_come_after_the_first_paint_a_batch_at_a_time(
+        qtbot, make_window, tmp_path):
+    from plcbuilder.ide.project_tree import DESCRIBE_BATCH, ROLE_DESCRIPTION
+    project = create_project(tmp_path / "example").root
+    for i in range(DESCRIBE_BATCH + 20):
+        (project / "software" / f"S{i:03}.plc").write_text(
+            f"// S{i:03}: job number {i}. More words.\nmain()\n{{\n  exit(99);\n}};\n")
+    w = make_window()
+    assert not w._painted
+    w.open_project(project)
+    tree = w.tree
+
+    def described():
+        return [it.text(0) for it in tree._all_items() if it.data(0, ROLE_DESCRIPTION)]
+
+    assert described() == [] and tree.describing() and w.busy()
+    qtbot.waitUntil(lambda: w._painted)
+    qtbot.waitUntil(lambda: 0 < len(described()))
+    first = len(described())
+    assert first <= DESCRIBE_BATCH                      # the rest on later turns
+    _workbench.settle(qtbot, w)
+    assert not tree.describing() and len(described()) > first
+    assert tree.find_item("S007").data(0, ROLE_DESCRIPTION) == "job number 7"
+    assert tree.find_item("M03").data(0, ROLE_DESCRIPTION) == "spindle on, clockwise"
+    # once painted, a refresh reads them on the next turns, not before returning
+    (project / "software" / "NEW.plc").write_text("// NEW: a new one\nmain()\n{\n};\n")
+    tree.refresh()
+    assert tree.find_item("NEW").data(0, ROLE_DESCRIPTION) is None and tree.describing()
+    qtbot.waitUntil(lambda: not tree.describing())
+    assert tree.find_item("NEW").data(0, ROLE_DESCRIPTION) == "a new one"
 
 
 def test_hidden_and_tabbed_docks_get_their_panel_when_shown(qtbot, make_window, tmp_path):
@@ -104,9 +144,20 @@ def test_hidden_and_tabbed_docks_get_their_panel_when_shown(qtbot, make_window, 
     assert "0 errors" in w.build_panel.text.toPlainText()
 
 
-def test_no_application_style_sheet_and_the_editor_tabs_keep_their_look(qtbot, make_window):
+def test_no_style_sheet_before_the_first_paint_and_the_editor_tabs_keep_their_look(
+        qtbot, make_window, tmp_path):
+    """A style sheet, even one widget's, is parsed and makes that widget draw
+    through the style-sheet style: none is set before the window first shows.
+    The editor tabs get theirs with the first tab, the find bar when made, the
+    speed list when it first drops down."""
     w = make_window()
     assert QApplication.instance().styleSheet() == ""
+    assert [x.objectName() or type(x).__name__ for x in w.findChildren(QWidget)
+            if x.styleSheet()] == []
+    assert w.editor_stack._find_bar is None                # made when first opened
+    project = create_project(tmp_path / "example").root
+    w.open_project(project)
+    w.open_file(project / "hardware" / "M03.plc")
     bar = w.tabs.tabBar()
     assert "padding: 5px 10px" in bar.styleSheet() and "close.svg" in bar.styleSheet()
     assert "border-top" in w.find_bar.styleSheet()

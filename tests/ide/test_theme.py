@@ -8,6 +8,7 @@ import pytest
 from PySide6.QtGui import QPalette
 from PySide6.QtWidgets import QApplication, QLabel
 
+from plcbuilder.ide.looks import text_colour
 from tests.ide.test_docks_fit import prompts_off, runwin  # noqa: F401 - fixtures
 
 Role = QPalette.ColorRole
@@ -28,7 +29,7 @@ def _axis_text(plot_item) -> int:
 def _look(w) -> dict:
     rp = w.run_panels
     status_labels = [lab for lab in w.statusBar().findChildren(QLabel)
-                     if lab.isVisible() and not lab.styleSheet()]      # not the coloured ones
+                     if lab.isVisible() and not text_colour(lab)]      # not the coloured ones
     return {
         "tree": _lightness(w.tree.viewport() if hasattr(w.tree, "viewport")
                            else w.tree, Role.Base),
