@@ -23,12 +23,13 @@ from typing import TYPE_CHECKING, Callable, Optional, Sequence
 from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.abi import proc_name
-from plcbuilder.bytecode.program import MAGIC, MAX_FILE_SIZE, Kind, LoadError, Program
+from plcbuilder.bytecode.kind import Kind
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
                                     summary)
 from plcbuilder.lang.options import CompileOptions
 
 if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type checkers
+    from plcbuilder.bytecode.program import MAGIC, LoadError, Program
     from plcbuilder.controller import events
     from plcbuilder.controller.events import ControllerStatus
     from plcbuilder.bytecode import disasm
@@ -67,6 +68,7 @@ if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type
 #: facade costs little, so the IDE paints its window before they load.
 _LAZY: dict[str, tuple[str, str | None]] = {}
 for _module, _names in (
+        ("plcbuilder.bytecode.program", "MAGIC LoadError Program"),
         ("plcbuilder.controller.controller", "Controller ControllerError"),
         ("plcbuilder.controller.debugger", "DebugError"),
         ("plcbuilder.controller.events", "ControllerStatus"),
@@ -153,6 +155,7 @@ MAX_MS = 7 * 24 * 3600 * 1000          # a week of simulated time
 
 def load_program(path) -> Program:
     """Read a compiled procedure (.bin); raises LoadError saying why it is refused."""
+    from plcbuilder.bytecode.program import MAX_FILE_SIZE, LoadError, Program
     try:
         data = read_bounded(path, MAX_FILE_SIZE, "compiled procedure")
     except OSError as exc:

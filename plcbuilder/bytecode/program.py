@@ -22,13 +22,13 @@ names the source line of a runtime fault and drives the disassembler.
 from __future__ import annotations
 
 import bisect
-import enum
 import functools
 import struct
 import zlib
 from dataclasses import dataclass, field
 
 from plcbuilder.bytecode import abi
+from plcbuilder.bytecode.kind import Kind  # defined there, and known here as ever
 from plcbuilder.bytecode.opcodes import DecodeError, validate
 
 MAGIC = b"PLCB"
@@ -36,19 +36,6 @@ FORMAT_VERSION = 1
 HEADER = struct.Struct("<4sBBBBIII")
 HEADER_SIZE = HEADER.size
 MAX_FILE_SIZE = 1 << 20
-
-
-class Kind(enum.IntEnum):
-    HARDWARE = 0
-    SOFTWARE = 1
-
-    @property
-    def label(self) -> str:
-        return self.name.lower()
-
-    @property
-    def code_limit(self) -> int:
-        return abi.HW_PROC_LIMIT if self is Kind.HARDWARE else abi.SW_PROC_LIMIT
 
 
 class LoadError(ValueError):

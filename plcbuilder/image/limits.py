@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from plcbuilder.bytecode import abi
-from plcbuilder.bytecode.program import Kind
+from plcbuilder.bytecode.kind import Kind
 
 #: The largest limit a project may set (bytes).
 MAX_LIMIT = 1 << 24

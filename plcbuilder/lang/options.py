@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
-from plcbuilder.bytecode.program import Kind
+from plcbuilder.bytecode.kind import Kind
 
 __all__ = ["CompileOptions"]
 

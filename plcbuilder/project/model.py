@@ -57,7 +57,7 @@ from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder._support.toml_errors import TomlLocator, decode_error
 from plcbuilder._support.toml_errors import loads as toml_loads
 from plcbuilder.bytecode import targets as T
-from plcbuilder.bytecode.program import Kind
+from plcbuilder.bytecode.kind import Kind
 from plcbuilder.image.limits import MAX_LIMIT, Limits
 from plcbuilder.lang.options import CompileOptions
 

@@ -30,7 +30,8 @@ NOT_AT_FIRST_PAINT = ("lark", "plcbuilder.lang.pipeline", "pyside6_scintilla", "
                       "plcbuilder.testing.spec", "plcbuilder.lang.preprocess",
                       "plcbuilder.lang.symbols", "plcbuilder.ide.completion",
                       "plcbuilder.image.manifest", "plcbuilder.image.romfs", "hashlib",
-                      "plcbuilder.ide.debug.callstack", "plcbuilder.ide.debug.inline")
+                      "plcbuilder.ide.debug.callstack", "plcbuilder.ide.debug.inline",
+                      "plcbuilder.bytecode.program", "plcbuilder.bytecode.opcodes")
 
 _PROBE = r"""
 import sys
