@@ -31,7 +31,8 @@ NOT_AT_FIRST_PAINT = ("lark", "plcbuilder.lang.pipeline", "pyside6_scintilla", "
                       "plcbuilder.lang.symbols", "plcbuilder.ide.completion",
                       "plcbuilder.image.manifest", "plcbuilder.image.romfs", "hashlib",
                       "plcbuilder.ide.debug.callstack", "plcbuilder.ide.debug.inline",
-                      "plcbuilder.bytecode.program", "plcbuilder.bytecode.opcodes")
+                      "plcbuilder.bytecode.program", "plcbuilder.bytecode.opcodes",
+                      "importlib.resources")
 
 _PROBE = r"""
 import sys
