@@ -13,11 +13,13 @@ causes of CPU use found by profiling, each pinned down without timing.
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 pytest.importorskip("PySide6")
 
-from PySide6 import QtCore, QtWidgets  # noqa: E402
+from PySide6 import QtCore, QtGui, QtWidgets  # noqa: E402
 
 from plcbuilder.ide.docks import on_screen  # noqa: E402
 from plcbuilder.ide.panels import RunPanels  # noqa: E402
@@ -219,3 +221,58 @@ def test_the_time_axis_ticks_are_pyqtgraphs_at_round_absolute_times(qtbot):
         assert [s for s, _v in mine] == pytest.approx([s for s, _v in ref])
         for (_s, a), (_t, b) in zip(mine, ref):
             assert [v + ax.offset for v in a] == pytest.approx(b, abs=1e-9)
+
+
+def _grid_columns(widget, y: int) -> list[int]:
+    """The x of each vertical grid line crossing row y of the widget's image."""
+    from plcbuilder.ide.panels.style import plot_colours
+    img = widget.grab().toImage()
+    grid = QtGui.QColor(plot_colours().grid).rgb()
+    xs = [x for x in range(img.width()) if img.pixel(x, y) == grid]
+    return [x for i, x in enumerate(xs) if i == 0 or xs[i - 1] != x - 1]
+
+
+def test_a_following_time_axis_moves_its_picture_until_a_tick_comes_or_goes(qtbot):
+    """While the plots follow at 1x, the time axis was drawn again at every
+    move (its tick texts: a tenth of the IDE's processor time with the plots
+    shown). Its picture is moved now, and drawn again when a tick comes or
+    goes, or after REDRAW_AFTER_PX; moved, it shows the grid where a picture
+    drawn afresh has it."""
+    from plcbuilder.ide.panels import style
+    widget = style.plot_widget(style.time_axis())
+    qtbot.addWidget(widget)
+    widget.resize(600, 300)
+    plot = widget.getPlotItem()
+    style.style_plot(plot)
+    ax = plot.getAxis("bottom")
+    plot.setXRange(-10.0, 0.0, padding=0)
+    ax.set_offset(100.9)
+    widget.show()
+    qtbot.waitExposed(widget)
+    widget.grab()
+    drawn = ax.redraws
+    y = int(plot.vb.mapToScene(plot.vb.boundingRect().center()).y())
+    px_per_s = ax.size().width() / 10.0
+    step = 3.0 / px_per_s                           # three pixels a move
+    spacing = ax._levels[0][0]
+    moved = 0
+    while abs(ax.shift_px()) + 3.0 < ax.REDRAW_AFTER_PX:
+        def ticks(o):
+            return math.ceil((o - 10.0) / spacing), math.floor(o / spacing)
+        if ticks(ax.offset + step) != ticks(ax.offset):
+            break                                   # a tick would come or go
+        ax.set_offset(ax.offset + step)
+        moved += 1
+        shifted = _grid_columns(widget, y)
+        assert ax.redraws == drawn, "a move of a few pixels drew the axis again"
+        ax.picture = None                           # the same offset, drawn afresh
+        fresh = _grid_columns(widget, y)
+        assert ax.redraws == drawn + 1
+        drawn = ax.redraws
+        assert len(shifted) == len(fresh) and \
+            all(abs(a - b) <= 1 for a, b in zip(shifted, fresh)), (shifted, fresh)
+    assert moved >= 2
+    # past REDRAW_AFTER_PX (or a tick coming in): drawn again
+    ax.set_offset(ax.offset + 2.0)
+    widget.grab()
+    assert ax.redraws == drawn + 1
