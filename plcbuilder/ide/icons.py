@@ -4,22 +4,17 @@ loaded once each. An unknown name gives an empty icon, never an error."""
 from __future__ import annotations
 
 from functools import lru_cache
-from pathlib import Path
 
 from PySide6.QtCore import QByteArray, QRectF, Qt
 from PySide6.QtGui import QIcon, QImage, QPainter, QPixmap
 
+from plcbuilder._support.package_data import data_folder
+
 ICON_DIR = ("resources", "icons")
-#: the icons' folder when the package is files on disk (it nearly always is);
-#: importlib.resources (a few ms to import) only for a package that is not
-_FOLDER = Path(__file__).resolve().parent.parent.joinpath(*ICON_DIR)
 
 
 def _ref(*parts: str):
-    if _FOLDER.is_dir():
-        return _FOLDER.joinpath(*parts)
-    from importlib import resources
-    return resources.files("plcbuilder").joinpath(*ICON_DIR, *parts)
+    return data_folder(*ICON_DIR).joinpath(*parts)
 
 
 def icon_names() -> list[str]:

@@ -4,26 +4,17 @@ that the IDE opens one without loading the preprocessor."""
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Optional
 
 from plcbuilder._support.files import read_bounded
+from plcbuilder._support.package_data import data_folder
 from plcbuilder.lang.source import MAX_SOURCE_BYTES, normalise
 
 BUILTIN_PREFIX = "<builtin>/"
 
 
-#: the headers' folder when the package is files on disk (it nearly always is);
-#: importlib.resources (a millisecond to import, at the IDE's start) only for
-#: a package that is not
-_FOLDER = Path(__file__).resolve().parent.parent / "resources" / "include"
-
-
 def _folder():
-    if _FOLDER.is_dir():
-        return _FOLDER
-    from importlib import resources
-    return resources.files("plcbuilder") / "resources" / "include"
+    return data_folder("resources", "include")
 
 
 def builtin_header(name: str) -> Optional[str]:
