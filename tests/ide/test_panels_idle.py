@@ -234,7 +234,7 @@ def _grid_columns(widget, y: int) -> list[int]:
 
 def test_a_following_time_axis_moves_its_picture_until_a_tick_comes_or_goes(qtbot):
     """While the plots follow at 1x, the time axis was drawn again at every
-    move (its tick texts: a tenth of the IDE's processor time with the plots
+    move (its tick texts: a fifth of the IDE's processor time with the plots
     shown). Its picture is moved now, and drawn again when a tick comes or
     goes, or after REDRAW_AFTER_PX; moved, it shows the grid where a picture
     drawn afresh has it."""
@@ -255,10 +255,12 @@ def test_a_following_time_axis_moves_its_picture_until_a_tick_comes_or_goes(qtbo
     px_per_s = ax.size().width() / 10.0
     step = 3.0 / px_per_s                           # three pixels a move
     spacing = ax._levels[0][0]
+
+    def ticks(o):                                   # the first and last tick shown at o
+        return math.ceil((o - 10.0) / spacing), math.floor(o / spacing)
+
     moved = 0
     while abs(ax.shift_px()) + 3.0 < ax.REDRAW_AFTER_PX:
-        def ticks(o):
-            return math.ceil((o - 10.0) / spacing), math.floor(o / spacing)
         if ticks(ax.offset + step) != ticks(ax.offset):
             break                                   # a tick would come or go
         ax.set_offset(ax.offset + step)

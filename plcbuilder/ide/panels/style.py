@@ -60,14 +60,16 @@ class TimeAxis(pg.AxisItem):
         super().__init__(orientation, **kw)
         self.offset = 0.0
         self.drawn_offset: float | None = None   # the offset the picture was drawn at
-        self._levels: list[tuple[float, float, int]] = []   # (spacing, first tick, count)
+        # per tick level when last worked out: (spacing, where its ticks start,
+        # the first tick's number, how many), see _ticks_between
+        self._levels: list[tuple[float, float, int, int]] = []
         self.redraws = 0
 
     def set_offset(self, offset: float) -> None:
         """Follow: the axis now starts at absolute time ``offset``. While its
         ticks stay the same ones and the picture has moved less than
         ``REDRAW_AFTER_PX``, the picture drawn before is painted moved, not
-        drawn again (the tick texts took a tenth of the IDE's processor time
+        drawn again (the tick texts took a fifth of the IDE's processor time
         while a procedure ran at 1x with the plots shown)."""
         if offset == self.offset:
             return
