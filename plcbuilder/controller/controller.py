@@ -85,12 +85,21 @@ class Controller:
         self.forces = Forces(self._plc, machine)
         #: everything done to this controller from outside (controller/recorder.py)
         self.recorder = Recorder()
+        self.recorder.where = self._halt_point
         #: what a replayed ``upload`` line loads (None: the procedures loaded now)
         self.replay_image: Optional[list[Program]] = None
         #: every image loaded, by its identity (what stepping back loads again)
         self.images: dict[str, list[Program]] = {}
         #: the variables recorded each tick (controller/watch.py, watch_variables)
         self.watch = VariableWatch()
+
+    def _halt_point(self) -> Optional[tuple]:
+        """Where the debugger holds the tick (procedure, code offset, return
+        offsets), when it is halted before a statement of a procedure mid-tick."""
+        h = self.debugger.halt
+        if h is None or h.process is None or h.pc is None or not self._plc.mid_tick:
+            return None
+        return (h.process.name, h.pc, tuple(h.rets))
 
     # ------------------------------------------------------------ basics
     @property

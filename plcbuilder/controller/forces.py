@@ -42,7 +42,7 @@ from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.controller.events import Forces as ForcesEvent
 from plcbuilder.controller.events import Note
-from plcbuilder.controller.vm import HANDOVER, Handoff, run_reference
+from plcbuilder.controller.vm import HANDOVER, K_BREAK, Handoff, run_reference
 
 __all__ = ["ForceError", "ForcedSlots", "Forces", "Target", "parse_target", "parse_value",
            "MODES"]
@@ -331,7 +331,22 @@ class Forces:
         if p.ended_at is not None or gen is None:
             return False
         kw = {}
-        if gen.gi_suspended:              # at a tick end
+        dbg = self.plc.debugger
+        h = dbg.halt if dbg is not None else None
+        if h is not None and h.process is p and h.pc is not None and self.plc.mid_tick:
+            # halted before a statement: it is on the reference interpreter already
+            # (started, or handed over by the fast backend and not started yet), and
+            # goes on from that statement, not asked about it again
+            here = gen.gi_frame.f_locals if gen.gi_frame is not None else {}
+            kw = dict(pc=h.pc, stack=list(here.get("stack") or ()), rets=h.rets,
+                      count=int(here.get("count") or 0), passed=h.pc)
+            lifted = here.get("pending", -1)
+            if isinstance(lifted, int) and lifted >= 0:
+                # the watched offset it ran last has its mark lifted until the next
+                # transfer of control (vm.run_reference): put it back, or that
+                # statement would never be watched again
+                here["kinds"][lifted] = K_BREAK if here["marks"][lifted] else here["base"][lifted]
+        elif gen.gi_suspended:            # at a tick end
             try:
                 p.sync()                   # (one that keeps locals takes HANDOVER after SYNC)
                 gen.send(HANDOVER)

@@ -17,7 +17,8 @@ instead of at 0, and says so when the project's image is not the one recorded.
 from __future__ import annotations
 
 import zlib
-from typing import Iterable
+from dataclasses import replace
+from typing import Callable, Iterable, Optional
 
 from plcbuilder.controller.scenario import Action
 
@@ -38,10 +39,16 @@ class Recorder:
         self.actions: list[Action] = []
         self.dropped = 0
         self.on = True
+        #: where in a tick an action is done (``Action.at``): the controller's
+        #: halt point while it is halted mid-tick, else None
+        self.where: Optional[Callable[[], Optional[tuple]]] = None
 
     def add(self, action: Action) -> None:
         if not self.on:
             return
+        at = self.where() if self.where is not None else None
+        if at is not None:
+            action = replace(action, at=at)
         self.actions.append(action)
         if len(self.actions) > MAX_ACTIONS:
             cut = len(self.actions) - MAX_ACTIONS

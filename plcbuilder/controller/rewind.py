@@ -131,15 +131,18 @@ def _actions(old, until: int, through: bool = False) -> list:
 def _run(old, new, actions: list, i: int, end: int, on_halt=None, counter=None,
          count_from: int = 1 << 62, chunk: int = CHUNK_MS):
     """Run ``new`` on ``actions[i:]`` up to tick ``end`` (see :func:`replay`);
-    yields after each chunk of ticks."""
+    yields after each chunk of ticks. An action done while the tick was halted
+    at a statement (``Action.at``) is done when ``new`` halts there again."""
     dbg = new.debugger
     n = len(actions)
     while True:
         t = new.t_ms
         if dbg.halt is not None:
+            i = _at_halt(old, new, actions, i)
             if on_halt is not None and on_halt(new):
                 break
             dbg.halt = None
+            _aim(dbg, actions, i, t)
             new.plc.resume_tick()
             continue
         if t >= count_from and dbg.counter is None:
@@ -147,12 +150,13 @@ def _run(old, new, actions: list, i: int, end: int, on_halt=None, counter=None,
             dbg._remark()
         if t >= end:
             break
-        while i < n and actions[i].t_ms <= t:
-            a = actions[i]
-            if a.kind == "upload":
-                new.replay_image = old.images[a.name]
-            apply(new, a)
+        # the actions of this tick done before it runs (one done mid-tick in a
+        # tick already over, which cannot happen, is done now rather than never)
+        while i < n and actions[i].t_ms <= t and not (actions[i].at is not None
+                                                      and actions[i].t_ms == t):
+            _do(old, new, actions[i])
             i += 1
+        _aim(dbg, actions, i, t)
         stop = end if i >= n else min(end, max(actions[i].t_ms, t + 1))
         if t < count_from < stop:
             stop = count_from
@@ -160,7 +164,48 @@ def _run(old, new, actions: list, i: int, end: int, on_halt=None, counter=None,
         new.drain_events()
         yield
     dbg.counter = None
+    _aim(dbg, actions, n, -1)
     dbg._remark()
+
+
+def _do(old, new, action) -> None:
+    if action.kind == "upload":
+        new.replay_image = old.images[action.name]
+    apply(new, action)
+
+
+def _aim(dbg, actions: list, i: int, t: int) -> None:
+    """Halt tick ``t`` where the next action was done mid-tick (a one-time
+    "run to" at its statement), or nowhere."""
+    a = actions[i] if i < len(actions) else None
+    want = {a.at[0]: {a.at[1]}} if a is not None and a.at is not None and a.t_ms == t else {}
+    if dbg._run_to != want:
+        dbg._run_to = want
+        dbg._remark()
+
+
+def _at_halt(old, new, actions: list, i: int) -> int:
+    """``new`` halted: when it is where the next actions were done mid-tick,
+    do them (after the breakpoints there, which the "run to" halt came before:
+    their hits count as they did); returns the index of the next action."""
+    dbg = new.debugger
+    h = dbg.halt
+    if i >= len(actions) or h.process is None or not new.plc.mid_tick:
+        return i
+    point = (h.process.name, h.pc, tuple(h.rets))
+    a = actions[i]
+    if a.at != point or a.t_ms != new.t_ms:
+        return i
+    counted = dbg.counter is not None and dbg.counter.done
+    if h.reason == "step" and h.breakpoint is None and not counted:
+        bps = dbg._at.get(h.process.program.name, {}).get(h.pc)
+        if bps:
+            dbg._breakpoints_at(h.process, h.pc, h.rets, bps)
+            dbg.halt = dbg.halt or h
+    while i < len(actions) and actions[i].at == point and actions[i].t_ms == new.t_ms:
+        _do(old, new, actions[i])
+        i += 1
+    return i
 
 
 def _breakpoints_key(dbg) -> tuple:
@@ -253,7 +298,9 @@ def _halted(new, halt: Halt):
 
 
 def _announce(new):
-    """The new controller's halt, announced as new (a ``halted`` event)."""
+    """The new controller's halt, announced as new (a ``halted`` event), and
+    what is forced there (a ``forces`` event: the replay's own were drained)."""
+    new.forces._changed()
     new.debugger._told = None
     new.debugger.settle()
     return new

@@ -61,6 +61,10 @@ class Action:
                                # release: target ("all": release everything)
     a: int = 0                 # start: eparam; input, bind: pin; adc: channel; write/force: value
     b: int = 0                 # input/adc: value; bind: eparam; release: 1 restore, 0 keep
+    #: done while the debugger held the tick halted before a statement: (procedure,
+    #: code offset, return offsets) there; a replay does it at that statement of
+    #: tick ``t_ms`` (controller/rewind.py). None: before the tick runs.
+    at: Optional[tuple] = None
 
     def describe(self) -> str:
         if self.kind == "start":

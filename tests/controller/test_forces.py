@@ -374,3 +374,42 @@ def test_a_force_while_a_gvarget_waits_for_its_latency_applies_when_it_can(backe
     for _ in range(6):
         c.step(1)
     assert _v(c)["x"] == 9
+
+
+#: line 5 reads, line 6 decides, line 7 counts the ticks that took the branch
+BRANCHES = """main()
+{
+  do
+  {
+    x = portget(3);
+    if (x == 0) {
+      y = y + 1;
+    };
+    z = x + y;
+  } while (1);
+}
+"""
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_forcing_a_variable_while_halted_at_a_statement_goes_on_from_that_statement(backend):
+    """A force of a variable while the debugger holds its procedure before a
+    statement (mid-tick) changes where the procedure is not: it goes on from that
+    statement, which runs once, and the statements before it keep being watched
+    (issue 23 point 4: the tick ran again from the procedure's start, or the rest
+    of the tick ran inside the force)."""
+    c = controller(compile_proc(BRANCHES, "M10"), backend=backend)
+    c.start("M10")
+    c.debugger.set_breakpoints("M10.plc", [{"line": 7, "hit": {"mode": "eq", "n": 3}}])
+    c.step(50)
+    assert c.debugger.halted_state()["line"] == 7 and c.variables()["M10"]["y"] == 2
+    c.force("M10.x", 4)
+    assert c.debugger.halted_state()["line"] == 7 and c.variables()["M10"]["y"] == 2
+    path = []
+    for _ in range(6):
+        c.debugger.step("into")
+        while not c.debugger.halted:
+            c.step(1)
+        path.append((c.t_ms, c.debugger.halted_state()["line"], c.variables()["M10"]["y"]))
+    # y = y + 1 ran once; then x reads 4 (forced): the branch is not taken again
+    assert path == [(2, 9, 3), (2, 10, 3), (3, 5, 3), (3, 6, 3), (3, 9, 3), (3, 10, 3)]

@@ -7,6 +7,7 @@ import pytest
 
 from plcbuilder import api
 from plcbuilder.controller.controller import Controller
+from plcbuilder.controller.events import Forces
 from plcbuilder.controller.rewind import Checkpoints, RewindError, run_back, step_back
 
 from tests.controller._sim import BACKENDS, COUNT, EXAMPLE, compile_proc
@@ -247,3 +248,67 @@ def test_running_back_from_checkpoints_equals_running_back_from_the_start(backen
             assert len(from_zero) == before, f"run back to {want['t_ms']} ms ran from t = 0"
     with pytest.raises(RewindError, match="no breakpoint was hit before now"):
         run_back(back, counted, pool)
+
+
+#: reads input 3 and ADC1 (2048 on the default machine) early in each tick,
+#: halts later in it (line 7)
+READS_EARLY = """main()
+{
+  do
+  {
+    x = portget(3) + adc02 - 2048;
+    if (x == 0) {
+      y = y + 1;
+    };
+    z = x + y;
+  } while (1);
+}
+"""
+# lines: 5 x=… | 6 if | 7 y=y+1 | 9 z=x+y | 10 while
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("action", [
+    ("write", "M10.x", 5), ("write", "in 3", 1), ("force", "in 3", 1), ("force", "M10.x", 4),
+    ("force-release", "in 3", 1), ("input", 3, 1), ("adc", 1, 7), ("write", "gvar 7000", 9)])
+def test_an_action_done_while_halted_mid_tick_is_done_there_again(backend, action):
+    """Issue 23 point 4: a write, a force, a release, an input or an ADC value
+    given while halted at a statement (mid-tick) changes the rest of that tick
+    only; the session run again does it at that same statement, not at the start
+    of the tick, so stepping back by a statement retraces the run forward."""
+    def factory():
+        return Controller(backend=backend)
+    c = factory()
+    c.load([compile_proc(READS_EARLY, "M10")])
+    c.start("M10")
+    c.debugger.set_breakpoints("M10.plc", [{"line": 7, "hit": {"mode": "eq", "n": 3}}])
+    c.step(50)
+    assert c.debugger.halted_state()["line"] == 7
+    kind, target, value = action
+    if kind in ("write", "force"):
+        getattr(c, kind)(target, value)
+    elif kind == "force-release":
+        c.force(target, value)
+        c.release(target, "keep")
+    elif kind == "input":
+        c.set_input(target, value)
+    else:
+        c.set_adc(target, value)
+    path = []
+    for _ in range(5):                        # on past the tick end, into the next tick
+        path.append(_look(c) | {"line": c.debugger.halted_state()["line"]})
+        c.debugger.step("into")
+        while not c.debugger.halted:
+            c.step(1)
+    back = c
+    for want in reversed(path):
+        back = step_back(back, factory, "statement")
+        assert _look(back) | {"line": back.debugger.halted_state()["line"]} == want
+    # the step back to where the action was done kept it, at that statement
+    assert [(a.kind, a.t_ms) for a in back.recorder.actions][-1][1] == path[0]["t_ms"]
+    again = step_back(back, factory, "tick")              # the start of that tick: not done
+    assert again.t_ms == path[0]["t_ms"]
+    assert all(a.t_ms < again.t_ms for a in again.recorder.actions if a.kind != "start")
+    # what is forced there is told (the IDE's lists follow it), also when nothing is
+    told = [e for e in again.drain_events() if isinstance(e, Forces)]
+    assert told and list(told[-1].forces) == again.forces() == []
