@@ -95,6 +95,7 @@ class MainWindow(QMainWindow):
         self.right_docks: list = []          # the docks the default sizes apply to
         self._shown_once = False
         self.layout_restored = False
+        self.wheel_guard = None              # made after the first paint (wheel_guard.py)
 
         self.setWindowTitle(APP_NAME)
         self.setWindowIcon(icon("app"))
@@ -549,7 +550,18 @@ class MainWindow(QMainWindow):
             self.run_panels.set_target(self._project.target)
         if self._pin_defines is not None:
             self._set_pin_names(self._pin_defines)
+        self._guard_wheel()
         return self.run_panels
+
+    def _guard_wheel(self) -> None:
+        """The wheel over a slider, spin box or combo box of a dock (or the
+        speed box) scrolls the dock and changes nothing (wheel_guard.py)."""
+        if self.wheel_guard is None:
+            from plcbuilder.ide.wheel_guard import WheelGuard
+            self.wheel_guard = WheelGuard(self)
+            if self.run_actions.speed_combo is not None:
+                self.wheel_guard.guard(self.run_actions.speed_combo)
+        self.wheel_guard.watch_docks(self)
 
     # ============================================================ settings
     def reset_layout(self) -> None:
@@ -577,6 +589,7 @@ class MainWindow(QMainWindow):
         run panels."""
         self._painted = True
         startup_done()
+        self._guard_wheel()
         self.tree.release_descriptions()
         if self._lint_due and not self._closing:
             self._lint_due = False
