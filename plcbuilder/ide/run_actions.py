@@ -162,6 +162,28 @@ class RunActions(QObject):
     def building(self) -> bool:
         return self.build_runner.running()
 
+    def ensure_saved(self, what: str) -> bool:
+        """Before ``what`` (Build All, Run Tests) reads the project's files:
+        every editor's text is on disk. Saved without asking when the
+        preference says so, else asked (Save All or Cancel); False: not saved,
+        nothing may run (never silently on files the editors do not show)."""
+        modified = self.editors.modified_editors()
+        if not modified:
+            return True
+        if not self.prefs.save_before_build:
+            names = ", ".join(Path(ed.path).name for ed in modified[:6]) + \
+                (" …" if len(modified) > 6 else "")
+            answer = QMessageBox.question(
+                self.parent(), what,
+                f"{len(modified)} file{'s' * (len(modified) != 1)} ha"
+                f"{'ve' if len(modified) != 1 else 's'} unsaved changes ({names}).\n\n"
+                f"{what} reads the files on disk: save them first?",
+                QMessageBox.StandardButton.Save | QMessageBox.StandardButton.Cancel,
+                QMessageBox.StandardButton.Save)
+            if answer != QMessageBox.StandardButton.Save:
+                return False
+        return self.editors.save_all()
+
     # ================================================================== run
     def start_procedure(self, name: Optional[str] = None, eparam: Optional[int] = None) -> bool:
         """Start a procedure on the controller (asking which, when not given)."""
@@ -390,7 +412,7 @@ class RunActions(QObject):
             return False
         if self.build_runner.running():
             return False
-        if self.prefs.save_before_build and not self.editors.save_all():
+        if not self.ensure_saved("Build All"):
             return False
         self.build_panel.begin(self.project)
         self.sig_build_started.emit()

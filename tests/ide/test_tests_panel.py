@@ -260,3 +260,59 @@ def test_the_panel_looks_for_tests_where_the_runner_does():
     from plcbuilder.ide.panels import tests as panel_module
     from plcbuilder.testing.spec import TESTS_DIR
     assert panel_module.TESTS_DIR == TESTS_DIR
+
+
+# ------------------------------------------------- what the editors show (23.2)
+
+def _halve_the_spindle_speed(qtbot, win, root):
+    """Open M03 and type ``/2`` after ``pwm01=speed`` (not saved)."""
+    ed = win.open_file(root / "hardware" / "M03.plc")
+    line = next(i for i, t in enumerate(ed.text().splitlines()) if "pwm01=speed;" in t)
+    col = ed.text().splitlines()[line].index(";")
+    ed.goto_line(line + 1, col + 1)
+    qtbot.keyClicks(ed, "/2")
+    assert "pwm01=speed/2;" in ed.text() and win.is_modified(ed)
+    return ed
+
+
+def test_run_tests_runs_what_the_editors_show_saving_first_as_build_all_does(
+        qtbot, win, tmp_path):
+    """Issue 23 point 2: with M03 changed and not saved, Ctrl+T said "14 passed"
+    (the files on disk); the tests run on the editors' text: saved first, as
+    Build All saves (the preference), and they fail."""
+    from plcbuilder.project.new import create_project
+    root = create_project(tmp_path / "example", name="example").root
+    assert win.open_project(root)
+    with qtbot.waitSignal(win.tests_panel.sig_finished, timeout=60000) as clean:
+        win.action(Act.RUN_TESTS).trigger()
+    assert ", 0 failed" in clean.args[0]
+    ed = _halve_the_spindle_speed(qtbot, win, root)
+    with qtbot.waitSignal(win.tests_panel.sig_finished, timeout=60000) as edited:
+        win.action(Act.RUN_TESTS).trigger()
+    assert ", 0 failed" not in edited.args[0], edited.args[0]
+    assert not win.is_modified(ed)
+    assert "pwm01=speed/2;" in (root / "hardware" / "M03.plc").read_text()
+
+
+def test_without_saving_before_build_run_tests_asks_and_cancel_runs_nothing(
+        qtbot, win, tmp_path, monkeypatch):
+    from PySide6.QtWidgets import QMessageBox
+    from plcbuilder.project.new import create_project
+    root = create_project(tmp_path / "example", name="example").root
+    win.apply_preferences(win.prefs.with_changes(save_before_build=False))
+    assert win.open_project(root)
+    ed = _halve_the_spindle_speed(qtbot, win, root)
+    asked = []
+    answer = [QMessageBox.StandardButton.Cancel]
+    monkeypatch.setattr(QMessageBox, "question", lambda _p, title, text, *a, **k: (
+        asked.append((title, text)), answer[0])[1])
+    win.action(Act.RUN_TESTS).trigger()
+    assert asked and asked[0][0] == "Run Tests" and "M03.plc" in asked[0][1]
+    assert not win.tests_panel.running() and win.is_modified(ed)
+    assert "pwm01=speed;" in (root / "hardware" / "M03.plc").read_text()
+    # Build All asks the same (it built the files on disk without a word)
+    assert not win.build_all() and len(asked) == 2 and asked[1][0] == "Build All"
+    answer[0] = QMessageBox.StandardButton.Save
+    with qtbot.waitSignal(win.tests_panel.sig_finished, timeout=60000) as edited:
+        win.action(Act.RUN_TESTS).trigger()
+    assert ", 0 failed" not in edited.args[0] and not win.is_modified(ed)

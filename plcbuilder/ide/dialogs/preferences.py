@@ -72,7 +72,11 @@ class PreferencesDialog(QDialog):
                                       "often, and offered back after a crash")
         self.reload_box = QCheckBox("Reload files changed on disk when they have no unsaved changes", fb)
         self.reload_box.setChecked(prefs.reload_unmodified)
-        self.save_build_box = QCheckBox("Save all files before Build All", fb)
+        self.save_build_box = QCheckBox("Save all files before Build All and Run Tests "
+                                        "without asking", fb)
+        self.save_build_box.setToolTip("Off: Build All and Run Tests ask first when an editor "
+                                       "has unsaved changes (they never run on files the "
+                                       "editors do not show)")
         self.save_build_box.setChecked(prefs.save_before_build)
         self.build_upload_box = QCheckBox("Build All before Upload", fb)
         self.build_upload_box.setChecked(prefs.build_before_upload)

@@ -16,7 +16,7 @@ so the window keeps painting; results arrive by signal.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import Callable, Optional
 
 from PySide6 import QtCore, QtWidgets
 
@@ -124,6 +124,9 @@ class TestsPanel(QtWidgets.QWidget):
         self.results: dict[str, object] = {}
         self.coverage = None
         self.showing: Optional[str] = None    # the recorded test run the run panels show
+        #: asked before a run reads the project's files (``what`` -> go on): the
+        #: window saves the editors first (RunActions.ensure_saved)
+        self.before_run: Optional[Callable[[str], bool]] = None
         self._stale = False                   # the project's tests are not read yet
 
         self.run_all_button = QtWidgets.QPushButton("Run All")
@@ -247,6 +250,8 @@ class TestsPanel(QtWidgets.QWidget):
         background. False when nothing can run (no project, a run going on)."""
         if self.root is None or self.running():
             return False
+        if self.before_run is not None and not self.before_run("Run Tests"):
+            return False
         self.reload()
         self.summary.setText("building and running…")
         for i in range(self.tree.topLevelItemCount()):
@@ -287,6 +292,8 @@ class TestsPanel(QtWidgets.QWidget):
         False when nothing can run."""
         name = name if name is not None else self.failing_selected()
         if name is None or self.root is None or self.running():
+            return False
+        if self.before_run is not None and not self.before_run("Open Failing Run"):
             return False
         self.summary.setText(f"recording '{name}'…")
         self._start(_RecordWorker(self.root, name, self.RECORD_KEEP), self._on_recorded)
@@ -419,6 +426,7 @@ def wire(win) -> None:
     """Connect the window's Tests panel: opening locations, the project, and
     coverage in the editors (those open now and those opened later)."""
     panel, es = win.tests_panel, win.editor_stack
+    panel.before_run = win.run_actions.ensure_saved
     panel.sig_open_location.connect(lambda f, line: win.open_location(f, line))
     panel.sig_coverage.connect(lambda cov: show_coverage(es, cov))
     panel.sig_open_run.connect(lambda rec: show_recorded_run(win, rec))
