@@ -184,7 +184,8 @@ def build_actions(win) -> dict[str, QAction]:
     A(Act.START, "&Start…", win.start_or_continue, "F5", "start",
       "Start a procedure on the controller (by name or M-code, with eparam)")
     A(Act.BUILD_UPLOAD_START, "Build, Upload and Start", win.run_actions.build_upload_start,
-      None, None, "Build All, upload the image and start the current editor's procedure")
+      "Ctrl+R", "start", "Build All, upload the image and start the current editor's "
+      "procedure")
     A(Act.START_CURRENT, "Start &This Procedure", win.run_actions.start_current, "Ctrl+F5", None,
       "Start the procedure of the current editor with the last eparam")
     A(Act.STOP, "S&top", win.stop, "Shift+F5", "stop",

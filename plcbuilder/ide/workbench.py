@@ -8,7 +8,7 @@
   :mod:`plcbuilder.lang.references`), the Outline (:mod:`.panels.outline`);
 * the Disassembly dock (:mod:`.panels.disasm_view`) and the code bytes in the
   editor margin (:mod:`.code_bytes`), both from the last check of the
-  current procedure; Build, Upload and Start;
+  current procedure; Build, Upload and Start in the Build menu and the toolbar;
 * the Registers dock (:mod:`.panels.register_browser`);
 * the manual, the shortcuts list and What Is This? (:mod:`.help`);
 
@@ -543,8 +543,6 @@ def _actions(win, wb: Workbench) -> None:
             "Show the code bytes of each source line beside it", checkable=True)
     act.toggled.connect(wb.set_show_bytes)
     act.setChecked(str(win.settings.qs.value(CODE_BYTES_KEY, False)).lower() == "true")
-    A(Act.BUILD_UPLOAD_START, "Build, Upload and Start", win.run_actions.build_upload_start,
-      "Ctrl+R", "start", "Build All, upload the image and start the current procedure")
     A(Act.REGISTERS, "&Registers", lambda: (win.registers_dock.show(),
                                             win.registers_dock.raise_(),
                                             wb.registers.search.setFocus()), None, None,
@@ -591,8 +589,6 @@ def _menus(win) -> None:
         build.addAction(a(Act.CODE_BYTES))
     run = _menu(win, "Run")
     if run is not None:
-        first = run.actions()[0] if run.actions() else None
-        run.insertAction(first, a(Act.BUILD_UPLOAD_START))
         run.addSeparator()
         run.addAction(a(Act.REGISTERS))
     help_menu = _menu(win, "Help")

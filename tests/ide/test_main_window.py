@@ -794,3 +794,26 @@ def test_run_panels_come_after_the_first_paint_and_work(make_window, project, qt
         assert w.ensure_run_panels() is p          # made once
     finally:
         w.shutdown()
+
+
+def test_no_menu_lists_an_action_twice(qtbot, make_window):
+    """Issue 23 point 13: the Run menu listed "Build, Upload and Start" twice
+    (one action made by the window, another by the workbench)."""
+    w = make_window(connection=RecordingConnection(), start_controller=True)
+
+    def walk(menu, where):
+        texts = [a.text().replace("&", "") for a in menu.actions()
+                 if not a.isSeparator() and a.text()]
+        dup = {t for t in texts if texts.count(t) > 1}
+        assert not dup, f"{where} lists {sorted(dup)} twice"
+        for a in menu.actions():
+            if a.menu() is not None:
+                walk(a.menu(), f"{where} › {a.text().replace('&', '')}")
+    for top in w.menuBar().actions():
+        walk(top.menu(), top.text().replace("&", ""))
+    tb = [a.text() for a in w.toolbar.actions() if a.text()]
+    assert len(tb) == len(set(tb)), tb
+    act = w.action(Act.BUILD_UPLOAD_START)
+    assert act.shortcut().toString() == "Ctrl+R"
+    run = next(a.menu() for a in w.menuBar().actions() if a.text().replace("&", "") == "Run")
+    assert act in run.actions()
