@@ -146,8 +146,12 @@ class Settings:
             return Path(str(custom))
         if self.explicit:                   # a settings file of its own: recovery beside it
             return Path(self.path).parent / "recovery"
-        base = QStandardPaths.writableLocation(QStandardPaths.StandardLocation.AppLocalDataLocation)
-        return Path(base or Path.home() / ".plcbuilder") / "recovery"
+        new = data_dir() / "recovery"
+        # (before 23.14: the organisation and the application, both "PLC Builder")
+        old = data_dir().parent / ORGANIZATION / APPLICATION / "recovery"
+        if not new.exists() and old.is_dir() and any(old.iterdir()):
+            return old                      # a crash's copies there are still offered
+        return new
 
     def set_recovery_dir(self, path) -> None:
         self.qs.setValue("recovery/dir", str(path))
@@ -156,11 +160,17 @@ class Settings:
         """Where "Open Example Project" creates its project when the user does not pick."""
         if self.explicit:
             return Path(self.path).parent / "examples"
-        base = QStandardPaths.writableLocation(QStandardPaths.StandardLocation.AppLocalDataLocation)
-        return Path(base or Path.home() / ".plcbuilder") / "examples"
+        return data_dir() / "examples"
 
     def sync(self) -> None:
         self.qs.sync()
+
+
+def data_dir() -> Path:
+    """The IDE's data folder: ``~/.local/share/PLC Builder`` on Linux (the
+    application's name once, not the organisation's and the application's)."""
+    base = QStandardPaths.writableLocation(QStandardPaths.StandardLocation.GenericDataLocation)
+    return Path(base or Path.home() / ".local" / "share") / APPLICATION
 
 
 def _key(project) -> str:
