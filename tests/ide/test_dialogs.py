@@ -156,6 +156,33 @@ def test_start_dialog_paths(qtbot):
     assert d.eparam() == -5
 
 
+@pytest.mark.parametrize("initial", ["M80", "M02"])
+def test_start_dialog_from_the_keyboard_starts_the_m_code_typed(qtbot, initial):
+    """Issue 23 point 11: F5, Alt+M, Ctrl+A, type 5, Enter started the previous
+    M-code (M80 again): Alt+M checked the radio button and kept the keys, so the
+    digit was lost. The M-code box takes the keys, its number selected."""
+    from PySide6.QtCore import Qt
+    from PySide6.QtWidgets import QApplication
+    procs = [(n, Kind.HARDWARE) for n in ("M02", "M03", "M05", "M80", "OFF")]
+    d = dialogs.StartDialog(None, procs, initial, 0)
+    qtbot.addWidget(d)
+    d.show()
+    qtbot.waitExposed(d)
+    d.activateWindow()
+    qtbot.waitUntil(lambda: QApplication.focusWidget() is not None)
+    for _ in range(2):                    # also when the radio button is already checked
+        qtbot.keyClick(QApplication.focusWidget(), Qt.Key.Key_M, Qt.KeyboardModifier.AltModifier)
+        qtbot.waitUntil(lambda: d.by_mcode.isChecked() and QApplication.focusWidget()
+                        in (d.mcode_spin, d.mcode_spin.lineEdit()), timeout=2000)
+    focus = QApplication.focusWidget()
+    qtbot.keyClick(focus, Qt.Key.Key_A, Qt.KeyboardModifier.ControlModifier)
+    qtbot.keyClicks(focus, "5")
+    assert d.selected() == "M05", d.mcode_spin.text()
+    with qtbot.waitSignal(d.accepted, timeout=2000):
+        qtbot.keyClick(focus, Qt.Key.Key_Return)
+    assert d.selected() == "M05"
+
+
 @pytest.mark.parametrize("procs, row", [([("plc", Kind.HARDWARE)], False),
                                         ([("Program", Kind.HARDWARE)], False),
                                         ([("M03", Kind.HARDWARE), ("OFF", Kind.HARDWARE)], True)])

@@ -70,6 +70,9 @@ class StartDialog(QDialog):
         self.list.currentItemChanged.connect(lambda *_: self._pick_name())
         self.mcode_spin.valueChanged.connect(lambda *_: self._pick_mcode())
         self.by_name.toggled.connect(self._validate)
+        # Alt+M (or a click) on "By M-code number" goes on into its box, the
+        # number selected: the digits typed next are the M-code (issue 23.11)
+        self.by_mcode.clicked.connect(self._to_mcode)
         self.setMinimumWidth(360)
         sel = 0
         for i, (name, _k) in enumerate(self.procedures):
@@ -98,6 +101,12 @@ class StartDialog(QDialog):
 
     def _pick_name(self) -> None:
         self.by_name.setChecked(True)
+        self._validate()
+
+    def _to_mcode(self) -> None:
+        self.by_mcode.setChecked(True)
+        self.mcode_spin.setFocus(Qt.FocusReason.ShortcutFocusReason)
+        self.mcode_spin.selectAll()
         self._validate()
 
     def _pick_mcode(self) -> None:
