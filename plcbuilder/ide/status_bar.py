@@ -17,6 +17,19 @@ if TYPE_CHECKING:
     from plcbuilder.link.client import ControllerStatus
 
 
+#: the widest time the status bar shows (its label is this wide)
+WIDEST_TIME = "t = 0000000.000 s"
+
+
+def time_text(t_ms: int, exact: bool = True) -> str:
+    """The simulated time as the status bar shows it: seconds (to the ms while
+    something runs) up to 115 days of it, then days; never wider than
+    :data:`WIDEST_TIME`."""
+    if t_ms >= 10_000_000_000:
+        return f"t = {t_ms / 86_400_000:.1f} d"
+    return f"t = {t_ms / 1000:.3f} s" if exact else f"t = {t_ms // 1000} s"
+
+
 #: what moves the edge of the room a message has
 _ROOM_EVENTS = (QEvent.Type.Move, QEvent.Type.Resize, QEvent.Type.Show, QEvent.Type.Hide)
 
@@ -57,10 +70,12 @@ class StatusBar(QStatusBar):
                                            "(from the last compile)", 120)
         self.cursor_label = lab("cursorLabel", "Line and column of the caret", 110)
         self.eol_label = lab("eolLabel", "Encoding and line ends of the file (kept on save)")
-        # the time changes five times a second: a label that keeps its width
-        # does not lay the status bar (and the window) out again each time
+        # the time changes five times a second: a label that keeps its width the status bar (and the window) out again each time
+        # does not lay the status bar (and the window) out again each time; room
+        # for the widest it shows (time_text), the label's margins counted
+        m = self.time_label.contentsMargins()
         self.time_label.setFixedWidth(self.time_label.fontMetrics().horizontalAdvance(
-            "t = 000000.000 s") + 12)
+            WIDEST_TIME) + m.left() + m.right() + 4)
         # (a fixed height too: Qt lays the parent out again unless both are fixed)
         self.time_label.setFixedHeight(self.time_label.sizeHint().height())
         self.time_label.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
@@ -156,7 +171,7 @@ class StatusBar(QStatusBar):
     def show_state(self, st: ControllerStatus) -> None:
         # while nothing runs, whole seconds: the label repaints once a second, not five times
         busy = bool(st.running or st.software)
-        self.time_label.setText(f"t = {st.t_ms / 1000:.3f} s" if busy else f"t = {st.t_ms // 1000} s")
+        self.time_label.setText(time_text(st.t_ms, busy))
         running = st.running
         self.running_label.setText(f"▶ {running}" if running else "idle")
         set_text_colour(self.running_label, "#1a7f37" if running else None, bold=bool(running))

@@ -4,6 +4,7 @@ Output and the run log start over with another project without a red error,
 the tree follows the active tab, the Start dialog takes typing at once, and
 Reset Layout brings a sideways-scrolled editor back to the left."""
 
+import pytest
 from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import QDialog
 
@@ -100,3 +101,21 @@ def test_reset_layout_scrolls_the_editor_back_to_the_left(runwin, qtbot):  # noq
     ed.goto_line(4, 3)                       # the caret back near the left edge
     w.reset_layout()
     qtbot.waitUntil(lambda: ed.xOffset() == 0, timeout=3000)
+
+
+@pytest.mark.parametrize("t_ms", [5_000, 239_766_131, 604_800_000, 9_999_999_999, 86_400_000_000])
+def test_the_simulated_time_is_never_clipped(runwin, qtbot, t_ms):  # noqa: F811
+    """Issue 23 point 12: above 100,000 s the status bar showed "= 239766.131 s"
+    (the label keeps a fixed width, which did not count its margins)."""
+    from PySide6.QtWidgets import QStyle, QStyleOption
+    w, _conn = runwin
+    label = w.status.time_label
+    w.status.show_state(ControllerStatus(t_ms=t_ms, running="M03"))
+    qtbot.wait(10)
+    text = label.text()
+    assert text.startswith("t = ")
+    room = label.contentsRect().width() - 2 * label.margin()
+    assert label.fontMetrics().horizontalAdvance(text) <= room, (text, room)
+    width = label.width()
+    w.status.show_state(ControllerStatus(t_ms=t_ms + 1, running="M03"))
+    assert label.width() == width                 # it still never lays the bar out again
