@@ -315,6 +315,7 @@ class MainWindow(QMainWindow):
             self.settings.remove_recent_project(str(Path(path).expanduser().resolve()))
             actions.fill_recent_menu(self)
             return False
+        self._save_session()                     # the project left: its editors come back
         self.editor_stack.close_all(force=True)
         self.project = project
         if self._build_panel is not None:

@@ -119,3 +119,22 @@ def test_the_simulated_time_is_never_clipped(runwin, qtbot, t_ms):  # noqa: F811
     width = label.width()
     w.status.show_state(ControllerStatus(t_ms=t_ms + 1, running="M03"))
     assert label.width() == width                 # it still never lays the bar out again
+
+
+def test_switching_back_to_a_project_reopens_its_editors(runwin, qtbot, tmp_path):  # noqa: F811
+    """Issue 23 point 18: docs/ide.md says the open files of each project are
+    remembered; switching to another project and back lost them."""
+    w, _conn = runwin
+    a = w.project.root
+    w.open_file(a / "hardware" / "M03.plc")
+    w.open_file(a / "hardware" / "M05.plc")
+    w.open_file(a / "hardware" / "M03.plc")             # the current one
+    b = make_project(tmp_path / "other")
+    assert w.open_project(b)
+    assert [p.rsplit("/", 1)[-1] for p in (ed.path for ed in w.editors())] == []
+    w.open_file(b / "hardware" / "M05.plc")
+    assert w.open_project(a)
+    assert sorted(ed.path.rsplit("/", 1)[-1] for ed in w.editors()) == ["M03.plc", "M05.plc"]
+    assert w.current_editor().path.endswith("M03.plc")
+    assert w.open_project(b)
+    assert [ed.path.rsplit("/", 1)[-1] for ed in w.editors()] == ["M05.plc"]
