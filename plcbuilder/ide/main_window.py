@@ -151,11 +151,14 @@ class MainWindow(QMainWindow):
 
     @project.setter
     def project(self, project: Optional[Project]) -> None:
+        another = project is None or self._project is None or project.root != self._project.root
         self._project = project
         self.editor_stack.project = self.lint.project = self.run_actions.project = project
         if self._tests_panel is not None:
             self._tests_panel.set_project(project.root if project is not None else None)
         if self.run_panels is not None:
+            if another:                      # nothing of the last project's runs stays
+                self.run_panels.project_changed()
             self.run_panels.set_target(project.target if project is not None else "mycnc")
 
     @property

@@ -212,7 +212,7 @@ def replay_session(win, path: Optional[str] = None, *, wait: bool = False) -> bo
         tools.show(trace, f"replay of {Path(path).name}")
         for note in r.report.get("notes", []):
             if note.get("level") == "warning":
-                tools.panels.log.add_note(note["text"], "error")
+                tools.panels.log.add_note(note["text"], "error", shown=True)
         win.statusBar().showMessage(f"Replayed {Path(path).name}: {trace.t_start}..{trace.t_end} ms",
                                     6000)
         win.sig_replayed.emit(trace)

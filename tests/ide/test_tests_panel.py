@@ -316,3 +316,33 @@ def test_without_saving_before_build_run_tests_asks_and_cancel_runs_nothing(
     with qtbot.waitSignal(win.tests_panel.sig_finished, timeout=60000) as edited:
         win.action(Act.RUN_TESTS).trigger()
     assert ", 0 failed" not in edited.args[0] and not win.is_modified(ed)
+
+
+def test_another_project_shows_none_of_the_last_ones_test_run(qtbot, live_win, tmp_path):
+    """Issue 23 points 9 and 8: after switching project, the Outputs dock still
+    said "showing test run 'pulse too long' (recorded)…", the Tests header kept
+    the old totals, and the trigger bar its last capture."""
+    win, conn = live_win
+    assert win.open_project(make_project(tmp_path / "p4", {"long": LONG_FAILING}))
+    rp, panel = win.run_panels, win.tests_panel
+    with qtbot.waitSignal(panel.sig_finished, timeout=30000):
+        panel.run_tests()
+    assert "failed" in panel.summary.text()
+    with qtbot.waitSignal(rp.sig_recorded, timeout=30000):
+        assert panel.open_failing_run("pulse too long")
+    assert rp.recorded == "pulse too long"
+    rp.traces.bar.set_state("captured at t = 1.000 s")
+    rp.traces.bar.spec.setText("out 3 rise")
+    rp.traces.bar.arm.setChecked(True)
+    assert win.open_project(make_project(tmp_path / "p5", {"other": LONG_FAILING}))
+    assert rp.recorded is None and all(b.isHidden() for b in rp.banners)
+    assert panel.showing is None and panel.open_run_button.text() == "Open Failing Run"
+    assert panel.summary.text() == ""
+    assert all(panel.status_of(n) == "not run" for n in panel.test_names())
+    assert rp.traces.capturer is None and not rp.traces.bar.arm.isChecked()
+    assert "not armed" in rp.traces.bar.state.text()
+    # closing the project too
+    with qtbot.waitSignal(panel.sig_finished, timeout=30000):
+        panel.run_tests()
+    assert win.close_project()
+    assert panel.summary.text() == ""

@@ -339,3 +339,61 @@ def test_the_trigger_bar_flows_onto_two_rows_rather_than_squeeze_its_boxes(qtbot
     below = bar.pre.geometry().top() > bar.spec.geometry().bottom()
     assert below is (rows == 2)
     assert bar.sizeHint().height() > bar.spec.sizeHint().height() * (rows - 0.5)
+
+
+# ---------------------------------------------- the log and the bar follow what is shown
+
+def _log_texts(panels) -> list[str]:
+    panels.log.flush()
+    return [r[3] for r in panels.log.rows.rows()]
+
+
+def _print(t, value):
+    from plcbuilder.controller import events as ev
+    return ev.Print(t_ms=t, source="M03", register=20000, value=value)
+
+
+def test_a_capture_on_show_does_not_double_the_run_log(qtbot, panels, fake):
+    """Issue 23 point 10: with a capture shown, the Run log had its events
+    again below the live rows (the same prints twice). The log shows what the
+    panels show: the capture's rows while it is shown, the live rows (with
+    those that came meanwhile) after Back to Live."""
+    _toggle(fake, 900, 1005)
+    bar = panels.traces.bar
+    arm(qtbot, bar, "out 3 rise", 15, 25)
+    fake.sig_events.emit([_print(1008, 7)])
+    _toggle(fake, 1010, 1100)                          # captured: 995..1035
+    assert panels.recorded is not None
+    texts = _log_texts(panels)
+    assert sum("register 20000 = 7" in t for t in texts) == 1, texts
+    fake.sig_events.emit([_print(1200, 8)])             # live, while the capture is shown
+    assert not any("= 8" in t for t in _log_texts(panels))
+    panels.back_to_live()
+    texts = _log_texts(panels)
+    assert sum("register 20000 = 7" in t for t in texts) == 1, texts
+    assert sum("register 20000 = 8" in t for t in texts) == 1, texts
+    # issue 23 point 8: the bar no longer says what was captured
+    assert "captured at" not in bar.state.text() and "not armed" in bar.state.text()
+
+
+def test_open_trace_shows_the_files_rows_not_below_the_live_ones(qtbot, panels, fake, tmp_path):
+    """Issue 23 point 10: Open Trace appended the file's old events below the
+    live rows; point 8: the trigger bar kept "captured at t = …"."""
+    _toggle(fake, 0, 300)
+    fake.sig_events.emit([_print(299, 1)])
+    saved = tmp_path / "old.plctrace"
+    panels.traces.save(saved)
+    arm(qtbot, panels.traces.bar, "out 3 rise", 15, 25)
+    _toggle(fake, 300, 400)                             # a capture: "captured at t = 0.310 s"
+    assert "captured at" in panels.traces.bar.state.text()
+    panels.back_to_live()
+    fake.sig_events.emit([_print(500, 2)])
+    panels.traces.open(saved)
+    texts = _log_texts(panels)
+    assert sum("register 20000 = 1" in t for t in texts) == 1, texts     # the file's
+    assert not any("register 20000 = 2" in t for t in texts), texts      # not the live one
+    assert "captured at" not in panels.traces.bar.state.text()
+    panels.back_to_live()
+    texts = _log_texts(panels)
+    assert [t for t in texts if "register 20000" in t] == ["register 20000 = 1",
+                                                           "register 20000 = 2"]

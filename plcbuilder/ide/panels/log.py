@@ -142,16 +142,57 @@ class LogPanel(QtWidgets.QWidget):
         lay.addLayout(bar)
         lay.addWidget(self.view, 1)
 
+        #: the live rows while a recorded run or a trace is shown (None: live)
+        self.live: Optional[list[tuple]] = None
+
     # ------------------------------------------------------------------ API
     def add_events(self, events: Iterable) -> None:
+        """Live events (kept aside while a recorded run or trace is shown)."""
         for e in events:
             row = event_row(e)
             if row is not None:
-                self.rows.queue(row)
+                self._live_row(row)
 
-    def add_note(self, text: str, kind: str = "link", t_ms: Optional[int] = None) -> None:
-        """A line from the IDE itself (connection state, a refused request)."""
-        self.rows.queue((_fmt_t(t_ms), "IDE", kind, text, "note", kind, None, None))
+    def add_note(self, text: str, kind: str = "link", t_ms: Optional[int] = None, *,
+                 shown: bool = False) -> None:
+        """A line from the IDE itself (connection state, a refused request);
+        ``shown``: about the recorded run or trace on show (with its rows)."""
+        row = (_fmt_t(t_ms), "IDE", kind, text, "note", kind, None, None)
+        self.rows.queue(row) if shown else self._live_row(row)
+
+    def show_recorded(self, text: str, events: Iterable) -> None:
+        """Show the rows of a recorded run or a trace (``text`` says which, on
+        the first row) instead of the live ones, which are kept, and those that
+        come meanwhile, until :meth:`back_to_live` (issue 23.10: they were added
+        below the live rows, the live session's own a second time)."""
+        rows = [("", "IDE", "link", text, "note", "link", None, None)]
+        rows += [r for r in map(event_row, events) if r is not None]
+        old = self.rows.replace(rows)
+        if self.live is None:
+            self.live = old
+        self._scroll()
+
+    def back_to_live(self, note: Optional[str] = None) -> None:
+        """The live rows again (with those that came while a run was shown)."""
+        if self.live is None:
+            return
+        live, self.live = self.live, None
+        self.rows.replace(live)
+        if note:
+            self.add_note(note, "link")
+        self._scroll()
+
+    def _live_row(self, row: tuple) -> None:
+        if self.live is None:
+            self.rows.queue(row)
+        else:
+            self.live.append(row)
+            if len(self.live) > 2 * self.rows.limit:
+                del self.live[:len(self.live) - self.rows.limit]
+
+    def _scroll(self) -> None:
+        if self.autoscroll.isChecked():
+            self.view.scrollToBottom()
 
     def flush(self) -> None:
         if self.rows.flush() and self.autoscroll.isChecked():
@@ -159,6 +200,8 @@ class LogPanel(QtWidgets.QWidget):
 
     def clear(self) -> None:
         self.rows.clear()
+        if self.live is not None:
+            self.live = []
 
     def fault_rows(self) -> list[int]:
         """Rows (of the view) that hold faults."""

@@ -251,6 +251,12 @@ class RunPanels(QtCore.QObject):
             self.registers.set_report({})
         self.set_pin_names(*self._pin_names)
 
+    def project_changed(self) -> None:
+        """Another project (or none): a recorded test run or a trace of the last
+        one is no longer shown, and its trigger no longer waits (issue 23.8, 9)."""
+        self.back_to_live()
+        self.traces.disarm()
+
     def clear(self) -> None:
         """Forget the recorded samples and messages (the log keeps its rows);
         while a recorded test run is shown, go back to live."""
@@ -284,8 +290,7 @@ class RunPanels(QtCore.QObject):
         if text is None:
             at = f", failing at t = {failing_ms} ms" if failing_ms is not None else ""
             text = f"showing test run '{name}' (recorded){at}"
-        self.log.add_note(text, "link")
-        self.log.add_events(events)
+        self.log.show_recorded(text, events)
         self._set_banner(text)
         for link in self.banner_links:
             link.show()
@@ -330,7 +335,8 @@ class RunPanels(QtCore.QObject):
         self.model.set_watch_bits(self.traces.live_bits)
         self._cleared()
         self.timebase.set_follow(True)
-        self.log.add_note("back to the live controller", "link")
+        self.log.back_to_live("back to the live controller")
+        self.traces.shown_over()
         self.sig_recorded.emit(None)
 
     def compare(self, comparison) -> None:

@@ -67,6 +67,16 @@ class RowsModel(QtCore.QAbstractTableModel):
         self.dropped = 0
         self.endResetModel()
 
+    def replace(self, rows: list) -> list[tuple]:
+        """Show ``rows`` instead (at most ``limit``, the newest); returns the
+        rows shown until now, those queued included."""
+        old = self._rows + self._pending
+        self.beginResetModel()
+        self._rows = list(rows)[-self.limit:] if self.limit else list(rows)
+        self._pending = []
+        self.endResetModel()
+        return old
+
     def row(self, i: int) -> tuple:
         return self._rows[i]
 

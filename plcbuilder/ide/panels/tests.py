@@ -193,6 +193,7 @@ class TestsPanel(QtWidgets.QWidget):
         self.results.clear()
         self.coverage = None
         self._stale = True
+        self.summary.setText("")              # not the last project's totals
         if dock_of(self) is None or on_screen(self):
             self.reload()
 

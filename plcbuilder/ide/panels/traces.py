@@ -168,6 +168,7 @@ class TraceTools(QtCore.QObject):
         self.capturer: Optional[api.Capturer] = None
         self.shown: Optional[api.Trace] = None       # a trace on show instead of live data
         self.captures = 0
+        self._armed_text = "not armed"       # what the bar says while it waits
         #: the variables this trigger had the controller record (``watch``)
         self.watching: list[str] = []
         #: the bit the last trigger armed watches of a variable (its lane live)
@@ -227,17 +228,27 @@ class TraceTools(QtCore.QObject):
                                    armed=False)
                 return False
             self._watch(names)
-            self.bar.set_state(f"armed: waiting for {spec} ({mode}; the controller records "
-                               f"{', '.join(names)} each tick)", armed=True)
+            self._armed_text = (f"armed: waiting for {spec} ({mode}; the controller records "
+                                f"{', '.join(names)} each tick)")
+            self.bar.set_state(self._armed_text, armed=True)
             return True
         self._watch([])
-        self.bar.set_state(f"armed: waiting for {spec} ({mode})", armed=True)
+        self._armed_text = f"armed: waiting for {spec} ({mode})"
+        self.bar.set_state(self._armed_text, armed=True)
         return True
 
     def disarm(self) -> None:
         self.capturer = None
         self._watch([])
         self.bar.set_state("not armed", armed=False)
+        self._armed_text = "not armed"
+
+    def shown_over(self) -> None:
+        """The panels went back to live: "captured at t = …" is over (issue
+        23.8); the bar says whether it still waits for its trigger."""
+        self.shown = None
+        self.bar.set_state(self._armed_text if self.capturer is not None else "not armed",
+                           armed=self.capturer is not None)
 
     def _watch(self, names: list[str]) -> None:
         """Have the controller record ``names`` each tick (none: stop), when that changes."""
@@ -327,6 +338,8 @@ class TraceTools(QtCore.QObject):
         """Open a trace file and show it; raises api.TraceFileError."""
         trace = api.load_trace(path)
         self.show(trace, f"trace {Path(path).name}")
+        self.bar.set_state(self._armed_text if self.capturer is not None else "not armed",
+                           armed=self.capturer is not None)
         self.sig_note.emit(f"opened {path}: {trace.t_start}..{trace.t_end} ms, "
                            f"{len(trace.signals)} signals")
         return trace
