@@ -129,6 +129,7 @@ class HelpWindow(QWidget):
             self.browser.setSearchPaths([str(path.parent)])
             self.browser.document().setBaseUrl(QUrl.fromLocalFile(str(path)))
             self.browser.setMarkdown(text)
+            self._one_picture_each()
             self.fit_images()
             for i in range(self.list.count()):
                 if self.list.item(i).data(Qt.ItemDataRole.UserRole) == str(path):
@@ -172,6 +173,40 @@ class HelpWindow(QWidget):
                 it += 1
             block = block.next()
         return n
+
+    def _one_picture_each(self) -> int:
+        """Qt's Markdown reader makes a picture of every piece of an image's
+        alt text (a long one, over several lines, gave a dozen copies side by
+        side, issue 23.7): keep the first of each run of the same picture.
+        Returns how many copies went."""
+        doc = self.browser.document()
+        extra: list[tuple[int, int]] = []          # (position, length) to delete
+        block = doc.begin()
+        while block.isValid():
+            last_name, last_end = None, -1
+            it = block.begin()
+            while not it.atEnd():
+                frag = it.fragment()
+                fmt = frag.charFormat()
+                if frag.isValid() and fmt.isImageFormat():
+                    name = fmt.toImageFormat().name()
+                    start, length = frag.position(), frag.length()
+                    if name == last_name and start == last_end:
+                        extra.append((start, length))
+                    elif length > 1:
+                        extra.append((start + 1, length - 1))
+                    last_name, last_end = name, start + length
+                else:
+                    last_name = None
+                it += 1
+            block = block.next()
+        cur = QTextCursor(doc)
+        for start, length in reversed(extra):
+            cur.setPosition(start)
+            cur.setPosition(start + length, QTextCursor.MoveMode.KeepAnchor)
+            cur.removeSelectedText()
+        doc.setModified(False)
+        return sum(n for _s, n in extra)
 
     def _image_path(self, name: str) -> str:
         p = Path(QUrl(name).toLocalFile() or name)

@@ -4,6 +4,8 @@ shortcuts list made from the window's real actions."""
 
 from pathlib import Path
 
+import pytest
+
 from PySide6.QtCore import QUrl
 from PySide6.QtGui import QKeySequence
 
@@ -64,6 +66,43 @@ def test_pictures_fit_the_window(qtbot):
     hw.show()
     hw.open_named("ide")
     assert hw.fit_images() >= 1                         # ide.md has screenshots wider than 700
+
+
+def _images(hw) -> list[tuple[str, float]]:
+    """(file, width drawn) of every picture in the chapter on show, in order."""
+    out = []
+    block = hw.browser.document().begin()
+    while block.isValid():
+        it = block.begin()
+        while not it.atEnd():
+            fmt = it.fragment().charFormat()
+            if fmt.isImageFormat():
+                for _ in range(it.fragment().length()):
+                    out.append((fmt.toImageFormat().name(), fmt.toImageFormat().width()))
+            it += 1
+        block = block.next()
+    return out
+
+
+@pytest.mark.parametrize("chapter", ["ide", "traces", "debugging", "tests"])
+def test_each_picture_is_drawn_once_at_the_width_of_the_view(qtbot, chapter):
+    """Issue 23 point 7: Help › Manual drew each screenshot as a grid of tiny
+    overlapping copies (Qt's Markdown reader makes one picture per piece of
+    its alt text, a long one on several lines made a dozen)."""
+    import re
+    text = (DOCS / f"{chapter}.md").read_text(encoding="utf-8")
+    wanted = re.findall(r"!\[[^\]]*\]\(([^)\s]+)", text)
+    if not wanted:
+        pytest.skip(f"{chapter}.md has no pictures")
+    hw = ide_help.HelpWindow(folder=DOCS)
+    qtbot.addWidget(hw)
+    hw.resize(900, 600)
+    hw.show()
+    hw.open_named(chapter)
+    got = _images(hw)
+    assert [name for name, _w in got] == wanted
+    widest = hw.browser.viewport().width() - 40
+    assert all(0 < w <= widest for _n, w in got), got
 
 
 def test_a_missing_manual_says_where_it_looked(qtbot, tmp_path, monkeypatch):
