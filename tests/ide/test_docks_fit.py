@@ -92,3 +92,47 @@ def test_the_tests_list_keeps_the_docks_height(runwin, qtbot):
     panel = w.tests_panel
     assert panel.tree.height() >= panel.height() - 60
     assert panel.detail.height() >= panel.height() - 60
+
+
+def _right_widths(w) -> tuple:
+    return tuple(w.run_docks[k].width() for k in ("outputs", "inputs"))
+
+
+def test_the_right_docks_keep_their_width_when_the_panels_load_and_a_trace_is_compared(
+        qtbot, tmp_path, prompts_off):
+    """Issue 23 point 6: at first start the right-hand docks widened by ~54 px
+    when the run panels loaded (the Watch's bar was wider than them), and by
+    ~70 px when a comparison was shown (Back to Live, Clear Comparison and the
+    banner beside the plot's buttons), and stayed so until Reset Layout."""
+    from tests.ide.test_panels import sample
+    from plcbuilder import api
+    conn = RecordingConnection()
+    with windows(qtbot, Settings(str(tmp_path / "cfg" / "s.ini")), None) as make:
+        w = make(connection=conn, start_controller=True)      # the default size
+        qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
+        w.open_project(make_project(tmp_path / "proj"))
+        _settle(qtbot)
+        want = int(w.width() * 0.30)                          # docks.default_dock_sizes
+        outputs, inputs = _right_widths(w)
+        assert abs(outputs - want) <= 8 and abs(inputs - want) <= 8, (outputs, inputs, want)
+        for key in ("watch", "cursors", "inputs", "proc", "analog", "axes", "outputs"):
+            w.run_docks[key].show()
+            w.run_docks[key].raise_()
+            _settle(qtbot)
+            assert abs(_right_widths(w)[0] - want) <= 8, key
+        rp = w.run_panels
+        conn.sig_samples.emit([sample(t, outputs=(t // 10) % 2 << 3) for t in range(0, 300)])
+        rp.traces.save(tmp_path / "a.plctrace")
+        other = api.load_trace(tmp_path / "a.plctrace")
+        kind, ch = other.signals["out 3"]
+        other.signals["out 3"] = (kind, [c for c in ch if c[0] < 140] + [(140, 1)])
+        api.save_trace(other, tmp_path / "b.plctrace")
+        before = _right_widths(w)
+        rp.traces.compare_with(tmp_path / "b.plctrace")
+        _settle(qtbot)
+        assert rp.comparison is not None
+        assert all(link.isVisible() for link in rp.compare_links[1:2])
+        assert _right_widths(w) == before
+        rp.back_to_live()
+        _settle(qtbot)
+        assert _right_widths(w) == before

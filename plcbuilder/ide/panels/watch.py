@@ -18,6 +18,7 @@ from typing import Optional
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from plcbuilder.api import abi
+from plcbuilder.ide.panels.flowbar import FlowBar
 
 Qt = QtCore.Qt
 
@@ -74,13 +75,9 @@ class WatchPanel(QtWidgets.QWidget):
         self.hex = QtWidgets.QCheckBox("Hex")
         self.hex.setChecked(True)
         self.hex.toggled.connect(lambda _: self._fill())
-        top = QtWidgets.QHBoxLayout()
-        top.setContentsMargins(4, 2, 4, 2)
-        top.addWidget(QtWidgets.QLabel("Procedure"))
-        top.addWidget(self.procedure, 1)
-        top.addWidget(self.follow)
-        top.addWidget(self.show_regs)
-        top.addWidget(self.hex)
+        # one row where the dock is wide enough, else the boxes under the combo
+        self.bar = FlowBar(((QtWidgets.QLabel("Procedure"), 0), (self.procedure, 1)),
+                           ((self.follow, 0), (self.show_regs, 0), (self.hex, 0)))
 
         self.table = QtWidgets.QTableWidget(0, 4)
         self.table.setHorizontalHeaderLabels(["Variable", "Value", "Hex", "Force"])
@@ -108,7 +105,7 @@ class WatchPanel(QtWidgets.QWidget):
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
         lay.setSpacing(2)
-        lay.addLayout(top)
+        lay.addWidget(self.bar)
         lay.addWidget(self.table, 1)
         lay.addWidget(self.hint)
 

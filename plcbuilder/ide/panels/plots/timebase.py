@@ -65,9 +65,12 @@ class TimeToolbar(QtWidgets.QWidget):
                  parent=None):
         super().__init__(parent)
         self.timebase = timebase
-        lay = QtWidgets.QHBoxLayout(self)
-        lay.setContentsMargins(4, 2, 4, 2)
+        outer = QtWidgets.QVBoxLayout(self)
+        outer.setContentsMargins(4, 2, 4, 2)
+        outer.setSpacing(2)
+        lay = QtWidgets.QHBoxLayout()
         lay.setSpacing(4)
+        outer.addLayout(lay)
         self.follow = style.small_button("Follow", "Scroll with the newest sample "
                                          "(panning or zooming a plot stops following)", True)
         self.follow.toggled.connect(timebase.set_follow)
@@ -79,10 +82,16 @@ class TimeToolbar(QtWidgets.QWidget):
         self.window.activated.connect(lambda i: timebase.set_window(self.window.itemData(i)))
         lay.addWidget(QtWidgets.QLabel("Window"))
         lay.addWidget(self.window)
+        #: the plot's own controls, beside the buttons
         self.extra = QtWidgets.QHBoxLayout()
         self.extra.setSpacing(4)
         lay.addLayout(self.extra)
         lay.addStretch(1)
+        #: a row under the buttons for what is shown only at times (what is on
+        #: show, Back to Live, Clear Comparison): beside them, it widened the dock
+        self.shown_row = QtWidgets.QHBoxLayout()
+        self.shown_row.setSpacing(8)
+        outer.addLayout(self.shown_row)
         if on_clear is not None:
             clear = style.small_button("Clear", "Forget the recorded samples and messages")
             clear.clicked.connect(on_clear)
