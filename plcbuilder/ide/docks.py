@@ -85,6 +85,14 @@ RUN_DOCKS = (("proc", "Proc / messages", "runProcDock"),
              ("cursors", "Cursors", "runCursorsDock"))
 
 
+def whole_tab_titles(bar) -> None:
+    """A tab bar of docks tabbed together says each dock's whole title: Qt
+    elides them ("Ou…", "Disasse…", issue 23.15); it scrolls instead when the
+    tabs do not all fit."""
+    bar.setElideMode(Qt.TextElideMode.ElideNone)
+    bar.setUsesScrollButtons(True)
+
+
 def on_screen(widget) -> bool:
     """Whether ``widget`` can be seen: visible, and not in a dock whose tab is
     put aside. Qt keeps the docks of a tab group that are not current

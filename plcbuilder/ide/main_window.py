@@ -27,9 +27,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Optional
 
-from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtCore import QEvent, Qt, QTimer, Signal
 from PySide6.QtGui import QAction
-from PySide6.QtWidgets import QApplication, QFileDialog, QMainWindow, QMessageBox
+from PySide6.QtWidgets import QApplication, QFileDialog, QMainWindow, QMessageBox, QTabBar
 
 from plcbuilder.api import Kind
 from plcbuilder.ide import actions, debug, dialogs, docks, startup_done, workbench
@@ -737,6 +737,15 @@ class MainWindow(QMainWindow):
             parts.append(self.project.name)
         parts.append(APP_NAME)
         self.setWindowTitle(" — ".join(parts))
+
+    def childEvent(self, event) -> None:  # noqa: N802 - Qt override
+        """Qt makes a tab bar for docks tabbed together when they are: it shows
+        whole titles (docks.whole_tab_titles)."""
+        super().childEvent(event)
+        if event.type() == QEvent.Type.ChildPolished:
+            child = event.child()
+            if isinstance(child, QTabBar):
+                docks.whole_tab_titles(child)
 
     # ---------------------------------------------------------- drag & drop
     def dragEnterEvent(self, event) -> None:  # noqa: N802 - Qt override

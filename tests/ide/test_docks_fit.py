@@ -136,3 +136,30 @@ def test_the_right_docks_keep_their_width_when_the_panels_load_and_a_trace_is_co
         rp.back_to_live()
         _settle(qtbot)
         assert _right_widths(w) == before
+
+
+def test_dock_tabs_show_their_whole_titles(qtbot, tmp_path, prompts_off):
+    """Issue 23 point 15: with Disassembly and Registers open beside the plots,
+    the right-hand tabs read "Ou…", "Ax…", "Disasse…": a tab says its whole
+    title (the bar scrolls when they do not all fit)."""
+    from PySide6.QtWidgets import QTabBar
+    conn = RecordingConnection()
+    with windows(qtbot, Settings(str(tmp_path / "cfg" / "s.ini")), None) as make:
+        w = make(connection=conn, start_controller=True)
+        qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
+        w.open_project(make_project(tmp_path / "proj"))
+        w.open_file(w.project.root / "hardware" / "M03.plc")
+        w.disasm_dock.show()
+        w.registers_dock.show()
+        w.registers_dock.raise_()
+        _settle(qtbot)
+        bars = [b for b in w.findChildren(QTabBar) if b.isVisible() and b.count() > 1]
+        assert bars
+        titles = set()
+        for bar in bars:
+            for i in range(bar.count()):
+                text = bar.tabText(i)
+                titles.add(text)
+                need = bar.fontMetrics().horizontalAdvance(text)
+                assert bar.tabRect(i).width() >= need, (text, bar.tabRect(i).width(), need)
+        assert {"Disassembly", "Registers", "Outputs", "Axes", "PWM / DAC / ADC"} <= titles

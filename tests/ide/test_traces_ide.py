@@ -397,3 +397,28 @@ def test_open_trace_shows_the_files_rows_not_below_the_live_ones(qtbot, panels, 
     texts = _log_texts(panels)
     assert [t for t in texts if "register 20000" in t] == ["register 20000 = 1",
                                                            "register 20000 = 2"]
+
+
+@pytest.mark.parametrize("width", [410, 300, 1400])
+def test_the_trigger_bars_state_is_never_cut_off(qtbot, width):
+    """Issue 23 point 15: in the right-hand dock the state read "armed: waitin"
+    (cut off at the dock's edge): it ends in "…" where it does not fit, and says
+    it whole in its tooltip."""
+    from plcbuilder.ide.panels.traces import TriggerBar
+
+    bar = TriggerBar()
+    qtbot.addWidget(bar)
+    bar.resize(width, 60)
+    bar.show()
+    text = "armed: waiting for M80.statez bit 0 rise (single; the controller records M80.statez)"
+    bar.set_state(text, armed=True)
+    QtWidgets.QApplication.processEvents()
+    st = bar.state
+    assert st.geometry().right() <= bar.width()
+    assert st.plain_text() == text
+    if st.is_elided():
+        assert st.toolTip() == text
+    else:
+        assert st.fontMetrics().horizontalAdvance(text) <= st.contentsRect().width()
+    bar.set_state("unknown condition 'x'", error=True)
+    assert st.plain_text() == "unknown condition 'x'"

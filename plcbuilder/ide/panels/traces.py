@@ -20,6 +20,8 @@ import pyqtgraph.exporters  # noqa: F401,E402 - pg.exporters
 
 from plcbuilder import api
 from plcbuilder.ide.docks import on_screen
+from plcbuilder.ide.elided_label import ElidedLabel
+from plcbuilder.ide.looks import set_text_colour
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import PINS
 from plcbuilder.ide.panels.plots.overlay import comparison_of, step_samples
@@ -79,10 +81,11 @@ class TriggerBar(QtWidgets.QWidget):
                                           "t = 0, in the panels (zoom and pan over all of it; "
                                           "Back to Live returns)")
         self.session.clicked.connect(self.sig_session)
-        self.state = QtWidgets.QLabel()
+        # what the trigger does: "…" where the dock is too narrow, whole in the tooltip
+        self.state = ElidedLabel(min_chars=4)
+        self.state.setTextFormat(Qt.TextFormat.PlainText)
         self.state.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,
                                  QtWidgets.QSizePolicy.Policy.Preferred)
-        self.state.setMinimumWidth(0)
         self.two_rows: Optional[bool] = None
         self._flow(False)
         # the bar never widens its dock: it takes the width there is, on two rows
@@ -146,9 +149,8 @@ class TriggerBar(QtWidgets.QWidget):
             self.sig_disarm.emit()
 
     def set_state(self, text: str, error: bool = False, armed: Optional[bool] = None) -> None:
-        colour = "#c62828" if error else "#505050"
-        self.state.setText(f"<span style='color:{colour}'>{text}</span>")
-        self.state.setToolTip(text)
+        set_text_colour(self.state, "#c62828" if error else "#505050")
+        self.state.setText(text)
         if armed is not None and armed != self.arm.isChecked():
             self.arm.blockSignals(True)
             self.arm.setChecked(armed)
