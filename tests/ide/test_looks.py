@@ -82,8 +82,9 @@ def test_an_empty_legend_draws_no_stray_box(qtbot):
     w = pg.PlotWidget()
     qtbot.addWidget(w)
     plot = w.getPlotItem()
-    lg = style.legend(plot, columns=2)
-    assert style.legend(plot) is lg and plot.legend is lg
+    title = style.legend(plot, columns=2)          # the plot's own: in its title row
+    assert style.legend(plot) is title and plot.legend is title
+    lg = style.new_legend(plot, (-8, 8))            # a legend in the view (a comparison's key)
     w.resize(400, 300)
     w.show()
     qtbot.waitExposed(w)
@@ -99,9 +100,12 @@ def test_an_empty_legend_draws_no_stray_box(qtbot):
 
     assert not painted()
     curve = plot.plot([0, 1], [0, 1], name="PWM0")            # a named curve: a legend row
+    lg.addItem(curve, "PWM0")
     assert len(lg.items) == 1 and painted()
     lg.removeItem(curve)                                      # (a compared trace's row goes)
     assert not painted()
+    # the title row's legend has the row, and no frame of its own to draw
+    assert len(title.items) == 1 and not title.frame
 
 
 def test_the_name_check_shows_underscores_whole(qtbot):

@@ -246,7 +246,7 @@ def test_a_following_time_axis_moves_its_picture_until_a_tick_comes_or_goes(qtbo
     style.style_plot(plot)
     ax = plot.getAxis("bottom")
     plot.setXRange(-10.0, 0.0, padding=0)
-    ax.set_offset(100.9)
+    ax.set_offset(100.5)                            # the first label well inside (30 px)
     widget.show()
     qtbot.waitExposed(widget)
     widget.grab()
@@ -263,6 +263,8 @@ def test_a_following_time_axis_moves_its_picture_until_a_tick_comes_or_goes(qtbo
     while abs(ax.shift_px()) + 3.0 < ax.REDRAW_AFTER_PX:
         if ticks(ax.offset + step) != ticks(ax.offset):
             break                                   # a tick would come or go
+        if ax._label_left is not None and ax._label_left + ax.shift_px() - 3.0 < 0:
+            break                                   # the first label would be cut
         ax.set_offset(ax.offset + step)
         moved += 1
         shifted = _grid_columns(widget, y)
@@ -278,3 +280,35 @@ def test_a_following_time_axis_moves_its_picture_until_a_tick_comes_or_goes(qtbo
     ax.set_offset(ax.offset + 2.0)
     widget.grab()
     assert ax.redraws == drawn + 1
+
+
+def test_a_moved_time_axis_never_shows_a_label_cut_at_its_left_edge(qtbot):
+    """Issue 23 point 16: the first tick's label, moved left with the picture,
+    was cut by the axis' edge ("66" read "6"). A move that would cut it draws
+    the axis again (which leaves out a label that does not fit whole)."""
+    from plcbuilder.ide.panels import style
+    widget = style.plot_widget(style.time_axis())
+    qtbot.addWidget(widget)
+    widget.resize(600, 300)
+    plot = widget.getPlotItem()
+    style.style_plot(plot)
+    ax = plot.getAxis("bottom")
+    plot.setXRange(-10.0, 0.0, padding=0)
+    ax.set_offset(100.0)
+    widget.show()
+    qtbot.waitExposed(widget)
+    widget.grab()
+    spacing = ax._levels[0][0]
+    px_per_s = ax.size().width() / 10.0
+    first = math.ceil(95.0 / spacing) * spacing     # a major tick, its label just inside
+    half = QtGui.QFontMetricsF(ax.style["tickFont"]).horizontalAdvance(
+        ax.tickStrings([first - 100.0], 1.0, spacing)[0]) / 2
+    ax.set_offset(first + 10.0 - (half + 2.0) / px_per_s)
+    widget.grab()
+    left = ax._label_left
+    assert left is not None and 0 <= left < 6, left
+    drawn = ax.redraws
+    ax.set_offset(ax.offset + 3.0 / px_per_s)       # three pixels on: it would be cut
+    widget.grab()
+    assert ax.redraws == drawn + 1
+    assert ax._label_left is None or ax._label_left >= 0

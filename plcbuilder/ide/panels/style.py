@@ -64,6 +64,8 @@ class TimeAxis(pg.AxisItem):
         # the first tick's number, how many), see _ticks_between
         self._levels: list[tuple[float, float, int, int]] = []
         self.redraws = 0
+        #: the left edge (pixels) of the leftmost label drawn whole, when drawn
+        self._label_left: float | None = None
 
     def set_offset(self, offset: float) -> None:
         """Follow: the axis now starts at absolute time ``offset``. While its
@@ -94,6 +96,8 @@ class TimeAxis(pg.AxisItem):
                 or self.logMode or self.scale != 1.0 or self.orientation not in ("bottom", "top") \
                 or abs(self.shift_px()) >= self.REDRAW_AFTER_PX:
             return False
+        if self._label_left is not None and self._label_left + self.shift_px() < 0:
+            return False        # the first label would be cut at the left ("66" read "6")
         lo, hi = sorted((self.range[0] + self.offset, self.range[1] + self.offset))
         return all(_ticks_between(lo, hi, spacing, first) == (k0, n)
                    for spacing, first, k0, n in self._levels)
@@ -103,6 +107,7 @@ class TimeAxis(pg.AxisItem):
             self.drawn_offset = self.offset
             self.redraws += 1
             super().paint(p, opt, widget)
+            self._label_left = self._leftmost_label()
             return
         dx = self.shift_px()
         if not dx:
@@ -113,6 +118,30 @@ class TimeAxis(pg.AxisItem):
         p.translate(dx, 0)
         self.picture.play(p)
         p.restore()
+
+    def _leftmost_label(self) -> float | None:
+        """The left edge (pixels) of the leftmost tick label that is drawn
+        whole (pyqtgraph leaves out one that would be cut)."""
+        if self.orientation not in ("bottom", "top") or not self._levels:
+            return None
+        lo, hi = self.range
+        span = hi - lo
+        width = self.size().width()
+        if not span or width <= 0:
+            return None
+        fm = QtGui.QFontMetricsF(self.style.get("tickFont") or QtGui.QFont())
+        left = None
+        texts = min(len(self._levels), 1 + int(self.style.get("maxTextLevel", 1)),
+                    1 + int(self.style.get("maxTickLevel", 2)))
+        for spacing, first, k0, n in self._levels[:texts]:
+            if n <= 0:
+                continue
+            v = first + k0 * spacing - self.offset             # the level's first tick
+            text = self.tickStrings([v], self.scale, spacing)[0]
+            edge = (v - lo) * width / span - fm.horizontalAdvance(text) / 2
+            if edge >= 0 and (left is None or edge < left):
+                left = edge
+        return left
 
     def tickValues(self, minVal, maxVal, size):  # noqa: N802
         """The ticks of each level (``tickSpacing``'s), at round absolute
@@ -142,6 +171,26 @@ class TimeAxis(pg.AxisItem):
     def tickStrings(self, values, scale, spacing):  # noqa: N802
         o = self.offset
         return super().tickStrings([v + o for v in values], scale, spacing)
+
+
+class SpacedAxis(pg.AxisItem):
+    """A horizontal axis whose tick numbers never run together: where the
+    spacing pyqtgraph picks leaves less room than the numbers need (a narrow
+    plot, issue 23.16: "99.8100.0100.2"), it takes 2×, 5×, 10× … that."""
+
+    def tickSpacing(self, minVal, maxVal, size):  # noqa: N802 - pyqtgraph's name
+        levels = super().tickSpacing(minVal, maxVal, size)
+        if not levels or self.orientation not in ("bottom", "top") or size <= 0:
+            return levels
+        spacing, offset = levels[0]
+        fm = QtGui.QFontMetricsF(self.style.get("tickFont") or QtGui.QFont())
+        widest = max(fm.horizontalAdvance(t) for t in self.tickStrings(
+            [minVal, maxVal, (minVal + maxVal) / 2], self.scale, spacing)) + 10
+        span = abs(maxVal - minVal) or 1.0
+        for factor in (1, 2, 5, 10, 20, 50, 100):
+            if span / (spacing * factor) * widest <= size:
+                break
+        return [(spacing * factor, offset)]
 
 
 def _ticks_between(lo: float, hi: float, spacing: float, first: float) -> tuple[int, int]:
@@ -210,10 +259,106 @@ def new_legend(plot: pg.PlotItem, offset: tuple[int, int], columns: int = 1) -> 
 
 
 def legend(plot: pg.PlotItem, columns: int = 1) -> pg.LegendItem:
-    """The plot's legend (what ``addLegend`` makes, as a :class:`Legend`)."""
+    """The plot's legend (what ``addLegend`` makes, as a :class:`Legend`), in
+    the plot's title row, right of the title: never over a curve (issue 23.16).
+    It takes as many columns as fit beside the title (``columns`` at least one
+    row's worth is not guaranteed); the title row grows for more rows."""
     if plot.legend is None:
-        plot.legend = new_legend(plot, (8, 8), columns)
+        c = plot_colours()
+        lg = TitleLegend(plot, labelTextColor=c.text, labelTextSize="8pt", colCount=columns,
+                         frame=False)
+        plot.legend = lg
     return plot.legend
+
+
+#: the height of a plot's title row (pyqtgraph's own)
+TITLE_ROW = 30
+
+
+class TitleLegend(Legend):
+    """A legend in its plot's title row, right-aligned, beside the left-aligned
+    title, with as many columns as fit there; when even one column does not
+    fit beside the title, it goes under the title (the title row grows)."""
+
+    def __init__(self, plot: pg.PlotItem, **kw):
+        super().__init__(offset=None, **kw)
+        self.plot = plot
+        self.layout.setContentsMargins(2, 0, 2, 0)
+        self.layout.setVerticalSpacing(0)
+        self.setParentItem(plot)
+        self._fitted = None
+        title = plot.titleLabel                 # at the left: the legend takes the right
+        title.opts["justify"] = "left"
+        title.setText(title.text)
+        title.resizeEvent(None)
+        plot.vb.sigResized.connect(lambda *_a: self.fit())
+        plot.geometryChanged.connect(lambda: self.fit())
+
+    def addItem(self, item, name):  # noqa: N802 - pyqtgraph's name
+        super().addItem(item, name)
+        self.fit(force=True)
+        # (a new label knows its width once laid out: fitted again then)
+        QtCore.QTimer.singleShot(0, self, self._fit_again)
+
+    def _fit_again(self) -> None:
+        try:
+            self.fit(force=True)
+        except RuntimeError:          # the plot went with its window meanwhile
+            pass
+
+    def removeItem(self, item):  # noqa: N802 - pyqtgraph's name
+        super().removeItem(item)
+        self.fit(force=True)
+
+    def clear(self):
+        super().clear()
+        self.fit(force=True)
+
+    def fit(self, force: bool = False) -> None:
+        """Columns and place for the plot's width now."""
+        plot = self.plot
+        title = plot.titleLabel
+        shown = title.isVisible()
+        view_left = plot.vb.pos().x()
+        right = plot.width() - 6
+        left = view_left + (title.item.boundingRect().width() + 12 if shown else 0)
+        room = max(40.0, right - left)
+        widths = [s.width() + lab.width() + 6 for s, lab in self.items]
+        key = (round(room), round(right), tuple(round(w) for w in widths), shown)
+        if key == self._fitted and not force:
+            return
+        self._fitted = key
+        cols = self._columns(widths, room)
+        under = False
+        if shown and widths:            # under the title when that takes fewer rows
+            below = self._columns(widths, max(40.0, right - view_left))
+            rows = -(-len(widths) // cols)
+            if self._row_width(widths, cols) > room or -(-len(widths) // below) < rows:
+                under, cols = True, below
+        if cols != self.columnCount:
+            self.setColumnCount(cols)
+        self.updateSize()
+        h = self.height() if self.items else 0
+        y = TITLE_ROW - 6 if under else (max(0.0, (TITLE_ROW - h) / 2) if shown else 2)
+        row = TITLE_ROW if shown else 0
+        plot.layout.setRowFixedHeight(0, max(row, y + h + 2) if self.items else row)
+        if shown:
+            title.setMaximumHeight(TITLE_ROW)
+        self.setPos(max(view_left, right - self.width()), y)
+
+    @classmethod
+    def _columns(cls, widths: list, room: float) -> int:
+        """The most columns whose rows fit in ``room`` (at least one)."""
+        cols = max(1, len(widths))
+        while cols > 1 and cls._row_width(widths, cols) > room:
+            cols -= 1
+        return cols
+
+    @staticmethod
+    def _row_width(widths: list, cols: int) -> float:
+        if not widths:
+            return 0.0
+        return sum(max(widths[i::cols]) for i in range(cols))
 
 
 def new_curve(plot: pg.PlotItem, c: str, name: str | None = None, width: float = LINE_WIDTH,

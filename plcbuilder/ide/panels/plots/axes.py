@@ -22,23 +22,24 @@ class AxesPanel(TimePanel):
         super().__init__(model, timebase, on_clear, parent)
         self.widget = style.layout_widget()
         self.pos_plot = self.widget.addPlot(row=0, col=0, axisItems=style.time_axis())
-        style.style_plot(self.pos_plot, title="Machine position", left="position (mm)",
+        # (the titles say what: the axis labels only the unit, which fits the
+        # height of a short plot; "position (mm)" ran into "velocity (mm/s)")
+        style.style_plot(self.pos_plot, title="Machine position", left="mm",
                          left_units=None, bottom=None, bottom_units=None)
         self.vel_plot = self.widget.addPlot(row=1, col=0, axisItems=style.time_axis())
-        style.style_plot(self.vel_plot, title="Velocity", left="velocity (mm/s)",
+        style.style_plot(self.vel_plot, title="Velocity", left="mm/s",
                          bottom="time (s)", bottom_units=None)
         for p in (self.pos_plot, self.vel_plot):
             self.add_time_plot(p)
             p.setMouseEnabled(x=True, y=False)
             p.getAxis("left").setWidth(56)
         self._fit = (YFit(self.pos_plot, minimum=10.0), YFit(self.vel_plot, minimum=10.0))
+        # one legend names the axes' colours for both plots (the same in each)
         self.pos_legend = style.legend(self.pos_plot, columns=3)
-        self.vel_legend = style.legend(self.vel_plot, columns=3)
-        self._fit[0].legend, self._fit[1].legend = self.pos_legend, self.vel_legend
 
-        self.xy_widget = style.plot_widget()
+        self.xy_widget = style.plot_widget({"bottom": style.SpacedAxis("bottom")})
         self.xy = self.xy_widget.getPlotItem()
-        style.style_plot(self.xy, title="Path (XY, machine)", left="Y (mm)", bottom="X (mm)",
+        style.style_plot(self.xy, title="XY path", left="Y (mm)", bottom="X (mm)",
                          bottom_units=None)
         for name in ("left", "bottom"):
             self.xy.getAxis(name).enableAutoSIPrefix(False)
@@ -71,7 +72,7 @@ class AxesPanel(TimePanel):
         for ax in m.active_axes():
             if ax not in self._pos:
                 self._pos[ax] = style.new_curve(self.pos_plot, style.colour(ax), AXES[ax])
-                self._vel[ax] = style.new_curve(self.vel_plot, style.colour(ax), AXES[ax])
+                self._vel[ax] = style.new_curve(self.vel_plot, style.colour(ax))
         t = self.x(a, b)
         pos, vel = [], []
         for ax, item in self._pos.items():

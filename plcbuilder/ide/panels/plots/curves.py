@@ -45,8 +45,6 @@ class AnalogPanel(TimePanel):
         self.out_legend = style.legend(self.out_plot, columns=2)
         self.in_legend = style.legend(self.in_plot, columns=2)
         self.var_legend = style.legend(self.var_plot, columns=2)
-        self._fit[0].legend, self._fit[1].legend = self.out_legend, self.in_legend
-        self._fit[2].legend = self.var_legend
         #: a watched variable's step curve, by name (and a compared trace's, dashed)
         self.var_curves: dict[str, pg.PlotDataItem] = {}
         self.other_var_curves: dict[str, pg.PlotDataItem] = {}

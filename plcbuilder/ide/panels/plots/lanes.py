@@ -43,6 +43,8 @@ class LanesPanel(TimePanel):
         self.add_time_plot(self.plot)
         self.plot.setMouseEnabled(x=True, y=False)
         self.plot.getAxis("left").setStyle(tickLength=0)
+        # no lane yet: no numbers on the lane axis ("1.0" was cut at its top)
+        self.plot.getAxis("left").setTicks([[], []])
         self.widget.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
         self.widget.customContextMenuRequested.connect(self._context_menu)
         self.widget.setToolTip("Right-click to add or remove lanes")

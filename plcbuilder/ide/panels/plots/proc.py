@@ -58,7 +58,7 @@ class ProcPanel(TimePanel):
             self._labels.append(t)
         self._ticks: tuple = ()
         self._drawn_messages = -1                   # the model's message_version drawn
-        self._label_pos: list[tuple[float, float]] = []   # where the shown labels are
+        self._label_pos: list[tuple[float, float, float]] = []   # where the shown labels are
         self._tick_labels: list[tuple[int, str]] = []
         self._shown_ticks: list[tuple[int, str]] | None = None
         self._empty = empty_text(self.plot, "No samples yet: start a procedure")
@@ -135,8 +135,11 @@ class ProcPanel(TimePanel):
         if self.other_curve is not None:
             shift_item(self.other_curve, dx)
         shift_item(self.markers, dx)
-        for lab, (x, y) in zip(self._labels, self._label_pos):
+        left = self.plot.getViewBox().viewRange()[0][0]
+        for lab, (x, y, edge) in zip(self._labels, self._label_pos):
             lab.setPos(x + dx, y)
+            if edge + dx < left:          # moved out at the left edge: not cut in half
+                lab.hide()
 
     def add_messages(self, rows) -> None:
         for m in rows:
@@ -239,7 +242,10 @@ class ProcPanel(TimePanel):
             if placed >= self.MAX_LABELS:
                 break
             text = rows[k].short
-            w = 7 * len(text) + 12
+            lab = self._labels[placed]
+            if lab.toPlainText() != text:
+                lab.setText(text)
+            w = lab.textItem.boundingRect().width() + 4     # as drawn (a guess cut some)
             x = (mt[k] - left_edge) * px_per_s      # pixels from the left edge
             y = (y_hi - my[k]) * px_per_y           # pixels from the top
             # centred on the marker, unless that would cut it at an edge
@@ -257,12 +263,10 @@ class ProcPanel(TimePanel):
             else:
                 continue
             placed_rects.append((x0, x1, y0, y1))
-            lab = self._labels[placed]
-            if lab.toPlainText() != text:
-                lab.setText(text)
             lab.setAnchor((ax, anchor_y))
             lab.setPos(mt[k], my[k])
-            self._label_pos.append((mt[k], my[k]))
+            # (x, y, where its left edge is, in the plot's x)
+            self._label_pos.append((mt[k], my[k], mt[k] - ax * w / px_per_s))
             lab.show()
             placed += 1
         for lab in self._labels[placed:]:
