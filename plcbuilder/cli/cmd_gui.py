@@ -36,7 +36,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         description="Open the PLC Builder IDE, with PROJECT when given (else the last "
                     "project). With --screenshot, save a PNG of the window and exit.")
     p.add_argument("project", nargs="?", type=Path, metavar="PROJECT",
-                   help="a project folder to open")
+                   help="a project folder to open, or a file of one (a .plc, a header, "
+                        "its plcbuilder.toml: the project opens with the file)")
     p.add_argument("--screenshot", type=Path, metavar="FILE",
                    help="open PROJECT, build it, save a PNG of the main window to FILE, exit")
     p.add_argument("--run", metavar="NAME[:EPARAM]",
@@ -71,8 +72,8 @@ def run(args: argparse.Namespace) -> int:
         print("plcbuilder gui: --after must not be negative", file=sys.stderr)
         return 2
     project = getattr(args, "project", None)
-    if project is not None and not project.is_dir():
-        print(f"plcbuilder gui: {project}: no such project folder", file=sys.stderr)
+    if project is not None and not project.exists():
+        print(f"plcbuilder gui: {project}: no such project folder or file", file=sys.stderr)
         return 2
     if "QT_QPA_PLATFORM" not in os.environ and not _has_display():
         if getattr(args, "screenshot", None):

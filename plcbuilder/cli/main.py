@@ -9,7 +9,8 @@ import sys
 
 #: Subcommand modules, in the order ``--help`` lists them.
 COMMANDS = ("gui", "check", "compile", "disasm", "run", "test", "new", "build",
-            "controller", "upload", "start", "stop", "input", "state", "trace", "lsp", "dap")
+            "controller", "upload", "start", "stop", "input", "state", "trace", "lsp", "dap",
+            "desktop")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -75,6 +75,19 @@ def apply_theme(app: QApplication, theme: str) -> None:
             w.setStyleSheet(own)
 
 
+def project_of(file: Path) -> Path:
+    """The project folder a file belongs to: the nearest folder above it with a
+    plcbuilder.toml, else the one holding its hardware/, software/ or include/
+    folder, else its own folder."""
+    file = file.resolve()
+    for folder in file.parents:
+        if (folder / "plcbuilder.toml").is_file():
+            return folder
+    if file.parent.name in ("hardware", "software", "include"):
+        return file.parent.parent
+    return file.parent
+
+
 def main(project: Optional[str] = None, *, screenshot: Optional[str] = None,
          run: Optional[str] = None, after_ms: int = 1000, settings_path: Optional[str] = None,
          start_controller: bool = True, traces: tuple = ()) -> int:
@@ -85,12 +98,18 @@ def main(project: Optional[str] = None, *, screenshot: Optional[str] = None,
     settings = Settings(settings_path)
     apply_theme(app, settings.preferences().theme)
     if screenshot:
+        if project and Path(project).is_file():
+            project = str(project_of(Path(project)))
         from plcbuilder.ide import screenshot as shot
         return shot.run(app, settings, project, screenshot, run, after_ms, start_controller,
                         traces=tuple(traces))
     win = MainWindow(settings, start_controller=start_controller)
     win.show()
-    if project:
+    if project and Path(project).is_file():     # a file of a project (the desktop's "open")
+        folder, file = project_of(Path(project)), Path(project)
+        if win.open_project(folder) and file.name != "plcbuilder.toml":
+            win.open_file(file)
+    elif project:
         win.open_project(project)
     elif win.prefs.open_last_project:
         recent = [p for p in settings.recent_projects() if Path(p).is_dir()]

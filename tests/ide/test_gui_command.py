@@ -135,3 +135,17 @@ def test_screenshot_of_a_trace_with_a_watched_variable(tmp_path):
     lane = sum(image.pixelColor(x, y).name() == LIGHT_PLOTS.variable
                for y in range(0, image.height(), 1) for x in range(0, image.width(), 2))
     assert lane > 50
+
+
+def test_the_launcher_opens_a_procedure_with_its_project(tmp_path):
+    """The launcher runs ``gui FILE``: a .plc file opens its project and the file
+    (the desktop's "Open With PLC Builder")."""
+    from plcbuilder.ide.app import project_of
+    from plcbuilder.project.new import create_project
+    root = create_project(tmp_path / "p").root
+    assert project_of(root / "hardware" / "M03.plc") == root.resolve()
+    assert project_of(root / "plcbuilder.toml") == root.resolve()
+    loose = tmp_path / "loose"
+    (loose / "hardware").mkdir(parents=True)
+    (loose / "hardware" / "X.plc").write_text("main(){}")
+    assert project_of(loose / "hardware" / "X.plc") == loose.resolve()
