@@ -18,6 +18,7 @@ from plcbuilder.ide.icons import icon
 class Act:
     """Names of the window's actions (``window.action(Act.BUILD_ALL)``)."""
     NEW_PROCEDURE = "new_procedure"
+    NEW_PROJECT = "new_project"
     NEW_HEADER = "new_header"
     OPEN_PROJECT = "open_project"
     OPEN_EXAMPLE = "open_example"
@@ -136,6 +137,8 @@ def build_actions(win) -> dict[str, QAction]:
       "Ctrl+N", "new", "Create a procedure")
     A(Act.NEW_HEADER, "New &Header…", win.tree.new_header, None, "file-header",
       "Create a header in include/")
+    A(Act.NEW_PROJECT, "New &Project…", win.new_project, "Ctrl+Shift+N", "project",
+      "Create a project for myCNC, Huazhong or TG Motion from its example, and open it")
     A(Act.OPEN_PROJECT, "&Open Project…", win.open_project_dialog, "Ctrl+Shift+O", "open",
       "Open a project folder")
     A(Act.OPEN_EXAMPLE, "Open &Example Project…", win.open_example_project, None, "example",
@@ -230,7 +233,8 @@ def build_menus(win) -> None:
     mb = win.menuBar()
     a = win.action
     m = mb.addMenu("&File")
-    for name in (Act.NEW_PROCEDURE, Act.NEW_HEADER, None, Act.OPEN_PROJECT, Act.OPEN_EXAMPLE):
+    for name in (Act.NEW_PROJECT, Act.NEW_PROCEDURE, Act.NEW_HEADER, None, Act.OPEN_PROJECT,
+                 Act.OPEN_EXAMPLE):
         m.addAction(a(name)) if name else m.addSeparator()
     win.recent_menu = m.addMenu("Recent &Projects")
     m.addAction(a(Act.CLOSE_PROJECT))

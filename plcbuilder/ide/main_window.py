@@ -366,6 +366,33 @@ class MainWindow(QMainWindow):
         self._show_welcome()
         return True
 
+    def new_project(self) -> bool:
+        """File › New Project…: a project for a target (myCNC, Huazhong, TG
+        Motion) from its example, in a folder the user names; then open it."""
+        if not self.editor_stack.confirm_discard_all("New Project"):
+            return False
+        from plcbuilder.project.new import create_project
+        start = self.settings.last_folder(
+            "projects", self.project.root.parent if self.project is not None else None)
+        base = "plc-project"
+        name = _unique_folder(start, base).name if start.is_dir() else base
+        res = dialogs.NewProjectDialog.get_new(self, start, name)
+        if res is None:
+            return False
+        dest, name, target = res
+        try:
+            project = create_project(dest, name=name, target=target)
+        except (OSError, ProjectError) as exc:
+            QMessageBox.critical(self, "New Project", f"Cannot create the project:\n\n{exc}")
+            return False
+        self.settings.set_last_folder("projects", dest.parent)
+        ok = self.open_project(project.root, offer_recovery=False)
+        if ok:
+            first = next(iter(project.procedures(Kind.HARDWARE)), None)
+            if first is not None:
+                self.open_file(first.path)
+        return ok
+
     def open_example_project(self) -> bool:
         """Create a copy of the example project (in the default place, or a
         folder the user picks) and open it."""
@@ -384,10 +411,11 @@ class MainWindow(QMainWindow):
             parent = default_parent
         else:
             chosen = QFileDialog.getExistingDirectory(self, "Folder for the example project",
-                                                      str(Path.home()))
+                                                      str(self.settings.last_folder("projects")))
             if not chosen:
                 return False
             parent = Path(chosen)
+            self.settings.set_last_folder("projects", parent)
         try:
             parent.mkdir(parents=True, exist_ok=True)
             dest = _unique_folder(parent, "plc-example")
@@ -405,10 +433,12 @@ class MainWindow(QMainWindow):
 
 
     def open_project_dialog(self) -> bool:
-        start = str(self.project.root.parent) if self.project else str(Path.home())
-        folder = QFileDialog.getExistingDirectory(self, "Open Project Folder", start)
+        start = self.settings.last_folder(
+            "projects", self.project.root.parent if self.project else None)
+        folder = QFileDialog.getExistingDirectory(self, "Open Project Folder", str(start))
         if not folder:
             return False
+        self.settings.set_last_folder("projects", Path(folder).parent)
         return self.open_project(folder)
 
     def _on_file_saved(self, path: str) -> None:
@@ -466,6 +496,7 @@ class MainWindow(QMainWindow):
         es.welcome.sig_open_project.connect(self.open_project)
         es.welcome.sig_open_project_dialog.connect(self.open_project_dialog)
         es.welcome.sig_open_example.connect(self.open_example_project)
+        es.welcome.sig_new_project.connect(self.new_project)
         es.welcome.sig_new_procedure.connect(lambda: tree.new_procedure(Kind.HARDWARE))
         # the project tree
         tree.sig_open_file.connect(lambda p: self.open_file(p))

@@ -76,6 +76,27 @@ class Settings:
     def clear_recent_projects(self) -> None:
         self.qs.setValue("recent/projects", [])
 
+    # ------------------------------------------------------------ folders
+    def last_folder(self, kind: str, default=None) -> Path:
+        """The folder a file dialog of ``kind`` (projects, traces, recordings)
+        was last left in, when it still exists; else ``default`` (or home)."""
+        value = str(self.qs.value(f"folders/{kind}", "") or "")
+        if value and Path(value).is_dir():
+            return Path(value)
+        return Path(default) if default is not None else Path.home()
+
+    def set_last_folder(self, kind: str, folder) -> None:
+        self.qs.setValue(f"folders/{kind}", str(folder))
+
+    # ------------------------------------------------- the project's run
+    def project_value(self, project, key: str, default=None):
+        """A value remembered for one project (its last eparam, its speed)."""
+        value = self.qs.value(f"session/{_key(project)}/{key}", None)
+        return default if value is None else value
+
+    def set_project_value(self, project, key: str, value) -> None:
+        self.qs.setValue(f"session/{_key(project)}/{key}", value)
+
     # ------------------------------------------------------------ window
     def window_state(self) -> tuple[Optional[QByteArray], Optional[QByteArray]]:
         geom = self.qs.value("window/geometry")

@@ -27,6 +27,9 @@ class WelcomePage(QWidget):
     sig_open_example = Signal()
     """"Open Example Project…" was pressed."""
 
+    sig_new_project = Signal()
+    """New Project… was clicked."""
+
     sig_new_procedure = Signal()
     """"New Procedure…" was pressed."""
 
@@ -46,9 +49,11 @@ class WelcomePage(QWidget):
         self.welcome_text.setTextFormat(Qt.TextFormat.RichText)
         lay.addWidget(self.welcome_text)
         row = QHBoxLayout()
+        self.welcome_new_project = QPushButton(icon("project"), "New Project…", box)
         self.welcome_open = QPushButton(icon("open"), "Open Project…", box)
         self.welcome_example = QPushButton(icon("example"), "Open Example Project…", box)
         self.welcome_new = QPushButton(icon("new"), "New Procedure…", box)
+        row.addWidget(self.welcome_new_project)
         row.addWidget(self.welcome_open)
         row.addWidget(self.welcome_example)
         row.addWidget(self.welcome_new)
@@ -68,6 +73,7 @@ class WelcomePage(QWidget):
         h.addStretch(1)
         outer.addLayout(h)
         outer.addStretch(2)
+        self.welcome_new_project.clicked.connect(self.sig_new_project)
         self.welcome_open.clicked.connect(self.sig_open_project_dialog)
         self.welcome_example.clicked.connect(self.sig_open_example)
         self.welcome_new.clicked.connect(self.sig_new_procedure)
@@ -77,8 +83,9 @@ class WelcomePage(QWidget):
         if project is None:
             self.welcome_text.setText(
                 "An editor, compiler and simulated controller for myCNC PLC procedures.<br><br>"
-                "Open a project folder (with <tt>hardware/</tt> and <tt>software/</tt>), or start "
-                "from a copy of the example project.")
+                "Create a project for myCNC, Huazhong or TG Motion (<b>New Project…</b>), "
+                "open a project folder (with <tt>hardware/</tt> and <tt>software/</tt>), or "
+                "start from a copy of the example project.")
             self.welcome_new.hide()
         else:
             p = project

@@ -379,3 +379,78 @@ def test_editor_actions_reach_the_current_editor(win, qtbot, prompts):
     assert win.editors() == []
     win.action(Act.ABOUT).trigger()
     assert prompts[0][-1][0] == "about"
+
+
+# ------------------------------------------------------------ new project
+@pytest.mark.parametrize("target, label, first", [("mycnc", "myCNC", "M02.plc"),
+                                                  ("huazhong", "Huazhong", "plc.plc"),
+                                                  ("tgmotion", "TG Motion", "Program.plc")])
+def test_file_new_project_creates_a_project_of_each_target_and_opens_it(
+        win, monkeypatch, tmp_path, qtbot, target, label, first):
+    """Issue 23, what users expect: File › New Project… with the target, a folder
+    and a name, as `plcbuilder new --target` (the IDE could only copy the myCNC
+    example)."""
+    from plcbuilder.project.model import Project
+    act = win.action(Act.NEW_PROJECT)
+    assert act.shortcut().toString() == "Ctrl+Shift+N"
+    file_menu = win.menuBar().actions()[0].menu()
+    assert file_menu.actions()[0] is act
+    where = tmp_path / "projects"
+    where.mkdir()
+
+    def fill(d):
+        assert d.name_edit.text() == "plc-project"
+        assert d.buttons.button(QDialogButtonBox.StandardButton.Ok).isEnabled()
+        i = d.target_combo.findText(label)
+        d.target_combo.setCurrentIndex(i)
+        assert label in d.what.text()
+        d.folder_edit.setText(str(where))
+        d.name_edit.selectAll()
+        qtbot.keyClicks(d.name_edit, f"table {target}")
+        assert d.where.text() == f"Creates {where / f'table {target}'}"
+    driving(monkeypatch, dialogs.NewProjectDialog, fill)
+    act.trigger()
+    root = where / f"table {target}"
+    assert win.project is not None and win.project.root == root.resolve()
+    assert Project.open(root).target == target and win.project.name == f"table {target}"
+    assert win.current_editor() is not None and win.current_editor().path.endswith(first)
+    # the next New Project starts in the same folder, with a name not taken there
+    seen = driving(monkeypatch, dialogs.NewProjectDialog, lambda d: None, REJECTED)
+    act.trigger()
+    assert seen[0].folder_edit.text() == str(where)
+    assert seen[0].name_edit.text() == "plc-project"
+
+
+def test_the_new_project_dialog_says_what_is_wrong(qtbot, tmp_path):
+    (tmp_path / "used").mkdir()
+    (tmp_path / "used" / "x").write_text("x")
+    d = dialogs.NewProjectDialog(None, tmp_path, "used")
+    qtbot.addWidget(d)
+    ok = d.buttons.button(QDialogButtonBox.StandardButton.Ok)
+    assert not ok.isEnabled() and "not an empty folder" in d.error.text()
+    d.name_edit.setText("a/b")
+    assert not ok.isEnabled() and "one folder's name" in d.error.text()
+    d.name_edit.setText("fresh")
+    d.folder_edit.setText(str(tmp_path / "nowhere"))
+    assert not ok.isEnabled() and "no such folder" in d.error.text()
+    d.folder_edit.setText(str(tmp_path))
+    assert ok.isEnabled() and d.error.text() == "" and d.destination() == tmp_path / "fresh"
+    d.accept()
+    assert d.result() == ACCEPTED
+
+
+def test_open_project_starts_where_a_project_was_last_opened(win, monkeypatch, tmp_path):
+    """File dialogs remember their last folder (issue 23, what users expect)."""
+    from PySide6.QtWidgets import QFileDialog
+    elsewhere = tmp_path / "far" / "away"
+    other = make_project(elsewhere / "other")
+    asked = []
+    monkeypatch.setattr(QFileDialog, "getExistingDirectory",
+                        lambda _p, _t, start, *a, **k: (asked.append(start), str(other))[1])
+    assert win.open_project_dialog()
+    assert win.project.root == other.resolve()
+    win.open_project(tmp_path / "proj")
+    monkeypatch.setattr(QFileDialog, "getExistingDirectory",
+                        lambda _p, _t, start, *a, **k: (asked.append(start), "")[1])
+    assert not win.open_project_dialog()
+    assert asked[-1] == str(elsewhere)

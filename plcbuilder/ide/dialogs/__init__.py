@@ -1,6 +1,6 @@
 """The IDE's dialogs: procedure and header names and go to line (:mod:`.files`),
-the start-procedure picker and connect to a controller (:mod:`.run`), and
-preferences (:mod:`.preferences`). The find/replace bar is
+the start-procedure picker and connect to a controller (:mod:`.run`), a new
+project (:mod:`.new_project`) and preferences (:mod:`.preferences`). The find/replace bar is
 :mod:`plcbuilder.ide.editor.find_bar`.
 
 Each modal dialog has a ``get_…`` class method that runs it and returns the
@@ -14,7 +14,8 @@ from plcbuilder._support.lazy import lazy_names
 # without building the dialogs' classes (nor Qt's for them).
 _WHERE = {"GoToLineDialog": "files", "HeaderNameDialog": "files",
           "ProcedureNameDialog": "files", "check_procedure_name": "files",
-          "PreferencesDialog": "preferences", "ConnectDialog": "run", "StartDialog": "run"}
+          "PreferencesDialog": "preferences", "ConnectDialog": "run", "StartDialog": "run",
+          "NewProjectDialog": "new_project"}
 
 
 __getattr__ = lazy_names(__name__, _WHERE)
@@ -24,5 +25,5 @@ def __dir__() -> list:
     return sorted(set(globals()) | set(__all__))
 
 
-__all__ = ["ConnectDialog", "GoToLineDialog", "HeaderNameDialog", "PreferencesDialog",
-           "ProcedureNameDialog", "StartDialog", "check_procedure_name"]
+__all__ = ["ConnectDialog", "GoToLineDialog", "HeaderNameDialog", "NewProjectDialog",
+           "PreferencesDialog", "ProcedureNameDialog", "StartDialog", "check_procedure_name"]
