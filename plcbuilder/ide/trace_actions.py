@@ -33,16 +33,48 @@ def _failed(win, title: str, exc: Exception) -> None:
     QMessageBox.warning(win, title, str(exc))
 
 
-def _ask(win, title: str, filters: str, save: bool = False, suffix=None):
+def _ask(win, title: str, filters: str, save: bool = False, suffix=None, name: str = ""):
     """A file from a dialog: (path, chosen filter), or (None, "") when cancelled.
-    ``suffix(chosen)`` names the suffix a saved name without one gets."""
+    ``suffix(chosen)`` names the suffix a saved name without one gets. It starts
+    in the folder a trace was last saved or opened in (else the project's),
+    proposing ``name`` for a file to save; the folder chosen is remembered."""
     ask = QFileDialog.getSaveFileName if save else QFileDialog.getOpenFileName
-    path, chosen = ask(win, title, _folder(win), filters)
+    folder = win.settings.last_folder("traces", _folder(win))
+    start = folder / name if save and name else folder
+    path, chosen = ask(win, title, str(start), filters)
     if not path:
         return None, ""
     if suffix is not None and not Path(path).suffix:
         path += suffix(chosen)
+    win.settings.set_last_folder("traces", Path(path).parent)
     return path, chosen
+
+
+def proposed_name(win, suffix: str) -> str:
+    """A name for what Save or Export writes: the project, then what is on
+    show (``capture-1.010s``, a trace file's own name, a test run's), else the
+    session to its end (``session-12.345s``)."""
+    import re
+    panels = win.run_panels
+    project = getattr(win, "project", None)
+    what = ""
+    if panels is not None and panels.recorded is not None:
+        shown = panels.recorded
+        m = re.match(r"capture at ([\d.]+) s", shown)
+        if m:
+            what = f"capture-{m.group(1)}s"
+        elif shown.startswith("trace "):
+            what = Path(shown[len("trace "):]).stem
+        elif shown.startswith("the whole session"):
+            what = "session"
+        else:
+            what = shown
+    elif panels is not None:
+        end = panels.traces.session.t_end
+        what = f"session-{end / 1000:.3f}s" if end is not None else "session"
+    stem = "-".join(x for x in ((project.name if project is not None else ""), what) if x)
+    stem = re.sub(r"[^\w.\-]+", "-", stem).strip("-.") or "trace"
+    return stem + suffix
 
 
 def open_trace(win, path: Optional[str] = None) -> bool:
@@ -73,7 +105,9 @@ def _write_file(win, title: str, filters: str, suffix_of, path: Optional[str], w
         return False
     chosen = ""
     if path is None:
-        path, chosen = _ask(win, title, filters, True, suffix_of)
+        first = filters.split(";;")[0]
+        path, chosen = _ask(win, title, filters, True, suffix_of,
+                            proposed_name(win, suffix_of(first)))
         if path is None:
             return False
     try:
@@ -146,11 +180,13 @@ def save_recording(win, path: Optional[str] = None) -> bool:
         QMessageBox.warning(win, "Save Session Recording", "Not connected to a controller.")
         return False
     if path is None:
+        folder = win.settings.last_folder("recordings", _folder(win))
         path, _ = QFileDialog.getSaveFileName(win, "Save Session Recording",
-                                              str(Path(_folder(win)) / "session.txt"),
+                                              str(folder / proposed_name(win, ".txt")),
                                               RECORDING_FILTER)
         if not path:
             return False
+        win.settings.set_last_folder("recordings", Path(path).parent)
 
     def got(verb: str, result: dict) -> None:
         if verb != "recording":
@@ -182,10 +218,12 @@ def replay_session(win, path: Optional[str] = None, *, wait: bool = False) -> bo
     if tools is None:
         return False
     if path is None:
-        path, _ = QFileDialog.getOpenFileName(win, "Replay Session", str(project.root),
-                                              RECORDING_FILTER)
+        path, _ = QFileDialog.getOpenFileName(
+            win, "Replay Session", str(win.settings.last_folder("recordings", project.root)),
+            RECORDING_FILTER)
         if not path:
             return False
+        win.settings.set_last_folder("recordings", Path(path).parent)
     import tempfile
     import threading
     from PySide6.QtCore import QObject, Signal

@@ -3,6 +3,8 @@ File › Open/Save/Export Trace, Export Plot Image and Compare with Trace."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 pytest.importorskip("PySide6")
@@ -422,3 +424,48 @@ def test_the_trigger_bars_state_is_never_cut_off(qtbot, width):
         assert st.fontMetrics().horizontalAdvance(text) <= st.contentsRect().width()
     bar.set_state("unknown condition 'x'", error=True)
     assert st.plain_text() == "unknown condition 'x'"
+
+
+def test_trace_file_dialogs_propose_a_name_and_remember_the_folder(qtbot, tmp_path,
+                                                                 monkeypatch):
+    """Issue 23, what users expect: Save Trace and Export Trace proposed no name
+    and always started in the project's folder."""
+    from tests.ide._workbench import RecordingConnection, answer_no, make_project
+    from plcbuilder.ide import trace_actions as ta
+    from plcbuilder.ide.main_window import MainWindow
+    from plcbuilder.ide.settings import Settings
+    answer_no(monkeypatch)
+    conn = RecordingConnection()
+    win = MainWindow(Settings(str(tmp_path / "s.ini")), connection=conn, start_controller=True)
+    qtbot.addWidget(win)
+    win.show()
+    qtbot.waitUntil(lambda: win.run_panels is not None, timeout=10000)
+    root = make_project(tmp_path / "table")
+    win.open_project(root)
+    rp = win.run_panels
+    conn.sig_samples.emit([sample(t, outputs=((t // 10) % 2) << 3) for t in range(0, 300)])
+    asked = []
+    saves = tmp_path / "my traces"
+    saves.mkdir()
+
+    def save_dialog(_parent, _title, start, filters, *a, **k):
+        asked.append(start)
+        name = Path(start).name
+        return str(saves / name), filters.split(";;")[0]
+    monkeypatch.setattr(QtWidgets.QFileDialog, "getSaveFileName", save_dialog)
+    assert ta.save_trace(win)
+    first = Path(asked[-1])
+    assert first.parent == root and first.suffix == ".plctrace"
+    assert first.stem.startswith("table-session-"), first
+    assert (saves / first.name).is_file()
+    # a capture on show: its name says so; and the folder is the one saved in last
+    arm(qtbot, rp.traces.bar, "out 3 rise", 15, 25)
+    conn.sig_samples.emit([sample(t, outputs=((t // 10) % 2) << 3) for t in range(300, 400)])
+    assert rp.recorded is not None
+    assert ta.export_trace(win)
+    second = Path(asked[-1])
+    assert second.parent == saves and second.suffix == ".vcd"
+    assert "capture-0.310s" in second.stem, second
+    assert ta.export_plot(win)
+    assert Path(asked[-1]).parent == saves and Path(asked[-1]).suffix == ".png"
+    win.shutdown()
