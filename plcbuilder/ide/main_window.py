@@ -114,6 +114,7 @@ class MainWindow(QMainWindow):
         self.lint = Lint(self, self.editor_stack, self.problems, debounce_ms)
         self.run_actions = RunActions(self, self.editor_stack, lambda: self.build_panel, self.prefs,
                                       connection=connection, start_controller=start_controller)
+        self.run_actions.settings = self.settings
         self.status = StatusBar(self)
         self.setStatusBar(self.status)
         self.debug = debug.DebugSession(self)
@@ -321,6 +322,7 @@ class MainWindow(QMainWindow):
         self._save_session()                     # the project left: its editors come back
         self.editor_stack.close_all(force=True)
         self.project = project
+        self.run_actions.project_opened()        # its own last eparam and speed
         if self._build_panel is not None:
             self._build_panel.forget()           # not the previous project's build
         self.lint.clear()

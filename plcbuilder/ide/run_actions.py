@@ -104,6 +104,32 @@ class RunActions(QObject):
             self.speed_actions[mode] = act
         self.speed_actions["realtime"].setChecked(True)
         self.speed_combo: Optional[QComboBox] = None
+        #: the window's Settings: each project's last start, eparam and speed
+        self.settings = None
+
+    def project_opened(self) -> None:
+        """The project's own last start, eparam and speed (remembered per
+        project: another project's are not carried over)."""
+        p, st = self.project, self.settings
+        if p is None or st is None:
+            self.last_eparam, self.last_start = 0, ""
+            return
+        try:
+            self.last_eparam = int(st.project_value(p.root, "eparam", 0))
+        except (TypeError, ValueError):
+            self.last_eparam = 0
+        self.last_start = str(st.project_value(p.root, "start", "") or "")
+        speed = str(st.project_value(p.root, "speed", "realtime") or "realtime")
+        if speed not in dict((m, m) for _l, m in SPEEDS) or speed == "pause":
+            speed = "realtime"
+        current = self.speed_combo.currentData() if self.speed_combo is not None else None
+        if speed != current:
+            self.set_speed(speed)
+
+    def _remember(self, **values) -> None:
+        if self.project is not None and self.settings is not None:
+            for key, value in values.items():
+                self.settings.set_project_value(self.project.root, key, value)
 
     def make_speed_combo(self, parent) -> QComboBox:
         """The speed box of the toolbar."""
@@ -203,6 +229,7 @@ class RunActions(QObject):
             name, eparam = res
         eparam = self.last_eparam if eparam is None else int(eparam)
         self.last_start, self.last_eparam = name, eparam
+        self._remember(start=name, eparam=eparam)
         reasons = self.stale_reasons()
         if reasons:
             answer = self.ask_stale_start(name, reasons)
@@ -259,6 +286,7 @@ class RunActions(QObject):
                 return self.start_procedure()
         eparam = self.last_eparam if eparam is None else int(eparam)
         self.last_start, self.last_eparam = name, eparam
+        self._remember(start=name, eparam=eparam)
         self.pending_start = (name, eparam)
         if not self._build(Step.BUILD_UPLOAD_START):
             self.pending_start = None
@@ -290,6 +318,8 @@ class RunActions(QObject):
                 act = self.speed_actions.get(m)
                 if act is not None:
                     act.setChecked(True)
+        if mode != "pause":                 # (a project opens running, not paused)
+            self._remember(speed=mode)
         if self.connection is not None:
             self.connection.set_speed(mode)
 

@@ -454,3 +454,48 @@ def test_open_project_starts_where_a_project_was_last_opened(win, monkeypatch, t
                         lambda _p, _t, start, *a, **k: (asked.append(start), "")[1])
     assert not win.open_project_dialog()
     assert asked[-1] == str(elsewhere)
+
+
+def test_eparam_and_speed_are_each_projects_own(qtbot, tmp_path, prompts, monkeypatch):
+    """Issue 23, what users expect: the eparam typed for one project's M03 was
+    offered in another project's Start dialog, and its speed carried over."""
+    from tests.ide._workbench import RecordingConnection
+    conn = RecordingConnection()
+    conn.connected = True
+    w = MainWindow(Settings(str(tmp_path / "cfg" / "s.ini")), connection=conn,
+                   start_controller=True, debounce_ms=20)
+    qtbot.addWidget(w)
+    w.show()
+    a = make_project(tmp_path / "a")
+    b = make_project(tmp_path / "b")
+    assert w.open_project(a)
+    seen = []
+
+    def fill(d):
+        seen.append((d.eparam(), d.selected()))
+        d.eparam_spin.setValue(12000)
+    driving(monkeypatch, dialogs.StartDialog, fill)
+    monkeypatch.setattr(w.run_actions, "stale_reasons", lambda: [])
+    assert w.start_procedure()
+    assert ("start", "M03", 12000) in conn.calls
+    w.run_actions.speed_combo.setCurrentIndex(w.run_actions.speed_combo.findData("10"))
+    assert ("set_speed", "10") in conn.calls
+    assert w.open_project(b)
+    assert w.run_actions.speed_combo.currentData() == "realtime"
+    assert conn.calls[-1] == ("set_speed", "realtime")
+    w.start_procedure()
+    assert seen[-1][0] == 0                       # not a's 12000
+    assert w.open_project(a)
+    assert w.run_actions.speed_combo.currentData() == "10"
+    assert conn.calls[-1] == ("set_speed", "10")
+    w.start_procedure()
+    assert seen[-1] == (12000, "M03")
+    # and after the IDE starts again
+    w.shutdown()
+    w2 = MainWindow(Settings(str(tmp_path / "cfg" / "s.ini")), connection=RecordingConnection(),
+                    start_controller=True, debounce_ms=20)
+    qtbot.addWidget(w2)
+    assert w2.open_project(a)
+    assert w2.run_actions.last_eparam == 12000 and w2.run_actions.last_start == "M03"
+    assert w2.run_actions.speed_combo.currentData() == "10"
+    w2.shutdown()
