@@ -40,7 +40,7 @@ class WelcomePage(QWidget):
         outer = QVBoxLayout(w)
         outer.addStretch(1)
         box = QWidget(w)
-        box.setMaximumWidth(560)
+        box.setMaximumWidth(660)          # room for the four buttons side by side
         lay = QVBoxLayout(box)
         title = QLabel(f"<span style='font-size:20pt; font-weight:600'>{APP_NAME}</span>", box)
         lay.addWidget(title)

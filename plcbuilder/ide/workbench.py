@@ -78,11 +78,13 @@ class Workbench(QObject):
                                     area.RightDockWidgetArea)
         win.registers_dock = make_dock(win, "Registers", "registersDock", None,
                                        area.RightDockWidgetArea)
-        # beside the plots when there are run docks, else tabbed together
-        beside = win.right_docks[0] if win.right_docks else win.disasm_dock
-        for d in (win.disasm_dock, win.registers_dock):
-            if d is not beside:
-                win.tabifyDockWidget(beside, d)
+        # the Disassembly on the right, with Inputs and Watch (beside the four
+        # plots the tabs did not fit: "Ou…", "Disasse…"); the Registers, a wide
+        # table, at the bottom with Problems
+        right = win.right_docks[-1] if win.right_docks else None
+        if right is not None:
+            win.tabifyDockWidget(right, win.disasm_dock)
+        win.tabifyDockWidget(win.problems_dock, win.registers_dock)
         for d in (win.find_dock, win.references_dock, win.disasm_dock, win.registers_dock):
             d.hide()
         win.problems_dock.raise_()
