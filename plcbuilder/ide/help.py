@@ -17,7 +17,7 @@ import sysconfig
 from pathlib import Path
 from typing import Iterable, Optional
 
-from PySide6.QtCore import Qt, QUrl
+from PySide6.QtCore import QEvent, Qt, QTimer, QUrl
 from PySide6.QtGui import QDesktopServices, QImageReader, QKeySequence, QTextCursor
 from PySide6.QtWidgets import (QDialog, QHeaderView, QLabel, QLineEdit, QListWidget,
                                QListWidgetItem, QSplitter, QTableWidget, QTableWidgetItem,
@@ -91,6 +91,8 @@ class HelpWindow(QWidget):
         self.list = QListWidget(self)
         self.browser = QTextBrowser(self)
         self.browser.setOpenLinks(False)
+        self.browser.viewport().installEventFilter(self)
+        self._fit_due = False
         self.browser.anchorClicked.connect(self._on_link)
         split = QSplitter(self)
         split.addWidget(self.list)
@@ -141,8 +143,20 @@ class HelpWindow(QWidget):
         self.browser.verticalScrollBar().setValue(0)
         return True
 
-    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt override
-        super().resizeEvent(event)
+    def eventFilter(self, obj, event) -> bool:  # noqa: N802 - Qt override
+        """The view's width changed: the pictures fit it again (fitted only
+        when the window was resized, they kept the width of a view not laid
+        out yet: 200 px on a real desktop)."""
+        if event.type() == QEvent.Type.Resize and obj is self.browser.viewport() \
+                and self.current is not None and not self._fit_due:
+            # after the resize is over (a picture fitted now can make the
+            # scroll bar come or go, and the view narrower again)
+            self._fit_due = True
+            QTimer.singleShot(0, self, self._fit_now)
+        return False
+
+    def _fit_now(self) -> None:
+        self._fit_due = False
         if self.current is not None:
             self.fit_images()
 
@@ -161,9 +175,10 @@ class HelpWindow(QWidget):
                 if frag.isValid() and fmt.isImageFormat():
                     img_fmt = fmt.toImageFormat()
                     size = QImageReader(self._image_path(img_fmt.name())).size()
-                    if size.isValid() and size.width() > widest:
-                        img_fmt.setWidth(widest)
-                        img_fmt.setHeight(size.height() * widest / size.width())
+                    want = min(widest, size.width()) if size.isValid() else 0
+                    if want and abs(img_fmt.width() - want) > 0.5:
+                        img_fmt.setWidth(want)
+                        img_fmt.setHeight(size.height() * want / size.width())
                         cur = QTextCursor(doc)
                         cur.setPosition(frag.position())
                         cur.setPosition(frag.position() + frag.length(),

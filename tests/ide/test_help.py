@@ -137,3 +137,23 @@ def test_no_two_actions_share_a_key(win):
             if not k.isEmpty():
                 assert k.toString() not in seen, (name, seen.get(k.toString()))
                 seen[k.toString()] = name
+
+
+def test_pictures_follow_the_width_of_the_view(qtbot):
+    """On a real desktop the manual's pictures stayed 200 px wide: they were
+    fitted when the window was resized, not when the view was (laid out after
+    it; or the splitter beside the chapters dragged)."""
+    from PySide6.QtWidgets import QSplitter
+    hw = ide_help.HelpWindow(folder=DOCS)
+    qtbot.addWidget(hw)
+    hw.resize(1200, 700)
+    hw.show()
+    qtbot.waitExposed(hw)
+    hw.open_named("ide")
+    split = hw.findChild(QSplitter)
+    for left in (600, 150, 400):
+        split.setSizes([left, 1200 - left])
+        qtbot.wait(50)
+        widest = hw.browser.viewport().width() - 40
+        widths = [w for _n, w in _images(hw)]
+        assert widths and all(abs(w - widest) <= 2 for w in widths), (left, widest, widths)
