@@ -146,9 +146,10 @@ class ProjectTree(QWidget):
         self.tree.setUniformRowHeights(True)
         self.tree.setIndentation(14)
         self.tree.setAnimated(True)
-        self.placeholder = QLabel("No project is open.\n\nFile › Open Project… opens a project "
-                                  "folder;\nFile › Open Example Project… makes a copy of the "
-                                  "example to try.", self)
+        self.placeholder = QLabel("No project is open.\n\nFile › New Project… creates one "
+                                  "(myCNC, Huazhong or TG Motion);\nFile › Open Project… opens "
+                                  "a project folder;\nFile › Open Example Project… makes a copy "
+                                  "of the example to try.", self)
         self.placeholder.setWordWrap(True)
         self.placeholder.setAlignment(Qt.AlignmentFlag.AlignTop | Qt.AlignmentFlag.AlignLeft)
         self.placeholder.setContentsMargins(10, 10, 10, 10)
