@@ -89,8 +89,26 @@ def whole_tab_titles(bar) -> None:
     """A tab bar of docks tabbed together says each dock's whole title: Qt
     elides them ("Ou…", "Disasse…", issue 23.15); it scrolls instead when the
     tabs do not all fit."""
-    bar.setElideMode(Qt.TextElideMode.ElideNone)
-    bar.setUsesScrollButtons(True)
+    if bar.elideMode() != Qt.TextElideMode.ElideNone:
+        bar.setElideMode(Qt.TextElideMode.ElideNone)
+        bar.setUsesScrollButtons(True)
+
+
+def follow_tab_bars(win) -> None:
+    """Whole titles on the window's dock tab bars now, and on those Qt makes
+    when docks are tabbed together later (a dock moved, the layout reset or
+    restored). Done after the first paint: the window's start does not wait."""
+    from PySide6.QtWidgets import QTabBar
+
+    def apply(*_a) -> None:
+        for bar in win.findChildren(QTabBar):
+            if bar.parent() is win:             # the docks' bars, not a panel's own tabs
+                whole_tab_titles(bar)
+    apply()
+    for dock in win.findChildren(QDockWidget):
+        dock.dockLocationChanged.connect(lambda *_a: QTimer.singleShot(0, apply))
+        dock.topLevelChanged.connect(lambda *_a: QTimer.singleShot(0, apply))
+    win.tab_bars_apply = apply
 
 
 def on_screen(widget) -> bool:
@@ -193,6 +211,9 @@ def default_dock_sizes(win) -> None:
 
 def reset_layout(win) -> None:
     win.restoreState(win.default_state)
+    apply = getattr(win, "tab_bars_apply", None)
+    if apply is not None:
+        QTimer.singleShot(0, apply)
     for dock in win.findChildren(QDockWidget):
         if dock.parent() is win:
             dock.show()

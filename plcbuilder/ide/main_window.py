@@ -27,9 +27,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Optional
 
-from PySide6.QtCore import QEvent, Qt, QTimer, Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtGui import QAction
-from PySide6.QtWidgets import QApplication, QFileDialog, QMainWindow, QMessageBox, QTabBar
+from PySide6.QtWidgets import QApplication, QFileDialog, QMainWindow, QMessageBox
 
 from plcbuilder.api import Kind
 from plcbuilder.ide import actions, debug, dialogs, docks, startup_done, workbench
@@ -598,6 +598,7 @@ class MainWindow(QMainWindow):
             self.wheel_guard = WheelGuard(self)
             if self.run_actions.speed_combo is not None:
                 self.wheel_guard.guard(self.run_actions.speed_combo)
+            docks.follow_tab_bars(self)      # whole tab titles, now and after a move
         self.wheel_guard.watch_docks(self)
 
     # ============================================================ settings
@@ -770,15 +771,6 @@ class MainWindow(QMainWindow):
             parts.append(self.project.name)
         parts.append(APP_NAME)
         self.setWindowTitle(" — ".join(parts))
-
-    def childEvent(self, event) -> None:  # noqa: N802 - Qt override
-        """Qt makes a tab bar for docks tabbed together when they are: it shows
-        whole titles (docks.whole_tab_titles)."""
-        super().childEvent(event)
-        if event.type() == QEvent.Type.ChildPolished:
-            child = event.child()
-            if isinstance(child, QTabBar):
-                docks.whole_tab_titles(child)
 
     # ---------------------------------------------------------- drag & drop
     def dragEnterEvent(self, event) -> None:  # noqa: N802 - Qt override
