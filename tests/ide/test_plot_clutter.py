@@ -88,7 +88,10 @@ def test_message_labels_are_not_cut_at_the_left_edge(qtbot):
         r = lab.textItem.mapRectToScene(lab.textItem.boundingRect())
         assert r.left() >= vb.left() - 1, (lab.toPlainText(), r, vb)
     # following moves them left: one that would leave at the edge is hidden, not cut
-    p.shift(-0.35)
+    left = p.plot.vb.viewRange()[0][0]
+    first = min(lab.pos().x() for lab in shown)
+    p.shift(-(first - left) - 0.2)           # the leftmost marker past the edge
+    QtWidgets.QApplication.processEvents()
     for lab in p._labels:
         if lab.isVisible():
             r = lab.textItem.mapRectToScene(lab.textItem.boundingRect())
