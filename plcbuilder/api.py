@@ -536,10 +536,12 @@ def save_trace(trace: Trace, path) -> None:
     trace_file.save(trace, path)
 
 
-def export_trace(trace: Trace, path, fmt: Optional[str] = None, *, per_tick: bool = False) -> str:
-    """Export as CSV (per change, or ``per_tick``) or VCD; raises ExportError."""
+def export_trace(trace: Trace, path, fmt: Optional[str] = None, *, per_tick: bool = False,
+                 split_bits: bool = False) -> str:
+    """Export as CSV (per change, or ``per_tick``) or VCD (``split_bits``: its
+    numbers as one-bit lanes, for PulseView); raises ExportError."""
     _load()
-    return trace_export.export(trace, path, fmt, per_tick=per_tick)
+    return trace_export.export(trace, path, fmt, per_tick=per_tick, split_bits=split_bits)
 
 
 def compare_traces(a: Trace, b: Trace) -> "trace_compare.Difference":

@@ -1,7 +1,7 @@
 """``plcbuilder trace info|export|compare``: trace files from the command line.
 
     trace info FILE                  the span, the signals and how often each changed
-    trace export FILE OUT [--per-tick] [--format csv|vcd]
+    trace export FILE OUT [--per-tick] [--split-bits] [--format csv|vcd]
     trace compare A B [--json]       the first tick where they differ (exit 1), or 0
 """
 
@@ -30,6 +30,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     e.add_argument("--per-tick", action="store_true",
                    help="CSV: one row per tick and a column per signal (default: one row per "
                         "change)")
+    e.add_argument("--split-bits", action="store_true",
+                   help="VCD: every number as one-bit lanes NAME[0], NAME[1]… (PulseView and "
+                        "sigrok-cli read only one-bit signals)")
     c = sub.add_parser("compare", help="the first tick where two traces differ")
     c.add_argument("a", type=Path, metavar="A")
     c.add_argument("b", type=Path, metavar="B")
@@ -53,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
                 return 0 if diff.same else 1
             trace = api.load_trace(args.file)
             if args.trace_command == "export":
-                fmt = api.export_trace(trace, args.out, args.format, per_tick=args.per_tick)
+                fmt = api.export_trace(trace, args.out, args.format, per_tick=args.per_tick,
+                                       split_bits=args.split_bits)
                 out.print(f"wrote {args.out} ({fmt})")
                 return 0
             changed = {n: len(ch) for n, (_k, ch) in trace.signals.items()}

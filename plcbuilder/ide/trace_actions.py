@@ -11,8 +11,9 @@ from PySide6.QtWidgets import QFileDialog, QMessageBox
 from plcbuilder import api
 
 TRACE_FILTER = "PLC Builder traces (*.plctrace);;All files (*)"
-EXPORT_FILTER = ("VCD for GTKWave and PulseView (*.vcd);;CSV, one row per change (*.csv);;"
-                 "CSV, one row per tick (*.csv)")
+EXPORT_FILTER = ("VCD for GTKWave (*.vcd);;"
+                 "VCD, one-bit lanes for PulseView and sigrok (*.vcd);;"
+                 "CSV, one row per change (*.csv);;CSV, one row per tick (*.csv)")
 IMAGE_FILTER = "PNG image (*.png);;SVG drawing (*.svg)"
 
 
@@ -124,11 +125,15 @@ def save_trace(win, path: Optional[str] = None) -> bool:
                        lambda tools, p, _c: tools.save(p), api.TraceFileError, "Saved")
 
 
-def export_trace(win, path: Optional[str] = None, per_tick: bool = False) -> bool:
+def export_trace(win, path: Optional[str] = None, per_tick: bool = False,
+                 split_bits: bool = False) -> bool:
+    """File › Export Trace…: VCD (whole numbers, for GTKWave; or one-bit lanes,
+    for PulseView and sigrok) or CSV (per change or per tick), by the filter chosen."""
     return _write_file(win, "Export Trace", EXPORT_FILTER,
                        lambda c: ".vcd" if "VCD" in c else ".csv", path,
-                       lambda tools, p, c: tools.export(p, per_tick=("per tick" in c) if c
-                                                        else per_tick),
+                       lambda tools, p, c: tools.export(
+                           p, per_tick=("per tick" in c) if c else per_tick,
+                           split_bits=("one-bit" in c) if c else split_bits),
                        api.ExportError, "Exported")
 
 

@@ -1,18 +1,24 @@
 """Exporting a trace: CSV (one row per change, or per tick) and VCD.
 
-VCD (IEEE 1364 value change dump, written with ``pyvcd``) opens in GTKWave and
-PulseView: timescale 1 ms, one 1-bit ``wire`` per digital signal and a 32-bit
-``integer`` vector per numeric one (two's complement), scopes by bank
-(``inputs``, ``outputs``, ``pwm``, ``dac``, ``adc``, ``axes``, ``plc``,
-``procedures``, ``variables``). A text signal (``running``) becomes the index
-of its value in a ``strings`` comment at the top of the file.
+VCD (IEEE 1364 value change dump, written with ``pyvcd``) opens in GTKWave:
+timescale 1 ms, one 1-bit ``wire`` per digital signal and an ``integer``
+vector per numeric one, as wide as its values need (two's complement when a
+value is negative; -2^63 takes 64 bits), scopes by bank (``inputs``,
+``outputs``, ``pwm``, ``dac``, ``adc``, ``axes``, ``plc``, ``procedures``,
+``variables``). A text signal (``running``) becomes the index of its value in
+a ``strings`` comment at the top of the file. libsigrok 0.5 (PulseView,
+``sigrok-cli``) reads one-bit signals only: ``split_bits`` writes each number
+as that many one-bit lanes ``NAME[0]`` (the lowest bit) … instead.
+
+CSV cells that a spreadsheet would read as a formula (a name starting with
+``=``, ``+``, ``-``, ``@``…) are written as OWASP's CSV-injection advice says:
+a single quote before them, the cell in double quotes.
 
 Exports are written atomically: a failed export leaves what was there.
 """
 
 from __future__ import annotations
 
-import csv
 import io
 import re
 from pathlib import Path
@@ -38,19 +44,40 @@ def _write(path: Path, text: str) -> None:
         raise ExportError(f"{path}: cannot write: {exc.strerror or exc}") from None
 
 
+#: what makes a spreadsheet read a cell as a formula when it starts one (OWASP,
+#: "CSV Injection"): = + - @, a tab, a carriage return, and their full-width forms
+_FORMULA_START = ("=", "+", "-", "@", "\t", "\r", "\uff1d", "\uff0b", "\uff0d", "\uff20")
+
+
+def _cell(value) -> str:
+    """One CSV cell: a number as it is; a text quoted where CSV needs it, and,
+    when it starts as a formula would, as OWASP advises: a single quote before
+    it, the whole cell in double quotes (so a spreadsheet shows ``=1+2`` as the
+    text ``'=1+2``, never runs it)."""
+    if isinstance(value, int):
+        return str(value)
+    text = str(value)
+    formula = text.startswith(_FORMULA_START)
+    if formula:
+        text = "'" + text
+    if formula or any(c in text for c in ',"\r\n'):
+        return '"' + text.replace('"', '""') + '"'
+    return text
+
+
+def _row(cells) -> str:
+    return ",".join([str(c) if type(c) is int else _cell(c) for c in cells]) + "\n"
+
+
 def csv_changes(trace: Trace) -> str:
     """``t_ms,signal,value``: one row per change, in time order (a text signal's
-    value as its text), then the events as ``t_ms,event,<type>: …`` rows."""
-    out = io.StringIO()
-    w = csv.writer(out, lineterminator="\n")
-    w.writerow(["t_ms", "signal", "value"])
+    value as its text)."""
     rows = []
     for name, (kind, changes) in trace.signals.items():
         for t, v in changes:
             rows.append((t, name, trace.strings[v] if kind == TEXT else v))
     rows.sort(key=lambda r: r[0])
-    w.writerows(rows)
-    return out.getvalue()
+    return _row(["t_ms", "signal", "value"]) + "".join(map(_row, rows))
 
 
 def csv_ticks(trace: Trace, t0: Optional[int] = None, t1: Optional[int] = None,
@@ -68,8 +95,7 @@ def csv_ticks(trace: Trace, t0: Optional[int] = None, t1: Optional[int] = None,
         if n not in trace.signals:
             raise ExportError(f"no signal named {n!r} in the trace")
     out = io.StringIO()
-    w = csv.writer(out, lineterminator="\n")
-    w.writerow(["t_ms", *names])
+    out.write(_row(["t_ms", *names]))
     cursors = []
     for n in names:
         kind, ch = trace.signals[n]
@@ -83,7 +109,7 @@ def csv_ticks(trace: Trace, t0: Optional[int] = None, t1: Optional[int] = None,
                 i += 1
             cur[2], cur[3] = i, v
             row.append("" if v is None else (trace.strings[v] if kind == TEXT else v))
-        w.writerow(row)
+        out.write(_row(row))
     return out.getvalue()
 
 
@@ -95,7 +121,7 @@ def _scope_and_name(signal: str) -> tuple[str, str]:
     for prefix, scope in _SCOPES:
         if signal.startswith(prefix):
             rest = signal[len(prefix):]
-            return scope, (f"{prefix.strip()}{rest}" if rest.isdigit() else rest)
+            return scope, _ident(f"{prefix.strip()}{rest}" if rest.isdigit() else rest)
     if "." in signal:
         proc, var = signal.split(".", 1)
         return f"variables.{_ident(proc)}", _ident(var)
@@ -106,43 +132,81 @@ def _ident(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9_]", "_", text) or "_"
 
 
-def vcd_text(trace: Trace) -> str:
-    """The trace as VCD text."""
+def width(kind: str, changes: list) -> int:
+    """The bits a signal's values need: 1 for a bit; for a number, its largest
+    value's bits, and one more for the sign when a value is negative (two's
+    complement), so -2^63 takes 64 bits and 0..1000 takes 10."""
+    if kind == BIT or not changes:
+        return 1
+    values = [v for _t, v in changes]
+    lo, hi = min(values), max(values)
+    if lo >= 0:
+        return max(1, hi.bit_length())
+    return max(max(hi, 0).bit_length(), (~lo).bit_length()) + 1
+
+
+def _comment(text: str) -> str:
+    """Text for a VCD ``$comment``: no ``$`` (a ``$end`` would end it), no line breaks."""
+    return re.sub(r"[\x00-\x1f\x7f]", " ", text).replace("$", "_")
+
+
+def vcd_text(trace: Trace, split_bits: bool = False) -> str:
+    """The trace as VCD text: each bit signal a 1-bit ``wire``, each number an
+    ``integer`` of the width its values need (:func:`width`). ``split_bits``:
+    each number as that many 1-bit wires ``NAME[0]`` (the lowest bit) … instead,
+    for readers of one-bit signals only (libsigrok 0.5: PulseView, sigrok-cli)."""
     out = io.StringIO()
     strings = ", ".join(f"{i}={s or '(none)'}" for i, s in enumerate(trace.strings))
     with VCDWriter(out, timescale="1 ms", date="", version="PLC Builder",
-                   comment=f"running: {strings}", init_timestamp=trace.t_start) as w:
-        variables = []
+                   comment=_comment(f"running: {strings}"), init_timestamp=trace.t_start) as w:
+        lanes = []                 # (var, bit or None for the whole value), per signal
+        taken: set[tuple[str, str]] = set()
         for name, (kind, changes) in trace.signals.items():
             scope, vname = _scope_and_name(name)
+            base, n = vname, 2
+            while (scope, vname) in taken:           # two signals one identifier
+                vname, n = f"{base}_{n}", n + 1
+            taken.add((scope, vname))
             if kind == BIT:
-                var = w.register_var(scope, vname, "wire", size=1)
+                lanes.append([(w.register_var(scope, vname, "wire", size=1), None)])
+                continue
+            bits = width(kind, changes)
+            if split_bits:
+                lanes.append([(w.register_var(scope, f"{vname}[{b}]", "wire", size=1), b)
+                              for b in range(bits)])
             else:
-                var = w.register_var(scope, vname, "integer", size=32)
-            variables.append((var, kind, changes))
+                lanes.append([(w.register_var(scope, vname, "integer", size=bits), None)])
         timeline = []
-        for k, (var, kind, changes) in enumerate(variables):
+        for k, (kind, changes) in enumerate(trace.signals.values()):
             for t, v in changes:
                 timeline.append((t, k, v))
         timeline.sort(key=lambda e: (e[0], e[1]))
+        last: dict[int, int] = {}
         for t, k, v in timeline:
-            var, kind, _ = variables[k]
-            if kind != BIT:
-                v &= 0xFFFFFFFF
-            w.change(var, t, v)
+            before = last.get(k)
+            last[k] = v
+            for var, b in lanes[k]:
+                if b is None:
+                    w.change(var, t, v)
+                elif before is None or (before >> b) & 1 != (v >> b) & 1:
+                    w.change(var, t, (v >> b) & 1)
         if trace.t_end > (timeline[-1][0] if timeline else trace.t_start):
             w.flush(trace.t_end)
     return out.getvalue()
 
 
 def export(trace: Trace, path: Union[str, Path], fmt: Optional[str] = None, *,
-           per_tick: bool = False) -> str:
+           per_tick: bool = False, split_bits: bool = False) -> str:
     """Write ``trace`` as ``fmt`` ('csv' or 'vcd'; default from the file's suffix).
+    ``split_bits``: a VCD's numbers as one-bit lanes (:func:`vcd_text`).
     Returns the format written; raises ExportError."""
     path = Path(path)
     fmt = (fmt or path.suffix.lstrip(".")).lower()
+    if split_bits and fmt != "vcd":
+        raise ExportError(f"{path}: one-bit lanes (--split-bits) are for VCD, not "
+                          f"{fmt or 'a file without a suffix'}")
     if fmt == "vcd":
-        _write(path, vcd_text(trace))
+        _write(path, vcd_text(trace, split_bits))
     elif fmt == "csv":
         _write(path, csv_ticks(trace) if per_tick else csv_changes(trace))
     else:

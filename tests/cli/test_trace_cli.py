@@ -77,3 +77,31 @@ def test_compare_of_traces_with_no_tick_in_common_exits_1(tmp_path, capsys, puls
                        "--post", "3", "--capture", path)[0] == 0      # 20..23, 30..33
     code, out, _ = run_cli(capsys, "trace", "compare", early, late)
     assert code == 1 and "no tick in common" in out, out
+
+
+@pytest.mark.skipif(__import__("shutil").which("sigrok-cli") is None,
+                    reason="sigrok-cli is not installed (apt install sigrok-cli)")
+def test_export_split_bits_is_read_by_sigrok(tmp_path, capsys, pulse):
+    """Issue 25 item 9: `trace export TRACE OUT.vcd --split-bits` writes one-bit
+    lanes that libsigrok 0.5 (sigrok-cli, PulseView) reads every sample of."""
+    import subprocess
+    hist = tmp_path / "all.plctrace"
+    assert run_cli(capsys, "run", pulse, "--watch", "M90.timer", "--history", hist)[0] == 0
+    out_vcd = tmp_path / "lanes.vcd"
+    code, out, err = run_cli(capsys, "trace", "export", hist, out_vcd, "--split-bits")
+    assert code == 0 and "wrote" in out, err
+    r = subprocess.run(["sigrok-cli", "-I", "vcd", "-i", str(out_vcd), "-O", "csv"],
+                       capture_output=True, text=True, timeout=120, check=True)
+    names = next(line for line in r.stdout.splitlines()
+                 if line.startswith("; Channels")).split(": ", 1)[1].split(", ")
+    rows = [[int(x) for x in line.split(",")] for line in r.stdout.splitlines()
+            if line[:1] in ("0", "1")]
+    assert len(rows) == 30                      # ticks 0..29; the run ended at 30
+    out3 = names.index("out3")
+    assert [row[out3] for row in rows] == [0] * 20 + [1] * 10
+    timer = [names.index(f"timer[{b}]") for b in range(5)]
+    values = [sum(row[c] << b for b, c in enumerate(timer)) for row in rows]
+    assert values[:3] == [19, 18, 17]            # the loop counts down from 20
+    code, _out, err = run_cli(capsys, "trace", "export", hist, tmp_path / "x.csv",
+                              "--split-bits")
+    assert code == 2 and "for VCD" in err

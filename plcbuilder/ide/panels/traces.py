@@ -351,9 +351,10 @@ class TraceTools(QtCore.QObject):
         api.save_trace(self.current(), path)
         self.sig_note.emit(f"saved {path}")
 
-    def export(self, path, per_tick: bool = False) -> str:
-        """Export as CSV or VCD (by suffix); raises api.ExportError."""
-        fmt = api.export_trace(self.current(), path, per_tick=per_tick)
+    def export(self, path, per_tick: bool = False, split_bits: bool = False) -> str:
+        """Export as CSV or VCD (by suffix; ``split_bits``: a VCD's numbers as
+        one-bit lanes, for PulseView); raises api.ExportError."""
+        fmt = api.export_trace(self.current(), path, per_tick=per_tick, split_bits=split_bits)
         self.sig_note.emit(f"exported {path} ({fmt})")
         return fmt
 
