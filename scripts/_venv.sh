@@ -15,5 +15,9 @@ if [ ! -f "$STAMP" ] || [ "$ROOT/pyproject.toml" -nt "$STAMP" ]; then
     SPEC="$ROOT"
     [ -n "$EXTRAS" ] && SPEC="$ROOT[$EXTRAS]"
     "$VENV/bin/python" -m pip install -q -e "$SPEC"
+    if [ "$EXTRAS" = "test" ]; then
+        # the schemas the suite checks our files against (not committed: fetched)
+        "$VENV/bin/python" "$ROOT/scripts/test_schemas.py" || true
+    fi
     touch "$STAMP"
 fi
