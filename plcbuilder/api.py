@@ -565,8 +565,8 @@ class TestOptions:
 @dataclass
 class TestRun:
     """What ``plcbuilder test`` reports. ``run`` is None when the project did
-    not build (``compiled`` has the diagnostics) or a test file has a mistake
-    (``errors``): then nothing ran."""
+    not build (``compiled`` has the diagnostics): then nothing ran. A test file
+    with a mistake is in ``errors`` and its tests are left out; the others run."""
     __test__ = False
     suite: Suite
     run: Optional[SuiteRun] = None
@@ -618,14 +618,16 @@ class TestRun:
 def test(project, options: Optional[TestOptions] = None, progress=None) -> TestRun:
     """``plcbuilder test``: build the project once (writing nothing), read
     ``tests/*.toml``, run every test (or those ``select`` picks), judge them.
-    A project that cannot be opened raises :class:`UsageError`."""
+    The tests of a file with a mistake are left out (the file is in
+    ``errors``); the others run. A project that cannot be opened raises
+    :class:`UsageError`."""
     _load()
     opts = options or TestOptions()
     try:
         suite = prepare(project, opts.select, strict=opts.strict)
     except SuiteError as exc:
         raise UsageError(str(exc)) from None
-    if not suite.built or suite.errors:
+    if not suite.built:
         return TestRun(suite)
     return TestRun(suite, run_suite(suite, coverage=opts.coverage, jobs=opts.jobs,
                                     progress=progress, trace_dir=opts.trace_dir))

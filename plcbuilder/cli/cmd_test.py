@@ -4,9 +4,10 @@ run the project's scenario tests (``tests/*.toml``, SPEC §8).
 Builds the project (writing nothing), runs every test on the simulated
 controller and prints one line per test (a failing one with its failing
 condition, expected and actual, and the tick; more failing conditions on the
-lines below), then ``N passed, N failed``. Exit status 0 when all pass, 1
-when any fails (or the project does not build), 2 for bad usage or a test
-file that cannot be read (its file, line and reason).
+lines below), then ``N passed, N failed``. A test file that cannot be read
+is reported (its file, line and reason) and its tests left out; the others
+run. Exit status 0 when all pass, 1 when any fails (or the project does not
+build), 2 for bad usage or a test file that cannot be read.
 """
 
 from __future__ import annotations
@@ -78,20 +79,20 @@ def run(args: argparse.Namespace) -> int:
         if args.json:
             out.print(json.dumps(tr.to_dict()))
             return tr.exit_status
-        if tr.errors:
-            out.print(f"plcbuilder test: not run: {len(tr.errors)} test file"
-                      f"{'s' if len(tr.errors) > 1 else ''} with mistakes", err=True)
-            return tr.exit_status
         if tr.run is None:
             return tr.exit_status
         for r in tr.results:
             out.print(result_line(r, out))
         if tr.run.coverage is not None:
             out.print(coverage_text(tr.run.coverage))
-        if not tr.results:
+        if not tr.results and not tr.errors:
             out.print(f"no tests in {tr.suite.project.root / 'tests'}"
                       + (f" matching {args.select!r}" if args.select else ""))
         out.print(f"{tr.run.passed} passed, {tr.run.failed} failed")
+        if tr.errors:
+            n = len(tr.errors)
+            out.print(f"plcbuilder test: {n} mistake{'s' if n > 1 else ''} in test files "
+                      f"(above): those tests did not run", err=True)
         return tr.exit_status
 
     return guarded(body, out)

@@ -35,11 +35,15 @@ def test_k_selects(tmp_path, capsys):
     assert code == 0 and out.splitlines()[-1] == "1 passed, 0 failed"
 
 
-def test_a_bad_test_file_exits_2_with_file_and_line(tmp_path, capsys):
+def test_a_bad_test_file_exits_2_with_file_and_line_and_the_others_run(tmp_path, capsys):
+    """Issue 25 item 7: the broken file is reported and the valid tests still run
+    (they were all left out); the exit status stays 2 (SPEC §8)."""
     root = make_project(tmp_path / "p", {"a": PASSING, "b": FAILING.replace("at_ms", "at_mss")})
     code, out, err = run_cli(capsys, "test", root)
-    assert code == 2 and out == ""
+    assert code == 2
+    assert out.splitlines() == ["PASS  pulse on in ticks 5..7", "1 passed, 0 failed"]
     assert f"{root / 'tests' / 'b.toml'}:9: unknown key 'at_mss'" in err
+    assert "1 mistake in test files (above): those tests did not run" in err
     assert "Traceback" not in err
 
 
@@ -93,14 +97,24 @@ def test_junit_xml_parses_back(tmp_path, capsys):
     assert "expected pwm 0 = 10, actual pwm 0 = 20 at tick 1" in res.message
 
 
-def test_junit_lists_unreadable_files_as_errors(tmp_path, capsys):
-    root = make_project(tmp_path / "p", {"a": PASSING, "b": "x = 1\n"})
+def test_junit_lists_unreadable_files_as_errors_and_the_other_tests(tmp_path, capsys):
+    """Issue 25 item 7: one unreadable tests/*.toml made the report one error
+    case (CI showed 1 test instead of 16): the valid tests are there too."""
+    many = "".join(PASSING.replace("pulse on in ticks 5..7", f"pulse {i}") for i in range(15))
+    root = make_project(tmp_path / "p", {"a": many, "b": "x = 1\n", "c": FAILING})
     xml_path = tmp_path / "j.xml"
-    code, _, _ = run_cli(capsys, "test", root, "--junit", xml_path)
-    assert code == 2
+    code, out, _ = run_cli(capsys, "test", root, "--junit", xml_path)
+    assert code == 2 and out.splitlines()[-1] == "15 passed, 1 failed"
     (suite,) = list(JUnitXml.fromfile(str(xml_path)))
-    (case,) = list(suite)
-    assert isinstance(case.result[0], Error) and "b.toml:1" in case.result[0].message
+    assert (suite.tests, suite.failures, suite.errors) == (17, 1, 1)
+    cases = {c.name: c for c in suite}
+    assert all(cases[f"pulse {i}"].is_passed for i in range(15))
+    assert isinstance(cases["branch two"].result[0], Failure)
+    err = cases["b.toml: cannot be read"].result[0]
+    assert isinstance(err, Error) and "b.toml:1" in err.message
+    code, out, _ = run_cli(capsys, "test", root, "--json")
+    doc = json.loads(out)
+    assert code == 2 and (doc["passed"], doc["failed"], len(doc["errors"])) == (15, 1, 1)
 
 
 def test_coverage_prints_percentages_and_uncovered_lines(tmp_path, capsys):
