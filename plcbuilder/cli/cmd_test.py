@@ -1,4 +1,5 @@
-"""``plcbuilder test PROJECT [-k TEXT] [--junit FILE] [--json] [--coverage]``:
+"""``plcbuilder test PROJECT [-k TEXT] [--junit FILE] [--json] [--coverage]
+[--coverage-xml FILE]``:
 run the project's scenario tests (``tests/*.toml``, SPEC §8).
 
 Builds the project (writing nothing), runs every test on the simulated
@@ -35,8 +36,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--junit", type=Path, metavar="FILE", help="write JUnit XML to FILE")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--coverage", action="store_true",
-                   help="report per procedure which source lines ran (runs on the "
-                        "reference interpreter)")
+                   help="report per procedure which source lines ran and which ways its "
+                        "conditions went, then a TOTAL line (runs on the reference "
+                        "interpreter)")
+    p.add_argument("--coverage-xml", type=Path, metavar="FILE",
+                   help="write the coverage as Cobertura XML to FILE (as pytest-cov's "
+                        "--cov-report xml; GitLab and Jenkins read it)")
     p.add_argument("--trace-failed", type=Path, metavar="DIR",
                    help="write each failing test's run as a CSV trace in DIR (one row a "
                         "tick, as 'plcbuilder run --trace')")
@@ -53,8 +58,9 @@ def run(args: argparse.Namespace) -> int:
 
     def body() -> int:
         from plcbuilder import api
-        opts = api.TestOptions(select=args.select, coverage=args.coverage, jobs=args.jobs,
-                               trace_dir=args.trace_failed)
+        opts = api.TestOptions(select=args.select,
+                               coverage=args.coverage or args.coverage_xml is not None,
+                               jobs=args.jobs, trace_dir=args.trace_failed)
         try:
             tr = api.test(args.project, opts)
         except api.UsageError as exc:
@@ -76,6 +82,14 @@ def run(args: argparse.Namespace) -> int:
                 out.print(f"plcbuilder test: error: cannot write {args.junit}: "
                           f"{exc.strerror or exc}", err=True)
                 return 2
+        if args.coverage_xml is not None and tr.run is not None \
+                and tr.run.coverage is not None:
+            try:
+                api.write_cobertura(args.coverage_xml, tr.run.coverage, tr.suite.project.root)
+            except OSError as exc:
+                out.print(f"plcbuilder test: error: cannot write {args.coverage_xml}: "
+                          f"{exc.strerror or exc}", err=True)
+                return 2
         if args.json:
             out.print(json.dumps(tr.to_dict()))
             return tr.exit_status
@@ -83,8 +97,8 @@ def run(args: argparse.Namespace) -> int:
             return tr.exit_status
         for r in tr.results:
             out.print(result_line(r, out))
-        if tr.run.coverage is not None:
-            out.print(coverage_text(tr.run.coverage))
+        if tr.run.coverage is not None and args.coverage:
+            out.print(coverage_text(tr.run.coverage, tr.suite.project.root))
         if not tr.results and not tr.errors:
             out.print(f"no tests in {tr.suite.project.root / 'tests'}"
                       + (f" matching {args.select!r}" if args.select else ""))
@@ -113,14 +127,24 @@ def result_line(r, out: term.Out) -> str:
     return "\n".join(lines)
 
 
-def coverage_text(coverage) -> str:
-    """Per procedure: its percentage, lines run of lines with code, the uncovered lines."""
+def coverage_text(coverage, root=None) -> str:
+    """Per procedure: its percentage, lines run of lines with code, the ways
+    its conditions went of the ways they have, the uncovered lines; then
+    ``TOTAL`` over every source file (a header several procedures include
+    counted once), the line a CI coverage regex reads."""
+    from plcbuilder.testing.cobertura import by_file, totals
     lines = ["coverage (lines with code that ran; measured on the reference interpreter):"]
-    width = max((len(c.name) for c in coverage), default=4)
+    width = max([len(c.name) for c in coverage] + [len("TOTAL")])
     for c in coverage:
         text = f"  {c.name.ljust(width)}  {c.percent:5.1f}%  {c.covered}/{c.lines} lines"
+        if c.branches:
+            text += f"  {c.branches_covered}/{c.branches} branches"
         missing = c.uncovered_text()
         if missing:
             text += f"  not run: {missing}"
         lines.append(text)
+    n, ran, ways, gone = totals(by_file(coverage, root))
+    percent = 100.0 * ran / n if n else 100.0
+    lines.append(f"  {'TOTAL'.ljust(width)}  {percent:5.1f}%  {ran}/{n} lines  "
+                 f"{gone}/{ways} branches")
     return "\n".join(lines)

@@ -214,6 +214,16 @@ def decoded(program: Program) -> tuple[list, list, list]:
 
 # ------------------------------------------------------------ interpreter
 
+
+class _NoMarks:
+    """The debugger's marks when there is no debugger: nothing is watched."""
+
+    def __getitem__(self, pc: int) -> bool:
+        return False
+
+
+_NO_MARKS = _NoMarks()
+
 def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[int] = None,
                   stack: Optional[list[int]] = None, rets: tuple[int, ...] | list[int] = (),
                   count: int = 0, cover=None, passed: int = -1) -> Iterator[None]:
@@ -224,7 +234,10 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
     :class:`~plcbuilder.controller.coverage.CodeCoverage`, records which
     instructions run: its table marks each one K_COVER until it first runs
     (then the mark is replaced by the instruction's own kind), so recording
-    costs one extra step per instruction once, and nothing when off.
+    costs one extra step per instruction once, and nothing when off. A
+    conditional jump stays marked until it has gone both ways (its recorder
+    reads the condition on the stack; until then each run lifts the mark, as
+    for the debugger, and the next transfer of control puts it back).
 
     The debugger (``host.debug``) works the same way: the offsets it watches
     are K_BREAK in its table, changed in place while the procedure runs. At one,
@@ -239,10 +252,14 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
         kinds, cover_hit = cover.table(program, kinds)
     debug = host.debug
     base = kinds
-    pending = -1                           # a watched offset whose mark is lifted
+    pending = -1                           # a watched (or branch) offset whose mark is lifted
     if debug is not None:
         kinds = debug.table(program, base)
         marks, brk = debug.marks, debug.brk
+    else:
+        marks = _NO_MARKS
+        if cover is not None:              # a table of its own: a branch's lifted mark
+            kinds = list(base)             # is put back from base
     if pc is None:
         pc = program.entry
     stack = [] if stack is None else list(stack)
@@ -375,10 +392,17 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
             elif k == K_END:
                 raise VMFault(pc, FAULT_END)
             elif k == K_COVER:            # first run of this instruction: record it, then run it
-                real = cover_hit(pc)
-                base[pc] = real
-                if kinds[pc] == K_COVER:
+                real = cover_hit(pc, stack)
+                if real < 0:              # a branch not yet seen both ways: run it, then the
+                    real = ~real          # next transfer of control marks it again
+                    if pending >= 0 and pending != pc:
+                        kinds[pending] = K_BREAK if marks[pending] else base[pending]
                     kinds[pc] = real
+                    pending = pc
+                else:
+                    base[pc] = real
+                    if kinds[pc] == K_COVER:
+                        kinds[pc] = real
                 count -= 1
                 continue
             elif k == K_BREAK:            # watched: ask the debugger, then run the instruction
@@ -405,3 +429,6 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
     except VMFault as fault:
         fault.callers = [r - _CALL_SIZE for r in reversed(calls)]
         raise
+    finally:
+        if pending >= 0:                   # ended (exit, fault, stop) with a mark lifted
+            kinds[pending] = K_BREAK if marks[pending] else base[pending]

@@ -295,26 +295,23 @@ def run_suite(suite: Suite, *, coverage: bool = False, jobs: Optional[int] = Non
               io_dat=env.io_dat)
     work = [(t, suite.machines.get(t.name, env.machine)) for t in todo]
     n = _jobs(jobs, todo)
-    hits: dict[str, set[int]] = {}
+    cov = CodeCoverage() if coverage else None
     results: list[TestResult] = []
     if n <= 1:
-        cov = CodeCoverage() if coverage else None
         for t, machine in work:
             r = run_test(t, env, machine, cov)
             results.append(r)
             if progress:
                 progress(r)
-        if cov is not None:
-            hits = cov.hits
     else:
         ctx = get_context("spawn")       # never fork a process that may hold Qt
         chunk = max(1, len(work) // (n * 4))
         with ProcessPoolExecutor(n, mp_context=ctx, initializer=_init_worker,
                                  initargs=(env,)) as pool:
-            for r, h in pool.map(_run_in_worker, work, chunksize=chunk):
+            for r, h, b in pool.map(_run_in_worker, work, chunksize=chunk):
                 results.append(r)
-                for name, pcs in h.items():
-                    hits.setdefault(name, set()).update(pcs)
+                if cov is not None:
+                    cov.merge(h, b)
                 if progress:
                     progress(r)
     if trace_dir is not None:
@@ -322,8 +319,8 @@ def run_suite(suite: Suite, *, coverage: bool = False, jobs: Optional[int] = Non
             if r.failures:
                 r.trace = str(write_trace(t, env, machine, Path(trace_dir), r))
     report = None
-    if coverage:
-        report = summarize(env.programs, hits, suite.project)
+    if cov is not None:
+        report = summarize(env.programs, cov.hits, suite.project, cov.branches)
     return SuiteRun(results, report, time.perf_counter() - t0, max(1, n), env.backend)
 
 
@@ -344,12 +341,12 @@ def _init_worker(env: Env) -> None:
     _WORKER["env"] = env
 
 
-def _run_in_worker(item) -> tuple[TestResult, dict[str, set[int]]]:
+def _run_in_worker(item) -> tuple[TestResult, dict[str, set[int]], dict[str, dict[int, int]]]:
     t, machine = item
     env = _WORKER["env"]
     cov = CodeCoverage() if env.coverage else None
     r = run_test(t, env, machine, cov)
-    return r, (cov.hits if cov is not None else {})
+    return r, (cov.hits if cov is not None else {}), (cov.branches if cov is not None else {})
 
 
 # ------------------------------------------------------------- one test
