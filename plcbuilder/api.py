@@ -59,6 +59,7 @@ if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type
     from plcbuilder.testing.runner import Suite, SuiteError, SuiteRun, prepare, run_suite
     from plcbuilder.testing.spec import TestFileError
     from plcbuilder.trace import compare as trace_compare, export as trace_export, file as trace_file
+    from plcbuilder.trace.compare import CompareError
     from plcbuilder.trace.export import ExportError
     from plcbuilder.trace.file import TraceFileError
 
@@ -100,6 +101,7 @@ for _module, _names in (
     for _name in _names.split():
         _LAZY[_name] = (_module, _name)
 _LAZY["ExportError"] = ("plcbuilder.trace.export", "ExportError")
+_LAZY["CompareError"] = ("plcbuilder.trace.compare", "CompareError")
 for _name, _module in (("disasm", "plcbuilder.bytecode.disasm"),
                        ("events", "plcbuilder.controller.events"),
                        ("trace_compare", "plcbuilder.trace.compare"),
@@ -147,7 +149,7 @@ __all__ = [
     "write_image", "TestFileError", "TestOptions", "TestRun", "junit_xml", "test", "write_junit",
     "cobertura_xml", "write_cobertura",
     "Capturer", "History", "Trace", "TriggerError", "parse_trigger", "watched_variables", "load_trace", "save_trace",
-    "export_trace", "compare_traces", "TraceFileError", "ExportError",
+    "export_trace", "compare_traces", "TraceFileError", "ExportError", "CompareError",
 ]
 
 DEFAULT_MS = 60_000
@@ -547,10 +549,13 @@ def export_trace(trace: Trace, path, fmt: Optional[str] = None, *, per_tick: boo
     return trace_export.export(trace, path, fmt, per_tick=per_tick, split_bits=split_bits)
 
 
-def compare_traces(a: Trace, b: Trace) -> "trace_compare.Difference":
-    """The first tick where two traces differ, and in which signals."""
+def compare_traces(a: Trace, b: Trace, align: str = "none",
+                   offset_ms: int = 0) -> "trace_compare.Difference":
+    """The first tick where two traces differ, and in which signals; ``b``
+    lined up with ``a`` first (``align``: none, start or trigger, then
+    ``offset_ms`` more). Raises CompareError when they cannot be lined up so."""
     _load()
-    return trace_compare.compare(a, b)
+    return trace_compare.compare(a, b, align, offset_ms)
 
 
 # ------------------------------------------------------------------- test

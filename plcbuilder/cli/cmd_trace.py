@@ -2,7 +2,8 @@
 
     trace info FILE                  the span, the signals and how often each changed
     trace export FILE OUT [--per-tick] [--split-bits] [--format csv|vcd]
-    trace compare A B [--json]       the first tick where they differ (exit 1), or 0
+    trace compare A B [--align none|start|trigger] [--offset MS] [--json]
+                                     the first tick where they differ (exit 1), or 0
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import json
 from pathlib import Path
 
 from plcbuilder.cli import term
-from plcbuilder.cli.common import guarded, safe_streams
+from plcbuilder.cli.common import guarded, int_in, safe_streams
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -36,6 +37,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     c = sub.add_parser("compare", help="the first tick where two traces differ")
     c.add_argument("a", type=Path, metavar="A")
     c.add_argument("b", type=Path, metavar="B")
+    c.add_argument("--align", choices=("none", "start", "trigger"), default="none",
+                   help="line B up with A before comparing: none (the same times, the "
+                        "default), start (the two starts together) or trigger (the two "
+                        "captures' triggers together)")
+    c.add_argument("--offset", type=int_in(-(1 << 53), 1 << 53), default=0, metavar="MS",
+                   help="then move B by MS more (may be negative)")
     c.add_argument("--json", action="store_true", help="print one JSON object")
     for q in (i, e, c):
         term.add_color_argument(q)
@@ -51,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             if args.trace_command == "compare":
                 a, b = api.load_trace(args.a), api.load_trace(args.b)
-                diff = api.compare_traces(a, b)
+                diff = api.compare_traces(a, b, args.align, args.offset)
                 out.print(json.dumps(diff.to_dict()) if args.json else diff.text())
                 return 0 if diff.same else 1
             trace = api.load_trace(args.file)
@@ -76,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
                 if k > 1:
                     out.print(f"  {n}: {k} changes")
             return 0
-        except (api.TraceFileError, api.ExportError) as exc:
+        except (api.TraceFileError, api.ExportError, api.CompareError) as exc:
             out.print(f"plcbuilder trace: error: {exc}", err=True)
             return 2
 

@@ -1,5 +1,12 @@
 """Comparing two traces: the first tick where they differ, and in what.
 
+The second trace can be lined up with the first before they are compared
+(``align``): ``"none"`` (the same times: a replay against its session),
+``"start"`` (the two starts together: two runs started at different
+moments) or ``"trigger"`` (the two captures' triggers together: the before
+and after captures of one session), then moved by ``offset_ms`` more. Every
+time reported is the first trace's.
+
 Signals are compared by name over the time both traces cover (two traces
 with no tick in common are not "the same": nothing could be compared); a
 signal that only one trace has is listed apart (``only_in_a``/``only_in_b``)
@@ -20,6 +27,58 @@ from plcbuilder.controller.history import Trace
 
 #: The events compare() compares: what the procedures did.
 COMPARED_EVENTS = frozenset({"started", "ended", "message", "print", "fault"})
+#: How the second trace can be lined up with the first.
+ALIGNS = ("none", "start", "trigger")
+#: The largest shift (ms) a comparison takes: 2^53, as trace files' times.
+MAX_SHIFT = 1 << 53
+
+
+class CompareError(ValueError):
+    """Traces that cannot be lined up as asked (a trace with no trigger to
+    align on); the message says why."""
+
+
+def trigger_ms(trace: Trace) -> Optional[int]:
+    """When a capture's trigger fired (None: not a capture)."""
+    trig = trace.meta.get("trigger")
+    t = trig.get("t_ms") if isinstance(trig, dict) else None
+    return t if isinstance(t, int) and not isinstance(t, bool) else None
+
+
+def shift_of(a: Trace, b: Trace, align: str = "none", offset_ms: int = 0) -> int:
+    """The ms added to ``b``'s times to line it up with ``a`` (see the module
+    docstring); raises CompareError."""
+    if align not in ALIGNS:
+        raise CompareError(f"align on {', '.join(ALIGNS)}, not {align!r}")
+    if not -MAX_SHIFT <= offset_ms <= MAX_SHIFT:
+        raise CompareError(f"an offset of {offset_ms} ms is more than {MAX_SHIFT} ms either way")
+    if align == "start":
+        return a.t_start - b.t_start + offset_ms
+    if align == "trigger":
+        ta, tb = trigger_ms(a), trigger_ms(b)
+        missing = [n for n, t in (("first", ta), ("second", tb)) if t is None]
+        if missing:
+            which = "the first and the second traces have" if len(missing) > 1 else \
+                f"the {missing[0]} trace has"
+            raise CompareError(f"{which} no trigger (not a capture): align on the start, or "
+                               f"none, with an offset")
+        return ta - tb + offset_ms
+    return offset_ms
+
+
+def shifted(trace: Trace, dt: int) -> Trace:
+    """``trace`` with every time moved by ``dt`` ms (its changes, its span, its
+    events and its trigger)."""
+    if not dt:
+        return trace
+    signals = {name: (kind, [(t + dt, v) for t, v in changes])
+               for name, (kind, changes) in trace.signals.items()}
+    events = [dict(e, t_ms=e["t_ms"] + dt) if isinstance(e.get("t_ms"), int) else dict(e)
+              for e in trace.events]
+    meta = dict(trace.meta)
+    if trigger_ms(trace) is not None:
+        meta["trigger"] = dict(meta["trigger"], t_ms=meta["trigger"]["t_ms"] + dt)
+    return Trace(trace.t_start + dt, trace.t_end + dt, signals, list(trace.strings), events, meta)
 
 
 @dataclass
@@ -31,8 +90,11 @@ class Difference:
     events: bool = False
     only_in_a: list[str] = field(default_factory=list)
     only_in_b: list[str] = field(default_factory=list)
-    #: the time each trace covers
+    #: the time each trace covers (the second's after its shift)
     spans: tuple[tuple[int, int], tuple[int, int]] = ((0, 0), (0, 0))
+    #: how the second trace was lined up, and the ms added to its times
+    align: str = "none"
+    shift_ms: int = 0
 
     @property
     def span(self) -> tuple[int, int]:
@@ -55,7 +117,15 @@ class Difference:
                 "signals": [{"name": n, "a": a, "b": b} for n, a, b in self.signals],
                 "events": self.events, "only_in_a": self.only_in_a,
                 "only_in_b": self.only_in_b, "span": list(self.span),
-                "overlap": self.overlap}
+                "overlap": self.overlap, "align": self.align, "shift_ms": self.shift_ms}
+
+    def shift_text(self) -> str:
+        """``the second trace moved by -4000 ms (triggers together)``, or ''."""
+        if not self.shift_ms and self.align == "none":
+            return ""
+        how = {"none": "", "start": " (starts together)",
+               "trigger": " (triggers together)"}[self.align]
+        return f"the second trace moved by {self.shift_ms:+d} ms{how}"
 
     def text(self) -> str:
         lo, hi = self.span
@@ -63,14 +133,20 @@ class Difference:
             (a0, a1), (b0, b1) = self.spans
             head = (f"the traces have no tick in common (the first covers {a0}..{a1} ms, "
                     f"the second {b0}..{b1} ms): nothing to compare")
+            if self.align == "none" and not self.shift_ms:
+                head += ("; captures of different moments line up with --align trigger "
+                         "(or start, or an --offset)")
         elif self.same:
             head = f"the traces are the same from {lo} to {hi} ms"
         else:
             what = ", ".join(f"{n} ({a} / {b})" for n, a, b in self.signals)
             if self.events:
                 what = (what + ", " if what else "") + "the events"
-            head = f"first difference at {self.t_ms} ms: {what}"
+            own = f" ({self.t_ms - self.shift_ms} ms in the second)" if self.shift_ms else ""
+            head = f"first difference at {self.t_ms} ms{own}: {what}"
         extra = []
+        if self.shift_text():
+            extra.append(self.shift_text())
         if self.only_in_a:
             extra.append("only in the first: " + ", ".join(self.only_in_a))
         if self.only_in_b:
@@ -99,8 +175,17 @@ def _first_change_difference(a: list, b: list, lo: int, hi: int) -> Optional[int
     return None
 
 
-def compare(a: Trace, b: Trace) -> Difference:
-    """The first difference of ``a`` and ``b`` over the span both cover."""
+def compare(a: Trace, b: Trace, align: str = "none", offset_ms: int = 0) -> Difference:
+    """The first difference of ``a`` and ``b`` over the span both cover, ``b``
+    lined up with ``a`` first (``align``, ``offset_ms``: see the module
+    docstring; raises CompareError)."""
+    dt = shift_of(a, b, align, offset_ms)
+    diff = _compare(a, shifted(b, dt))
+    diff.align, diff.shift_ms = align, dt
+    return diff
+
+
+def _compare(a: Trace, b: Trace) -> Difference:
     names_a, names_b = set(a.signals), set(b.signals)
     diff = Difference(None, only_in_a=sorted(names_a - names_b),
                       only_in_b=sorted(names_b - names_a),
