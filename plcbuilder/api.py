@@ -54,7 +54,7 @@ if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type
     from plcbuilder.project.build import compile_all
     from plcbuilder.project.conditions import compile_condition
     from plcbuilder.project.model import DEFAULT_MACHINE, kind_of
-    from plcbuilder.testing.cobertura import cobertura_xml, write_cobertura
+    from plcbuilder.testing.cobertura import cobertura_xml, coverage_totals, write_cobertura
     from plcbuilder.testing.junit import junit_xml, write_junit
     from plcbuilder.testing.runner import Suite, SuiteError, SuiteRun, prepare, run_suite
     from plcbuilder.testing.spec import TestFileError
@@ -93,7 +93,7 @@ for _module, _names in (
         ("plcbuilder.project.build", "compile_all"),
         ("plcbuilder.project.conditions", "compile_condition"),
         ("plcbuilder.project.model", "DEFAULT_MACHINE kind_of"),
-        ("plcbuilder.testing.cobertura", "cobertura_xml write_cobertura"),
+        ("plcbuilder.testing.cobertura", "cobertura_xml coverage_totals write_cobertura"),
         ("plcbuilder.testing.junit", "junit_xml write_junit"),
         ("plcbuilder.testing.runner", "Suite SuiteError SuiteRun prepare run_suite"),
         ("plcbuilder.testing.spec", "TestFileError"),
@@ -147,7 +147,7 @@ __all__ = [
     "disassemble", "error", "events", "image_of", "instructions", "kind_of", "load_machine", "load_program",
     "load_variables", "options_for", "proc_name", "read_image", "render_text", "run", "summary",
     "write_image", "TestFileError", "TestOptions", "TestRun", "junit_xml", "test", "write_junit",
-    "cobertura_xml", "write_cobertura",
+    "cobertura_xml", "coverage_totals", "write_cobertura",
     "Capturer", "History", "Trace", "TriggerError", "parse_trigger", "watched_variables", "load_trace", "save_trace",
     "export_trace", "compare_traces", "TraceFileError", "ExportError", "CompareError",
 ]

@@ -132,7 +132,7 @@ def coverage_text(coverage, root=None) -> str:
     its conditions went of the ways they have, the uncovered lines; then
     ``TOTAL`` over every source file (a header several procedures include
     counted once), the line a CI coverage regex reads."""
-    from plcbuilder.testing.cobertura import by_file, totals
+    from plcbuilder import api
     lines = ["coverage (lines with code that ran; measured on the reference interpreter):"]
     width = max([len(c.name) for c in coverage] + [len("TOTAL")])
     for c in coverage:
@@ -143,7 +143,7 @@ def coverage_text(coverage, root=None) -> str:
         if missing:
             text += f"  not run: {missing}"
         lines.append(text)
-    n, ran, ways, gone = totals(by_file(coverage, root))
+    n, ran, ways, gone = api.coverage_totals(coverage, root)
     percent = 100.0 * ran / n if n else 100.0
     lines.append(f"  {'TOTAL'.ljust(width)}  {percent:5.1f}%  {ran}/{n} lines  "
                  f"{gone}/{ways} branches")

@@ -80,6 +80,13 @@ def _relative(path: str, root: Optional[Path]) -> str:
     return p.as_posix()
 
 
+def coverage_totals(coverage: Iterable[ProcedureCoverage], root: Optional[Path] = None
+                    ) -> tuple[int, int, int, int]:
+    """(lines with code, lines run, branch ways, ways gone) over every source
+    file of a run's coverage (a header several procedures include counted once)."""
+    return totals(by_file(coverage, root))
+
+
 def totals(files: Iterable[SourceCoverage]) -> tuple[int, int, int, int]:
     """(lines with code, lines run, branch ways, ways gone)."""
     fs = list(files)
