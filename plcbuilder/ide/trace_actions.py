@@ -143,23 +143,30 @@ def export_plot(win, path: Optional[str] = None) -> bool:
                        lambda tools, p, _c: tools.export_image(p), api.ExportError, "Exported")
 
 
-def compare_trace(win, path: Optional[str] = None):
+def compare_trace(win, path: Optional[str] = None, align: Optional[str] = None,
+                  offset_ms: int = 0):
+    """File › Compare with Trace…: the trace on show (or the session) with a
+    trace file, lined up as the dialog says (``align``: none, start or
+    trigger, then ``offset_ms``); given a ``path``, no dialog (``align``
+    default none). The panels draw the file's trace moved so, dashed."""
     tools = _tools(win)
     if tools is None:
         return None
     if path is None:
-        path, _ = _ask(win, "Compare with Trace", TRACE_FILTER)
-        if path is None:
+        from plcbuilder.ide.dialogs.compare_trace import CompareDialog
+        got = CompareDialog.get(win, tools.current(), tools.base_name(), _folder(win))
+        if got is None:
             return None
+        path, align, offset_ms = got
     try:
-        diff = tools.compare_with(path)
-    except api.TraceFileError as exc:
+        diff = tools.compare_with(path, align or "none", offset_ms)
+    except (api.TraceFileError, api.CompareError) as exc:
         _failed(win, "Compare with Trace", exc)
         return None
     QMessageBox.information(win, "Compare with Trace",
                             f"{diff.text()}\n\n{Path(path).name} is drawn dashed over the "
-                            f"trace on show; File › Clear Comparison (or Back to Live) "
-                            f"removes it.")
+                            f"trace on show{' (moved as above)' if diff.shift_ms else ''}; "
+                            f"File › Clear Comparison (or Back to Live) removes it.")
     return diff
 
 

@@ -382,28 +382,45 @@ class TraceTools(QtCore.QObject):
             raise api.ExportError(f"{path}: cannot write: {exc.strerror or exc}") from None
         self.sig_note.emit(f"exported {path}")
 
-    def compare_with(self, path) -> "api.trace_compare.Difference":
-        """Compare what is on show (or the session) with a trace file: the
-        panels show the first with the second drawn over it (dashed), and a
-        line at the first difference; raises api.TraceFileError."""
+    def base_name(self) -> str:
+        """What a comparison compares with: the trace on show, or the session."""
         shown = self.shown is not None and self.panels.recorded is not None
+        return self.panels.recorded if shown else "the session"
+
+    def compare_with(self, path, align: str = "none",
+                     offset_ms: int = 0) -> "api.trace_compare.Difference":
+        """Compare what is on show (or the session) with a trace file, the
+        file's trace lined up first (``align``: none, start or trigger, then
+        ``offset_ms``): the panels show the first with the second drawn over it
+        (dashed) where it lines up, and a line at the first difference; raises
+        api.TraceFileError, api.CompareError."""
         base = self.current()
-        base_name = self.panels.recorded if shown else "the session"
+        base_name = self.base_name()
         other = api.load_trace(path)
-        diff = api.compare_traces(base, other)
+        diff = api.compare_traces(base, other, align, offset_ms)
         name = Path(path).name
         meta = dict(base.meta)
-        meta.pop("trigger", None)
+        label = "first difference"
         if diff.t_ms is not None:
             meta["trigger"] = {"spec": f"first difference from {name}", "t_ms": diff.t_ms,
                                "pre_ms": 0, "post_ms": 0, "mode": "compare"}
+        elif diff.shift_ms and api.trace_compare.trigger_ms(base) is not None:
+            label = "trigger"                   # lined up on it, the same: show where
+        else:
+            meta.pop("trigger", None)
         shown_trace = api.Trace(base.t_start, base.t_end, base.signals, base.strings,
                                 base.events, meta)
         where = (f"first difference at {diff.t_ms / 1000:.3f} s" if diff.t_ms is not None
                  else "no difference" if diff.same else "no tick in common")
-        self.show(shown_trace, base_name, marker_label="first difference",
-                  bits=trigger_bits(base))
-        self.panels.compare(comparison_of(other, name, base_name, where))
+        drawn = name
+        if diff.shift_ms or align != "none":
+            how = {"none": "", "start": "starts together, ",
+                   "trigger": "triggers together, "}[align]
+            drawn = f"{name} (moved {diff.shift_ms / 1000:+.3f} s)"
+            where = f"{how}{name} moved {diff.shift_ms / 1000:+.3f} s; {where}"
+        self.show(shown_trace, base_name, marker_label=label, bits=trigger_bits(base))
+        self.panels.compare(comparison_of(api.trace_compare.shifted(other, diff.shift_ms),
+                                          drawn, base_name, where))
         self.sig_note.emit(f"comparing {base_name} with {name}: {where}; "
                            + diff.text().replace("\n", "; "))
         return diff
