@@ -199,6 +199,9 @@ def _compare(a: Trace, b: Trace) -> Difference:
         kb, cb = b.signals[name]
         ca = [(t, a.display(name, v)) for t, v in ca]      # text signals by their text
         cb = [(t, b.display(name, v)) for t, v in cb]
+        if name.startswith("run "):                       # not started yet: not running
+            ca = [(lo, "0")] + ca if not ca or ca[0][0] > lo else ca
+            cb = [(lo, "0")] + cb if not cb or cb[0][0] > lo else cb
         t = _first_change_difference(ca, cb, lo, hi)
         if t is not None and (first is None or t < first):
             first = t
@@ -212,6 +215,8 @@ def _compare(a: Trace, b: Trace) -> Difference:
     diff.t_ms = first
     for name in (n for n in a.signals if n in names_b):
         va, vb = a.display(name, a.value_at(name, first)), b.display(name, b.value_at(name, first))
+        if name.startswith("run "):
+            va, vb = va or "0", vb or "0"
         if va != vb:
             diff.signals.append((name, va, vb))
     diff.events = t_events == first

@@ -116,3 +116,15 @@ def test_the_cli_aligns_too(tmp_path, capsys):
     assert code == 2 and "the second trace has no trigger" in err
     code, _out, err = run_cli(capsys, "trace", "compare", a, b, "--offset", "1e400")
     assert code == 2 and "--offset" in err
+
+
+def test_a_procedure_not_started_yet_is_not_running():
+    """``run NAME`` has no value before NAME first starts: in a capture from
+    before its first start it compares as 0 with a later capture where it ended."""
+    h = _session()
+    first = _capture(h, 120, pre=30)                 # M90 starts at 100: from 90 no run M90
+    assert first.value_at("run M90", 90) is None
+    second = _capture(h, 1020, pre=30)               # ended at ~131, 0 from then on
+    assert second.value_at("run M90", 990) == 0
+    d = compare.compare(first, second, align="trigger")
+    assert d.same, d.text()
