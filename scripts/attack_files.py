@@ -1,5 +1,6 @@
 """Attacks on the files and numbers the product takes (issue 17, items 6, 7,
-8, 10 and 12), against the real command line: each case runs
+8, 10 and 12; issue 24, items 7, 8 and 9: trace files, JUnit names, VCD and
+CSV exports), against the real command line: each case runs
 ``python -m plcbuilder …`` in a child, in a temporary folder, with a timeout.
 
     ATTACKS: list[tuple[str, callable]]   name, attack() -> {"tried", "refused",
@@ -374,12 +375,225 @@ def attack_outside_files() -> dict:
     return t.result()
 
 
+# ------------------------------------------------------- issue 24 items 7-9
+
+def _trace_zip(path: Path, head, events="[]", bins=None, raw_head: Optional[str] = None,
+               members: Optional[dict] = None) -> Path:
+    """A .plctrace: trace.json (``head`` as JSON, or ``raw_head`` as written),
+    the signals' members and events.json."""
+    import json
+    import struct
+    import zipfile
+    if bins is None:
+        bins = [struct.pack("<2q", 0, 5) + struct.pack("<2q", 0, 1)]
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("trace.json", raw_head if raw_head is not None else json.dumps(head))
+        for i, b in enumerate(bins):
+            z.writestr(f"signals/{i}.bin", b)
+        z.writestr("events.json", events)
+        for name, data in (members or {}).items():
+            z.writestr(name, data)
+    return path
+
+
+def _hostile_traces(w: Path) -> list[tuple[str, Path]]:
+    """Trace files a hostile or broken tool could hand over: each number out of
+    range or of the wrong type (NaN, Infinity, 1e400, 2^64, a text, true,
+    null, a fraction), nesting 200,000 and 33 deep, names and kinds that are
+    not names and kinds, events with wrong fields, sizes that do not add up."""
+    import json
+    import struct
+    good = {"format": "plcbuilder-trace", "version": 1, "t_start": 0, "t_end": 9,
+            "tick_ms": 1, "strings": [""], "meta": {},
+            "signals": [{"name": "out 1", "kind": "bit", "changes": 2}]}
+    text = json.dumps(good)
+    out: list[tuple[str, Path]] = []
+    n = 0
+
+    def add(name: str, **kw) -> None:
+        nonlocal n
+        n += 1
+        out.append((name, _trace_zip(w / f"t{n}.plctrace", kw.pop("head", good), **kw)))
+
+    bad_numbers = ["Infinity", "-Infinity", "NaN", "1e400", "-1e400", "-1", str(1 << 63),
+                   str(1 << 64), '"5"', "true", "null", "[]", "{}", "1.5", "1" * 5000]
+    for field in ("t_start", "t_end", "version"):
+        for v in bad_numbers:
+            add(f"{field} = {v[:12]}", raw_head=text.replace(f'"{field}": {good[field]}',
+                                                             f'"{field}": {v}'))
+    for v in bad_numbers + ["-5"]:
+        add(f"changes = {v[:12]}", raw_head=text.replace('"changes": 2', f'"changes": {v}'))
+    add("t_end before t_start", head=dict(good, t_start=9, t_end=0))
+    for name in (7, "", "a\x00b", "x" * 300, None, ["out 1"]):
+        add(f"signal name {str(name)[:12]!r}",
+            head=dict(good, signals=[{"name": name, "kind": "bit", "changes": 2}]))
+    for kind in ("float", None, ["bit"], 1):
+        add(f"signal kind {kind!r}",
+            head=dict(good, signals=[{"name": "out 1", "kind": kind, "changes": 2}]))
+    add("a name twice", head=dict(good, signals=good["signals"] * 2),
+        bins=[struct.pack("<2q", 0, 5) + struct.pack("<2q", 0, 1)] * 2)
+    add("signals not a list", head=dict(good, signals={"a": 1}))
+    add("strings not texts", head=dict(good, strings=[1, {}]))
+    add("meta a list", head=dict(good, meta=[1]))
+    for trig in (5, {"spec": "x"}, {"t_ms": 5}, {"spec": "x", "t_ms": "5"},
+                 {"spec": "x", "t_ms": -1}, {"spec": 5, "t_ms": 5},
+                 {"spec": "x", "t_ms": 5, "pre_ms": "a"}):
+        add(f"meta.trigger {str(trig)[:30]}", head=dict(good, meta={"trigger": trig}))
+    add("trigger t_ms Infinity",
+        raw_head=text.replace('"meta": {}', '"meta": {"trigger": {"spec": "x", "t_ms": '
+                                            'Infinity}}'))
+    for depth in (200_000, 33):
+        deep = "[" * depth + "]" * depth
+        add(f"trace.json nested {depth}",
+            raw_head=text.replace('"meta": {}', f'"meta": {{"x": {deep}}}'))
+        add(f"events.json nested {depth}", events=f'[{{"t_ms": 1, "type": "halted", '
+                                                  f'"state": {{"x": {deep}}}}}]')
+        add(f"events.json bare nesting {depth}", events=deep)
+    for ev in ('[{"t_ms": Infinity, "type": "note", "text": "x"}]',
+               '[{"t_ms": 1e400, "type": "note", "text": "x"}]',
+               '[{"t_ms": NaN, "type": "note", "text": "x"}]',
+               '[{"t_ms": "7", "type": "note", "text": "x"}]',
+               '[{"type": "note", "text": "x"}]', '[{"t_ms": 1}]',
+               '[{"t_ms": 1, "type": "message", "message": "x"}]',
+               '[{"t_ms": 1, "type": "print", "register": 1e400}]',
+               '[{"t_ms": 1, "type": "print", "register": %d}]' % (1 << 64),
+               '[{"t_ms": 1, "type": "fault", "line": []}]',
+               '[{"t_ms": 1, "t_ms": 2, "type": "note"}]', '{"t_ms": 1}', "[5]", "null",
+               '[{"t_ms": 1, "type": "halted", "state": {"a": [NaN]}}]'):
+        add(f"events {ev[:40]}", events=ev)
+    add("bit value 7", bins=[struct.pack("<2q", 0, 5) + struct.pack("<2q", 0, 7)])
+    add("negative time", bins=[struct.pack("<2q", -5, 5) + struct.pack("<2q", 0, 1)])
+    add("time 2^63-1", bins=[struct.pack("<2q", 0, (1 << 63) - 1) + struct.pack("<2q", 0, 1)])
+    add("times decreasing", bins=[struct.pack("<2q", 5, 0) + struct.pack("<2q", 0, 1)])
+    add("member short", bins=[b"\0" * 30])
+    add("member missing", bins=[])
+    add("trace.json not UTF-8", raw_head="\udcff".encode("utf-8", "surrogateescape")
+        .decode("latin-1"))
+    n += 1
+    (w / f"t{n}.plctrace").write_text("not a zip")
+    out.append(("not a ZIP", w / f"t{n}.plctrace"))
+    return out
+
+
+def attack_trace_files() -> dict:
+    """Issue 24 item 7: hostile trace files through every command that reads
+    one (info, export to VCD, to CSV per tick, to one-bit lanes, compare on the
+    triggers). Each must be refused (exit 2) naming the file, never "internal
+    error" (OverflowError, RecursionError) nor accepted."""
+    t = Tally("24.7 trace files")
+    with tempfile.TemporaryDirectory(prefix="attack24-7-") as d:
+        w = Path(d)
+        for name, path in _hostile_traces(w):
+            for argv in (["trace", "info", path, "--json"],
+                         ["trace", "export", path, w / "x.vcd"],
+                         ["trace", "export", path, w / "x.csv", "--per-tick"],
+                         ["trace", "export", path, w / "x.vcd", "--split-bits"],
+                         ["trace", "compare", path, path, "--align", "trigger"]):
+                o = plcbuilder(*argv, cwd=w, timeout=min(30, TIMEOUT_S))
+                t.case(f"{argv[1]} {name}", o, refused=o.rc == 2 and str(path) in o.err,
+                       accepted=o.rc in (0, 1))
+    return t.result()
+
+
+def attack_junit_names() -> dict:
+    """Issue 24 item 8: tests named with every kind of character XML 1.0 cannot
+    hold (controls, U+FFFE, U+FFFF) in names, in a project name, in a broken
+    test file's message. ``refused`` counts reports that are well-formed XML
+    (the defence held), ``accepted`` reports that are not."""
+    import xml.etree.ElementTree as ET
+    t = Tally("24.8 JUnit names")
+    chars = [0, 1, 7, 8, 0x0B, 0x0C, 0x0E, 0x1B, 0x1F, 0x7F, 0xFFFE, 0xFFFF]
+    with tempfile.TemporaryDirectory(prefix="attack24-8-") as d:
+        w = Path(d)
+        for c in chars:
+            esc = f"\\u{c:04x}"
+            proj = _project(w / f"p{c:x}", {"M03": OK_SOURCE})
+            (proj / "tests").mkdir()
+            (proj / "tests" / "a.toml").write_text(
+                f'[[test]]\nname = "ok {esc} end"\nms = 20\nscenario = "start M03 @ 0"\n'
+                f'[[test.expect]]\nat_end = true\nexit = {{ M03 = 99 }}\n'
+                f'[[test]]\nname = "fails {esc}"\nms = 20\nscenario = "start M03 @ 0"\n'
+                f'[[test.expect]]\nat_end = true\nexit = {{ M03 = 1 }}\n')
+            (proj / "tests" / "b.toml").write_text(f'[[test]]\nname = "{esc}\n')
+            report = w / f"j{c:x}.xml"
+            o = plcbuilder("test", proj, "--junit", report, cwd=w)
+            try:
+                ET.parse(report)
+                well_formed = True
+            except (ET.ParseError, OSError):
+                well_formed = False
+            t.case(f"test name with U+{c:04X}", o, refused=well_formed and o.rc == 2,
+                   accepted=not well_formed)
+    return t.result()
+
+
+def attack_exports() -> dict:
+    """Issue 24 item 9: 64-bit values through VCD (read back with vcdvcd, every
+    value whole), and signal names a spreadsheet would run as a formula through
+    CSV (each must start with a quote inside double quotes). ``refused``
+    counts exports that came out right."""
+    import csv
+    import io
+    t = Tally("24.9 VCD and CSV exports")
+    sys.path.insert(0, str(ROOT))
+    from plcbuilder import api
+    from tests.vcd_reader import VCDVCD
+    extremes = [-(1 << 63), (1 << 63) - 1, -1, 0, 1, (1 << 31), -(1 << 31) - 1, 1 << 40]
+    names = ["=1+2", "+SUM(A1)", "-2+3", "@cmd", "\tx", "=HYPERLINK(\"http://x\",\"y\")",
+             "\uff1dcmd", "a,b", 'say "hi"']
+    with tempfile.TemporaryDirectory(prefix="attack24-9-") as d:
+        w = Path(d)
+        for i, v in enumerate(extremes):
+            tr = api.Trace(0, 3, {"axis X": ("int", [(0, 0), (1, v)])}, [""], [], {})
+            src = w / f"v{i}.plctrace"
+            api.save_trace(tr, src)
+            out = w / f"v{i}.vcd"
+            o = plcbuilder("trace", "export", src, out, cwd=w)
+            try:
+                var = VCDVCD(str(out))["axes.X"]
+                bits = var.tv[-1][1].zfill(int(var.size))
+                got = int(bits, 2) - ((1 << len(bits)) if v < 0 and bits[0] == "1" else 0)
+                right = got == v
+            except Exception:  # noqa: BLE001 - anything that does not read back is wrong
+                right = False
+            t.case(f"VCD value {v}", o, refused=right and o.rc == 0, accepted=not right)
+        for i, name in enumerate(names):
+            tr = api.Trace(0, 2, {name: ("int", [(0, -5)]), "running": ("text", [(0, 1)])},
+                           ["", name], [], {})
+            src = w / f"n{i}.plctrace"
+            try:
+                api.save_trace(tr, src)
+            except Exception:  # noqa: BLE001
+                continue
+            for flag in ([], ["--per-tick"]):
+                out = w / f"n{i}{len(flag)}.csv"
+                o = plcbuilder("trace", "export", src, out, *flag, cwd=w)
+                if o.rc == 2 and "control characters" in o.err:
+                    t.case(f"CSV name {name!r} {flag} (refused on load)", o, refused=True)
+                    continue
+                try:
+                    text = out.read_bytes().decode("utf-8")
+                    cells = [c for row in csv.reader(io.StringIO(text)) for c in row]
+                    formula = ("=", "+", "-", "@", "\t", "\r", "\uff1d", "\uff0b", "\uff0d",
+                               "\uff20")
+                    right = all(not c.startswith(formula) or c.lstrip("-").isdigit()
+                                for c in cells) and (name in cells or "'" + name in cells)
+                except Exception:  # noqa: BLE001
+                    right = False
+                t.case(f"CSV name {name!r} {flag}", o, refused=right and o.rc == 0,
+                       accepted=not right)
+    return t.result()
+
+
 ATTACKS: list[tuple[str, Callable[[], dict]]] = [
     ("6 atomic_write on special files", attack_special_outputs),
     ("7 machine values", attack_machine_values),
     ("8 unbounded reads", attack_unbounded_reads),
     ("10 numbers out of range", attack_numbers),
     ("12 files outside the project", attack_outside_files),
+    ("24.7 hostile trace files", attack_trace_files),
+    ("24.8 JUnit names XML cannot hold", attack_junit_names),
+    ("24.9 VCD widths and CSV formulas", attack_exports),
 ]
 
 
