@@ -497,9 +497,10 @@ def attack_trace_files() -> dict:
 
 def attack_junit_names() -> dict:
     """Issue 24 item 8: tests named with every kind of character XML 1.0 cannot
-    hold (controls, U+FFFE, U+FFFF) in names, in a project name, in a broken
-    test file's message. ``refused`` counts reports that are well-formed XML
-    (the defence held), ``accepted`` reports that are not."""
+    hold (controls, U+FFFE, U+FFFF) in names, with and without a test file that
+    cannot be read beside them. ``refused`` counts reports that are well-formed
+    XML holding the tests (the defence held), ``accepted`` reports that are not
+    (not well-formed, or the tests missing)."""
     import xml.etree.ElementTree as ET
     t = Tally("24.8 JUnit names")
     chars = [0, 1, 7, 8, 0x0B, 0x0C, 0x0E, 0x1B, 0x1F, 0x7F, 0xFFFE, 0xFFFF]
@@ -507,23 +508,25 @@ def attack_junit_names() -> dict:
         w = Path(d)
         for c in chars:
             esc = f"\\u{c:04x}"
-            proj = _project(w / f"p{c:x}", {"M03": OK_SOURCE})
-            (proj / "tests").mkdir()
-            (proj / "tests" / "a.toml").write_text(
-                f'[[test]]\nname = "ok {esc} end"\nms = 20\nscenario = "start M03 @ 0"\n'
-                f'[[test.expect]]\nat_end = true\nexit = {{ M03 = 99 }}\n'
-                f'[[test]]\nname = "fails {esc}"\nms = 20\nscenario = "start M03 @ 0"\n'
-                f'[[test.expect]]\nat_end = true\nexit = {{ M03 = 1 }}\n')
-            (proj / "tests" / "b.toml").write_text(f'[[test]]\nname = "{esc}\n')
-            report = w / f"j{c:x}.xml"
-            o = plcbuilder("test", proj, "--junit", report, cwd=w)
-            try:
-                ET.parse(report)
-                well_formed = True
-            except (ET.ParseError, OSError):
-                well_formed = False
-            t.case(f"test name with U+{c:04X}", o, refused=well_formed and o.rc == 2,
-                   accepted=not well_formed)
+            for broken in (False, True):
+                proj = _project(w / f"p{c:x}{int(broken)}", {"M03": OK_SOURCE})
+                (proj / "tests").mkdir()
+                (proj / "tests" / "a.toml").write_text(
+                    f'[[test]]\nname = "ok {esc} end"\nms = 20\nscenario = "start M03 @ 0"\n'
+                    f'[[test.expect]]\nat_end = true\nexit = {{ M03 = 99 }}\n'
+                    f'[[test]]\nname = "fails {esc}"\nms = 20\nscenario = "start M03 @ 0"\n'
+                    f'[[test.expect]]\nat_end = true\nexit = {{ M03 = 1 }}\n')
+                if broken:                      # and a file that cannot be read
+                    (proj / "tests" / "b.toml").write_text(f'[[test]]\nname = "{esc}\n')
+                report = w / f"j{c:x}{int(broken)}.xml"
+                o = plcbuilder("test", proj, "--junit", report, cwd=w)
+                try:
+                    names = [e.get("name") for e in ET.parse(report).iter("testcase")]
+                    right = any(n.startswith("ok ") for n in names)
+                except (ET.ParseError, OSError):
+                    right = False
+                t.case(f"test name with U+{c:04X}{' and a broken file' if broken else ''}", o,
+                       refused=right and o.rc == (2 if broken else 1), accepted=not right)
     return t.result()
 
 
