@@ -154,10 +154,12 @@ def compare_trace(win, path: Optional[str] = None, align: Optional[str] = None,
         return None
     if path is None:
         from plcbuilder.ide.dialogs.compare_trace import CompareDialog
-        got = CompareDialog.get(win, tools.current(), tools.base_name(), _folder(win))
+        folder = win.settings.last_folder("traces", _folder(win))
+        got = CompareDialog.get(win, tools.current(), tools.base_name(), str(folder))
         if got is None:
             return None
         path, align, offset_ms = got
+        win.settings.set_last_folder("traces", Path(path).resolve().parent)
     try:
         diff = tools.compare_with(path, align or "none", offset_ms)
     except (api.TraceFileError, api.CompareError) as exc:

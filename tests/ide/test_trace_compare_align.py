@@ -106,6 +106,7 @@ def test_two_captures_overlay_with_their_triggers_together(runwin, qtbot, captur
     assert "trigger out 3 rise at 1.020 s" in seen["on_show"]
     assert seen["info"] == "4.920 .. 5.220 s, trigger out 3 rise at 5.020 s"
     assert seen["ok_enabled"]
+    assert w.settings.last_folder("traces") == b.parent.resolve()     # remembered
     panels = w.run_panels
     _drawn(qtbot, panels)
     comp = panels.comparison
