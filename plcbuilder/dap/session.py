@@ -77,6 +77,8 @@ class Session:
         self._looks: "queue.Queue[dict]" = queue.Queue()
         self._own_resume = False        # the next "resumed" is one a request of ours asked for
         self._stepped_back: Optional[dict] = None
+        self._generation = 0            # which launch or attach the controller's callbacks are of
+        self._generation_lock = threading.Lock()
 
     # ------------------------------------------------------------ the loop
     def serve(self) -> None:
@@ -518,20 +520,27 @@ class Session:
                 self.client = Client.connect()          # the one of the runtime file
         except ValueError as exc:
             raise Refusal(str(exc)) from None
-        client = self.client
-
-        def notified(msg: dict) -> None:     # (a controller left behind tells nothing)
-            if client is self.client:
-                self.on_notification(msg)
-
-        def telemetry(batch) -> None:
-            if client is self.client:
-                self.on_telemetry(batch)
-        client.notification_callback = notified
-        client.subscribe(telemetry, samples=False, events=True)
+        self._listen(self.client)
         where = "an embedded controller" if self.embedded else "the controller at %s:%d" % \
             tuple(self.client.address)
         self.wire.output(f"plcbuilder dap: connected to {where}")
+
+    def _listen(self, client) -> None:
+        """Hear the controller's halts, resumes and events; once this session has
+        moved on to another launch or attach, what it still tells is dropped."""
+        generation = self._generation
+
+        def notified(msg: dict) -> None:
+            with self._generation_lock:
+                if generation == self._generation:
+                    self.on_notification(msg)
+
+        def telemetry(batch) -> None:
+            with self._generation_lock:
+                if generation == self._generation:
+                    self.on_telemetry(batch)
+        client.notification_callback = notified
+        client.subscribe(telemetry, samples=False, events=True)
 
     def _leave(self, terminate: bool) -> None:
         c = self.client
@@ -549,16 +558,17 @@ class Session:
     def _end_previous(self) -> None:
         """A launch or attach after another: the first one's controller is left
         (as disconnect leaves it) and, if this session started it, stopped."""
-        self.wire.reopen()
-        if self.client is None and self.embedded is None:
-            return
         had = self.embedded is not None
-        self._leave(True)
-        self.shutdown()
-        self.view = None
-        self._last_stop = None
-        self.started = self.configured = False
-        self.procedure = None
+        if self.client is not None or had:
+            self._leave(True)
+            with self._generation_lock:     # what the old controller still tells is dropped
+                self._generation += 1
+            self.shutdown()
+            self.view = None
+            self._last_stop = None
+            self.started = self.configured = False
+            self.procedure = None
+        self.wire.reopen()
         if had:
             self.wire.output("plcbuilder dap: stopped the controller of the previous launch")
 

@@ -147,3 +147,38 @@ def test_requests_that_change_the_session_are_answered_in_order(slow_compile):
     finally:
         go.set()
         a.close()
+
+
+def test_what_the_previous_controller_still_tells_is_dropped():
+    """A relaunch after the first procedure ended: its 'ended' event came late
+    (the telemetry of a busy machine), while the relaunch was leaving the first
+    controller, and its terminated closed the session the relaunch had already
+    reopened: the new launch's initialized and every later event were dropped.
+    Now the first session's end is told before the new one opens, and what the
+    old controller tells after that is dropped."""
+    from types import SimpleNamespace
+
+    ended = SimpleNamespace(type="ended", name="M03", exit_code=99, exit_name="x", source="M03")
+
+    class Old(_Controller):
+        def subscribe(self, fn, **kw):
+            self.telemetry = fn
+
+        def stop(self):                             # the late news, while being left
+            self.telemetry(SimpleNamespace(events=[ended]))
+            return {}
+
+        def close(self):
+            pass
+
+    sent: list[dict] = []
+    s = dap_session.Session(Wire(lambda n: b"", lambda data: sent.append(
+        json.loads(data.split(b"\r\n\r\n", 1)[1]))))
+    old = Old()
+    s.client, s.started, s.procedure = old, True, "M03"
+    s._listen(old)
+    s._end_previous()                               # a second launch begins
+    old.telemetry(SimpleNamespace(events=[ended]))  # later still: dropped
+    s.wire.event("initialized")
+    assert [m["event"] for m in sent if m["type"] == "event" and m["event"] != "output"] == \
+        ["exited", "terminated", "initialized"]
