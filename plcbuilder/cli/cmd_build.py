@@ -6,7 +6,9 @@ hardware total against its limit, what happened to ``build/eeprom.rom`` (only
 written when there is no error; otherwise the previous image is kept) and a
 summary. ``--quiet`` prints only the diagnostics and the summary. Exit status
 1 if there is any error (in a procedure, in the totals, or in the project
-settings), else 0.
+settings), else 0. A folder that is not a project (no plcbuilder.toml,
+hardware/ or software/) is refused with exit status 1, and nothing is written
+there.
 """
 
 from __future__ import annotations
@@ -75,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
 
     def body() -> int:
         try:
-            project = api.Project.open(args.project)
+            project = api.Project.open(args.project, existing=True)
         except api.ProjectError as exc:
             out.print(f"plcbuilder build: error: {exc}", err=True)
             return 1

@@ -38,6 +38,12 @@ STEP_KINDS = ("tick", "into", "over", "out")
 _CALL_SIZE = size_of(Op.CALL)
 _SLOT_OPS = frozenset({Op.LOAD, Op.STORE, Op.INC, Op.DEC})
 _PLACEHOLDER = re.compile(r"\{([A-Za-z_][A-Za-z0-9_]*)\}")
+#: The longest condition or log text a breakpoint takes (the compiler's limit for a
+#: condition, plcbuilder.project.conditions.MAX_CONDITION_CHARS, and the link's).
+MAX_TEXT = 1000
+#: The largest compiled condition or expression (a condition of MAX_TEXT characters
+#: compiles to far less).
+MAX_CODE = 64 * 1024
 
 
 class DebugError(Exception):
@@ -279,8 +285,8 @@ class Debugger:
                 raise DebugError(f"{what}: hit count n must be 1 or more, not {n!r}")
             bp.hit = (hit["mode"], n)
         log = spec.get("log")
-        if log is not None and not isinstance(log, str):
-            raise DebugError(f"{what}: log must be text")
+        if log is not None and (not isinstance(log, str) or len(log) > MAX_TEXT):
+            raise DebugError(f"{what}: log must be text of at most {MAX_TEXT} characters")
         bp.log = log
         cond = spec.get("condition")
         if cond is not None:
@@ -288,6 +294,9 @@ class Debugger:
                 cond = {"text": cond.name, "code": cond.to_bytes()}
             if not isinstance(cond, dict) or not isinstance(cond.get("code"), (bytes, bytearray)):
                 raise DebugError(f"{what}: a condition must arrive compiled ({{text, code}})")
+            if len(str(cond.get("text") or "")) > MAX_TEXT or len(cond["code"]) > MAX_CODE:
+                raise DebugError(f"{what}: a condition is at most {MAX_TEXT} characters "
+                                 f"({MAX_CODE // 1024} KiB compiled)")
             try:
                 Program.from_bytes(bytes(cond["code"]))
             except LoadError as exc:
@@ -614,6 +623,8 @@ class Debugger:
         (``compile_condition``), over the variables of ``procedure`` (None: the
         halted one, else the hardware one, else the first running); built-in
         functions read the machine as the procedure would. It writes nothing."""
+        if len(code) > MAX_CODE:
+            raise DebugError(f"a compiled expression is at most {MAX_CODE // 1024} KiB")
         try:
             cond = Program.from_bytes(bytes(code))
         except LoadError as exc:

@@ -38,6 +38,8 @@ class Breakpoints:
     def __init__(self, session):
         self.session = session
         self.by_file: dict[str, list[dict]] = {}
+        self.pending: dict[str, list[dict]] = {}   # answers given before there was a controller
+        self._client_id: dict[int, int] = {}       # the debugger's id -> the id the client knows
         self._next = 1_000_000                     # ids of breakpoints the debugger did not take
 
     def set(self, args: dict) -> list[dict]:
@@ -52,14 +54,25 @@ class Breakpoints:
             raise ValueError("breakpoints must be a list of objects")
         self.by_file[path] = bps
         if self.session.client is None:
-            return [self._unverified(b, "set when the session connects to a controller")
-                    for b in bps]
+            answers = [self._unverified(b, "set when the session connects to a controller")
+                       for b in bps]
+            self.pending[path] = answers
+            return answers
+        self.pending.pop(path, None)
         return self._apply(path, bps)
 
     def apply_pending(self) -> None:
-        """Set the breakpoints sent before there was a controller, and tell the client."""
-        for path, bps in list(self.by_file.items()):
-            for answer in self._apply(path, bps):
+        """Set the breakpoints sent before there was a controller, and tell the
+        client (a ``breakpoint`` event for each, with the id it was given)."""
+        pending, self.pending = self.pending, {}
+        for path, told in pending.items():
+            bps = self.by_file.get(path)
+            if bps is None:
+                continue
+            for old, answer in zip(told, self._apply(path, bps)):
+                if answer["id"] != old["id"]:
+                    self._client_id[answer["id"]] = old["id"]
+                answer = {**answer, "id": old["id"]}
                 self.session.wire.event("breakpoint", {"reason": "changed", "breakpoint": answer})
 
     def clear_all(self) -> None:
@@ -70,10 +83,12 @@ class Breakpoints:
             except LinkError:
                 pass
         self.by_file.clear()
+        self.pending.clear()
+        self._client_id.clear()
 
-    @staticmethod
-    def dap_ids(engine_id: int) -> list[int]:
-        return [engine_id]
+    def dap_ids(self, engine_id: int) -> list[int]:
+        """The ids the client knows for the debugger's breakpoint ``engine_id``."""
+        return [self._client_id.get(engine_id, engine_id)]
 
     # ------------------------------------------------------------ private
     def _apply(self, path: str, bps: list[dict]) -> list[dict]:

@@ -7,6 +7,12 @@ Ids are small numbers kept for the session: a procedure keeps its thread id,
 a frame id is ``thread * 100 + depth``, and a scope's ``variablesReference``
 is ``frame * 10 + scope``, so every id can be decoded without tables that
 would grow.
+
+Pins and registers are *indexed* scopes (``indexedVariables``: a client pages
+them with ``filter``/``start``/``count``), the others *named*. A variable's
+``evaluateName`` is an expression that evaluates to its value (``count``,
+``portget(3)``, ``adc01``, ``gvarget(6060)``); those with none (output pins,
+axes) have no ``evaluateName``.
 """
 
 from __future__ import annotations
@@ -15,11 +21,15 @@ from importlib import resources
 from pathlib import Path
 from typing import Callable, Optional
 
-#: The scopes of a frame, in order: (name, what they hold, expensive?)
-SCOPES = (("Variables", "vars", False), ("Inputs", "inputs", False),
-          ("Outputs", "outputs", False), ("Analog", "analog", False),
-          ("Axes", "axes", False), ("Registers", "registers", True))
+#: The scopes of a frame, in order: (name, what they hold, expensive?, indexed?)
+SCOPES = (("Variables", "vars", False, False), ("Inputs", "inputs", False, True),
+          ("Outputs", "outputs", False, True), ("Analog", "analog", False, False),
+          ("Axes", "axes", False, False), ("Registers", "registers", True, True))
 _BUILTIN = "<builtin>/"
+#: Analog channels a PLC expression names (adc01 is ADC 0, ...): the predefined
+#: register-mapped variables (docs/language.md).
+_ANALOG_NAMES = {"adc": ("adc01", "adc02"), "pwm": ("pwm01", "pwm02", "pwm03", "pwm04"),
+                 "dac": ("dac01", "dac02")}
 
 
 class Threads:
@@ -70,8 +80,8 @@ class View:
             src = self._source(name, f.get("file"))
             if src is not None:
                 frame["source"] = src
-            if depth == 0 and p.get("at_loop_end"):
-                frame["presentationHint"] = "label"
+            if depth == 0 and p.get("at_loop_end"):          # its tick ended there
+                frame["name"] += " (at the loop's end)"
             frames.append(frame)
         frames = frames[start:]
         return frames[:levels] if levels else frames
@@ -90,21 +100,39 @@ class View:
     # ------------------------------------------------------------ scopes
     def scopes(self, frame_id: int) -> list[dict]:
         out = []
-        for k, (name, _what, expensive) in enumerate(SCOPES):
+        for k, (name, _what, expensive, indexed) in enumerate(SCOPES):
             ref = frame_id * 10 + k + 1
+            n = len(self._items(ref))
             out.append({"name": name, "variablesReference": ref, "expensive": expensive,
-                        "namedVariables": len(self._items(ref))})
+                        ("indexedVariables" if indexed else "namedVariables"): n})
         return out
 
-    def variables(self, ref: int) -> list[dict]:
-        return [{"name": n, "value": str(v), "variablesReference": 0,
-                 "evaluateName": n if self._scope(ref) == "vars" else None}
-                for n, v, _target in self._items(ref)]
+    def variables(self, ref: int, filt: Optional[str] = None, start: int = 0,
+                  count: int = 0) -> list[dict]:
+        """The variables of a scope: those of ``filt`` (indexed or named: a scope
+        is one or the other), from ``start``, at most ``count`` of them (0: all)."""
+        k = ref % 10 - 1
+        if filt is not None and 0 <= k < len(SCOPES) and SCOPES[k][3] != (filt == "indexed"):
+            return []
+        items = self._items(ref)[start:]
+        out = []
+        for n, v, _target, expr in items[:count] if count else items:
+            var = {"name": n, "value": str(v), "variablesReference": 0}
+            if expr is not None:
+                var["evaluateName"] = expr
+            out.append(var)
+        return out
+
+    def value_of(self, ref: int, name: str):
+        for n, v, _t, _e in self._items(ref):
+            if n == name:
+                return v
+        return None
 
     def target(self, ref: int, name: str) -> Optional[str]:
         """The write target (``PROC.var``, ``in N``, ``out N``, ``adc N``, ``pwm N``,
         ``dac N``, ``gvar N``) behind a variable, or None (axes are read only)."""
-        for n, _v, target in self._items(ref):
+        for n, _v, target, _e in self._items(ref):
             if n == name:
                 return target
         return None
@@ -113,26 +141,31 @@ class View:
         k = ref % 10 - 1
         return SCOPES[k][1] if 0 <= k < len(SCOPES) else None
 
-    def _items(self, ref: int) -> list[tuple[str, int, Optional[str]]]:
+    def _items(self, ref: int) -> list[tuple[str, int, Optional[str], Optional[str]]]:
+        """(name, value, write target, evaluateName) of each variable of a scope."""
         what = self._scope(ref)
         proc = self.frame_procedure(ref // 10)
         m = self.state.get("machine") or {}
         if what == "vars":
             p = self.procs.get(proc) or {}
-            return [(n, v, f"{proc}.{n}") for n, v in (p.get("vars") or {}).items()]
+            return [(n, v, f"{proc}.{n}", n) for n, v in (p.get("vars") or {}).items()]
         if what == "inputs":
-            return [(f"in {i}", v, f"in {i}") for i, v in enumerate(m.get("inputs") or ())]
+            return [(f"in {i}", v, f"in {i}", f"portget({i})")
+                    for i, v in enumerate(m.get("inputs") or ())]
         if what == "outputs":
-            return [(f"out {i}", v, f"out {i}") for i, v in enumerate(m.get("outputs") or ())]
+            return [(f"out {i}", v, f"out {i}", None) for i, v in enumerate(m.get("outputs") or ())]
         if what == "analog":
             out = []
             for kind in ("adc", "pwm", "dac"):
-                out += [(f"{kind} {i}", v, f"{kind} {i}") for i, v in enumerate(m.get(kind) or ())]
+                names = _ANALOG_NAMES[kind]
+                out += [(f"{kind} {i}", v, f"{kind} {i}", names[i] if i < len(names) else None)
+                        for i, v in enumerate(m.get(kind) or ())]
             return out
         if what == "axes":
-            return [(axis, v, None) for axis, v in (m.get("axes") or {}).items()]
+            return [(axis, v, None, None) for axis, v in (m.get("axes") or {}).items()]
         if what == "registers":
-            return [(f"gvar {a}", v, f"gvar {a}") for a, v in (m.get("registers") or {}).items()]
+            return [(f"gvar {a}", v, f"gvar {a}", f"gvarget({a})")
+                    for a, v in (m.get("registers") or {}).items()]
         return []
 
 

@@ -1,21 +1,32 @@
 """``plcbuilder dap``: the Debug Adapter Protocol, bridged to the controller's
 debugger over the link (docs/editors.md, "Debugging from an editor").
 
-One :class:`Session` per adapter process. ``launch`` builds the project, starts
-a controller (an embedded one of the session's own, or the one named by
+One :class:`Session` per adapter process. ``launch`` builds the project (a
+folder that is not a project is refused: nothing is written there), starts a
+controller (an embedded one of the session's own, or the one named by
 ``controller`` or the project's settings), uploads the image, and on
 ``configurationDone`` starts the procedure with its eparam; ``attach`` joins a
-controller that runs already. Halts and resumes come back from the controller
-as ``stopped``/``continued`` events; logpoints, prints and faults as
-``output``; the end of the launched procedure as ``exited`` and ``terminated``.
+controller that runs already. A second launch or attach in the same session
+first ends the first: the controller it started is stopped. Halts come back
+from the controller as ``stopped`` events (a resume as ``continued`` only when
+no request of ours implied it); logpoints, prints and faults as ``output``;
+the end of the launched procedure as ``exited`` and ``terminated``.
 
-Requests are answered on the main thread, one ``handle_<command>`` each; a
+Threads: one reads the messages and never waits on a request. Requests that
+only look at the halted state (:data:`CONCURRENT`: threads, stackTrace,
+scopes, variables, evaluate) are answered by a few worker threads as they
+come, so a slow one (an expression to compile) keeps no other waiting; every
+other request is answered in the order it came, one at a time, on the main
+thread, and the events it causes go out after its response (the wire is held
+meanwhile: :meth:`Wire.hold`). One ``handle_<command>`` per request; a
 request the adapter does not know, or cannot carry out, gets a response with
 ``success: false`` and the reason, and the session goes on.
 """
 
 from __future__ import annotations
 
+import os
+import queue
 import sys
 import threading
 from pathlib import Path
@@ -32,6 +43,13 @@ from plcbuilder.project.conditions import compile_condition
 _STOP_REASONS = {"breakpoint": "breakpoint", "step": "step", "pause": "pause",
                  "fault": "exception"}
 _STEPS = {"next": "over", "stepIn": "into", "stepOut": "out"}
+#: Requests that only look: answered beside the others, as they come.
+CONCURRENT = frozenset({"threads", "stackTrace", "scopes", "variables", "evaluate"})
+#: Requests whose events are not held back: launch and attach (the build's output
+#: shows as it happens; what follows their response is sent after it anyway).
+_UNHELD = frozenset({"initialize", "launch", "attach"})
+#: Worker threads for the CONCURRENT requests.
+WORKERS = 4
 
 
 class Refusal(Exception):
@@ -55,17 +73,38 @@ class Session:
         self.done = False
         self._last_stop = None
         self._stop_lock = threading.Lock()
+        self._ordered: "queue.Queue[Optional[dict]]" = queue.Queue()
+        self._looks: "queue.Queue[dict]" = queue.Queue()
+        self._own_resume = False        # the next "resumed" is one a request of ours asked for
+        self._stepped_back: Optional[dict] = None
+        self._generation = 0            # which launch or attach the controller's callbacks are of
+        self._generation_lock = threading.Lock()
 
     # ------------------------------------------------------------ the loop
     def serve(self) -> None:
+        """Read on a thread of its own; answer the ordered requests here, the
+        others on the workers; return after disconnect or at the end of input."""
+        threading.Thread(target=self._read, name="dap-reader", daemon=True).start()
+        for k in range(WORKERS):
+            threading.Thread(target=self._look, name=f"dap-worker-{k}", daemon=True).start()
+        while not self.done:
+            msg = self._ordered.get()
+            if msg is None:
+                break
+            self.dispatch(msg)
+        self.shutdown()
+
+    def _read(self) -> None:
         for msg in self.wire.messages():
             if isinstance(msg, BadMessage):
                 self._bad(msg)
             elif msg.get("type") == "request":
-                self.dispatch(msg)
-            if self.done:
-                break
-        self.shutdown()
+                (self._looks if msg["command"] in CONCURRENT else self._ordered).put(msg)
+        self._ordered.put(None)
+
+    def _look(self) -> None:
+        while True:
+            self.dispatch(self._looks.get())
 
     def dispatch(self, req: dict) -> None:
         command = req["command"]
@@ -73,16 +112,31 @@ class Session:
         if handler is None:
             self.wire.respond(req, error=f"unknown request {command[:60]!r}")
             return
+        if command in CONCURRENT:
+            self._answer(req, command, handler)
+            return
+        held = command not in _UNHELD
+        if held:
+            self.wire.hold()
+        try:
+            self._answer(req, command, handler)
+        finally:
+            if held:
+                self.wire.release()
+
+    def _answer(self, req: dict, command: str, handler) -> None:
+        show = command in ("launch", "attach")       # the session did not start: say so
         try:
             body = handler(req.get("arguments") or {})
         except (Refusal, ValueError) as exc:
-            self.wire.respond(req, error=str(exc))
+            self.wire.respond(req, error=str(exc), show_user=show)
             return
         except LinkError as exc:
-            self.wire.respond(req, error=f"the controller: {exc}")
+            self.wire.respond(req, error=f"the controller: {exc}", show_user=show)
             return
         except Exception as exc:  # noqa: BLE001 - a bug answers this request, the session goes on
-            self.wire.respond(req, error=f"internal error: {type(exc).__name__}: {exc}")
+            self.wire.respond(req, error=f"internal error: {type(exc).__name__}: {exc}",
+                              show_user=show)
             return
         self.wire.respond(req, body)
         after = getattr(self, "after_" + command, None)
@@ -105,6 +159,7 @@ class Session:
             "supportsSetVariable": True,
             "supportsEvaluateForHovers": True,
             "supportsTerminateRequest": True,
+            "supportsStepBack": True,
             "supportsSteppingGranularity": False,
             "supportTerminateDebuggee": True,
             "supportsRestartRequest": False,
@@ -112,25 +167,28 @@ class Session:
         }
 
     def handle_launch(self, args: dict) -> dict:
+        self._end_previous()
         self.launch_args = args
         self.project = self._project(args)
         self.procedure, self.eparam = self._what_to_start(args)
         image = self._build() if args.get("build", True) else self._built_image()
+        target = self._target()
         self._connect(args, launch=True)
         self.wire.output(f"plcbuilder dap: uploading {self.project.image_path}")
-        self.client.upload(image)
+        self.client.upload(image, target=target)
         return {}
 
     def handle_attach(self, args: dict) -> dict:
+        self._end_previous()
         self.launch_args = args
-        if args.get("project"):
-            self.project = self._project(args)
+        self.project = self._project(args) if args.get("project") else None
         self._connect(args, launch=False)
         return {}
 
     def after_launch(self) -> None:
         if self.client is not None:
             self.wire.event("initialized")
+            self.breakpoints.apply_pending()
 
     after_attach = after_launch
 
@@ -163,8 +221,10 @@ class Session:
 
     def handle_terminate(self, args: dict) -> dict:
         self._leave(True)
-        self.wire.event("terminated")
         return {}
+
+    def after_terminate(self) -> None:
+        self.wire.event("terminated")
 
     # ------------------------------------------------------------ breakpoints
     def handle_setBreakpoints(self, args: dict) -> dict:
@@ -176,8 +236,19 @@ class Session:
     # ------------------------------------------------------------ running
     def handle_continue(self, args: dict) -> dict:
         self._need_halt()
-        self.client.debug_continue()
+        self._resume(self.client.debug_continue)
         return {"allThreadsContinued": True}
+
+    def _resume(self, command, *args) -> dict:
+        """A link command that resumes the run: its "resumed" is not told as a
+        continued event (DAP: the client knows; the event is for resumes no
+        request of its own implied)."""
+        self._own_resume = True
+        try:
+            return command(*args)
+        except BaseException:
+            self._own_resume = False
+            raise
 
     def handle_pause(self, args: dict) -> dict:
         self._need_client()
@@ -196,8 +267,30 @@ class Session:
     def _step(self, command: str, args: dict) -> dict:
         self._need_halt()
         proc = self.threads.name_of(args.get("threadId", 0))
-        self.client.debug_step(_STEPS[command], proc)
+        self._resume(self.client.debug_step, _STEPS[command], proc)
         return {}
+
+    def handle_stepBack(self, args: dict) -> dict:
+        """Back by one statement: the session run again to the statement before
+        (docs/debugging.md, "Stepping back")."""
+        self._need_halt()
+        self._stepped_back = self.client.debug_step_back("statement").get("halted")
+        return {}
+
+    def handle_reverseContinue(self, args: dict) -> dict:
+        """Back to the previous breakpoint hit."""
+        self._need_halt()
+        self._stepped_back = self.client.debug_run_back().get("halted")
+        return {}
+
+    def after_stepBack(self) -> None:
+        """The controller halted where the run was taken back to: tell it (the
+        new controller's halt is the answer; a notification may not come)."""
+        state, self._stepped_back = self._stepped_back, None
+        if isinstance(state, dict):
+            self.on_halted(state)
+
+    after_reverseContinue = after_stepBack
 
     # ------------------------------------------------------------ looking
     def handle_threads(self, args: dict) -> dict:
@@ -220,9 +313,16 @@ class Session:
         return {"scopes": view.scopes(_int(args.get("frameId"), "frameId"))}
 
     def handle_variables(self, args: dict) -> dict:
+        """A scope's variables; ``filter`` (indexed/named), ``start`` and ``count``
+        page a big scope as the client asks (0 or no count: all from start)."""
         view = self._need_halt()
-        return {"variables": view.variables(_int(args.get("variablesReference"),
-                                                 "variablesReference"))}
+        ref = _int(args.get("variablesReference"), "variablesReference")
+        start = _int(args.get("start", 0), "start", lo=0)
+        count = _int(args.get("count", 0), "count", lo=0)
+        filt = args.get("filter")
+        if filt not in (None, "indexed", "named"):
+            raise Refusal(f"filter is indexed or named, not {filt!r}")
+        return {"variables": view.variables(ref, filt, start, count)}
 
     def handle_setVariable(self, args: dict) -> dict:
         view = self._need_halt()
@@ -234,10 +334,8 @@ class Session:
         value = self._value(args.get("value"))
         self.client.write(target, value)
         self._refresh()
-        for n, v, _t in self.view._items(ref):
-            if n == name:
-                return {"value": str(v)}
-        return {"value": str(value)}
+        shown = self.view.value_of(ref, name) if self.view is not None else None
+        return {"value": str(value if shown is None else shown)}
 
     def handle_evaluate(self, args: dict) -> dict:
         self._need_client()
@@ -254,13 +352,20 @@ class Session:
 
     # ------------------------------------------------------------ controller events
     def on_notification(self, msg: dict) -> None:
-        """From the link's reader thread: halted / resumed."""
+        """From the link's reader thread: halted / resumed. A resume that a
+        request of ours asked for (continue, a step, ...) is not told: the
+        client knows (DAP's continued event is for the others, e.g. the IDE's)."""
         if msg.get("type") == "halted" and isinstance(msg.get("state"), dict):
+            self._own_resume = False
             self.on_halted(msg["state"])
         elif msg.get("type") == "resumed":
             self.view = None
             self._last_stop = None
-            self.wire.event("continued", {"threadId": 1, "allThreadsContinued": True})
+            if self._own_resume:
+                self._own_resume = False
+            else:
+                self.wire.event("continued", {"threadId": self._any_thread(),
+                                              "allThreadsContinued": True})
 
     def on_halted(self, state: dict) -> None:
         bp = state.get("breakpoint") or {}
@@ -307,6 +412,12 @@ class Session:
         if not self.done:
             self.wire.event("terminated")
 
+    def _any_thread(self) -> int:
+        """A thread id for an event about all threads (the launched procedure's)."""
+        if self.procedure is not None:
+            return self.threads.id_of(self.procedure)
+        return next(iter(self.threads.ids.values()), 1)
+
     def _need_client(self) -> Client:
         if self.client is None:
             raise Refusal("not connected to a controller: launch or attach first")
@@ -342,9 +453,19 @@ class Session:
                               "software/ and plcbuilder.toml or include/)")
             return found
         try:
-            return Project.open(p)
+            return Project.open(p, existing=True)
         except ProjectError as exc:
             raise Refusal(f"cannot open the project: {exc}") from None
+
+    def _target(self) -> Optional[dict]:
+        """The project's target for the upload (None: myCNC), as the IDE sends it."""
+        try:
+            target = self.project.target_settings()
+        except ProjectError as exc:
+            raise Refusal(str(exc)) from None
+        if target.get("name") == "mycnc":
+            return None
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in target.items()}
 
     def _what_to_start(self, args: dict) -> tuple[Optional[str], int]:
         name = args.get("procedure")
@@ -399,12 +520,27 @@ class Session:
                 self.client = Client.connect()          # the one of the runtime file
         except ValueError as exc:
             raise Refusal(str(exc)) from None
-        self.client.notification_callback = self.on_notification
-        self.client.subscribe(self.on_telemetry, samples=False, events=True)
+        self._listen(self.client)
         where = "an embedded controller" if self.embedded else "the controller at %s:%d" % \
             tuple(self.client.address)
         self.wire.output(f"plcbuilder dap: connected to {where}")
-        self.breakpoints.apply_pending()
+
+    def _listen(self, client) -> None:
+        """Hear the controller's halts, resumes and events; once this session has
+        moved on to another launch or attach, what it still tells is dropped."""
+        generation = self._generation
+
+        def notified(msg: dict) -> None:
+            with self._generation_lock:
+                if generation == self._generation:
+                    self.on_notification(msg)
+
+        def telemetry(batch) -> None:
+            with self._generation_lock:
+                if generation == self._generation:
+                    self.on_telemetry(batch)
+        client.notification_callback = notified
+        client.subscribe(telemetry, samples=False, events=True)
 
     def _leave(self, terminate: bool) -> None:
         c = self.client
@@ -413,11 +549,28 @@ class Session:
         try:
             self.breakpoints.clear_all()
             if c.debug_state() is not None:
-                c.debug_continue()
+                self._resume(c.debug_continue)
             if terminate and self.embedded is None and self.started:
                 c.stop()
         except LinkError:
             pass
+
+    def _end_previous(self) -> None:
+        """A launch or attach after another: the first one's controller is left
+        (as disconnect leaves it) and, if this session started it, stopped."""
+        had = self.embedded is not None
+        if self.client is not None or had:
+            self._leave(True)
+            with self._generation_lock:     # what the old controller still tells is dropped
+                self._generation += 1
+            self.shutdown()
+            self.view = None
+            self._last_stop = None
+            self.started = self.configured = False
+            self.procedure = None
+        self.wire.reopen()
+        if had:
+            self.wire.output("plcbuilder dap: stopped the controller of the previous launch")
 
     def shutdown(self) -> None:
         c, self.client = self.client, None
@@ -452,9 +605,10 @@ class Session:
             return p
 
 
-def _int(v, what: str) -> int:
-    if isinstance(v, bool) or not isinstance(v, int):
-        raise Refusal(f"{what} must be a whole number, not {v!r}")
+def _int(v, what: str, lo: Optional[int] = None) -> int:
+    if isinstance(v, bool) or not isinstance(v, int) or (lo is not None and v < lo):
+        more = f" from {lo}" if lo is not None else ""
+        raise Refusal(f"{what} must be a whole number{more}, not {v!r}")
     return v
 
 
@@ -464,7 +618,13 @@ def serve_stdio() -> int:
     def write(data: bytes) -> None:
         stdout.write(data)
         stdout.flush()
-    read = stdin.read1 if hasattr(stdin, "read1") else stdin.read
+    try:                # the file descriptor itself: the reader thread may still be in a
+        fd = sys.stdin.fileno()       # read at exit, and a buffered stdin's lock would abort it
+
+        def read(n: int) -> bytes:
+            return os.read(fd, n)
+    except (AttributeError, OSError, ValueError):
+        read = stdin.read1 if hasattr(stdin, "read1") else stdin.read
     session = Session(Wire(read, write))
     try:
         session.serve()

@@ -15,6 +15,10 @@
    image with a manifest, see plcbuilder.image); otherwise the previous image
    is kept, and the result says so.
 
+A folder that is not a project (no plcbuilder.toml, hardware/ or software/:
+:func:`~plcbuilder.project.model.not_a_project`) is not built: the result is
+that one error, and nothing is written there (no build/, no image).
+
 Every file is written atomically, and only when its contents change. The image
 and the cache are flushed to the disk before they replace the old ones; the
 binaries are not (one a power cut loses fails its CRC check at the next build
@@ -77,7 +81,7 @@ from plcbuilder.lang.source import MAX_SOURCE_BYTES
 from plcbuilder.lang.builtin_headers import source_text
 from plcbuilder.lang.preprocess import builtin_header
 from plcbuilder._support.files import atomic_write, read_bounded, remove_temp_files
-from plcbuilder.project.model import Procedure, Project
+from plcbuilder.project.model import Procedure, Project, not_a_project
 
 try:
     import fcntl
@@ -297,6 +301,13 @@ def build_project(project: Project, progress: Optional[Progress] = None, *,
     settings say; ``jobs`` as :func:`compile_all`'s. Never raises for problems in
     the sources; an unwritable build folder raises OSError."""
     build_dir = project.build_dir
+    why = not_a_project(project.root)
+    if why is not None:              # write nothing: not even build/
+        result = BuildResult(project, [], [error("not-a-project", f"{project.root}: {why}",
+                                                 None)],
+                             project.limits, 0, project.image_path)
+        result.image_message = f"{project.image_path} not written: {project.root} is not a project"
+        return result
     outside = _build_dir_problem(project)
     if outside is not None:          # write nothing there: compile, report, keep the image
         result = BuildResult(project, compile_all(project, progress, strict=strict, jobs=jobs),

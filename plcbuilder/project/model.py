@@ -82,6 +82,17 @@ def looks_like_project(path: Union[str, Path]) -> bool:
                            or (p / SOFTWARE_DIR).is_dir())
 
 
+def not_a_project(path: Union[str, Path]) -> Optional[str]:
+    """Why the folder ``path`` is not a project, or None when it is one (or is no
+    folder: opening it says so): what Build All and the debug adapter's launch
+    say before they write anything there."""
+    p = Path(path)
+    if not p.is_dir() or looks_like_project(p):
+        return None
+    return (f"not a project: it has no {SETTINGS_FILE}, {HARDWARE_DIR}/ or {SOFTWARE_DIR}/ "
+            "(plcbuilder new DIR makes one in a new or empty folder)")
+
+
 class ProjectError(ValueError):
     """A project that cannot be opened or used; ``str()`` reads ``FILE:LINE: what``."""
 
@@ -309,9 +320,12 @@ class Project:
 
     # --------------------------------------------------------------- open
     @classmethod
-    def open(cls, path: Union[str, Path]) -> "Project":
+    def open(cls, path: Union[str, Path], *, existing: bool = False) -> "Project":
         """Open a project folder (or its plcbuilder.toml). A missing settings
-        file means the defaults; a bad one raises ProjectError (file, line)."""
+        file means the defaults; a bad one raises ProjectError (file, line).
+        ``existing``: a folder that is not a project (:func:`not_a_project`)
+        raises ProjectError too, rather than being a project with no procedures
+        (what building or launching asks: they would write into it)."""
         p = Path(path)
         if p.name == SETTINGS_FILE and p.is_file():
             p = p.parent
@@ -320,6 +334,9 @@ class Project:
         if not p.is_dir():
             raise ProjectError("a project is a folder (with hardware/ and software/), "
                                "this is a file", p)
+        why = not_a_project(p) if existing else None
+        if why is not None:
+            raise ProjectError(why, p)
         default_name = p.resolve().name
         sp = p / SETTINGS_FILE
         if not sp.exists():

@@ -69,3 +69,35 @@ def test_bad_project(tmp_path, capsys):
     assert main(["build", str(tmp_path)]) == 1
     err = capsys.readouterr().err
     assert f"{tmp_path}/plcbuilder.toml:2: limits.hw_proc: must be from 1 to" in err
+
+
+def test_a_folder_that_is_not_a_project_is_refused_and_nothing_is_written(tmp_path, capsys,
+                                                                         monkeypatch):
+    """Issue 23 (Also) and 24.5: `plcbuilder build DIR` on a folder with no
+    plcbuilder.toml, hardware/ or software/ said "Build All ok: 0 procedures"
+    and wrote DIR/build/eeprom.rom (in any folder, / included)."""
+    stray = tmp_path / "etc"
+    stray.mkdir()
+    (stray / "passwd").write_text("root:x:0:0\n")
+    assert main(["build", str(stray), "--color", "never"]) == 1
+    out, err = capsys.readouterr()
+    assert f"plcbuilder build: error: {stray}: not a project: it has no plcbuilder.toml, " \
+           "hardware/ or software/" in err
+    assert "Build All ok" not in out
+    assert sorted(p.name for p in stray.iterdir()) == ["passwd"]
+    monkeypatch.chdir(stray)                       # the default: the current folder
+    assert main(["build"]) == 1
+    assert "not a project" in capsys.readouterr().err
+    assert sorted(p.name for p in stray.iterdir()) == ["passwd"]
+
+
+@pytest.mark.parametrize("marker", ["plcbuilder.toml", "hardware", "software"])
+def test_any_one_mark_of_a_project_is_enough(tmp_path, capsys, marker):
+    root = tmp_path / "p"
+    root.mkdir()
+    if marker.endswith(".toml"):
+        (root / marker).write_text('name = "x"\n')
+    else:
+        (root / marker).mkdir()
+    assert main(["build", str(root), "--color", "never"]) == 0
+    assert (root / "build" / "eeprom.rom").is_file()

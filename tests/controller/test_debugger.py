@@ -334,3 +334,25 @@ def test_m80_halts_on_the_home_switch_read_and_steps_over_it(backend):
     c.debugger.resume()
     c.run_until_idle(60_000)
     assert c.plc.last["M80"].exit_code == 99             # homed
+
+
+def test_the_condition_and_log_texts_are_bounded():
+    """Issue 24.2: a client of the controller that sends its own condition (not
+    through compile_condition, which refuses over 1000 characters) meets the
+    same bound, and so does a log text and a compiled expression to evaluate."""
+    from plcbuilder.controller.debugger import MAX_TEXT
+    c = _c("reference")
+    code = api.compile_condition("n > 1")
+    for spec, why in [
+            ({"line": 7, "condition": {"text": "n" * (MAX_TEXT + 1), "code": code}},
+             "breakpoint 1: a condition is at most 1000 characters"),
+            ({"line": 7, "log": "x" * (MAX_TEXT + 1)}, "log must be text of at most 1000"),
+            ({"line": 7, "condition": {"text": "n", "code": code + b"\0" * 70000}},
+             "64 KiB compiled")]:
+        with pytest.raises(DebugError, match=why):
+            c.debugger.set_breakpoints("M10.plc", [spec])
+    assert c.debugger.breakpoints() == []
+    c.start("M10")
+    c.step(5)
+    with pytest.raises(DebugError, match="at most 64 KiB"):
+        c.debugger.evaluate(b"\0" * 70000)

@@ -3,86 +3,37 @@ process, the test sends DAP requests over its stdin and reads responses and
 events from its stdout; the adapter builds the project, starts its own
 controller and debugs a real procedure on it."""
 
+import time
 from pathlib import Path
 
 import pytest
 
-from tests.lsp._client import Client, frame, spawn
-
-M03 = """main()
-{
-  count = 0;
-  do {
-    count = count + 1;
-    helper();
-  } while (count < 5);
-  gvarset(20001, total);
-  exit(99);
-}
-helper()
-{
-  total = total + count;
-}
-"""
-
-
-class DapClient(Client):
-    def request(self, command: str, arguments=None, timeout: float = 60.0) -> dict:
-        seq = self.next_id()
-        self.send({"seq": seq, "type": "request", "command": command,
-                   "arguments": arguments or {}})
-        return self.wait(lambda m: m.get("type") == "response" and m.get("request_seq") == seq,
-                         timeout)
-
-    def ok(self, command: str, arguments=None) -> dict:
-        r = self.request(command, arguments)
-        assert r["success"], r
-        return r.get("body") or {}
-
-    def event(self, name: str, timeout: float = 60.0, pred=lambda b: True) -> dict:
-        m = self.wait(lambda m: m.get("type") == "event" and m.get("event") == name
-                      and pred(m.get("body") or {}), timeout)
-        return m.get("body") or {}
+from tests.dap._dap import DapClient, frames as _frames, initialize, make_project, start, \
+    values as _vars
+from tests.lsp._client import frame, spawn
 
 
 @pytest.fixture
 def project(tmp_path):
-    root = tmp_path / "proj"
-    (root / "hardware").mkdir(parents=True)
-    (root / "software").mkdir()
-    (root / "include").mkdir()
-    (root / "plcbuilder.toml").write_text('name = "dap"\n')
-    (root / "hardware" / "M03.plc").write_text(M03)
-    return root
+    return make_project(tmp_path / "proj")
 
 
 @pytest.fixture
 def dap(project):
-    c = DapClient(spawn("dap", cwd=project))
+    c = start(project)
     yield c
     c.close()
 
 
 def _launch(dap, project, **extra):
-    caps = dap.ok("initialize", {"clientID": "test", "adapterID": "plcbuilder",
-                                 "linesStartAt1": True, "columnsStartAt1": True,
-                                 "pathFormat": "path"})
+    caps = initialize(dap)
     assert caps["supportsConditionalBreakpoints"] and caps["supportsLogPoints"]
     assert caps["supportsHitConditionalBreakpoints"] and caps["supportsSetVariable"]
+    assert caps["supportsStepBack"]
     dap.ok("launch", {"project": str(project), "program": str(project / "hardware" / "M03.plc"),
                       "eparam": 7, **extra})
     dap.event("initialized")
     return str(project / "hardware" / "M03.plc")
-
-
-def _frames(dap, tid):
-    return dap.ok("stackTrace", {"threadId": tid})["stackFrames"]
-
-
-def _vars(dap, frame_id, scope="Variables"):
-    scopes = dap.ok("scopes", {"frameId": frame_id})["scopes"]
-    ref = next(s["variablesReference"] for s in scopes if s["name"] == scope)
-    return ref, {v["name"]: v["value"] for v in dap.ok("variables", {"variablesReference": ref})["variables"]}
 
 
 def test_a_debugging_session_as_an_editor_runs_it(dap, project):
@@ -122,7 +73,6 @@ def test_a_debugging_session_as_an_editor_runs_it(dap, project):
     dap.event("stopped", pred=lambda b: b["reason"] == "step")
     assert _frames(dap, tid)[0]["name"] == "main()"
     dap.ok("continue", {"threadId": tid})
-    dap.event("continued")
     out = dap.event("output", pred=lambda b: "print 20001" in b.get("output", ""))
     assert out["output"].startswith("M03: print 20001 = ")
     assert dap.event("exited")["exitCode"] == 99
@@ -208,7 +158,7 @@ def test_attach_to_a_running_controller(project, tmp_path):
     ctl = ControllerProcess.start(image=build.image_path)
     try:
         ep = ctl.wait_endpoint()
-        dap = DapClient(spawn("dap", cwd=project))
+        dap = start(project)
         try:
             dap.ok("initialize", {"adapterID": "plcbuilder"})
             dap.ok("attach", {"controller": f"{ep.host}:{ep.port}", "token": ep.token,
@@ -227,7 +177,6 @@ def test_attach_to_a_running_controller(project, tmp_path):
             assert int(_vars(dap, frames[0]["id"])[1]["n"]) > 20      # the condition held
             dap.ok("setBreakpoints", {"source": {"path": lube}, "breakpoints": []})
             dap.ok("continue", {"threadId": stopped["threadId"]})
-            dap.event("continued")
             dap.ok("pause", {"threadId": stopped["threadId"]})
             assert dap.event("stopped")["reason"] == "pause"
             dap.ok("disconnect", {})
@@ -242,3 +191,203 @@ def test_attach_to_a_running_controller(project, tmp_path):
             c.close()
     finally:
         ctl.stop()
+
+
+# ---------------------------------------------------------------- order (issue 25.2)
+
+def _index(log, pred) -> int:
+    return next(i for i, m in enumerate(log) if pred(m))
+
+
+def test_a_fault_on_continue_comes_after_the_continue_response(dap, project):
+    """The wire had event continued, event stopped, then the continue response:
+    a request's response comes before the events it causes, and a resume the
+    client asked for is not told back to it as continued."""
+    initialize(dap)
+    dap.ok("launch", {"project": str(project), "procedure": "M04"})
+    dap.event("initialized")
+    m04 = str(project / "hardware" / "M04.plc")
+    dap.ok("setBreakpoints", {"source": {"path": m04},
+                              "breakpoints": [{"line": 6, "condition": "n == 0"}]})
+    dap.ok("configurationDone")
+    tid = dap.event("stopped")["threadId"]
+    r = dap.request("continue", {"threadId": tid})
+    fault = dap.event("stopped", pred=lambda b: b["reason"] == "exception")
+    assert fault["description"] == "Fault" and "division by zero" in fault["text"]
+    log = dap.received()
+    responded = _index(log, lambda m: m.get("request_seq") == r["request_seq"])
+    stopped = _index(log, lambda m: m.get("event") == "stopped"
+                     and m["body"]["reason"] == "exception")
+    assert responded < stopped
+    assert [m for m in log if m.get("event") == "continued"] == []
+    assert _frames(dap, tid)[0]["line"] == 6
+    dap.ok("disconnect")
+
+
+def test_nothing_follows_terminated_but_exited(dap, project):
+    path = _launch(dap, project)
+    dap.ok("setBreakpoints", {"source": {"path": path}, "breakpoints": [{"line": 8}]})
+    dap.ok("configurationDone")
+    tid = dap.event("stopped")["threadId"]
+    dap.ok("continue", {"threadId": tid})
+    dap.event("terminated")
+    dap.ok("terminate")                  # after the end: answered, and nothing more is told
+    dap.ok("disconnect", {"terminateDebuggee": True})
+    dap.proc.wait(20)
+    log = dap.received()
+    after = log[_index(log, lambda m: m.get("event") == "terminated") + 1:]
+    assert [m["event"] for m in after if m["type"] == "event"] == []
+    events = [m["event"] for m in log if m["type"] == "event"]
+    assert events.index("exited") < events.index("terminated")
+    assert "continued" not in events
+
+
+# ------------------------------------------------- what the halted state shows (25.1, 25.3, 25.4)
+
+def test_variables_page_and_every_evaluate_name_evaluates(dap, project):
+    path = _launch(dap, project)
+    dap.ok("setBreakpoints", {"source": {"path": path}, "breakpoints": [{"line": 13}]})
+    dap.ok("configurationDone")
+    tid = dap.event("stopped")["threadId"]
+    top = _frames(dap, tid)[0]["id"]
+    scopes = {s["name"]: s for s in dap.ok("scopes", {"frameId": top})["scopes"]}
+    inputs = scopes["Inputs"]
+    assert inputs["indexedVariables"] > 5 and "namedVariables" not in inputs
+    assert scopes["Variables"]["namedVariables"] >= 3
+    ref = inputs["variablesReference"]
+    page = dap.ok("variables", {"variablesReference": ref, "filter": "indexed", "start": 2,
+                                "count": 3})["variables"]
+    assert [v["name"] for v in page] == ["in 2", "in 3", "in 4"]
+    assert dap.ok("variables", {"variablesReference": ref, "filter": "named"})["variables"] == []
+    whole = dap.ok("variables", {"variablesReference": ref})["variables"]
+    assert len(whole) == inputs["indexedVariables"]
+    bad = dap.request("variables", {"variablesReference": ref, "start": -1})
+    assert not bad["success"] and "start must be a whole number from 0" in bad["message"]
+    dap.ok("setVariable", {"variablesReference": ref, "name": "in 3", "value": "1"})
+    checked = 0
+    for name, s in scopes.items():
+        for v in dap.ok("variables", {"variablesReference": s["variablesReference"]})["variables"]:
+            assert v.get("evaluateName", "") is not None, v
+            if "evaluateName" in v:
+                got = dap.ok("evaluate", {"expression": v["evaluateName"], "frameId": top,
+                                          "context": "watch"})["result"]
+                assert got == v["value"], (name, v)
+                checked += 1
+    assert checked > 20
+    dap.ok("disconnect")
+
+
+def test_a_procedure_at_its_loop_end_is_an_ordinary_frame(tmp_path):
+    """The procedure that did not halt ended its tick at its loop's end: its
+    frame said presentationHint "label" (meant for separators)."""
+    project = make_project(tmp_path / "proj", software=True)
+    dap = start(project)
+    try:
+        initialize(dap)
+        dap.ok("launch", {"project": str(project), "procedure": "M05"})
+        dap.event("initialized")
+        lube = str(project / "software" / "LUBE.plc")
+        dap.ok("setBreakpoints", {"source": {"path": lube},
+                                  "breakpoints": [{"line": 4, "hitCondition": "3"}]})
+        dap.ok("configurationDone")
+        dap.event("stopped")
+        threads = {t["name"]: t["id"] for t in dap.ok("threads")["threads"]}
+        m05 = _frames(dap, threads["M05"])
+        assert m05[0]["name"] == "main() (at the loop's end)" and m05[0]["line"] == 5
+        assert "presentationHint" not in m05[0]
+        dap.ok("disconnect")
+    finally:
+        dap.close()
+
+
+def test_evaluate_speaks_of_what_was_typed_and_refusals_pop_no_dialog(dap, project):
+    path = _launch(dap, project)
+    dap.ok("setBreakpoints", {"source": {"path": path}, "breakpoints": [{"line": 5}]})
+    dap.ok("configurationDone")
+    top = _frames(dap, dap.event("stopped")["threadId"])[0]["id"]
+    r = dap.request("evaluate", {"expression": "nope(", "frameId": top, "context": "repl"})
+    assert not r["success"] and r["message"] == \
+        "the '(' at column 5 is not closed: a ')' is missing"
+    assert ";" not in r["message"]
+    for command in ("fly", "source", "gotoTargets"):       # not supported: no dialog each time
+        r = dap.request(command, {})
+        assert not r["success"] and "unknown request" in r["message"]
+        assert r["body"]["error"]["showUser"] is False
+    dap.ok("disconnect")
+
+
+# -------------------------------------------------------- hostile input (issue 24.2, 24.5)
+
+def test_a_hostile_condition_keeps_no_request_waiting(dap, project):
+    """800/1,600/3,200 '(' took 2.2/5.6/16.4 s to compile and the next request
+    waited 77.7 s: each is refused at once, and a cheap request is answered
+    promptly behind them."""
+    path = _launch(dap, project)
+    t0 = time.monotonic()
+    for n in (800, 1600, 3200):
+        bp = dap.ok("setBreakpoints", {"source": {"path": path}, "breakpoints": [
+            {"line": 5, "condition": "(" * n}]})["breakpoints"][0]
+        assert not bp["verified"] and ("nest at most 16 deep" in bp["message"]
+                                       or "at most 1000 characters" in bp["message"])
+        r = dap.request("evaluate", {"expression": "(" * n, "context": "repl"})
+        assert not r["success"]
+    assert dap.ok("threads")["threads"] == []
+    assert time.monotonic() - t0 < 5.0
+    dap.ok("disconnect")
+
+
+def test_launch_refuses_a_folder_that_is_not_a_project(tmp_path):
+    """The launch built into any folder (/build, /etc/build got an eeprom.rom)."""
+    stray = tmp_path / "stray"
+    stray.mkdir()
+    (stray / "notes.txt").write_text("x\n")
+    dap = start(stray)
+    try:
+        initialize(dap)
+        for args in ({}, {"project": str(stray)}, {"cwd": str(stray), "procedure": "M03"}):
+            r = dap.request("launch", args)
+            assert not r["success"], r
+            assert r["message"] == (f"cannot open the project: {stray if args else '.'}: not a "
+                                    "project: it has no plcbuilder.toml, hardware/ or software/ "
+                                    "(plcbuilder new DIR makes one in a new or empty folder)")
+            assert r["body"]["error"]["showUser"] is True      # the session did not start
+        assert sorted(p.name for p in stray.iterdir()) == ["notes.txt"]
+        dap.ok("disconnect")
+    finally:
+        dap.close()
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            out.append(int(stat.parent.name))
+    return out
+
+
+def _cmdline(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+    except OSError:
+        return f"{pid} (gone)"
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux's /proc")
+def test_a_relaunch_stops_the_controller_the_previous_launch_started(dap, project):
+    """Five launches left five controllers running until disconnect."""
+    initialize(dap)
+    for _ in range(3):
+        dap.ok("launch", {"project": str(project), "procedure": "M03"})
+        dap.event("initialized")
+        dap.ok("configurationDone")
+        deadline = time.monotonic() + 30
+        while len(_children(dap.proc.pid)) != 1 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        kids = _children(dap.proc.pid)
+        assert len(kids) == 1, [_cmdline(k) for k in kids]
+    dap.ok("disconnect")
+    dap.proc.wait(20)

@@ -220,7 +220,9 @@ def test_source_lines_for_cached_diagnostics(example):
 
 
 def test_empty_project_builds_an_empty_image(tmp_path):
-    p = small_project(tmp_path / "empty", {})
+    """A project with no procedure yet (its settings file only) builds an empty
+    image; a folder with nothing at all is no project (below)."""
+    p = small_project(tmp_path / "empty", {}, 'name = "empty"\n')
     r = build_project(p)
     assert r.ok and r.image_written and read_image(p.image_path.read_bytes()).procedures == ()
 
@@ -476,3 +478,18 @@ def test_a_damaged_diagnostic_in_the_cache_compiles_again(example, row):
     r = build_project(example)
     assert (r.compiled, r.reused) == (1, 11) and not r.get("M08").cached
     assert all(isinstance(pb.diagnostics, list) for pb in r.procedures)
+
+
+def test_a_folder_that_is_not_a_project_is_not_built(tmp_path):
+    """Issue 24.5: Build All wrote build/eeprom.rom into any folder. Whoever
+    calls build_project (the CLI, the IDE, the debug adapter) gets one error
+    and nothing is written there."""
+    stray = tmp_path / "stray"
+    stray.mkdir()
+    (stray / "notes.txt").write_text("x\n")
+    result = build_project(Project.open(stray))
+    assert not result.ok and not result.image_written and result.procedures == []
+    assert [d.code for d in result.diagnostics] == ["not-a-project"]
+    assert "not a project: it has no plcbuilder.toml, hardware/ or software/" in \
+        result.diagnostics[0].message
+    assert sorted(p.name for p in stray.iterdir()) == ["notes.txt"]

@@ -139,3 +139,16 @@ def test_build_include_setting(tmp_path):
     p = Project.open(tmp_path)
     assert p.include_dirs() == (tmp_path / "include", tmp_path / "shared")
     assert p.compile_options(tmp_path / "hardware" / "M03.plc").root == tmp_path
+
+
+def test_existing_refuses_a_folder_that_is_not_a_project(tmp_path):
+    """Project.open accepts any folder (defaults); building and launching ask
+    for existing=True, which names what is missing."""
+    assert Project.open(tmp_path).root == tmp_path
+    with pytest.raises(ProjectError) as err:
+        Project.open(tmp_path, existing=True)
+    assert str(err.value) == (f"{tmp_path}: not a project: it has no plcbuilder.toml, "
+                              "hardware/ or software/ (plcbuilder new DIR makes one in a new "
+                              "or empty folder)")
+    (tmp_path / "software").mkdir()
+    assert Project.open(tmp_path, existing=True).root == tmp_path
