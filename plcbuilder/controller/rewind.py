@@ -238,25 +238,43 @@ class Checkpoints:
         self.ready.clear()
         self._job = None
 
-    def take(self, old, before: int) -> Optional[tuple]:
-        """(controller, next action's index) of the latest fitting checkpoint at
-        or before tick ``before``, removed from the pool; or None."""
+    def _latest(self, old, before: int) -> Optional[int]:
+        """The tick of the latest checkpoint at or before tick ``before`` that
+        fits ``old``'s recording and breakpoints, or None."""
         key = _breakpoints_key(old.debugger)
         acts = old.recorder.actions
+        if old.recorder.dropped:
+            return None
         for tick in sorted(self.ready, reverse=True):
             if tick > before:
                 continue
-            c, applied, bps = self.ready[tick]
+            _c, applied, bps = self.ready[tick]
             k = len(applied)
-            if bps == key and acts[:k] == applied and (k == len(acts) or acts[k].t_ms >= tick) \
-                    and not old.recorder.dropped:
-                del self.ready[tick]
-                return c, k
+            if bps == key and acts[:k] == applied and (k == len(acts) or acts[k].t_ms >= tick):
+                return tick
         return None
+
+    def take(self, old, before: int) -> Optional[tuple]:
+        """(controller, next action's index) of the latest fitting checkpoint at
+        or before tick ``before``, removed from the pool; or None."""
+        tick = self._latest(old, before)
+        if tick is None:
+            return None
+        c, applied, _bps = self.ready.pop(tick)
+        return c, len(applied)
 
     def work(self, old, budget_s: float) -> bool:
         """Make checkpoints for about ``budget_s`` seconds; False when there is
-        nothing to do (every wanted checkpoint is there)."""
+        nothing to do (every wanted checkpoint is there, or out of reach).
+
+        A checkpoint is made from the latest fitting one before it (used up,
+        and made again in turn), or from t = 0 when there is none, so moving
+        the window on by one checkpoint runs the session over the window once
+        (``keep`` x ``every_ms``), not from t = 0 again. The latest one is
+        always made; an older one only when it is at most ``keep`` x
+        ``every_ms`` from where it would start (after hours at Max speed with
+        no idle time, that leaves only the latest: one run of the session,
+        not ``keep``)."""
         if old.target is not None or old.recorder.dropped:
             return False
         deadline = time.perf_counter() + budget_s
@@ -264,23 +282,35 @@ class Checkpoints:
         key = _breakpoints_key(old.debugger)
         acts = old.recorder.actions
         for tick, (_c, applied, bps) in list(self.ready.items()):
-            if tick not in wanted or bps != key or acts[:len(applied)] != applied:
+            if bps != key or acts[:len(applied)] != applied:
                 del self.ready[tick]                 # of no use any more: made again
+        spare = [t for t in self.ready if t not in wanted]
+        for tick in sorted(spare)[:-1]:
+            del self.ready[tick]    # out of the window: the latest is kept to start from
         if self._job is not None and self._job[3] != key:
             self._job = None
+        reach = self.keep * self.every_ms
         while time.perf_counter() < deadline:
             if self._job is None:
-                todo = [t for t in wanted if t not in self.ready]
-                if not todo:
+                job = None
+                for tick in wanted:
+                    if tick in self.ready:
+                        continue
+                    base = self._latest(old, tick)
+                    if tick == wanted[0] or tick - (base or 0) <= reach:
+                        job = tick
+                        break
+                if job is None:
                     return False
-                tick = todo[0]
+                tick = job
                 try:
                     actions = _actions(old, tick)
-                    c = _fresh(old, self.factory)
+                    start = self.take(old, tick) or (_fresh(old, self.factory), 0)
                 except RewindError:
                     return False
-                self._job = (tick, c, actions, _breakpoints_key(old.debugger),
-                             _run(old, c, actions, 0, tick, chunk=BUILD_CHUNK_MS))
+                c, i = start
+                self._job = (tick, c, actions, key,
+                             _run(old, c, actions, i, tick, chunk=BUILD_CHUNK_MS))
             tick, c, actions, key, gen = self._job
             try:
                 next(gen)

@@ -18,6 +18,20 @@ skips the whole backlog at once: pacing restarts from now, the ticks skipped
 are added to ``state.speed.dropped_ms`` once, and the simulation never runs
 ahead of the wall clock. Time comes from :attr:`Simulation.clock` (replaceable
 in tests) and one pacing decision is :meth:`Simulation.pace`.
+
+A controller with nothing to do (no hardware procedure, the machine still,
+nothing due: :func:`quiet_ticks`) is not woken every batch: the thread sleeps
+until the next tick where something happens (a software tick, a start due) or
+at most :attr:`Simulation.idle_sleep`, and the quiet ticks in between are run
+in one go (the controller counts them without running anything) when it
+wakes, or before it answers a request that comes first (:meth:`Simulation.call`
+then sees the time the wall clock says). The ticks run and everything they
+produce are the same as when paced batch by batch: only the wake-ups go.
+
+Idle work (stepping back's checkpoints, :attr:`Simulation.idle_work`) gets at
+most :attr:`Simulation.idle_share` of the wall time while a run is paced, so
+that a long session (or one run at Max for hours) cannot keep a core busy at
+1x; while halted or paused it gets the time it wants.
 """
 
 from __future__ import annotations
@@ -31,10 +45,14 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional
 
 from plcbuilder.controller.controller import Controller
+from plcbuilder.controller.plc import SOFTWARE_PERIOD_MS
 from plcbuilder.link import protocol
 from plcbuilder.link.protocol import debug as _debug
 
-__all__ = ["Simulation", "SimulationDown", "TelemetryQueue"]
+__all__ = ["Simulation", "SimulationDown", "TelemetryQueue", "quiet_ticks"]
+
+#: quiet_ticks() when nothing at all is due
+FOREVER = 1 << 62
 
 
 class SimulationDown(RuntimeError):
@@ -75,7 +93,8 @@ class TelemetryQueue:
     idle_time_interval = 1.0
 
     def __init__(self, max_samples: int = 1000, max_events: int = 20000, samples: bool = True,
-                 events: bool = True, lossless: bool = False):
+                 events: bool = True, lossless: bool = False,
+                 notify: Optional[Callable[[], None]] = None):
         self.want_samples = samples
         self.want_events = events
         self.lossless = lossless
@@ -85,9 +104,13 @@ class TelemetryQueue:
         self._lock = threading.Lock()
         self.missed = 0
         self.missed_events = 0
-        self.t_ms = 0
+        self.t_ms = -1                  # nothing pushed yet: nothing to take
         self.active = True              # a procedure runs or is due (time-only takes are due)
         self._time_only_at = 0.0        # monotonic time of the last time-only take
+        #: called (from the simulation thread) when something new arrives after a
+        #: take, once until the next take: the server's loop sleeps until then
+        self.notify = notify
+        self._told = False
 
     @property
     def room(self) -> int:
@@ -97,18 +120,35 @@ class TelemetryQueue:
     def push(self, samples: list, events: list, t_ms: int, active: bool = True) -> None:
         """Add what one batch of ticks produced; ``active``: a procedure runs or is due."""
         with self._lock:
+            tell = not self._told and (t_ms != self.t_ms or self.want_samples and samples
+                                       or self.want_events and events)
             self.t_ms = t_ms
             self.active = active
             if self.want_samples and samples:
                 self.missed += _append(self._samples, samples)
             if self.want_events and events:
                 self.missed_events += _append(self._events, events)
+            if tell:
+                self._told = True
+        if tell and self.notify is not None:
+            self.notify()
+
+    def ready_at(self) -> Optional[float]:
+        """The monotonic time from which :meth:`take` has something to hand out
+        (0.0: now), or None while nothing new came."""
+        if self._samples or self._events or self.missed or self.missed_events:
+            return 0.0
+        if self.t_ms == self._taken_t:
+            return None
+        return self._time_only_at + (self.busy_time_interval if self.active
+                                     else self.idle_time_interval)
 
     def take(self, limit: Optional[int] = None) -> Optional[tuple[list, list, int, int, int]]:
         """(samples, events, missed, missed_events, t_ms) since the last take (the
         oldest ``limit`` samples and events at most; ``t_ms`` is then the time of the
         next sample left), or None when there is nothing new."""
         with self._lock:
+            self._told = False
             if not self._samples and not self._events and not self.missed \
                     and not self.missed_events:
                 if self.t_ms == self._taken_t:
@@ -135,6 +175,53 @@ class TelemetryQueue:
     _taken_t = -1
 
 
+# ===================================================================== quiet stretches
+
+def quiet_ticks(c) -> int:
+    """Ticks from ``c.t_ms`` on that only count time: no procedure runs in
+    them, the machine does not move, nothing is due (0: the next tick does
+    something; :data:`FOREVER`: nothing is due at all). Running them later,
+    in one go, gives exactly what running them one by one would (the
+    controller already runs such stretches as one count, PLC._machine_alone).
+    Conservative: anything it does not know (another target, a machine
+    without ``quiet``, a step or a run-to going on, a watched variable, a
+    pending force, a bound input about to start something) is 0."""
+    if getattr(c, "target", None) is not None:
+        return 0
+    plc = getattr(c, "plc", None)
+    machine = getattr(c, "machine", None)
+    if plc is None or machine is None or plc.hw is not None or plc.watching:
+        return 0
+    if getattr(machine, "pending_notes", True):
+        return 0
+    end = FOREVER
+    if not getattr(machine, "quiet", False):
+        # still only a delayed input to come (an output's follower, such as an
+        # arc-OK sensor): nothing happens before the tick whose end applies it
+        sensors, motion = getattr(machine, "sensors", None), getattr(machine, "motion", None)
+        if sensors is None or motion is None or motion.needs_advance or sensors.dynamic_adc \
+                or not sensors.pending:
+            return 0
+        end = min(due for due, _level in sensors.pending.values()) - 1
+    dbg = c.debugger
+    if dbg is not None and dbg.halt is not None:
+        return 0
+    if c.forces.pending or c.watch:
+        return 0
+    if plc.record_samples and (not plc.sample_changes_only or not plc._same_row(
+            None, plc.proc, machine.sample_fields())):
+        return 0                        # the next tick's sample is recorded (a subscriber's first)
+    if plc.bindings and plc._edge_due():
+        return 0
+    t = plc.t
+    if plc.sw:
+        end = min(end, t + (plc.grid - t) % SOFTWARE_PERIOD_MS)
+    due = c.next_due()
+    if due is not None:
+        end = min(end, due)
+    return FOREVER if end >= FOREVER else max(0, end - t)
+
+
 # ===================================================================== simulation
 
 @dataclass
@@ -156,6 +243,15 @@ class Simulation:
     max_lag = 1.0
     #: Seconds a simulation at Max speed waits for a lossless subscriber before dropping.
     lossless_wait = 1.0
+    #: Longest sleep of a paced controller with nothing to do (its subscribers see the
+    #: time move at least this often; a request wakes it at once).
+    idle_sleep = 0.25
+    #: Seconds a quiet sleep lasts beyond the tick it waits for (rounding).
+    wake_margin = 0.0002
+    #: Share of the wall time idle work may take while a run is paced (not halted or
+    #: paused), and the most it may save up (seconds).
+    idle_share = 0.01
+    idle_burst = 0.05
 
     def __init__(self, controller: Controller, mode: str = "realtime", factor: float = 1.0):
         self.controller = controller
@@ -175,6 +271,11 @@ class Simulation:
         self._tick_cost = 2e-6                  # seconds a tick takes, averaged
         self._held_since: Optional[float] = None  # waiting for a lossless subscriber since
         self._was_halted = False
+        self._lazy = False                      # asleep over quiet ticks: catch up before a call
+        self._idle_tokens = 0.0                 # seconds of idle work allowed while paced
+        self._idle_refill = time.monotonic()
+        #: paced wake-ups (batches run or quiet sleeps ended), for tests and benchmarks
+        self.wakeups = 0
         self.clock: Callable[[], float] = time.monotonic
         self._base_wall = self.clock()
         self._base_t = controller.t_ms
@@ -322,7 +423,7 @@ class Simulation:
         self._rebase()
 
     # ---------------------------------------------------------------- the thread
-    def _run_ticks(self, n: int) -> None:
+    def _run_ticks(self, n: int, measure: bool = True) -> None:
         t0 = time.perf_counter()
         try:
             self.controller.step(n)
@@ -331,8 +432,9 @@ class Simulation:
             _debug(traceback.format_exc())
             self.mode = "pause"
             return
-        dt = time.perf_counter() - t0
-        self._tick_cost = 0.8 * self._tick_cost + 0.2 * (dt / n)
+        if measure:
+            dt = time.perf_counter() - t0
+            self._tick_cost = 0.8 * self._tick_cost + 0.2 * (dt / n)
         self.publish()
 
     def _chunk(self) -> int:
@@ -340,6 +442,8 @@ class Simulation:
         return max(1, min(100_000, int(self.slice / max(self._tick_cost, 1e-8))))
 
     def _exec(self, c: _Call) -> None:
+        if self._lazy:              # asleep over quiet ticks: first the ticks due by now
+            self.catch_up()
         try:
             c.result = c.fn()
         except BaseException as exc:  # noqa: BLE001 - handed back to the caller
@@ -372,12 +476,20 @@ class Simulation:
         When more than :attr:`max_lag` seconds of ticks are due, the backlog is
         skipped: pacing restarts from now and the skipped ticks are counted in
         ``dropped_ms``, so the simulation neither races to catch up nor ever runs
-        ahead of the wall clock."""
+        ahead of the wall clock.
+
+        When the ticks ahead are quiet (:func:`quiet_ticks`) the wait runs to
+        the end of the tick where something happens next, or
+        :attr:`idle_sleep` at most; the quiet ticks are run when it ends (or
+        before a request, :meth:`catch_up`)."""
         rate = 1000.0 * self.factor                      # ticks per second
         now = self.clock()
-        t = self.controller.t_ms
+        c = self.controller
+        t = c.t_ms
         due = self._base_t + int((now - self._base_wall) * rate) - t
         if due > 0:
+            self._lazy = False
+            self.wakeups += 1
             if due > max(1, int(self.max_lag * rate)):  # stalled, or cannot keep up: skip it
                 self.dropped_ms += due
                 self._base_wall = now
@@ -385,8 +497,32 @@ class Simulation:
                 return self.batch
             self._run_ticks(min(due, self._chunk()))
             return None
+        quiet = quiet_ticks(c)
+        if quiet > 0:
+            # nothing happens before tick t + quiet: wake when it is due (it runs
+            # once the wall clock has passed its end), a request wakes us sooner
+            self._lazy = True
+            wake = self._base_wall + (min(t + quiet, FOREVER) + 1 - self._base_t) / rate
+            # (a hair late rather than a hair early: the tick is due then for sure)
+            return min(max(wake - now + self.wake_margin, self.batch), self.idle_sleep)
+        self._lazy = False
         next_due = self._base_wall + (t + 1 - self._base_t) / rate
         return max(next_due - now, self.batch)
+
+    def catch_up(self) -> None:
+        """Run the quiet ticks a paced simulation slept over (see :meth:`pace`),
+        so that a request acts at the time the wall clock says. On the
+        simulation thread, before each request; it runs ticks only when all
+        that are due are quiet (but the last), never a backlog of busy ones."""
+        if self.mode not in ("realtime", "factor") or self._halted():
+            return
+        rate = 1000.0 * self.factor
+        c = self.controller
+        due = self._base_t + int((self.clock() - self._base_wall) * rate) - c.t_ms
+        if 0 < due <= max(1, int(self.max_lag * rate)) and due <= quiet_ticks(c) + 1:
+            # cheap (they are counted, not run), and not what a tick costs:
+            # they do not count in _tick_cost
+            self._run_ticks(due, measure=False)
 
     def _halted(self) -> bool:
         """The debugger halted the controller: time stands still (requests are
@@ -400,17 +536,30 @@ class Simulation:
             self._rebase()
         return halted
 
-    def _idle(self, seconds: float) -> bool:
-        """Do idle work for about ``seconds``; False when there was none."""
+    def _idle(self, seconds: float, paced: bool = False) -> bool:
+        """Do idle work for about ``seconds``; False when there was none (or,
+        ``paced``, when its share of the wall time is used up)."""
         work = self.idle_work
         if work is None or not self._commands.empty():
             return False
+        if paced:
+            now = time.monotonic()
+            self._idle_tokens = min(self.idle_burst, self._idle_tokens
+                                    + (now - self._idle_refill) * self.idle_share)
+            self._idle_refill = now
+            if self._idle_tokens <= 0:
+                return False
+            seconds = min(seconds, self._idle_tokens)
+        t0 = time.perf_counter()
         try:
             return bool(work(seconds))
         except Exception:  # noqa: BLE001 - idle work must not bring the simulation down
             _debug(traceback.format_exc())
             self.idle_work = None
             return False
+        finally:
+            if paced:
+                self._idle_tokens -= time.perf_counter() - t0
 
     def _shutdown_controller(self) -> None:
         try:
@@ -452,7 +601,7 @@ class Simulation:
                 continue
             wait = self.pace()
             if wait is not None:
-                if wait < 0.002 or not self._idle(wait / 2):
+                if wait < 0.002 or not self._idle(wait / 2, paced=True):
                     self._wait(wait)
         self._drain_commands()
         if self._shutdown_on_stop:

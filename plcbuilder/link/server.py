@@ -49,7 +49,8 @@ class _Conn:
     __slots__ = ("sock", "peer", "decoder", "out", "authed", "opened", "last_rx",
                  "frame_started", "close_at", "session", "closed", "mask", "inflight")
 
-    def __init__(self, sock: socket.socket, peer: str, now: float, max_frame: int):
+    def __init__(self, sock: socket.socket, peer: str, now: float, max_frame: int,
+                 notify: Optional[Callable[[], None]] = None):
         self.sock = sock
         self.peer = peer
         self.decoder = FrameDecoder(max_frame)
@@ -59,7 +60,7 @@ class _Conn:
         self.last_rx = now
         self.frame_started: Optional[float] = None
         self.close_at: Optional[float] = None      # set: closing once out is sent
-        self.session = Session(peer=peer)
+        self.session = Session(peer=peer, notify=notify)
         self.closed = False
         self.mask = 0
         self.inflight = False                      # a slow request runs on a worker
@@ -148,11 +149,12 @@ class Server:
         self._thread: Optional[threading.Thread] = None
         self._stopping = False
         self._next_flush = time.monotonic()
+        self._wake_at = float("inf")             # when the loop's select returns at the latest
         self._flushing: list[_Conn] = []          # subscribers still to serve this round
         self._parts: list = []                    # other protocols this loop serves (attach)
         self.stats = {"accepted": 0, "closed": 0, "bad_frames": 0, "unauthorized": 0,
                       "timeouts": 0, "requests": 0, "telemetry_frames": 0, "evicted": 0,
-                      "busy": 0, "overflow": 0}
+                      "busy": 0, "overflow": 0, "passes": 0}
 
     # ---------------------------------------------------------------- lifecycle
     @property
@@ -208,6 +210,12 @@ class Server:
     def unwatch(self, sock) -> None:
         self._sel.unregister(sock)
 
+    def _poke(self) -> None:
+        """A subscriber's telemetry has something new (the simulation thread):
+        wake the loop unless it wakes soon anyway."""
+        if self._wake_at > time.monotonic() + self.telemetry_interval:
+            self._wake()
+
     def _wake(self) -> None:
         try:
             self._wake_w.send(b"x", NOSIGNAL)
@@ -219,7 +227,10 @@ class Server:
         try:
             while not self._stopping:
                 busy = self._backlog or self._flushing or any(p.pending for p in self._parts)
+                self._wake_at = float("inf")     # a poke from now on wakes the select
                 timeout = 0.0 if busy else self._timeout()
+                self._wake_at = time.monotonic() + timeout
+                self.stats["passes"] += 1
                 for key, mask in self._sel.select(timeout):
                     tag = key.data
                     if tag == "listen":
@@ -279,9 +290,12 @@ class Server:
     def _timeout(self) -> float:
         now = time.monotonic()
         t = 0.5
-        if any(c.session.telemetry is not None for c in self._conns.values()):
-            t = min(t, max(0.0, self._next_flush - now))
         for c in self._conns.values():
+            q = c.session.telemetry
+            if q is not None:                  # asleep until it has something (or a poke)
+                ready = q.ready_at()
+                if ready is not None:
+                    t = min(t, max(0.0, max(ready, self._next_flush) - now))
             if c.close_at is not None:
                 t = min(t, max(0.0, c.close_at - now))
             elif not c.authed:
@@ -312,9 +326,19 @@ class Server:
         if self._flushing:
             self._flush_telemetry(now)
         elif now >= self._next_flush:
-            self._flushing = [c for c in self._conns.values() if c.session.telemetry is not None]
-            self._next_flush = now + self.telemetry_interval
-            self._flush_telemetry(now)
+            # a round at most every telemetry_interval, of the subscribers that have
+            # something to take (a controller where nothing changes wakes nobody)
+            ready = []
+            for c in self._conns.values():
+                q = c.session.telemetry
+                if q is not None:
+                    at = q.ready_at()
+                    if at is not None and at <= now:
+                        ready.append(c)
+            if ready:
+                self._flushing = ready
+                self._next_flush = now + self.telemetry_interval
+                self._flush_telemetry(now)
 
     # ---------------------------------------------------------------- connections
     def _accept(self) -> None:
@@ -338,7 +362,7 @@ class Server:
                                  f"no hello yet, and {self.max_unauthed} connections without "
                                  "one are the most allowed")
             now = time.monotonic()
-            conn = _Conn(sock, peer, now, min(self.hello_frame, self.max_frame))
+            conn = _Conn(sock, peer, now, min(self.hello_frame, self.max_frame), self._poke)
             self._conns[sock.fileno()] = conn
             self._unauthed[sock.fileno()] = conn
             conn.mask = selectors.EVENT_READ

@@ -48,6 +48,8 @@ class Session:
     """What the service keeps per client."""
     telemetry: Optional[TelemetryQueue] = None
     peer: str = ""
+    #: told when the telemetry queue has something new (the server wakes up for it)
+    notify: Optional[Callable[[], None]] = None
     changes: protocol.ChangeEncoder = field(default_factory=protocol.ChangeEncoder)
 
 
@@ -451,7 +453,8 @@ class Service(DebugVerbs):
         size = protocol.field_int(msg, "queue", 1000, lo=16, hi=self.max_queue)
         if session.telemetry is not None:
             self.end_session(session)
-        q = TelemetryQueue(max_samples=size, samples=samples, events=events, lossless=lossless)
+        q = TelemetryQueue(max_samples=size, samples=samples, events=events, lossless=lossless,
+                           notify=session.notify)
         session.changes.reset()
         session.telemetry = q
         self.sim.call(lambda: self.sim.subscribe(q))

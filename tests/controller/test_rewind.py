@@ -312,3 +312,55 @@ def test_an_action_done_while_halted_mid_tick_is_done_there_again(backend, actio
     # what is forced there is told (the IDE's lists follow it), also when nothing is
     told = [e for e in again.drain_events() if isinstance(e, Forces)]
     assert told and list(told[-1].forces) == again.forces() == []
+
+
+def test_checkpoints_move_on_from_the_one_before_not_from_the_start():
+    """Issue 23 point 3: a checkpoint is made from the latest one before it, so
+    moving the window on runs the session over the window, not from t = 0 again
+    for each new checkpoint (a long session kept a core busy doing that); and
+    what it gives equals a step back from t = 0."""
+    programs = _example_programs() + [compile_proc(SOFT, "S1", software=True)]
+    fresh = []
+
+    def counted():
+        fresh.append(1)
+        return Controller()
+    c = Controller()
+    c.load(programs)
+    c.step(230)
+    pool = Checkpoints(counted, every_ms=50, keep=4)
+    while pool.work(c, 1.0):
+        pass
+    assert sorted(pool.ready) == [50, 100, 150, 200] and len(fresh) == 4
+    c.set_input(3, 1)
+    c.step(60)                                    # t = 290: the window is 100..250
+    while pool.work(c, 1.0):
+        pass
+    assert sorted(pool.ready) == [100, 150, 200, 250]   # each from the one before
+    assert len(fresh) == 4                        # none ran from t = 0 again
+    back = step_back(c, Controller, "tick", pool)
+    assert _look(back) == _look(step_back(c, Controller, "tick"))
+
+
+def test_after_a_long_run_without_checkpoints_only_the_latest_is_made():
+    """After a long run with no idle time (Max speed), making the window's older
+    checkpoints would run the whole session once for each: only the latest is
+    made (one run of the session), and it moves on with the session."""
+    c = Controller()
+    c.load([compile_proc(SOFT, "S1", software=True)])
+    c.step(2000)
+    fresh = []
+
+    def counted():
+        fresh.append(1)
+        return Controller()
+    pool = Checkpoints(counted, every_ms=50, keep=4)
+    while pool.work(c, 1.0):
+        pass
+    assert sorted(pool.ready) == [1950] and len(fresh) == 1
+    c.step(100)
+    while pool.work(c, 1.0):
+        pass
+    assert sorted(pool.ready) == [2050] and len(fresh) == 1
+    assert _look(step_back(c, counted, "tick", pool)) == _look(step_back(c, Controller, "tick"))
+    assert len(fresh) == 1
