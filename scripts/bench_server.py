@@ -6,6 +6,10 @@ the controller in its own process (``plcbuilder controller``), as the IDE runs i
     .venv/bin/python scripts/bench.py server
     PLCB_BENCH_SERVER_SECONDS=10 .venv/bin/python scripts/bench.py server   # shorter
 
+It also gives the controller's own processor time at 1x (nothing running, and
+one software procedure: issue 26 point 3) and after a long run at Max
+(issue 23 point 3), read from /proc.
+
 The drift run lasts 60 s by default (the goal is stated over 60 s). The cost
 of a subscriber is a ratio to its floor, the same run without one, measured
 interleaved (no subscriber, subscriber, no subscriber, ...): each round's cost
@@ -314,10 +318,101 @@ def under_load() -> list[str]:
             f"(goal p99 < 100 ms) {ok}"]
 
 
+def process_cpu(pid: int) -> float:
+    """Seconds of processor time process ``pid`` has used (every thread), from
+    /proc (Linux; the benchmark of issue 26 point 3 needs it)."""
+    with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _ide_like(connect) -> tuple[Client, int]:
+    """A client subscribed as the IDE is (lossless, a large queue), and the
+    controller's pid."""
+    c = connect()
+    _subscribe(c, {"n": 0, "missed": 0}, True)
+    return c, c.state().server["pid"]
+
+
+def idle_cpu() -> list[str]:
+    """Issue 26 point 3: the controller's processor time at 1x with a
+    subscriber as the IDE has one, (a) with nothing running, (b) with one
+    software procedure (LUBE) running. Two controllers side by side, each
+    window measured on both at once; the median of ``PLCB_BENCH_ROUNDS``
+    (default 5) windows of ``PLCB_BENCH_IDLE_WINDOW`` (default 6) seconds."""
+    if not os.path.exists(f"/proc/{os.getpid()}/stat"):
+        return ["idle CPU: skipped (needs /proc)"]
+    rounds = int(os.environ.get("PLCB_BENCH_ROUNDS", "5"))
+    window = float(os.environ.get("PLCB_BENCH_IDLE_WINDOW", "6"))
+    hw_only = {k: v for k, v in SOURCES.items() if v[0] is Kind.HARDWARE}
+    lube = {**hw_only, "LUBE": SOURCES["LUBE"]}
+    with controller_process(_image(hw_only), "realtime") as idle_connect, \
+            controller_process(_image(lube), "realtime") as lube_connect:
+        a, a_pid = _ide_like(idle_connect)
+        b, b_pid = _ide_like(lube_connect)
+        assert b.state().software == ("LUBE",) and not a.state().software
+        time.sleep(1.0)
+        got: dict[str, list[float]] = {"idle": [], "lube": []}
+        for _ in range(rounds):
+            w0, ca, cb = time.monotonic(), process_cpu(a_pid), process_cpu(b_pid)
+            time.sleep(window)
+            wall = time.monotonic() - w0
+            got["idle"].append((process_cpu(a_pid) - ca) / wall * 100)
+            got["lube"].append((process_cpu(b_pid) - cb) / wall * 100)
+        a.close()
+        b.close()
+    idle, soft = statistics.median(got["idle"]), statistics.median(got["lube"])
+    each = lambda xs: ", ".join(f"{x:.2f}" for x in xs)   # noqa: E731
+    return [f"controller at 1x, an IDE-like subscriber, nothing running: {idle:.2f}% of a core "
+            f"(goal <= 1%) {'OK' if idle <= 1 else 'MISSED'}; windows: {each(got['idle'])}",
+            f"controller at 1x, an IDE-like subscriber, LUBE (one software procedure) running: "
+            f"{soft:.2f}% of a core (goal <= 3%) {'OK' if soft <= 3 else 'MISSED'}; windows: "
+            f"{each(got['lube'])} (median of {rounds} windows of {window:g} s)"]
+
+
+def after_max() -> list[str]:
+    """Issue 23 point 3: M03 and LUBE at 1x, then Max for
+    ``PLCB_BENCH_MAX_SECONDS`` (default 20), then 1x again: the processor time
+    at 1x before and from 2 s after the switch (median of 5 windows of 2 s each),
+    and how closely the simulated clock follows the wall clock after it."""
+    if not os.path.exists(f"/proc/{os.getpid()}/stat"):
+        return ["after Max: skipped (needs /proc)"]
+    seconds = float(os.environ.get("PLCB_BENCH_MAX_SECONDS", "20"))
+    with controller_process(_image(), "realtime") as connect:
+        c = connect()
+        pid = c.state().server["pid"]
+        c.start("M03")
+
+        def windows() -> list[float]:
+            out = []
+            for _ in range(5):
+                w0, c0 = time.monotonic(), process_cpu(pid)
+                time.sleep(2.0)
+                out.append((process_cpu(pid) - c0) / (time.monotonic() - w0) * 100)
+            return out
+        time.sleep(1.0)
+        before = windows()
+        c.speed("max")
+        time.sleep(seconds)
+        reached = c.state().t_ms
+        c.speed("realtime")
+        time.sleep(2.0)
+        w0, t0 = _timed_t(c)
+        after = windows()
+        w1, t1 = _timed_t(c)
+        c.close()
+    b, a = statistics.median(before), statistics.median(after)
+    follow = (t1 - t0) / ((w1 - w0) * 1000) * 100
+    return [f"after {seconds:g} s at Max (to t = {reached / 86_400_000:.2f} simulated days), "
+            f"back at 1x with M03 running: {a:.2f}% of a core from 2 s after the switch, "
+            f"{b:.2f}% before Max (goal: the same) {'OK' if a <= max(2 * b, b + 2) else 'MISSED'}"
+            f"; the simulated clock then ran at {follow:.2f}% of the wall clock"]
+
+
 def run() -> list[str]:
     seconds = float(os.environ.get("PLCB_BENCH_SERVER_SECONDS", "60"))
     image = _image()
-    return speed(image) + under_load() + realtime(seconds, image)
+    return idle_cpu() + after_max() + speed(image) + under_load() + realtime(seconds, image)
 
 
 if __name__ == "__main__":
