@@ -179,6 +179,123 @@ def idle_sockets_lock_out() -> dict:
     return out
 
 
+# ------------------------------------------------------------------ 24.6
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _api_ask(port: int, command: str, timeout: float = 5.0) -> str:
+    """One Server API command on a fresh connection; its reply line ('' if none)."""
+    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as s:
+        s.sendall(command.encode() + b"\n")
+        data = b""
+        while b"\r\n" not in data:
+            chunk = s.recv(4096)
+            if not chunk:
+                break
+            data += chunk
+    return data.split(b"\r\n")[0].decode("utf-8", "replace")
+
+
+def server_api_idle_sockets() -> dict:
+    """64 Server API connections that never send a command, then a client: it
+    must get its answer (they locked every client out: "too many Server API
+    clients (16)", still at 90 s)."""
+    out = _counts()
+    port = _free_port()
+    with controller(extra=["--server-api", str(port)]) as proc:
+        for _ in range(5):
+            out["tried"] += 1
+            idle = []
+            try:
+                for _ in range(64):
+                    idle.append(socket.create_connection(("127.0.0.1", port), timeout=5))
+                time.sleep(0.2)
+                try:
+                    reply = _api_ask(port, "GetMCC")
+                except OSError:
+                    reply = ""
+                out["refused" if reply == "OK 77" else "accepted"] += 1
+            finally:
+                for s in idle:
+                    s.close()
+        if not _alive(proc):
+            out["crashed"] += 1
+    return out
+
+
+def server_api_connect_flood_vs_pendant() -> dict:
+    """A pendant polling GetMachinePosition while silent connections pour in
+    (each left open): the pendant keeps its place and its answers."""
+    out = _counts()
+    port = _free_port()
+    with controller(extra=["--server-api", str(port)]) as proc:
+        pendant = socket.create_connection(("127.0.0.1", port), timeout=5)
+        flood: list[socket.socket] = []
+        buf = b""
+        try:
+            deadline = time.monotonic() + SECONDS
+            while time.monotonic() < deadline:
+                for _ in range(10):
+                    try:
+                        flood.append(socket.create_connection(("127.0.0.1", port), timeout=5))
+                    except OSError:
+                        pass
+                out["tried"] += 1
+                try:
+                    pendant.sendall(b"GetMachinePosition\n")
+                    while b"\r\n" not in buf:
+                        chunk = pendant.recv(4096)
+                        if not chunk:
+                            raise ConnectionError("closed")
+                        buf += chunk
+                    line, _, buf = buf.partition(b"\r\n")
+                    out["refused" if line.startswith(b"OK X ") else "accepted"] += 1
+                except OSError:
+                    out["accepted"] += 1
+                    break
+                time.sleep(0.05)
+        finally:
+            pendant.close()
+            for s in flood:
+                s.close()
+        if not _alive(proc):
+            out["crashed"] += 1
+    return out
+
+
+def idle_sockets_mid_hello() -> dict:
+    """The main protocol's slots: 64 connections each stopped in the middle of a
+    hello frame (its length sent, not its body), then a client with the token."""
+    out = _counts()
+    with controller() as proc:
+        host, port = proc.address
+        for _ in range(3):
+            out["tried"] += 1
+            idle = []
+            try:
+                for _ in range(64):
+                    s = socket.create_connection((host, port), timeout=5)
+                    s.sendall(struct.pack(">I", 200) + b'{"type": "hel')
+                    idle.append(s)
+                time.sleep(0.2)
+                try:
+                    with proc.connect(timeout=5, connect_timeout=5) as c:
+                        c.state()
+                    out["refused"] += 1
+                except LinkError:
+                    out["accepted"] += 1
+            finally:
+                for s in idle:
+                    s.close()
+        if not _alive(proc):
+            out["crashed"] += 1
+    return out
+
+
 # ------------------------------------------------------------------ 17.3
 
 def big_frames_before_hello() -> dict:
@@ -465,5 +582,8 @@ ATTACKS = [
     ("17.5 state/stop, 1,000 busy procedures", busy_procedures_slow_state),
     ("17.11 newer controller stops", newer_controller_removes_older_file),
     ("17.11 runtime file in a shared folder", runtime_file_in_a_shared_folder),
+    ("24.6 64 idle Server API sockets, then a client", server_api_idle_sockets),
+    ("24.6 Server API connect flood vs a pendant", server_api_connect_flood_vs_pendant),
+    ("24.6 64 sockets stopped mid-hello, then a client", idle_sockets_mid_hello),
     ("link fuzz (random frames)", fuzz_frames),
 ]

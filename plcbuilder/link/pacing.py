@@ -282,6 +282,8 @@ class Simulation:
         #: work for the simulation's idle time (stepping back's checkpoints):
         #: ``idle_work(seconds) -> bool``, False when there is nothing to do
         self.idle_work: Optional[Callable[[float], bool]] = None
+        #: called with the events of every batch, on the simulation thread (listen)
+        self._listeners: list[Callable[[list], None]] = []
         self.set_speed(mode, factor)
         self._update_recording()
 
@@ -392,11 +394,22 @@ class Simulation:
         except AttributeError:
             pass
 
+    def listen(self, fn: Callable[[list], None]) -> None:
+        """Call ``fn(events)`` with the events of every batch, on the simulation
+        thread (it must be quick: the Server API keeps the last PLC message)."""
+        self._listeners.append(fn)
+
     def publish(self) -> None:
         """Hand the controller's new events and sample changes to every subscriber."""
         c = self.controller
         events = c.drain_events()
         samples = c.drain_sample_rows()
+        if events:
+            for fn in self._listeners:
+                try:
+                    fn(events)
+                except Exception:  # noqa: BLE001 - a listener's bug costs nothing here
+                    _debug(traceback.format_exc())
         queues = self._queues
         if queues:
             t = c.t_ms

@@ -2,6 +2,7 @@
 driver or a script drives it: a real socket (and ``nc`` where installed), one
 command a line, one reply a line."""
 
+import dataclasses
 import shutil
 import socket
 import subprocess
@@ -241,6 +242,305 @@ def test_the_command_line_option(tmp_path):
         c = Line(("127.0.0.1", port))
         assert c.ask("GetMCC") == "OK 77"
         c.close()
+    finally:
+        proc.terminate()
+        proc.wait(20)
+
+
+# ---------------------------------------------------------------- myCNC's published list (issue 25.14)
+
+#: The command list of myCNC's Server API page (docs.pv-automation.com/mycnc/server_api),
+#: with its own spelling ("ProgrmaEnd"), and the older names still in use.
+PUBLISHED = """EchoMode ProgramFileOpen ProgramBegin ProgramAppend ProgrmaEnd ProgramPlay
+ProgramPlayBack ProgramPlayStep ProgramPlayStepBack ProgramPause ProgramStop ProgramReset
+GetEstimateTime GetMachinePosition GetProcess GetWorkPosition GetMyCNCVersion GetFVariable
+GetIVariable GetReady LineAppend GetScanData GetSensors GetMCC GetMCPtr GetHW GetHWDAC GetHWADC
+GetHWInputBit GetHWInputs GetHWOutputs GetHWPWM GetPWMs GetPausedLine GetLastMessage
+GetWorkState PendantWidgetShow PendantWidgetHide PendantWidgetHidden RunPLC SaveConfig SetG92
+SetHWDAC SetHWOutputBit SetHWPWM SetPendant SetRotationAngle SetCNCVariable SetJog SetScale
+SetGVariable SinglePlay ShutDown GetJobName GetSVariable8020 GetSVariable8107 GetSVariable8108
+GetSVariable8109 SetHWBinaryOutput GetHWOutputBit""".split()
+
+
+def test_every_published_command_is_known(line):
+    """Each command of myCNC's list answers (OK, a usage, or why it means nothing
+    on the simulated controller), never "unknown command"; ? lists them all."""
+    listed = line.ask("?")[3:].split()
+    for name in PUBLISHED:
+        reply = line.ask(name)
+        assert "unknown command" not in reply, (name, reply)
+        assert name in listed
+    from plcbuilder.link.server_api import NOT_HERE
+    for name, why in NOT_HERE.items():
+        assert line.ask(name) == f"ERROR {name}: {why}"
+
+
+def test_sethwoutputbit_and_every_change_is_recorded(served, line):
+    """SetHWOutputBit is myCNC's current name; what a command changes is
+    recorded as the IDE's writes are, so replaying the session does it too."""
+    assert line.ask("SetHWOutputBit 4 1") == "OK 4 1"
+    assert line.ask("GetHWOutputBit 4") == "OK 1"
+    assert line.ask("SetHWPWM 1 2000") == "OK 1 2000"
+    assert line.ask("SetHWDAC 0 99") == "OK 0 99"
+    assert line.ask("SetGVariable 9001 7") == "OK 9001 7"
+    assert line.ask("SetJog x+y-") == "OK 0x0201"
+    assert line.ask("SetJog xystop") == "OK 0x0000"
+    acts = _controller(served, lambda c: [a.describe().split(" @")[0] for a in c.recorder.actions
+                                          if a.kind == "write"])
+    assert acts == ["write out 4=1", "write pwm 1=2000", "write dac 0=99", "write gvar 9001=7",
+                    "write gvar 8635=513", "write gvar 8635=0"]
+    assert line.ask("SetGVariable 7180 1").startswith("ERROR gvar 7180 is an input word")
+
+
+def test_reading_commands(served, line):
+    _controller(served, lambda c: c.set_input(2, 1))
+    hw = line.ask("GetHW").split()
+    assert hw[:2] == ["OK", "IN"] and int(hw[2], 16) & 4 and "OUT" in hw and "ADC" in hw
+    assert line.ask("GetPWMs") == "OK 0 0 0 0 0 0 0 0"
+    assert line.ask("SetGVariable 9002 1234") == "OK 9002 1234"
+    assert line.ask("GetFVariable 9002") == "OK 1234.000000"
+    sensors = line.ask("GetSensors").split()
+    assert sensors[0] == "OK" and any(s.startswith("INPUT_HOME_X=") for s in sensors[1:])
+    assert line.ask("GetMyCNCVersion").startswith("OK PLC Builder ")
+    assert line.ask("GetWorkState") == "OK idle" and line.ask("GetReady") == "OK 1"
+    assert line.ask("RunPLC 88") == "OK M88 0"                  # loops for ever
+    deadline = time.monotonic() + 5
+    while line.ask("GetWorkState") != "OK plc M88":
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    assert line.ask("GetReady") == "OK 0"
+
+
+def test_getlastmessage(served, line):
+    assert line.ask("GetLastMessage") == "OK -"
+    _controller(served, lambda c: c.load(compile_programs(["M05"], overrides={"M05": (
+        Kind.HARDWARE, "main(){ command = 7; parameter = 3000; message = 1100; timer = 2; "
+                       "do{ timer--; }while(timer > 0); exit(99); }")})))
+    assert line.ask("RunPLC M05") == "OK M05 0"
+    deadline = time.monotonic() + 5
+    while line.ask("GetLastMessage") == "OK -":
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    code, name, command, parameter = line.ask("GetLastMessage").split()[1:]
+    assert (code, name, command, parameter) == ("1100", "PLCCMD_REPLY_TO_MYCNC", "7", "3000")
+
+
+def test_echomode(line):
+    assert line.ask("EchoMode") == "OK 0"
+    assert line.ask("EchoMode 1") == "OK 1"
+    line.send(b"GetMCC\n")
+    assert line.line() == "GetMCC" and line.line() == "OK 77"
+    assert line.ask("EchoMode 0") == "EchoMode 0"
+    assert line.line() == "OK 0"
+    assert line.ask("GetMCC") == "OK 77"
+
+
+def test_program_commands_without_a_job_runner_say_so(line, tmp_path):
+    g = tmp_path / "job.nc"
+    g.write_text("G0 X10\nM30\n")
+    for cmd in (f"ProgramFileOpen {g}", "ProgramBegin", "ProgramPlay", "ProgramPause",
+                "ProgramStop", "ProgramReset", "GetPausedLine", "GetJobName", "GetSVariable8020",
+                "GetEstimateTime"):
+        name = cmd.split()[0]
+        assert line.ask(cmd) == f"ERROR {name}: no G-code job runner in this controller yet"
+    assert line.ask("SetPendant 50;0x0301") == "OK X 0.000"          # selecting moves nothing
+    assert line.ask("SetPendant 55;0x0301") == ("ERROR SetPendant: the handwheel moves an axis "
+                                                "through the G-code job runner, and there is no "
+                                                "G-code job runner in this controller yet")
+
+
+class FakeJob:
+    """A job runner as the program commands drive it (server_api.JobRunner)."""
+
+    def __init__(self):
+        from plcbuilder.link.server_api import JobStatus
+        self.calls = []
+        self.st = JobStatus()
+        self.JobStatus = JobStatus
+
+    def open(self, name, text, path=None):
+        self.calls.append(("open", name, text, path))
+        self.st = self.JobStatus(name=name, path=path, lines=text.count("\n"), size=len(text))
+
+    def play(self):
+        self.calls.append(("play",))
+        self.st = dataclasses.replace(self.st, state="running", line=1, estimate_s=12.5)
+
+    def pause(self):
+        self.calls.append(("pause",))
+        self.st = dataclasses.replace(self.st, state="paused", paused_line=2)
+
+    def stop(self):
+        self.calls.append(("stop",))
+
+    def reset(self):
+        self.calls.append(("reset",))
+
+    def move(self, axis, mm):
+        self.calls.append(("move", axis, mm))
+
+    def status(self):
+        return self.st
+
+
+def test_program_commands_drive_the_job_runner(served, line, tmp_path):
+    job = FakeJob()
+    _controller(served, lambda c: setattr(c, "job_runner", job))
+    g = tmp_path / "part.nc"
+    g.write_text("G0 X10\nG0 Y5\nM30\n")
+    assert line.ask(f"ProgramFileOpen {g}") == f"OK {g}"
+    assert job.calls[-1] == ("open", "part.nc", "G0 X10\nG0 Y5\nM30\n", str(g.resolve()))
+    assert line.ask("GetJobName") == f"OK {g.resolve()}"
+    assert line.ask("GetSVariable8020") == f"OK {g.resolve()}"
+    assert line.ask("GetSVariable8107") == "OK part.nc"
+    assert line.ask("GetSVariable8108") == f"OK {g.resolve().parent}"
+    assert line.ask("GetSVariable8109") == "OK 0.000"
+    assert line.ask("GetSVariable9999").startswith("ERROR GetSVariable: the simulated controller "
+                                                  "knows GetSVariable8020")
+    assert line.ask("ProgramPlay") == "OK" and line.ask("GetWorkState") == "OK job running"
+    assert line.ask("GetEstimateTime") == "OK 12.500"
+    assert line.ask("ProgramPause") == "OK" and line.ask("GetPausedLine") == "OK 2"
+    assert line.ask("ProgramStop") == "OK" and line.ask("ProgramReset") == "OK"
+    assert line.ask("ProgramAppend G0 X1").startswith("ERROR ProgramAppend: no program begun")
+    assert line.ask("ProgramBegin") == "OK"
+    assert line.ask("ProgramAppend G0 X1") == "OK 1"
+    assert line.ask("ProgramAppend M30") == "OK 2"
+    assert line.ask("ProgrmaEnd") == "OK 2"                    # myCNC's list's spelling
+    assert job.calls[-1] == ("open", "(server api)", "G0 X1\nM30\n", None)
+    assert line.ask(f"ProgramFileOpen {tmp_path / 'none.nc'}").startswith(
+        "ERROR ProgramFileOpen: cannot read")
+
+
+def test_setpendant_turns_the_handwheel(served, line):
+    """SetPendant WHEEL;SELECT: the wheel's clicks (0..99, wrapping) times the
+    step of the high byte move the axis of the low byte; selecting moves nothing."""
+    job = FakeJob()
+    _controller(served, lambda c: setattr(c, "job_runner", job))
+    assert line.ask("SetPendant 50;0x0300") == "OK OFF 0.000"       # axis off
+    assert line.ask("SetPendant 50;0x0301") == "OK X 0.000"         # X selected, x1
+    assert line.ask("SetPendant 55;0x0301") == "OK X 5.000"         # +5 clicks
+    assert line.ask("SetPendant 55;0x0102") == "OK Y 0.000"         # Y, x0.01
+    assert line.ask("SetPendant 65;0x0102") == "OK Y 0.100"
+    assert line.ask("SetPendant 2;0x0102") == "OK Y 0.370"          # 65 -> 2: +37 the short way
+    assert line.ask("SetPendant 98; 0x0203") == "OK Z 0.000"
+    assert line.ask("SetPendant 1;0x0203") == "OK Z 0.300"          # 98 -> 1 wraps: +3
+    assert line.ask("SetPendant 96;0x0203") == "OK Z -0.500"
+    assert [c for c in job.calls if c[0] == "move"] == [
+        ("move", "X", 5.0), ("move", "Y", 0.1), ("move", "Y", 0.37), ("move", "Z", 0.3),
+        ("move", "Z", -0.5)]
+    assert line.ask("SetPendant 100;0x0301").startswith("ERROR the handwheel's position is 0..99")
+    assert line.ask("SetPendant 5;0x0409").startswith("ERROR SELECT 0x0409")
+    assert line.ask("SetPendant 5").startswith("ERROR usage: SetPendant WHEEL;SELECT")
+
+
+# ---------------------------------------------------------------- places (issue 24.6)
+
+def test_idle_sockets_never_keep_a_client_from_an_answer(served):
+    """16 (or 64) connections that never send anything: a new client still gets
+    its answer, the oldest silent one making room (it is told why)."""
+    api = served.server_api
+    idle = [socket.create_connection(api.address, timeout=10) for _ in range(64)]
+    try:
+        time.sleep(0.2)
+        c = Line(api.address)
+        assert c.ask("GetMCC") == "OK 77"
+        c.close()
+        assert api.stats["evicted"] >= 49
+        first = idle[0]
+        first.settimeout(5)
+        data = b""
+        while True:
+            chunk = first.recv(4096)
+            if not chunk:
+                break
+            data += chunk
+        assert data.startswith(b"ERROR closed to make room for a new client")
+    finally:
+        for s in idle:
+            s.close()
+
+
+def test_a_polling_pendant_is_not_pushed_out_by_idle_sockets(served):
+    api = served.server_api
+    pendant = Line(api.address)
+    assert pendant.ask("GetMCC") == "OK 77"
+    idle = [socket.create_connection(api.address, timeout=10) for _ in range(40)]
+    try:
+        time.sleep(0.2)
+        assert pendant.ask("GetMachinePosition").startswith("OK X ")
+    finally:
+        for s in idle:
+            s.close()
+        pendant.close()
+
+
+def test_a_connection_idle_too_long_is_closed_and_told_why(served):
+    api = served.server_api
+    api.idle_timeout = 0.5
+    c = Line(api.address)
+    assert c.ask("GetMCC") == "OK 77"
+    time.sleep(2.5)
+    assert c.line().startswith("ERROR closed: no command for")
+    with pytest.raises((EOFError, OSError)):
+        c.line()
+    assert api.stats["idle_closed"] == 1
+
+
+def test_when_every_place_is_busy_a_new_client_is_refused_with_the_reason(served):
+    api = served.server_api
+    busy = [Line(api.address) for _ in range(api.max_clients)]
+    try:
+        for b in busy:
+            assert b.ask("GetMCC") == "OK 77"
+        late = Line(api.address)
+        assert late.line() == "ERROR too many Server API clients (16), all of them busy"
+        late.close()
+    finally:
+        for b in busy:
+            b.close()
+
+
+# ---------------------------------------------------------------- the manual's example
+
+def _manual_example() -> tuple[list[str], list[str]]:
+    """The piped nc example of docs/editors.md's Server API section: its
+    commands (the ``$`` lines) and the lines it shows."""
+    import re
+    from pathlib import Path
+    text = (Path(__file__).resolve().parents[2] / "docs" / "editors.md").read_text()
+    m = re.search(r"<!-- server-api-nc -->\s*```\n(.*?)```", text, re.S)
+    assert m, "docs/editors.md lost its Server API nc example"
+    lines = m.group(1).splitlines()
+    return [x[2:] for x in lines if x.startswith("$ ")], [x for x in lines if not x.startswith("$")]
+
+
+@pytest.mark.skipif(shutil.which("nc") is None, reason="nc is not installed")
+def test_the_manuals_nc_example_gives_the_replies_it_shows(tmp_path):
+    """issue 25: the manual's piped example printed OK 0 where it shows OK 1."""
+    commands, shown = _manual_example()
+    assert commands[0].split() == ["plcbuilder", "controller", "--image", "build/eeprom.rom",
+                                   "--server-api", "4266", "&"]
+    command = commands[1]
+    proj = tmp_path / "proj"
+    run = lambda *a: subprocess.run([sys.executable, "-m", "plcbuilder", *a],  # noqa: E731
+                                    capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert run("new", str(proj)).returncode == 0
+    assert run("build", str(proj)).returncode == 0
+    proc = subprocess.Popen([sys.executable, "-m", "plcbuilder", "controller", "--image",
+                             "build/eeprom.rom", "--server-api", "0", "--runtime-file",
+                             str(tmp_path / "rt.json")], cwd=proj, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        port = None
+        for _ in range(10):
+            out = proc.stdout.readline()
+            if "Server API on" in out:
+                port = int(out.split(":")[-1].split()[0])
+                break
+        assert port is not None
+        r = subprocess.run(["bash", "-c", command.replace("4266", str(port))], cwd=proj,
+                           capture_output=True, timeout=30)
+        assert r.stdout.decode().replace("\r\n", "\n").splitlines() == shown
     finally:
         proc.terminate()
         proc.wait(20)
