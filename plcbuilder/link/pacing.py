@@ -248,6 +248,8 @@ class Simulation:
     idle_sleep = 0.25
     #: Seconds a quiet sleep lasts beyond the tick it waits for (rounding).
     wake_margin = 0.0002
+    #: Quiet ticks slept over at most (a millisecond or two of work to run them).
+    lazy_ticks = 20_000
     #: Share of the wall time idle work may take while a run is paced (not halted or
     #: paused), and the most it may save up (seconds).
     idle_share = 0.01
@@ -510,12 +512,14 @@ class Simulation:
                 return self.batch
             self._run_ticks(min(due, self._chunk()))
             return None
-        quiet = quiet_ticks(c)
+        # at most lazy_ticks at a time: at a high factor the ticks slept over are
+        # many, and a request that comes first runs them before it is answered
+        quiet = min(quiet_ticks(c), self.lazy_ticks)
         if quiet > 0:
             # nothing happens before tick t + quiet: wake when it is due (it runs
             # once the wall clock has passed its end), a request wakes us sooner
             self._lazy = True
-            wake = self._base_wall + (min(t + quiet, FOREVER) + 1 - self._base_t) / rate
+            wake = self._base_wall + (t + quiet + 1 - self._base_t) / rate
             # (a hair late rather than a hair early: the tick is due then for sure)
             return min(max(wake - now + self.wake_margin, self.batch), self.idle_sleep)
         self._lazy = False

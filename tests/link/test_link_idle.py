@@ -225,3 +225,13 @@ def test_the_quiet_sleep_is_only_for_paced_runs(programs, mode):
     sim.clock.now += 5.0
     sim.catch_up()
     assert sim.controller.t_ms == 0
+
+
+def test_at_a_high_factor_the_quiet_sleep_stays_short(programs):
+    """At 10000x, 0.25 s would be 2.5 million quiet ticks for the next request
+    to run first: a sleep covers lazy_ticks at most."""
+    sim = _sim([p for p in programs if p.kind is Kind.HARDWARE], factor=10000.0)
+    _drive(sim, 0.01)
+    wait = sim.pace()
+    assert wait is not None and sim._lazy
+    assert wait <= max(sim.batch, sim.lazy_ticks / 10_000_000 + sim.wake_margin) + 1e-9
