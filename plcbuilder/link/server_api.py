@@ -11,13 +11,22 @@ Replies are ``OK`` followed by the values, or ``ERROR`` followed by the
 reason; the connection stays open either way. Numbers may be decimal or
 ``0x`` hex; command names are not case sensitive.
 
+The commands are those of myCNC's published list (its Server API page), one
+``cmd_<name>`` method each in :class:`Commands`; the ones with no meaning on
+the simulated controller answer why (:data:`NOT_HERE`), and the program
+commands drive a G-code job runner through :class:`JobRunner` (none yet:
+they say so). What a command changes goes through ``Controller.write``,
+which records it, so replays and stepping back do it too.
+
 The connections are served by the controller server's own selector loop
 (:meth:`plcbuilder.link.server.Server.attach`): non-blocking sockets, lines of
 at most :attr:`ServerApi.max_line` bytes (a longer one is answered with an
 error and skipped), at most :attr:`ServerApi.lines_per_turn` commands of one
 client per pass of the loop, and a client that does not read its replies is
 not read either (then closed past :attr:`ServerApi.max_outbuf`), so a flood
-never stalls the controller or the other clients.
+never stalls the controller or the other clients. Idle connections are closed
+after :attr:`ServerApi.idle_timeout`, and a new client takes the place of the
+oldest silent one when every place is taken (issue 24.6).
 """
 
 from __future__ import annotations
