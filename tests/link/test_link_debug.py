@@ -88,8 +88,8 @@ def test_step_over_and_step_tick(served):
 def test_pause_halts_between_ticks_and_run_to_line(served):
     """"pause (halts at the end of the current tick)" and "run to line"."""
     srv, c = served
-    c.start("M10")
-    while c.state().t_ms < 5:
+    started = c.start("M10")["t_ms"]
+    while c.state().t_ms < started + 5:           # M10 has run (at 50x time was past 5 ms)
         time.sleep(0.01)
     r = c.debug_pause()
     assert r["halted"]["reason"] == "pause" and r["halted"]["procedure"] is None
