@@ -82,7 +82,9 @@ TGM_DATA_WORDS = 524_288 // 4
 TGM_PROCEDURES = ("Program_Ini", "Program_01", "Program_02", "Program_03", "Program_04",
                   "Program_05")
 TGM_CYCLE_TIMES = (250, 500, 1000)
-TGM_PERIOD_RANGE = (100, 10_000)
+#: Program_01..03's periods: at least 100 µs, no upper bound (the seed: "from 100 μs to
+#: 10 000 μs (the upper value is not limited)")
+TGM_PERIOD_MIN = 100
 TGM_DEFAULT_INSTRUCTION_NS = 20
 #: slots per cycle, by cycle time (the seed's figures)
 TGM_SLOTS = {250: 5, 500: 5, 1000: 10}

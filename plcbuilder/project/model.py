@@ -33,7 +33,7 @@ The settings file::
 
     [tgmotion]
     cycle_time_us = 500            # 250, 500 or 1000
-    cycle_time_program_01_us = 1000   # 100 ... 10000 (also _02_, _03_)
+    cycle_time_program_01_us = 1000   # at least 100, no upper bound (also _02_, _03_)
     instruction_ns = 20            # modelled execution time of one instruction
 
 #include finds headers in the procedure's folder, include/, the folders of
@@ -161,7 +161,7 @@ class Settings:
         if self.target == T.TGMOTION:
             out += ("\n[tgmotion]\n"
                     + line("cycle_time_us", str(self.cycle_time_us), "250, 500 or 1000")
-                    + "".join(line(f"cycle_time_program_0{i + 1}_us", str(v), "100 ... 10000")
+                    + "".join(line(f"cycle_time_program_0{i + 1}_us", str(v), "at least 100 (µs)")
                               for i, v in enumerate(self.program_periods_us))
                     + line("instruction_ns", str(self.instruction_ns),
                            "modelled time of one instruction"))
@@ -248,13 +248,13 @@ def parse_settings(text: str, file: Union[str, Path] = SETTINGS_FILE,
         raise ProjectError(f"must be 250, 500 or 1000 (µs, as TG Motion's Cycle_Time), is {cycle}",
                            file, _line_of(text, "tgmotion", "cycle_time_us"),
                            "tgmotion.cycle_time_us")
-    lo, hi = T.TGM_PERIOD_RANGE
+    lo = T.TGM_PERIOD_MIN
     periods = []
     for i in (1, 2, 3):
         key = f"cycle_time_program_0{i}_us"
         v = values.get(f"tgmotion.{key}", 1000)
-        if not lo <= v <= hi:
-            raise ProjectError(f"must be from {lo} to {hi} µs, is {v}", file,
+        if v < lo:
+            raise ProjectError(f"must be at least {lo} µs (no upper bound), is {v}", file,
                                _line_of(text, "tgmotion", key), f"tgmotion.{key}")
         periods.append(v)
     ns = values.get("tgmotion.instruction_ns", T.TGM_DEFAULT_INSTRUCTION_NS)

@@ -36,6 +36,61 @@ def test_program_ini_returning_0_aborts_the_start():
     assert c.idle() and "Program_05" not in c.plc.calls
 
 
+def test_program_ini_runs_to_its_end_however_long():
+    """`Program_Ini` runs once, to its end however long ("The execution length
+    of this function is not limited"; the instruction limit applies to the
+    cyclic programs only)"""
+    # clearing all of TGM_Data: 131072 iterations, far over the 100 000 instructions of a call
+    src = tgm(head="#include <tgmotion.h>\n",
+              ini="i = 0; do { gvarset(TGM_DATA + i, 7); i++; } while (i < TGM_WORDS);")
+    c = controller(src, "tgmotion", instruction_ns=1)
+    c.step(10)
+    assert faults(c) == []
+    assert c.plc.calls["Program_Ini"] == 1 and c.variables()["plc"]["i"] == T.TGM_DATA_WORDS
+    assert len(c.plc.data) == T.TGM_DATA_WORDS and c.plc.calls["Program_05"] > 0
+    # the same loop in a cyclic program is over the limit: a fault
+    cyc = controller(tgm(head="#include <tgmotion.h>\n",
+                         p04="i = 0; do { i++; } while (i < TGM_WORDS);"), "tgmotion")
+    cyc.step(1)
+    assert "instructions in one call" in faults(cyc)[0].text
+
+
+def test_program_ini_time_passes_before_the_first_cycle():
+    """"After PLC is started and Program_Ini function is executed successfully,
+    cyclical calling of a loop lasting 250 μs is started": its modelled time
+    (instructions x instruction_ns) passes first, a tick's worth a tick."""
+    # 5 instructions an iteration x 1000 ns: 200 iterations a tick; 1000 of them take 5 ticks
+    c = controller(tgm(ini=loop(1000), p04="n4++;"), "tgmotion", instruction_ns=1000)
+    c.step(3)
+    assert "Program_04" not in c.plc.calls and not c.idle()   # Program_Ini still runs
+    c.step(4)
+    assert c.variables()["plc"]["i"] == 1000 and c.plc.calls["Program_04"] >= 2
+
+
+def test_a_program_ini_that_never_ends_never_stops_the_controller():
+    """Bad input never crashes anything: an endless Program_Ini runs on, tick by
+    tick, and time still advances."""
+    c = controller(tgm(ini="do { n++; } while (1);"), "tgmotion")
+    c.step(50)
+    assert c.t_ms == 50 and faults(c) == [] and c.state().running == "plc"
+    assert "Program_05" not in c.plc.calls
+
+
+def test_a_program_period_over_10000_us_is_accepted():
+    """`cycle_time_program_01_us` … `_03_us` (from 100; the seed: "100 μs to 10 000 μs
+    (the upper value is not limited)")"""
+    c = controller(tgm(), "tgmotion", cycle_time_us=1000, program_periods_us=(20_000, 1000, 100))
+    c.step(100)
+    assert c.plc.calls["Program_01"] == 5 and c.plc.calls["Program_02"] == 100
+
+
+@pytest.mark.parametrize("bad", [99, 0, -5])
+def test_a_program_period_under_100_us_is_refused(bad):
+    from plcbuilder.controller.targets import TargetConfig, TargetConfigError
+    with pytest.raises(TargetConfigError, match="at least 100"):
+        TargetConfig("tgmotion", program_periods_us=(bad, 1000, 1000)).check()
+
+
 @pytest.mark.parametrize("cycle,slots", [(250, 5), (500, 5), (1000, 10)])
 def test_cycle_split_into_slots_program_05_in_every_slot(cycle, slots):
     """each cycle is split into 5 (250 and 500 µs) or 10 (1000 µs) equal slots;

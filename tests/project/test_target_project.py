@@ -24,15 +24,14 @@ def test_target_setting_defaults_to_mycnc_and_round_trips():
 @pytest.mark.parametrize("text,line,words", [
     ('name = "a"\ntarget = "fanuc"\n', 2, "unknown target 'fanuc'"),
     ('[tgmotion]\ncycle_time_us = 300\n', 2, "must be 250, 500 or 1000"),
-    ('[tgmotion]\ncycle_time_us = 500\ncycle_time_program_02_us = 99\n', 3, "from 100 to 10000"),
-    ('[tgmotion]\ncycle_time_program_03_us = 10001\n', 2, "from 100 to 10000"),
+    ('[tgmotion]\ncycle_time_us = 500\ncycle_time_program_02_us = 99\n', 3, "at least 100"),
     ('[tgmotion]\ninstruction_ns = 0\n', 2, "from 1 to 1000000"),
     ('[tgmotion]\ncycle_time_us = "500"\n', 2, "must be a whole number"),
     ('[huazhong]\nparameters = ""\n', 2, "must name a file"),
 ])
 def test_bad_target_settings_name_file_and_line(text, line, words):
     """the project sets `cycle_time_us` (250, 500 or 1000) and
-    `cycle_time_program_01_us` … `_03_us` (100 … 10 000)."""
+    `cycle_time_program_01_us` … `_03_us` (from 100)."""
     with pytest.raises(ProjectError) as info:
         parse_settings(text, "plcbuilder.toml")
     assert info.value.line == line and words in str(info.value)
@@ -116,3 +115,11 @@ def test_coverage_of_a_target_program(tmp_path):
     (cov,) = run.run.coverage
     d = cov.to_dict()
     assert d["name"] == "plc" and d["covered"] == d["lines"] > 10 and d["percent"] == 100.0
+
+
+def test_a_program_period_has_no_upper_bound():
+    """`cycle_time_program_01_us` … `_03_us` (from 100; the seed: "100 μs to
+    10 000 μs (the upper value is not limited)")"""
+    s = parse_settings('[tgmotion]\ncycle_time_program_01_us = 20000\n'
+                       'cycle_time_program_03_us = 1000000\n', "plcbuilder.toml")
+    assert s.program_periods_us == (20000, 1000, 1000000)

@@ -51,13 +51,13 @@ class TargetConfig:
         if self.cycle_time_us not in T.TGM_CYCLE_TIMES:
             raise TargetConfigError(f"cycle_time_us must be 250, 500 or 1000, not "
                                     f"{self.cycle_time_us}")
-        lo, hi = T.TGM_PERIOD_RANGE
+        lo = T.TGM_PERIOD_MIN
         if len(self.program_periods_us) != 3:
             raise TargetConfigError("three periods: Program_01, Program_02, Program_03")
         for i, v in enumerate(self.program_periods_us):
-            if not isinstance(v, int) or not lo <= v <= hi:
-                raise TargetConfigError(f"cycle_time_program_0{i + 1}_us must be from {lo} to "
-                                        f"{hi}, not {v!r}")
+            if not isinstance(v, int) or isinstance(v, bool) or v < lo:
+                raise TargetConfigError(f"cycle_time_program_0{i + 1}_us must be at least {lo} "
+                                        f"(µs), not {v!r}")
         if not isinstance(self.instruction_ns, int) or not 1 <= self.instruction_ns <= 1_000_000:
             raise TargetConfigError(f"instruction_ns must be from 1 to 1000000, not "
                                     f"{self.instruction_ns!r}")

@@ -17,7 +17,9 @@ test_target_calls.py pins this down, so a change in the interpreter that
 moves those locals fails there, not in a run.
 
 A call over :data:`CALL_LIMIT` instructions faults (SPEC §9: "a call over the
-instruction limit faults").
+instruction limit faults"): the cyclic programs' calls. :class:`Call` runs a
+call in pieces with no limit, for TG Motion's ``Program_Ini`` ("The execution
+length of this function is not limited").
 """
 
 from __future__ import annotations
@@ -75,31 +77,63 @@ def _frame_of(tb):
     return frame
 
 
+class Call:
+    """One call in progress, run in pieces: :meth:`run` goes on from where the
+    last piece stopped (a loop's end) until the call ends or has run at least
+    ``budget`` more instructions. TG Motion's ``Program_Ini``, whose length the
+    seed does not limit, runs so: a piece per tick, its modelled time passing
+    as it goes."""
+
+    def __init__(self, entry: Program, slots: list[int], host: Host, cover=None):
+        self.gen = vm.run_reference(entry, slots, host, cover=cover)
+        self.instructions = 0
+
+    def run(self, budget: Optional[int] = None) -> Optional[CallResult]:
+        """Run on; the CallResult when the call ended (or faulted), None when it
+        stopped at a loop's end after ``budget`` instructions (None: no budget)."""
+        gen = self.gen
+        used = 0
+        while True:
+            try:
+                next(gen)
+            except ProcExit as exc:
+                frame = _frame_of(exc.__traceback__)
+                self.instructions += frame.f_locals["count"] if frame is not None else 0
+                return CallResult(wrap(exc.code), self.instructions)
+            except StopIteration:
+                return CallResult(0, self.instructions)
+            except VMFault as fault:
+                frame = _frame_of(fault.__traceback__)
+                if frame is not None:
+                    self.instructions += frame.f_locals["count"]
+                    if fault.pc < 0:           # raised by the host: the instruction that called it
+                        fault.pc = frame.f_locals["pc"]
+                return CallResult(None, self.instructions, fault)
+            n = gen.gi_frame.f_locals["count"]  # suspended where a loop's iteration ends
+            self.instructions += n
+            used += n
+            if budget is not None and used >= budget:
+                return None
+
+    @property
+    def pc(self) -> int:
+        """Where it stopped (the code offset of the loop's end)."""
+        frame = self.gen.gi_frame
+        return frame.f_locals["pc"] if frame is not None else 0
+
+    def close(self) -> None:
+        self.gen.close()
+
+
 def call(entry: Program, slots: list[int], host: Host, limit: int = CALL_LIMIT,
          cover=None) -> CallResult:
     """Run the procedure ``entry`` starts at over ``slots`` to its end
-    (``cover``: a CodeCoverage recording the instructions that run)."""
-    gen = vm.run_reference(entry, slots, host, cover=cover)
-    total = 0
-    while True:
-        try:
-            next(gen)
-        except ProcExit as exc:
-            frame = _frame_of(exc.__traceback__)
-            total += frame.f_locals["count"] if frame is not None else 0
-            return CallResult(wrap(exc.code), total)
-        except StopIteration:
-            return CallResult(0, total)
-        except VMFault as fault:
-            frame = _frame_of(fault.__traceback__)
-            if frame is not None:
-                total += frame.f_locals["count"]
-                if fault.pc < 0:               # raised by the host: the instruction that called it
-                    fault.pc = frame.f_locals["pc"]
-            return CallResult(None, total, fault)
-        frame = gen.gi_frame                   # suspended where a loop's iteration ends
-        total += frame.f_locals["count"]
-        if total > limit:
-            fault = VMFault(frame.f_locals["pc"], FAULT_CALL_LIMIT)
-            gen.close()
-            return CallResult(None, total, fault)
+    (``cover``: a CodeCoverage recording the instructions that run); more than
+    ``limit`` instructions is a fault (SPEC §9: the cyclic programs' calls)."""
+    c = Call(entry, slots, host, cover)
+    r = c.run(limit + 1)
+    if r is not None:
+        return r
+    fault = VMFault(c.pc, FAULT_CALL_LIMIT)
+    c.close()
+    return CallResult(None, c.instructions, fault)

@@ -1,7 +1,11 @@
 """TG Motion's virtual PLC (seed 002, SPEC §9 "tgmotion").
 
-``Program_Ini`` runs once when the PLC starts; a status of 0 (``exit(0)``, or
-its end without ``exit(1)``) aborts the start with an error. Then each cycle
+``Program_Ini`` runs once when the PLC starts, to its end however long (the
+seed: "The execution length of this function is not limited"): it is not cut
+at the instruction limit of the cyclic programs. Its modelled time passes as
+it runs, one tick's worth of instructions (1 ms / ``instruction_ns``) a tick,
+and the first cycle begins in the tick where it ends. A status of 0
+(``exit(0)``, or its end without ``exit(1)``) aborts the start with an error. Then each cycle
 of ``cycle_time_us`` (250, 500 or 1000) is split into equal slots, 5 (250 and
 500 µs) or 10 (1000 µs). In each slot, in this order:
 
@@ -37,6 +41,7 @@ from plcbuilder.bytecode.semantics import wrap
 from plcbuilder.controller.events import Note
 from plcbuilder.controller.plc import Process
 from plcbuilder.controller.targets.base import TargetPLC
+from plcbuilder.controller.targets.calls import Call
 from plcbuilder.controller.vm import Host
 
 LOW = ("Program_03", "Program_02", "Program_01")      # highest of the three first
@@ -61,6 +66,8 @@ class TgMotionPLC(TargetPLC):
         self.scope_count = 0
         self._scope_fields = None                 # the machine's fields at the tick's last sample
         self.missed: dict[str, int] = {}
+        self._ini_due = False
+        self._ini_call: Optional[Call] = None     # Program_Ini while it runs (over ticks)
         self._reset_schedule()
 
     def _reset_schedule(self) -> None:
@@ -75,11 +82,26 @@ class TgMotionPLC(TargetPLC):
     def on_begin(self, p: Process) -> None:
         self._reset_schedule()
         self._ini_due = True
+        if self._ini_call is not None:
+            self._ini_call.close()
+        self._ini_call = None
 
-    def _ini(self, p: Process) -> None:
-        r = self.call("Program_Ini")
+    def _ini(self, p: Process) -> bool:
+        """Run Program_Ini on for this tick's worth of modelled time; True once
+        it has ended well (the cycles may begin), False while it runs on or
+        when it failed (the program then ended)."""
+        if self._ini_due:
+            self._ini_due = False
+            self.calls["Program_Ini"] += 1
+            self._ini_call = Call(self.entries.get("Program_Ini"), p.slots, p.host,
+                                  cover=self.coverage)
+        r = self._ini_call.run(max(1, 1_000_000 // self.ns))
         if r is None:
-            return                                  # it faulted: the program ended
+            return False                            # it goes on in the next tick
+        self._ini_call = None
+        if r.fault is not None:
+            self._fault(p, r.fault.pc, r.fault.text, r.fault.callers)
+            return False
         if r.code == 0:
             file, line = self.entries.line_of("Program_Ini")
             self._fault(p, self.entries.get("Program_Ini").entry,
@@ -87,14 +109,13 @@ class TgMotionPLC(TargetPLC):
                         "is aborted")
             self.events.append(Note(self.t, f"TG Motion: the PLC did not start: Program_Ini "
                                             f"returned 0 ({file}:{line})", "error"))
+            return False
+        return self.hw is p
 
     # ----------------------------------------------------------------- tick
     def tick(self, t: int, p: Process) -> None:
-        if self._ini_due:
-            self._ini_due = False
-            self._ini(p)
-            if self.hw is not p:
-                return
+        if (self._ini_due or self._ini_call is not None) and not self._ini(p):
+            return
         for _ in range(1000 // self.cycle_us):
             if not self._cycle(p):
                 return
