@@ -36,7 +36,7 @@ if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type
     from plcbuilder.controller.controller import Controller, ControllerError
     from plcbuilder.controller.debugger import DebugError
     from plcbuilder.controller.history import History, Trace
-    from plcbuilder.controller.io_dat import io_dat_of, load_io_dat, with_io_dat
+    from plcbuilder.controller.io_dat import io_dat_of, io_dat_path, load_io_dat, with_io_dat
     from plcbuilder.controller.machine_config import ConfigError, default_machine, load_machine
     from plcbuilder.controller.recorder import image_id
     from plcbuilder.controller.scenario import Action
@@ -75,7 +75,7 @@ for _module, _names in (
         ("plcbuilder.controller.debugger", "DebugError"),
         ("plcbuilder.controller.events", "ControllerStatus"),
         ("plcbuilder.controller.history", "History Trace"),
-        ("plcbuilder.controller.io_dat", "io_dat_of load_io_dat with_io_dat"),
+        ("plcbuilder.controller.io_dat", "io_dat_of io_dat_path load_io_dat with_io_dat"),
         ("plcbuilder.controller.machine_config", "ConfigError default_machine load_machine"),
         ("plcbuilder.controller.recorder", "image_id"),
         ("plcbuilder.controller.scenario", "Action"),
@@ -288,10 +288,13 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     if any(not r.ok for r in tg.compiled):
         return RunResult(tg.compiled, None)
     machine_path = opts.machine if opts.machine is not None else tg.machine_path
+    io_note = None
     try:
         mconf = load_machine(machine_path) if machine_path is not None else default_machine()
         if tg.io_dat is not None:
-            mconf = with_io_dat(mconf, load_io_dat(tg.io_dat))
+            io = load_io_dat(tg.io_dat)
+            io_note = io.note
+            mconf = with_io_dat(mconf, io)
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
     config = tg.target
@@ -328,6 +331,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
                          capturer=capturer, watch=watch)
     if replay:
         report["notes"].insert(0, {"t_ms": 0, "level": "warning", "text": replay})
+    if io_note:
+        report["notes"].insert(0, {"t_ms": 0, "level": "info", "text": io_note})
     forces = report.pop("forces", None)          # (the forces stay last)
     report["halted"] = _halted_report(c.debugger.halted_state()) if opts.breaks else None
     if history is not None:
@@ -516,7 +521,7 @@ def _compile_project(root: Path, opts: RunOptions) -> _Target:
                          f"{project.machine_path}")
     return _Target(programs, compiled, machine, variables, None,
                    _target_config(project) if project.target != "mycnc" else None,
-                   io_dat_of(project.root))
+                   io_dat_path(project.root))
 
 
 def _target_config(project: Project) -> TargetConfig:

@@ -236,15 +236,47 @@ GVAR.update({
     "GVAR_PLC_JOG": JOG,
 })
 
+class _Names(dict):
+    """The built-in names: a dict of the listed ones that also knows every
+    ``PLS<k>_<FIELD>`` name (the softMC seed: "There is no limit of the number
+    of ... PLSs", so they cannot all be listed; :func:`softmc.dynamic_name`)."""
+
+    def __missing__(self, name):
+        v = softmc.dynamic_name(name) if isinstance(name, str) else None
+        if v is None:
+            raise KeyError(name)
+        return v
+
+    def __contains__(self, name) -> bool:
+        return dict.__contains__(self, name) or (
+            isinstance(name, str) and softmc.dynamic_name(name) is not None)
+
+    def get(self, name, default=None):
+        try:
+            return self[name]
+        except KeyError:
+            return default
+
+
+class _Kinds(dict):
+    """Which table each built-in name comes from (a PLS past the listed ones too)."""
+
+    def get(self, name, default=None):
+        v = dict.get(self, name)
+        if v is None and isinstance(name, str) and softmc.dynamic_name(name) is not None:
+            return "softMC register"
+        return default if v is None else v
+
+
 #: Every built-in name, available without any include, in table order.
-BUILTIN_NAMES: dict[str, int] = {}
+BUILTIN_NAMES: dict[str, int] = _Names()
 for _table in (PLCCMD, PLC_BROADCAST, PLC_MESSAGE, MAPPED_OUT, PROC, EXIT, GVAR, softmc.REGISTERS,
                softmc.CONSTANTS):
     for _name, _value in _table.items():
         BUILTIN_NAMES.setdefault(_name, _value)
 
 #: Which table each built-in name comes from (for hover help and completion).
-BUILTIN_KIND: dict[str, str] = {}
+BUILTIN_KIND: dict[str, str] = _Kinds()
 for _kind, _table in (("command", PLCCMD), ("broadcast", PLC_BROADCAST), ("message", PLC_MESSAGE),
                       ("mapped output", MAPPED_OUT), ("proc state", PROC), ("exit code", EXIT),
                       ("register", GVAR), ("softMC register", softmc.REGISTERS),

@@ -3,30 +3,39 @@
 The softMC seed (``004_87c8f6c16dc5ce4a.txt``) gives every controller 32 virtual
 inputs and 32 virtual outputs (VIN.1..32, VOUT.1..32) and programmable limit
 switches (PLS). PLC Builder reaches them through ``gvarget``/``gvarset`` on the
-addresses below, which lie in a block (30000..31899) that no myCNC register uses.
-The names are built-in names of the language (:data:`NAMES`); the users' table is
-in the manual (the targets chapter, "softMC virtual I/O and programmable limit
-switches").
+addresses below, which lie in blocks that no myCNC register uses. The names are
+built-in names of the language (:data:`NAMES`, and :func:`dynamic_name` for the
+PLSs past the eighth); the users' table is in the manual (the targets chapter,
+"softMC virtual I/O and programmable limit switches").
 
-=====================  ===================================================
-30000  VIN_WORD        the 32 virtual inputs as one word (VIN.n = bit n-1)
-30001  VOUT_WORD       the 32 virtual outputs as one word (VOUT.n = bit n-1)
-30002  IO_DAT_DIP      the DIP value of the project's IO.DAT (read-only)
-30101..30132           VIN_1..VIN_32: one virtual input, 0 or 1
-30201..30232           VOUT_1..VOUT_32: one virtual output, 0 or 1
-31000 + 100·k + f      field f of PLS k (k = 1..8), fields below
-=====================  ===================================================
+=========================  ===================================================
+30000  VIN_WORD            the 32 virtual inputs as one word (VIN.n = bit n-1)
+30001  VOUT_WORD           the 32 virtual outputs as one word (VOUT.n = bit n-1)
+30002  IO_DAT_DIP          the DIP value of the project's IO.DAT (read-only)
+30101..30132               VIN_1..VIN_32: one virtual input, 0 or 1
+30201..30232               VOUT_1..VOUT_32: one virtual output, 0 or 1
+31000000 + 100000·k + f    field f of PLS k (k = 1, 2, …), fields below
+=========================  ===================================================
 
-PLS fields (``PLS<k>_<FIELD>`` = 31000 + 100·k + offset): ENABLE 0, AXIS 1 (0..8
-for X..W), OUTPUT 2 (n: physical output n; ``PLS_VOUT`` + n: VOUT.n; -1: none),
-POLARITY 3, REPEAT 4 (0.01 mm, 0: none), HYSTERESIS 5 (0.01 mm), COUNT 6 (how
-many positions, 1..16), STATE 7 (the PLS output now, read-only), STATUS 8 (what
-the last write to this PLS did: ``PLS_OK`` or a refusal code), POSITION 10..25
-(positions 1..16, 0.01 mm).
+"There is no limit of the number of positions or PLSs that can be defined"
+(the seed): the layout does not cap either. PLS k's block is 100000 registers
+long, so PLS numbers go up to :data:`PLS_NUMBER_MAX` (21164) and a PLS up to
+:data:`PLS_POSITIONS_MAX` (99900) positions before the 32-bit register
+addresses run out; the machine file's PLSs are PLS1, PLS2, … in its order.
+
+PLS fields (``PLS<k>_<FIELD>`` = 31000000 + 100000·k + offset): ENABLE 0, AXIS 1
+(0..8 for X..W), OUTPUT 2 (n: physical output n; ``PLS_VOUT`` + n: VOUT.n; -1:
+none), POLARITY 3, REPEAT 4 (0.01 mm, 0: none), HYSTERESIS 5 (0.01 mm), COUNT 6
+(how many positions: the seed's ``CreatePLSData n``), STATE 7 (the PLS output
+now, read-only), STATUS 8 (what the last write to this PLS did: ``PLS_OK`` or a
+refusal code), DELETE 9 (writing 1 is the seed's ``DeletePLS``), AXISNAME 10
+(the seed's ``PLSAxisName``: the axis letter's character code, 88 for X;
+read-only), POSITION 100 + i - 1 (position i, 0.01 mm).
 """
 
 from __future__ import annotations
 
+import re
 from typing import Optional
 
 VIN_WORD = 30000
@@ -36,21 +45,30 @@ VIN_BIT_BASE = 30100       # VIN.n = 30100 + n (n = 1..32)
 VOUT_BIT_BASE = 30200      # VOUT.n = 30200 + n
 VIRTUAL_BITS = 32
 
-PLS_COUNT_MAX = 8          # PLS1..PLS8
-PLS_BASE = 31000           # PLS k: 31000 + 100·k
-PLS_STRIDE = 100
-PLS_POSITIONS_MAX = 16
+PLS_BASE = 31_000_000      # PLS k: 31000000 + 100000·k
+PLS_STRIDE = 100_000
+PLS_POSITION_OFFSET = 100
+#: the bounds the 32-bit register addresses set (the seed sets none)
+PLS_NUMBER_MAX = ((1 << 31) - 1 - PLS_BASE) // PLS_STRIDE - 1
+PLS_POSITIONS_MAX = PLS_STRIDE - PLS_POSITION_OFFSET
+#: the PLSs whose register names are listed (completion, the register browser);
+#: the names of every other PLS k work all the same (:func:`dynamic_name`)
+PLS_NAMED = 8
 PLS_VOUT = 1000            # OUTPUT = PLS_VOUT + n drives VOUT.n
 PLS_NO_OUTPUT = -1
 
 #: field name -> offset inside one PLS's block
 PLS_FIELDS: dict[str, int] = {
     "ENABLE": 0, "AXIS": 1, "OUTPUT": 2, "POLARITY": 3, "REPEAT": 4, "HYSTERESIS": 5,
-    "COUNT": 6, "STATE": 7, "STATUS": 8, "POSITION": 10,
+    "COUNT": 6, "STATE": 7, "STATUS": 8, "DELETE": 9, "AXISNAME": 10,
+    "POSITION": PLS_POSITION_OFFSET,
 }
 F_ENABLE, F_AXIS, F_OUTPUT, F_POLARITY, F_REPEAT, F_HYSTERESIS, F_COUNT, F_STATE, F_STATUS, \
-    F_POSITION = (PLS_FIELDS[k] for k in ("ENABLE", "AXIS", "OUTPUT", "POLARITY", "REPEAT",
-                                         "HYSTERESIS", "COUNT", "STATE", "STATUS", "POSITION"))
+    F_DELETE, F_AXISNAME, F_POSITION = (
+        PLS_FIELDS[k] for k in ("ENABLE", "AXIS", "OUTPUT", "POLARITY", "REPEAT", "HYSTERESIS",
+                                "COUNT", "STATE", "STATUS", "DELETE", "AXISNAME", "POSITION"))
+#: the seed's default polarity ("The default value for polarity is 0", docs/targets.md)
+PLS_DEFAULT_POLARITY = 0
 
 #: what PLS<k>_STATUS reads after a write to PLS k
 PLS_STATUS: dict[str, int] = {
@@ -59,6 +77,7 @@ PLS_STATUS: dict[str, int] = {
     "PLS_BAD_VALUE": 2,           # the value is out of range for that field
     "PLS_BAD_POSITIONS": 3,       # enable refused: positions not increasing / longer than REPEAT
     "PLS_NOT_READY": 4,           # enable refused: no output, or the axis is not on the machine
+    "PLS_OUT_OF_BOUNDS": 5,       # a position outside 1..COUNT (the seed: "an error is generated")
 }
 PLS_STATUS_TEXT: dict[int, str] = {
     0: "ok",
@@ -66,22 +85,43 @@ PLS_STATUS_TEXT: dict[int, str] = {
     2: "refused: value out of range",
     3: "enable refused: positions must increase (and span less than the repeat interval)",
     4: "enable refused: no output, or its axis is not on this machine",
+    5: "refused: the position is outside 1..COUNT",
 }
 
 
 def pls_base(k: int) -> int:
-    """The first address of PLS ``k`` (1..8)."""
+    """The first address of PLS ``k`` (1, 2, …)."""
     return PLS_BASE + PLS_STRIDE * k
 
 
+#: the addresses of every PLS's registers: [PLS_FIRST, PLS_END)
+PLS_FIRST = pls_base(1)
+PLS_END = pls_base(PLS_NUMBER_MAX + 1)
+_FIELD_OFFSETS = frozenset(o for o in PLS_FIELDS.values() if o != PLS_POSITION_OFFSET)
+
+
 def pls_field(addr: int) -> Optional[tuple[int, int]]:
-    """``(k, offset)`` when ``addr`` is a field of PLS k, else None."""
-    k, off = divmod(addr - PLS_BASE, PLS_STRIDE)
-    if not 1 <= k <= PLS_COUNT_MAX:
+    """``(k, offset)`` when ``addr`` is a field of PLS k (a position's offset is
+    ``F_POSITION + i - 1``), else None."""
+    if not PLS_FIRST <= addr < PLS_END:
         return None
-    if off in PLS_FIELDS.values() or F_POSITION <= off < F_POSITION + PLS_POSITIONS_MAX:
+    k, off = divmod(addr - PLS_BASE, PLS_STRIDE)
+    if off in _FIELD_OFFSETS or off >= F_POSITION:
         return k, off
     return None
+
+
+_DYNAMIC = re.compile(r"PLS([1-9][0-9]*)_([A-Z]+)")
+
+
+def dynamic_name(name: str) -> Optional[int]:
+    """The register of a ``PLS<k>_<FIELD>`` name for any PLS number k (PLS9_ENABLE
+    and on are not listed in :data:`REGISTERS`, but are names all the same)."""
+    m = _DYNAMIC.fullmatch(name)
+    if m is None or m.group(2) not in PLS_FIELDS:
+        return None
+    k = int(m.group(1))
+    return pls_base(k) + PLS_FIELDS[m.group(2)] if k <= PLS_NUMBER_MAX else None
 
 
 #: the registers' built-in names
@@ -90,7 +130,7 @@ for _n in range(1, VIRTUAL_BITS + 1):
     REGISTERS[f"VIN_{_n}"] = VIN_BIT_BASE + _n
 for _n in range(1, VIRTUAL_BITS + 1):
     REGISTERS[f"VOUT_{_n}"] = VOUT_BIT_BASE + _n
-for _k in range(1, PLS_COUNT_MAX + 1):
+for _k in range(1, PLS_NAMED + 1):
     for _f, _off in PLS_FIELDS.items():
         REGISTERS[f"PLS{_k}_{_f}"] = pls_base(_k) + _off
 #: the constants' built-in names (an OUTPUT value base, the STATUS codes)
@@ -103,9 +143,11 @@ _FIELD_TEXT = {
     F_OUTPUT: "output (n: output n; PLS_VOUT+n: VOUT.n; -1: none)",
     F_POLARITY: "polarity in the first segment (0 or 1)",
     F_REPEAT: "repeat interval, 0.01 mm (0: none)", F_HYSTERESIS: "hysteresis, 0.01 mm",
-    F_COUNT: "number of positions (1..16)", F_STATE: "output state now (read-only)",
+    F_COUNT: "number of positions (CreatePLSData n)", F_STATE: "output state now (read-only)",
     F_STATUS: "result of the last write (0 ok; 1 enabled; 2 bad value; 3 bad positions; "
-              "4 not ready)",
+              "4 not ready; 5 position out of bounds)",
+    F_DELETE: "write 1 to delete it (DeletePLS; only while disabled)",
+    F_AXISNAME: "the axis name's character code, 88 for X (PLSAxisName; read-only)",
 }
 
 

@@ -10,6 +10,12 @@ One ``KEY=VALUE`` a line (keys INP and DIP, either case; values hexadecimal
 ``0x..`` or decimal; spaces around ``=`` allowed); blank lines are skipped.
 Anything else — an unknown key, a key twice, a value that is not a number or
 too wide — is a :class:`ConfigError` naming the file and the line.
+
+"File IO.DAT is generated automatically if it does not exist on the flash
+disk" (the seed): :func:`load_io_dat` writes one with every value 0 where it
+was to be read (the project's folder is the simulated controller's flash disk)
+and reads that; a folder it cannot write to gives the same zeros, with a note
+saying why.
 """
 
 from __future__ import annotations
@@ -20,7 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
-from plcbuilder._support.files import read_bounded
+from plcbuilder._support.files import atomic_write, read_bounded
 
 from .machine_config import ConfigError, MachineConfig
 
@@ -30,6 +36,8 @@ INP_BITS = 23                  # sys.din.1 .. sys.din.23
 DIP_BITS = 8                   # DIP=0xXX: one byte
 _LINE = re.compile(r"^\s*([A-Za-z]+)\s*=\s*(\S+)\s*$")
 _NUMBER = re.compile(r"^(0[xX][0-9A-Fa-f]+|[0-9]+)$")
+#: what a generated IO.DAT holds: the seed's two fields, every input preset 0
+GENERATED = "DIP=0x00\nINP=0x000000\n"
 
 
 @dataclass(frozen=True)
@@ -38,6 +46,8 @@ class IoDat:
     inp: int = 0
     dip: int = 0
     source: Optional[str] = None
+    #: set when the file was generated (or could not be): a line for the run log
+    note: Optional[str] = None
 
 
 def parse_io_dat(text: str, name: str = IO_DAT_FILE) -> IoDat:
@@ -72,9 +82,20 @@ def parse_io_dat(text: str, name: str = IO_DAT_FILE) -> IoDat:
                  source=name)
 
 
-def load_io_dat(path) -> IoDat:
-    """Read and parse an IO.DAT file."""
+def load_io_dat(path, generate: bool = True) -> IoDat:
+    """Read and parse an IO.DAT file; one that does not exist is generated first
+    (``generate``, the seed's rule), else read as all 0."""
     p = Path(path)
+    if generate and not p.exists():
+        try:
+            atomic_write(p, GENERATED)
+        except OSError as e:
+            return IoDat(source=str(p), note=f"{p}: IO.DAT does not exist and cannot be "
+                                             f"generated ({e.strerror or e}): every preset is 0")
+        return dataclasses.replace(parse_io_dat(GENERATED, str(p)),
+                                   note=f"{p}: IO.DAT did not exist; generated it with every "
+                                        f"value 0 (the seed: \"generated automatically if it "
+                                        f"does not exist\")")
     try:
         data = read_bounded(p, MAX_IO_DAT_BYTES, "IO.DAT")
     except OSError as e:
@@ -97,3 +118,8 @@ def io_dat_of(folder) -> Optional[Path]:
     """The IO.DAT of a project folder, if it has one."""
     p = Path(folder) / IO_DAT_FILE
     return p if p.is_file() else None
+
+
+def io_dat_path(folder) -> Path:
+    """Where a project's IO.DAT is (or is generated): next to plcbuilder.toml."""
+    return Path(folder) / IO_DAT_FILE

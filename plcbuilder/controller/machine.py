@@ -20,7 +20,7 @@ Register map (for users: docs/machine.md, "Registers"):
 5521, 5525             non-zero disables hardware / software limits
 8631, 8632, 8634, 8635 jog: acceleration time, speed units, axis speed, direction
 30000..30232           softMC virtual I/O (controller/virtual_io.py)
-31100..31899           softMC programmable limit switches (controller/pls.py)
+31100000 and on        softMC programmable limit switches, 100000 a PLS (controller/pls.py)
 everything else        plain register: keeps what was written, reads 0 before
 =====================  ==================================================
 
@@ -48,6 +48,7 @@ STOP_MESSAGES = frozenset(abi.PLCCMD[n] for n in (
     "PLCCMD_LINE_STOP", "PLCCMD_LINE_SOFT_STOP", "PLCCMD_MOTION_SKIP",
     "PLCCMD_MOTION_ABORT", "PLCCMD_MOTION_BREAK"))
 
+_PLS_FIRST, _PLS_END = softmc.PLS_FIRST, softmc.PLS_END
 _M32 = 0xFFFFFFFF
 _M256 = (1 << 256) - 1
 _WORDS = struct.Struct("<8I")              # 8 words of 32 pins, from 32 little-endian bytes
@@ -182,7 +183,6 @@ class Machine(MachineForces):
         s[abi.JOG_AXIS_SPEED] = self._set_jog_speed
         s[abi.JOG] = self._set_jog
         self.vio.install(g, s, ro)
-        self.pls.install(g, s)
 
     # ------------------------------------------------------- PLC-facing
     def portset(self, pin: int) -> None:
@@ -214,20 +214,28 @@ class Machine(MachineForces):
     def gvarget(self, addr: int) -> int:
         f = self._get.get(addr)
         if f is None:
+            if _PLS_FIRST <= addr < _PLS_END and softmc.pls_field(addr) is not None:
+                return self.pls.read_register(addr)
             return self._regs.get(addr, 0)
         return f(addr)
 
     def gvarset(self, addr: int, value: int) -> None:
         f = self._set.get(addr)
         if f is None:
-            self._regs[addr] = value
+            if _PLS_FIRST <= addr < _PLS_END and softmc.pls_field(addr) is not None:
+                self.quiet = False
+                self.pls.write_register(addr, value)
+            else:
+                self._regs[addr] = value
         else:
             self.quiet = False
             f(addr, value)
 
     def is_plain_register(self, addr: int) -> bool:
         """True when gvarget(addr) reads the plain global register store."""
-        return addr not in self._get or addr in self._plain_held
+        if addr in self._plain_held:
+            return True
+        return addr not in self._get and softmc.pls_field(addr) is None
 
     def g0move(self, flags: int, mask: int, distance: int) -> None:
         """g0moveA(flags, mask, distance): bit 0 absolute, bit 1 machine coordinates,

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from typing import Optional
 
-from plcbuilder.bytecode import abi
+from plcbuilder.bytecode import abi, softmc
 from plcbuilder.bytecode.semantics import wrap
 
 from .machine_config import ADC_CHANNELS
@@ -102,7 +102,8 @@ class MachineForces:
 
     def forceable_register(self, addr: int) -> bool:
         """Whether ``force_register`` takes ``addr``: a plain register, PWM or DAC."""
-        return addr not in self._get or addr in self._held or self._channel_list(addr) is not None
+        return (addr not in self._get and softmc.pls_field(addr) is None) or addr in self._held \
+            or self._channel_list(addr) is not None
 
     def force_register(self, addr: int, value: int) -> None:
         """Hold register ``addr`` (plain, PWM or DAC) at ``value``: gvarget reads

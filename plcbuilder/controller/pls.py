@@ -10,9 +10,18 @@ disabled at run time. The rules (docs: the targets chapter):
   first segment, p1 ≤ x < p2) and the other level when c is even. So enabling the
   PLS anywhere sets the output "according to the current position so that when
   the axis reaches the first segment, the output polarity is as indicated".
-* The default polarity is 1. The seed says both ("The default value for polarity
-  is 0" and, after a PLS is declared, "The initial output polarity is 1"); 1 is
-  what its set-up list and all its figures (on at the first position) show.
+* The default polarity is 0: "The default value for polarity is 0", which the
+  seed says three times ("PLSPOLARITY defaults to OFF", "The default output
+  state of a PLS is 0"); one sentence of its set-up list says "The initial
+  output polarity is 1" (docs/targets.md says why we follow the three).
+* "There is no limit of the number of positions or PLSs that can be defined":
+  PLS k exists for every k the register layout reaches (bytecode/softmc.py),
+  made when the machine file defines it or a procedure first writes to it; its
+  COUNT (the seed's ``CreatePLSData n``) sizes its positions, 1-based, and
+  reading or writing one outside 1..COUNT is refused ("an error is generated
+  if you attempt to access an index outside of the array bounds").
+* ``DeletePLS``: writing its DELETE field removes a disabled PLS (refused while
+  it is enabled); the next write to its registers declares it anew.
 * With a repeat interval R > 0 the switch points are p_i + m·R for every integer
   m (the positions must span less than R), so each point still toggles.
 * Hysteresis h moves every switch point h/2 forward for positive motion and h/2
@@ -42,14 +51,15 @@ from typing import Callable, Optional
 
 from plcbuilder.bytecode import softmc
 from plcbuilder.bytecode.abi import AXES
-from plcbuilder.bytecode.softmc import (F_AXIS, F_COUNT, F_ENABLE, F_HYSTERESIS, F_OUTPUT,
-                                        F_POLARITY, F_POSITION, F_REPEAT, F_STATE, F_STATUS)
+from plcbuilder.bytecode.softmc import (F_AXIS, F_AXISNAME, F_COUNT, F_DELETE, F_ENABLE,
+                                        F_HYSTERESIS, F_OUTPUT, F_POLARITY, F_POSITION, F_REPEAT,
+                                        F_STATE, F_STATUS)
 
 from .pls_config import PlsConfig
 
-OK, REFUSED_ENABLED, BAD_VALUE, BAD_POSITIONS, NOT_READY = (
+OK, REFUSED_ENABLED, BAD_VALUE, BAD_POSITIONS, NOT_READY, OUT_OF_BOUNDS = (
     softmc.PLS_STATUS[k] for k in ("PLS_OK", "PLS_REFUSED_ENABLED", "PLS_BAD_VALUE",
-                                   "PLS_BAD_POSITIONS", "PLS_NOT_READY"))
+                                   "PLS_BAD_POSITIONS", "PLS_NOT_READY", "PLS_OUT_OF_BOUNDS"))
 _PROPERTY_FIELDS = (F_AXIS, F_OUTPUT, F_POLARITY, F_REPEAT, F_HYSTERESIS, F_COUNT)
 _I32_MAX = (1 << 31) - 1
 
@@ -76,14 +86,15 @@ class Pls:
         self.number = number
         self.name = name or f"PLS{number}"
         # the seed's state after "Common Shared MyPLS as PLS": one position at 0,
-        # polarity 1, no repeat, no hysteresis, disabled; no output until one is set
+        # no repeat, no hysteresis, disabled (polarity: the seed's default, 0);
+        # no output until one is set
         self.axis = 0
         self.target = softmc.PLS_NO_OUTPUT
-        self.polarity = 1
+        self.polarity = softmc.PLS_DEFAULT_POLARITY
         self.repeat = 0
         self.hysteresis = 0
         self.count = 1
-        self.positions = [0] * softmc.PLS_POSITIONS_MAX
+        self.positions = [0]
         self.enabled = False
         self.state = 0
         self.status = OK
@@ -100,8 +111,14 @@ class Pls:
         p.repeat = c.repeat
         p.hysteresis = c.hysteresis
         p.count = len(c.positions)
-        p.positions[:len(c.positions)] = c.positions
+        p.positions = list(c.positions)
         return p
+
+    def resize(self, n: int) -> None:
+        """COUNT := n (the seed's CreatePLSData n): the first positions kept, new ones 0."""
+        self.count = n
+        del self.positions[n:]
+        self.positions += [0] * (n - len(self.positions))
 
     def points(self) -> list[int]:
         return self.positions[:self.count]
@@ -184,8 +201,10 @@ def _target_text(target: int) -> Optional[str]:
 
 
 class PlsBank:
-    """PLS1..PLS8 of a machine: their registers, their evaluation each ms.
+    """The PLSs of a machine: their registers, their evaluation each ms.
 
+    PLS k is made when the machine file defines it or a procedure first writes
+    to it (a read of one never written gives a newly declared PLS's values).
     ``axis_present(i)``, ``position(i)`` and ``write(target, level)`` connect it to
     the machine; ``notes`` is the machine's list of (level, text) notes."""
 
@@ -198,34 +217,32 @@ class PlsBank:
         self._position = position
         self._write = write
         self._notes = notes
-        self.units: list[Pls] = self._define()
+        self.units: dict[int, Pls] = self._define()
         self.active: list[Pls] = []
         self._warned: set = set()
+        #: what a PLS not declared yet reads
+        self._blank = Pls(0)
 
-    def _define(self) -> list[Pls]:
-        units = [Pls.from_config(k + 1, c) for k, c in enumerate(self._configs)]
-        return units + [Pls(k) for k in range(len(units) + 1, softmc.PLS_COUNT_MAX + 1)]
+    def _define(self) -> dict[int, Pls]:
+        return {k + 1: Pls.from_config(k + 1, c) for k, c in enumerate(self._configs)}
 
     def reset(self) -> None:
-        """Power-on: the machine file's PLSs as defined (the others at the seed's
-        defaults), the ones marked ``enabled`` enabled at the start position (the
-        machine calls it once its outputs and positions are reset)."""
+        """Power-on: the machine file's PLSs as defined, no other, the ones
+        marked ``enabled`` enabled at the start position (the machine calls it
+        once its outputs and positions are reset)."""
         self._warned.clear()
         self.units = self._define()
         self.active = []
-        for c, p in zip(self._configs, self.units):
+        for k, c in enumerate(self._configs):
             if c.enabled:
-                self._enable(p)
+                self._enable(self.units[k + 1])
 
-    def install(self, get: dict, put: dict) -> None:
-        """Add the PLS registers to a machine's register maps."""
-        for k in range(1, softmc.PLS_COUNT_MAX + 1):
-            base = softmc.pls_base(k)
-            offsets = [*softmc.PLS_FIELDS.values(),
-                       *range(F_POSITION + 1, F_POSITION + softmc.PLS_POSITIONS_MAX)]
-            for off in offsets:
-                get[base + off] = lambda _a, k=k, off=off: self.read(k, off)
-                put[base + off] = lambda _a, v, k=k, off=off: self.write(k, off, v)
+    def unit(self, k: int) -> Pls:
+        """PLS k, declared now if it was not (k from 1 to softmc.PLS_NUMBER_MAX)."""
+        p = self.units.get(k)
+        if p is None:
+            p = self.units[k] = Pls(k)
+        return p
 
     # ---------------------------------------------------------------- run
     def update(self) -> None:
@@ -236,27 +253,42 @@ class PlsBank:
                 self._write(p.target, p.state)
 
     def report(self) -> list[dict]:
-        """The PLSs that are defined in the machine file or enabled, for the run report."""
-        n = len(self._configs)
-        return [p.report() for p in self.units if p.number <= n or p.enabled]
+        """The PLSs that exist (the machine file's, and those a procedure declared), by number."""
+        return [self.units[k].report() for k in sorted(self.units)]
 
     # ---------------------------------------------------------- registers
+    def read_register(self, addr: int) -> int:
+        """gvarget(addr) of a PLS register (softmc.pls_field(addr) is not None)."""
+        k, off = softmc.pls_field(addr)
+        return self.read(k, off)
+
+    def write_register(self, addr: int, value: int) -> None:
+        k, off = softmc.pls_field(addr)
+        self.write(k, off, value)
+
     def read(self, k: int, off: int) -> int:
-        p = self.units[k - 1]
+        p = self.units.get(k) or self._blank
         if off >= F_POSITION:
-            return p.positions[off - F_POSITION]
+            i = off - F_POSITION
+            if i >= p.count:
+                if k in self.units:
+                    self._refuse(p, off, None, OUT_OF_BOUNDS, self._bounds(p, i))
+                return 0
+            return p.positions[i]
+        if off == F_AXISNAME:
+            return ord(AXES[p.axis])
         return {F_ENABLE: int(p.enabled), F_AXIS: p.axis, F_OUTPUT: p.target,
                 F_POLARITY: p.polarity, F_REPEAT: p.repeat, F_HYSTERESIS: p.hysteresis,
-                F_COUNT: p.count, F_STATE: p.state, F_STATUS: p.status}[off]
+                F_COUNT: p.count, F_STATE: p.state, F_STATUS: p.status, F_DELETE: 0}[off]
 
     def write(self, k: int, off: int, value: int) -> None:
         """A procedure's gvarset on field ``off`` of PLS k."""
-        p = self.units[k - 1]
+        p = self.unit(k)
         if off == F_STATUS:
             p.status = OK                       # writing the status clears it
             return
-        if off == F_STATE:
-            self._refuse(p, off, value, BAD_VALUE, "the state is read-only")
+        if off in (F_STATE, F_AXISNAME):
+            self._refuse(p, off, value, BAD_VALUE, "the field is read-only")
             return
         if off == F_ENABLE:
             if value and not p.enabled:
@@ -273,17 +305,35 @@ class PlsBank:
                          f"{p.name} is enabled; disable it (gvarset({softmc.pls_base(k)}, 0)) "
                          "to change it")
             return
+        if off == F_DELETE:
+            if value:
+                del self.units[k]               # DeletePLS: declared anew by the next write
+            else:
+                p.status = OK
+            return
+        if off >= F_POSITION:
+            i = off - F_POSITION
+            if i >= p.count:
+                self._refuse(p, off, value, OUT_OF_BOUNDS, self._bounds(p, i))
+                return
+            p.positions[i] = value
+            p.status = OK
+            return
         why = self._bad_value(off, value)
         if why:
             self._refuse(p, off, value, BAD_VALUE, why)
             return
-        if off >= F_POSITION:
-            p.positions[off - F_POSITION] = value
+        if off == F_COUNT:
+            p.resize(value)
         else:
             setattr(p, {F_AXIS: "axis", F_OUTPUT: "target", F_POLARITY: "polarity",
-                        F_REPEAT: "repeat", F_HYSTERESIS: "hysteresis", F_COUNT: "count"}[off],
-                    value)
+                        F_REPEAT: "repeat", F_HYSTERESIS: "hysteresis"}[off], value)
         p.status = OK
+
+    @staticmethod
+    def _bounds(p: Pls, i: int) -> str:
+        return (f"{p.name} has positions 1..{p.count} (PLS{p.number}_COUNT), not {i + 1}; "
+                f"set its COUNT first (the seed's CreatePLSData)")
 
     def _bad_value(self, off: int, v: int) -> Optional[str]:
         if off == F_AXIS and not 0 <= v < len(AXES):
@@ -299,7 +349,8 @@ class PlsBank:
         if off in (F_REPEAT, F_HYSTERESIS) and v < 0:
             return f"{v}: must not be negative"
         if off == F_COUNT and not 1 <= v <= softmc.PLS_POSITIONS_MAX:
-            return f"{v} positions: 1..{softmc.PLS_POSITIONS_MAX}"
+            return f"{v} positions: at least 1 (the register layout has room for " \
+                   f"{softmc.PLS_POSITIONS_MAX})"
         return None
 
     def _enable(self, p: Pls, off: int = F_ENABLE) -> None:
@@ -317,10 +368,11 @@ class PlsBank:
         self.active.sort(key=lambda u: u.number)   # a fixed order: PLS1 first
         p.status = OK
 
-    def _refuse(self, p: Pls, off: int, value: int, code: int, why: str) -> None:
+    def _refuse(self, p: Pls, off: int, value: Optional[int], code: int, why: str) -> None:
         p.status = code
         addr = softmc.pls_base(p.number) + off
         key = (p.number, off, code)
         if key not in self._warned:
             self._warned.add(key)
-            self._notes.append(("warning", f"gvarset({addr}, {value}) refused: {why}"))
+            what = f"gvarset({addr}, {value})" if value is not None else f"gvarget({addr})"
+            self._notes.append(("warning", f"{what} refused: {why}"))

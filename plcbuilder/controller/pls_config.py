@@ -5,14 +5,18 @@
 name = "cam"                 # optional, for the report and the panels
 axis = "X"                   # the axis whose position drives it
 output = 7                   # a physical output ... or vout = 1..32 (a virtual one)
-positions = [1.0, 2.0]       # mm, strictly increasing, 1..16 of them
-polarity = 1                 # the output between positions 1 and 2 (default 1)
+positions = [1.0, 2.0]       # mm, strictly increasing, as many as needed
+polarity = 1                 # the output between positions 1 and 2 (default 0)
 repeat = 0.0                 # mm: the pattern repeats every `repeat` (0: no repetition)
 hysteresis = 0.0             # mm: split half each way by the direction of motion
 enabled = false              # enabled at power-on
 ```
 
-The k-th ``[[pls]]`` table is PLS k (1..8) of the registers. Parsed by
+The k-th ``[[pls]]`` table is PLS k of the registers. Neither the tables nor
+their positions are capped (the seed: "There is no limit of the number of
+positions or PLSs that can be defined") beyond what the register layout
+reaches (:data:`softmc.PLS_NUMBER_MAX`, :data:`softmc.PLS_POSITIONS_MAX`). The
+polarity defaults to 0, the seed's "The default value for polarity is 0". Parsed by
 :func:`parse_pls` with the machine file's reader, so every problem names the file,
 the line and the key.
 """
@@ -38,7 +42,7 @@ class PlsConfig:
     output: Optional[int]           # a physical output, or None
     vout: Optional[int]             # VOUT.n (1..32), or None
     positions: tuple[int, ...]      # 0.01 mm, strictly increasing
-    polarity: int = 1
+    polarity: int = softmc.PLS_DEFAULT_POLARITY
     repeat: int = 0                 # 0.01 mm
     hysteresis: int = 0             # 0.01 mm
     enabled: bool = False
@@ -53,9 +57,10 @@ def parse_pls(r, data: Any, axes, n_out: int) -> tuple[PlsConfig, ...]:
     """The ``[[pls]]`` tables; ``r`` is machine_config's reader, ``axes`` the
     configured axes, ``n_out`` the number of outputs."""
     entries = r.tables(data, "pls", PLS_KEYS, "axis")
-    if len(data) > softmc.PLS_COUNT_MAX:
-        raise r.error(("pls", softmc.PLS_COUNT_MAX),
-                      f"at most {softmc.PLS_COUNT_MAX} programmable limit switches")
+    if len(data) > softmc.PLS_NUMBER_MAX:
+        raise r.error(("pls", softmc.PLS_NUMBER_MAX),
+                      f"{len(data)} programmable limit switches: the register layout has "
+                      f"room for {softmc.PLS_NUMBER_MAX}")
     out = []
     for k, p, d in entries:
         ax = r.string(d, "axis", p, choices=AXES)
@@ -72,7 +77,7 @@ def parse_pls(r, data: Any, axes, n_out: int) -> tuple[PlsConfig, ...]:
                           f"the repeat interval {repeat / 100:g} mm")
         out.append(PlsConfig(
             name=r.string(d, "name", p, f"PLS{k + 1}"), axis=ax, output=output, vout=vout,
-            positions=positions, polarity=r.integer(d, "polarity", p, 1, 0, 1), repeat=repeat,
+            positions=positions, polarity=r.integer(d, "polarity", p, softmc.PLS_DEFAULT_POLARITY, 0, 1), repeat=repeat,
             hysteresis=_length(r, d, "hysteresis", p),
             enabled=r.boolean(d, "enabled", p, False)))
     return tuple(out)
@@ -85,8 +90,8 @@ def _positions(r, d: dict, p: tuple) -> tuple[int, ...]:
     if not isinstance(raw, list) or not raw:
         raise r.error(p + ("positions",), "expected a non-empty array of positions (mm)")
     if len(raw) > softmc.PLS_POSITIONS_MAX:
-        raise r.error(p + ("positions",), f"{len(raw)} positions: at most "
-                                          f"{softmc.PLS_POSITIONS_MAX}")
+        raise r.error(p + ("positions",), f"{len(raw)} positions: the register layout has "
+                                          f"room for {softmc.PLS_POSITIONS_MAX}")
     vals: list[int] = []
     for i, v in enumerate(raw):
         mm = r.number({"positions": v}, "positions", p, None, -_BIG_MM, _BIG_MM)

@@ -96,3 +96,24 @@ def test_without_io_dat_nothing_changes():
     cfg = parse_machine("")
     assert with_io_dat(cfg, None) is cfg
     assert Machine(cfg).inputs_on() == []
+
+
+def test_io_dat_is_generated_if_it_does_not_exist(tmp_path):
+    """The seed: "File IO.DAT is generated automatically if it does not exist on
+    the flash disk." Loading a missing IO.DAT writes one in the seed's format
+    (DIP and INP, every value 0) and says so; the next load reads it."""
+    p = tmp_path / "IO.DAT"
+    io = load_io_dat(p)
+    assert p.read_text(encoding="ascii") == "DIP=0x00\nINP=0x000000\n"
+    assert (io.inp, io.dip) == (0, 0) and "generated" in io.note
+    again = load_io_dat(p)
+    assert again.note is None and parse_io_dat(p.read_text()).inp == 0
+
+
+def test_io_dat_that_cannot_be_generated_reads_as_zeros(tmp_path):
+    """Bad input never crashes anything: a folder that cannot be written gives
+    all-0 presets and a note naming the file."""
+    p = tmp_path / "no" / "such" / "IO.DAT"
+    io = load_io_dat(p)
+    assert (io.inp, io.dip) == (0, 0) and "cannot be generated" in io.note
+    assert not p.exists()

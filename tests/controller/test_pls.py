@@ -67,7 +67,8 @@ def test_one_switch_position(backend):
     """SPEC §9: "an increasing list of positions where the output toggles". The
     seed's first figure: one switch position at 100, the output turns on there
     (polarity 1) — crossed both ways, with noise right at the point."""
-    cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [100.0]\nenabled = true\n')
+    cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [100.0]\npolarity = 1\n'
+                  'enabled = true\n')
     targets = [50, 150, 99.99, 100, 99.98, 100.01, 0]
     got, c, _ = run_tour(cfg, targets, OUT5, backend)
     assert got == [0, 1, 0, 1, 0, 1, 0]
@@ -80,7 +81,7 @@ def test_second_position_turns_it_back_off(backend):
     where the output toggles". The seed: "to have the PLS ... turn back off at 200,
     simply add a second position at 200" — here driving a virtual output."""
     cfg = machine('[[pls]]\naxis = "X"\nvout = 2\npositions = [100.0, 200.0]\n'
-                  'enabled = true\n')
+                  'polarity = 1\nenabled = true\n')
     targets = [150, 250, 199.99, 200.02, 120, 99, 200]
     got, c, _ = run_tour(cfg, targets, "VOUT_2", backend)
     assert got == [1, 0, 1, 0, 1, 0, 0]
@@ -93,7 +94,7 @@ def test_four_positions(backend):
     seed: on at 100, off at 200, on again at 400, off again at 600; the axis
     goes out and comes back."""
     cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [100, 200, 400, 600]\n'
-                  'enabled = true\n')
+                  'polarity = 1\nenabled = true\n')
     targets = [150, 300, 500, 700, 500, 300, 150, 50]
     got, _, _ = run_tour(cfg, targets, OUT5, backend)
     assert got == [1, 0, 1, 0, 1, 0, 1, 0]
@@ -105,7 +106,7 @@ def test_repeat_interval(backend):
     repeat of 100 — so on again from 100 to 110, 200 to 210, and (going back
     below the first position) from -100 to -90."""
     cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [0.0, 10.0]\nrepeat = 100.0\n'
-                  'enabled = true\n')
+                  'polarity = 1\nenabled = true\n')
     targets = [5, 15, 105, 110, 209.99, 150, 100, 99.99, -95, -89]
     got, _, _ = run_tour(cfg, targets, OUT5, backend)
     assert got == [1, 0, 1, 0, 1, 0, 1, 0, 1, 0]
@@ -164,7 +165,7 @@ def test_hysteresis_split_by_direction(backend):
     h = 0.1 mm at 100 mm: going up it turns on at 100.05, going down off below
     99.95; noise of ±0.04 mm around 100 changes nothing."""
     cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [100.0]\nhysteresis = 0.1\n'
-                  'enabled = true\n')
+                  'polarity = 1\nenabled = true\n')
     targets = [99.9, 100.0, 100.04, 99.96, 100.04, 100.05,     # up: on at 100.05
                100.0, 99.96, 100.04, 99.95, 99.94,             # down: off below 99.95
                100.02, 99.98, 100.1]                           # noise, then up again
@@ -181,7 +182,7 @@ def test_stopped_on_a_position_noise_changes_nothing(backend):
     the inherent noise on the axis is less than the hysteresis, the PLS state does
     not change due to this noise." Stopped on 200 coming from above, jittering."""
     cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [100.0, 200.0]\n'
-                  'hysteresis = 0.2\nenabled = true\n')
+                  'hysteresis = 0.2\npolarity = 1\nenabled = true\n')
     jitter = [200.0, 200.09, 199.91, 200.05, 199.95, 200.0]
     got, _, _ = run_tour(cfg, [250] + jitter + [150], OUT5, backend)
     assert got == [0] + [0] * len(jitter) + [1]
@@ -211,7 +212,8 @@ main()
   exit(99);
 }
 """
-    cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [-50.0]\nenabled = true\n')
+    cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [-50.0]\npolarity = 1\n'
+                  'enabled = true\n')
     c, events = run_hw(src, 100, backend, machine_config=cfg)
     v = c.variables()["M03"]
     assert v["var00"] == softmc.PLS_STATUS["PLS_REFUSED_ENABLED"]
@@ -219,7 +221,8 @@ main()
     assert (v["var04"], v["var05"]) == (softmc.PLS_STATUS["PLS_OK"], 20000)
     assert v["var06"] == 1                          # disabling leaves the output as it is
     notes = [n.text for n in of(events, Note)]
-    assert any("31110" in t and "refused" in t and "enabled" in t for t in notes)
+    at = str(softmc.pls_base(1) + softmc.F_POSITION)
+    assert any(at in t and "refused" in t and "enabled" in t for t in notes)
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -255,7 +258,7 @@ main()
     assert (v["var00"], v["var01"]) == (bad, 0)
     assert v["var02"] == bad                        # spans 2.01 mm, repeat 1.5 mm
     assert (v["var03"], v["var04"]) == (0, 1)
-    assert c.machine.vio.vouts_on() == []           # X at 0: below 1 mm, polarity 1 -> 0
+    assert c.machine.vio.vouts_on() == [1]          # X at 0: below 1 mm, polarity 0 -> 1
     notes = [n.text for n in of(events, Note)]
     assert any("position 3 (300) is not above position 2 (300)" in t for t in notes)
 
@@ -263,9 +266,9 @@ main()
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_enable_needs_an_output_and_a_present_axis(backend):
     """SPEC §9: a PLS has "an axis, an output (physical or virtual)". The seed's
-    defaults after a PLS is declared: "A single PLS position exists at 0. The
-    initial output polarity is 1. PLSREPEAT is set to 0. The hysteresis is set to
-    0." and it is disabled. Without an output, or on an axis the machine lacks,
+    defaults after a PLS is declared: "A single PLS position exists at 0. ...
+    PLSREPEAT is set to 0. The hysteresis is set to 0." and it is disabled; the
+    polarity is the seed's default, "The default value for polarity is 0". Without an output, or on an axis the machine lacks,
     enabling is refused (PLS_NOT_READY); out-of-range values are refused
     (PLS_BAD_VALUE)."""
     src = """
@@ -296,11 +299,11 @@ main()
     c, _ = run_hw(src, 100, backend, machine_config=machine())
     v = c.variables()["M03"]
     st = softmc.PLS_STATUS
-    assert v["var00"] == 1010                       # one position at 0, polarity 1, rest 0
+    assert v["var00"] == 1000                       # one position at 0, polarity 0, rest 0
     assert v["var01"] == st["PLS_NOT_READY"]        # no output yet
     assert v["var02"] == st["PLS_BAD_VALUE"]        # the machine has outputs 0..63
     assert v["var03"] == st["PLS_NOT_READY"]        # this machine has no Z
-    assert (v["var04"], v["var05"]) == (0, 1)       # X at 0 is at the position: on
+    assert (v["var04"], v["var05"]) == (0, 0)       # X at 0 is at the position: polarity 0
     assert v["var06"] == st["PLS_BAD_VALUE"]        # the state is read-only
     assert v["var07"] == 0                          # writing the status clears it
 
@@ -310,7 +313,7 @@ def test_disabled_pls_does_not_drive_its_output(backend):
     """SPEC §9: "enabled and disabled at run time". The seed: "After being
     defined, a PLS is disabled (output pattern is not generated)"; disabled again,
     the output stays as the PLS left it while the axis moves on."""
-    cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [100.0]\n')
+    cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [100.0]\npolarity = 1\n')
     between = {2: "  gvarset(PLS1_ENABLE, 1);", 4: "  gvarset(PLS1_ENABLE, 0);"}
     got, _, _ = run_tour(cfg, [150, 50, 150, 50, 50, 150], OUT5, backend, between=between)
     assert got == [0, 0, 1, 0, 0, 0]
@@ -321,8 +324,8 @@ def test_several_pls_on_one_axis_and_a_procedure_in_between(backend):
     """SPEC §9: PLSs "defined in the machine file or from a procedure" — the seed
     allows "Multiple PLSs per axis"; between two switch points a procedure may
     write the output itself (the PLS writes only when its level changes)."""
-    cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [100.0]\nenabled = true\n'
-                  '[[pls]]\naxis = "X"\nvout = 32\npositions = [50.0, 150.0]\npolarity = 0\n'
+    cfg = machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [100.0]\npolarity = 1\n'
+                  'enabled = true\n[[pls]]\naxis = "X"\nvout = 32\npositions = [50.0, 150.0]\npolarity = 0\n'
                   'enabled = true\n')
     read = "VOUT_WORD"
     between = {2: "  portclear(5);"}
@@ -339,7 +342,7 @@ def test_evaluated_after_motion_each_ms():
     ms"; a PLS is evaluated right after, so during a move its output changes in
     the very ms the position crosses the point."""
     m = Machine(machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [10.0]\n'
-                        'enabled = true\n'))
+                        'polarity = 1\nenabled = true\n'))
     m.g0move(0x3, 1, 2000)
     crossed = None
     for _ in range(2000):
@@ -381,12 +384,100 @@ def test_machine_file_errors_name_file_and_line(text, line, words):
     assert words in str(err) and str(err).startswith(f"machine.toml:{line}: pls")
 
 
-def test_at_most_eight_pls():
-    """The register map (bytecode/softmc.py): PLS1..PLS8 (the k-th [[pls]] is PLS k)."""
-    one = '[[pls]]\naxis = "X"\noutput = 1\npositions = [1.0]\n'
-    assert len(machine(one * 8).pls) == 8
-    with pytest.raises(ConfigError, match="at most 8"):
-        machine(one * 9)
+def test_no_limit_on_the_number_of_pls_or_of_positions():
+    """SPEC §9: "There is no limit of the number of positions or PLSs that can be
+    defined": neither is capped. 40 PLSs of 50 positions each in the machine file;
+    PLS40's registers follow the layout (softMC register map: PLS k at
+    31000000 + 100000·k)."""
+    pos = ", ".join(str(float(i)) for i in range(1, 51))
+    one = f'[[pls]]\naxis = "X"\noutput = 1\npositions = [{pos}]\n'
+    m = Machine(machine(one * 40))
+    assert len(m.config.pls) == 40
+    b = softmc.pls_base(40)
+    assert b == 31_000_000 + 100_000 * 40
+    assert m.gvarget(b + softmc.F_COUNT) == 50
+    assert m.gvarget(b + softmc.F_POSITION + 49) == 5000
+    assert [p["pls"] for p in m.pls.report()] == list(range(1, 41))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_procedure_defines_a_pls_past_the_eighth_with_many_positions(backend):
+    """SPEC §9: PLSs "defined in the machine file or from a procedure" — "There is
+    no limit of the number of positions or PLSs that can be defined": PLS 100
+    with 200 positions (PLS100_* are names like PLS1_*), toggling every mm."""
+    setup = """
+  gvarset(PLS100_AXIS, 0);
+  gvarset(PLS100_OUTPUT, 5);
+  gvarset(PLS100_COUNT, 200);
+  i = 0;
+  do { gvarset(PLS100_POSITION + i, 1000 + 100 * i); i++; } while (i < 200);
+  gvarset(PLS100_POLARITY, 1);
+  gvarset(PLS100_ENABLE, 1);
+  gvarset(20090, gvarget(PLS100_STATUS));"""
+    got, c, events = run_tour(machine(), [10.5, 11.5, 209.5, 250], OUT5, backend, setup)
+    assert [p.value for p in of(events, Print) if p.register == 20090] == [0]
+    assert got[1:] == [1, 0, 0, 0]               # 200 points: even past the last one
+    assert [p["pls"] for p in c.machine.pls.report()] == [100]
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_position_outside_the_count_is_refused(backend):
+    """The seed: "A call to CREATEPLSDATA creates an array of n positions ... The
+    array is 1-based and an error is generated if you attempt to access an index
+    outside of the array bounds." COUNT is CreatePLSData; position COUNT + 1 is
+    refused (PLS_OUT_OF_BOUNDS), and taken once COUNT covers it."""
+    src = """
+main()
+{
+  gvarset(PLS1_COUNT, 2);
+  gvarset(PLS1_POSITION + 2, 500);
+  var00 = gvarget(PLS1_STATUS);
+  var01 = gvarget(PLS1_POSITION + 2);
+  gvarset(PLS1_COUNT, 3);
+  gvarset(PLS1_POSITION + 2, 500);
+  var02 = gvarget(PLS1_STATUS);
+  var03 = gvarget(PLS1_POSITION + 2);
+  exit(99);
+}
+"""
+    c, events = run_hw(src, 100, backend, machine_config=machine())
+    v = c.variables()["M03"]
+    assert (v["var00"], v["var01"]) == (softmc.PLS_STATUS["PLS_OUT_OF_BOUNDS"], 0)
+    assert (v["var02"], v["var03"]) == (0, 500)
+    assert any("positions 1..2" in n.text for n in of(events, Note))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_delete_pls_and_the_axis_name_query(backend):
+    """The seed: "Delete a PLS to remove it from the system only when the PLS is
+    disable" (``DeletePLS MyPLS``) and "Query the name of the axis driving the
+    PLS: ? MyPLS.PLSAxisName returns the axis associated with the PLS (A1)."
+    DELETE refuses an enabled PLS, removes a disabled one (it reads as newly
+    declared again); AXISNAME reads the axis letter ('X' = 88, 'Y' = 89)."""
+    src = """
+main()
+{
+  gvarset(PLS2_AXIS, 1);
+  var00 = gvarget(PLS2_AXISNAME);
+  gvarset(PLS2_AXIS, 0);
+  gvarset(PLS2_OUTPUT, 5);
+  gvarset(PLS2_ENABLE, 1);
+  gvarset(PLS2_DELETE, 1);
+  var01 = gvarget(PLS2_STATUS);
+  var02 = gvarget(PLS2_OUTPUT);
+  gvarset(PLS2_ENABLE, 0);
+  gvarset(PLS2_DELETE, 1);
+  var03 = gvarget(PLS2_OUTPUT);
+  var04 = gvarget(PLS2_AXISNAME);
+  exit(99);
+}
+"""
+    c, _ = run_hw(src, 100, backend, machine_config=machine())
+    v = c.variables()["M03"]
+    assert v["var00"] == ord("Y")
+    assert (v["var01"], v["var02"]) == (softmc.PLS_STATUS["PLS_REFUSED_ENABLED"], 5)
+    assert (v["var03"], v["var04"]) == (softmc.PLS_NO_OUTPUT, ord("X"))
+    assert c.machine.pls.report() == []          # deleted: no longer in the system
 
 
 def test_machine_file_pls_in_the_registers():
@@ -400,7 +491,7 @@ def test_machine_file_pls_in_the_registers():
     got = {k: m.gvarget(b + off) for k, off in f.items()}
     assert got == {"ENABLE": 0, "AXIS": 0, "OUTPUT": softmc.PLS_VOUT + 3, "POLARITY": 0,
                    "REPEAT": 500, "HYSTERESIS": 2, "COUNT": 2, "STATE": 0, "STATUS": 0,
-                   "POSITION": 150}
+                   "DELETE": 0, "AXISNAME": ord("X"), "POSITION": 150}
     assert m.gvarget(b + f["POSITION"] + 1) == 225
     assert m.pls.report() == [{"pls": 1, "name": "cam", "axis": "X", "output": "VOUT.3",
                                "enabled": False, "state": 0}]
@@ -453,3 +544,15 @@ def test_random_noisy_walks_follow_the_rule(seed):
         p.follow(x)
         got.append(p.state)
     assert got == _walk_reference(points, repeat, h, p.polarity, xs)
+
+
+def test_the_default_polarity_is_0():
+    """The seed: "The default value for polarity is 0." (also "PLSPOLARITY
+    defaults to OFF" and "The default output state of a PLS is 0"; its one
+    "The initial output polarity is 1" is not followed: docs/targets.md). A
+    machine-file PLS without `polarity`, and one a procedure declares, read 0."""
+    m = Machine(machine('[[pls]]\naxis = "X"\noutput = 5\npositions = [10.0]\n'))
+    assert m.gvarget(softmc.pls_base(1) + softmc.F_POLARITY) == 0
+    assert m.gvarget(softmc.pls_base(7) + softmc.F_POLARITY) == 0
+    m.gvarset(softmc.pls_base(7) + softmc.F_OUTPUT, 6)
+    assert m.gvarget(softmc.pls_base(7) + softmc.F_POLARITY) == 0

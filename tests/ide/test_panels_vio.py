@@ -23,11 +23,13 @@ start = 0.0
 axis = "X"
 vout = 3
 positions = [10.0, 20.0]
+polarity = 1
 enabled = true
 [[pls]]
 axis = "X"
 output = 6
 positions = [15.0]
+polarity = 1
 enabled = true
 """
 

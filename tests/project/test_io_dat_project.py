@@ -34,6 +34,7 @@ name = "cam"
 axis = "X"
 vout = 5
 positions = [10.0, 20.0]
+polarity = 1
 enabled = true
 """
 
@@ -135,3 +136,24 @@ def test_the_ides_controller_gets_io_dat(project):
     c = make_controller(None, None, project / "IO.DAT")()
     assert 20 in c.machine.inputs_on()
     assert c.machine.gvarget(softmc.IO_DAT_DIP) == 0x5A
+
+
+def test_run_generates_the_projects_io_dat(tmp_path):
+    """The seed: "File IO.DAT is generated automatically if it does not exist on
+    the flash disk": ``plcbuilder run`` of a project without one writes it next
+    to plcbuilder.toml (the simulated controller's flash disk) and notes it."""
+    root = make_project(tmp_path / "g", procs={"PRESET": PRESET})
+    assert not (root / "IO.DAT").exists()
+    r = api.run(root, api.RunOptions(starts=["PRESET@0"], ms=10))
+    assert (root / "IO.DAT").read_text(encoding="ascii") == "DIP=0x00\nINP=0x000000\n"
+    assert any("generated" in n["text"] for n in r.report["notes"])
+    again = api.run(root, api.RunOptions(starts=["PRESET@0"], ms=10))
+    assert not any("generated" in n["text"] for n in again.report["notes"])
+
+
+def test_the_controller_server_generates_io_dat(tmp_path):
+    """The controller the IDE starts (``plcbuilder controller --io-dat FILE``)
+    generates a missing IO.DAT the same way."""
+    p = tmp_path / "IO.DAT"
+    make_controller(io_dat=p)
+    assert p.read_text(encoding="ascii") == "DIP=0x00\nINP=0x000000\n"
