@@ -329,10 +329,10 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     _set_breaks(c, opts.breaks, target)
     report = run_session(c, sc, limit, trace=opts.trace, target=str(target), history=history,
                          capturer=capturer, watch=watch)
-    if replay:
-        report["notes"].insert(0, {"t_ms": 0, "level": "warning", "text": replay})
     if io_note:
         report["notes"].insert(0, {"t_ms": 0, "level": "info", "text": io_note})
+    if replay:
+        report["notes"].insert(0, {"t_ms": 0, "level": "warning", "text": replay})
     forces = report.pop("forces", None)          # (the forces stay last)
     report["halted"] = _halted_report(c.debugger.halted_state()) if opts.breaks else None
     if history is not None:

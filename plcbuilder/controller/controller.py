@@ -20,7 +20,7 @@ from __future__ import annotations
 from typing import Iterable, Optional
 
 from plcbuilder._support.numbers import INT32, WORD32, to_int32
-from plcbuilder.bytecode import abi
+from plcbuilder.bytecode import abi, softmc
 from plcbuilder.bytecode.opcodes import DecodeError, validate
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.controller.debugger import Debugger
@@ -40,6 +40,23 @@ SHUTDOWN_LIMIT_MS = 10_000
 def _as_int(value) -> int:
     """A written or forced value as the recording writes it (it was accepted)."""
     return to_int32(int(value, 0) if isinstance(value, str) else int(value))
+
+
+def bind_source_error(machine, source: str, n: int) -> Optional[str]:
+    """Why ``bind SOURCE N`` cannot be bound on this machine, or None."""
+    if source == "in":
+        count = getattr(machine, "input_count", None)
+        if n < 0 or (count is not None and n >= count):
+            return f"no input {n}" + (f" (the machine has inputs 0..{count - 1})" if count else "")
+    elif source in ("vin", "vout"):
+        if not 1 <= n <= softmc.VIRTUAL_BITS:
+            return f"no {source} {n} (virtual inputs and outputs are 1..{softmc.VIRTUAL_BITS})"
+    elif source == "pls":
+        if not 1 <= n <= softmc.PLS_NUMBER_MAX:
+            return f"no PLS {n} (PLSs are numbered from 1)"
+    else:
+        return f"cannot bind {source!r} (in, vin, vout or pls)"
+    return None
 
 
 class ControllerError(Exception):
@@ -172,9 +189,9 @@ class Controller:
         plc.end_all()
         plc.programs = by_name
         self.debugger.rebind()                   # breakpoints stay on their lines
-        for pin, (name, _e) in list(plc.bindings.items()):
+        for (source, pin), (name, _e) in list(plc.bindings.items()):
             if name not in by_name:
-                plc.unbind_input(pin)
+                plc.unbind_input(pin, source)
         self._crc = {name: p.crc32 for name, p in by_name.items()}
         plc.prepare(progs)                           # translate now, not on first start
         first, self._loaded_once = not self._loaded_once, True
@@ -253,28 +270,31 @@ class Controller:
             plc.end_hardware()
         return None
 
-    def bind_input(self, pin: int, name: str, eparam: int = 0) -> None:
+    def bind_input(self, pin: int, name: str, eparam: int = 0, source: str = "in") -> None:
         """Bind an input to a procedure: a 0 -> 1 edge of input ``pin`` starts
         ``name`` (with ``eparam``) at the beginning of the next tick, as an
-        input pin bound to a procedure does on the controller."""
+        input pin bound to a procedure does on the controller. ``source`` "vin"
+        or "vout" binds virtual input or output ``pin`` (1..32), "pls" the output
+        of PLS ``pin`` (the softMC seed: "You can use software I/O to start
+        events just as with standard I/O"; ``EventOn MyEvent MyPLS.PlsOutput = ON``)."""
         pin = self._int(pin, "input pin")
         if name not in self._plc.programs:
             raise ControllerError(self._unknown(name))
-        n = getattr(self.machine, "input_count", None)
-        if pin < 0 or (n is not None and pin >= n):
-            raise ControllerError(f"no input {pin}" + (f" (the machine has inputs 0..{n - 1})"
-                                                       if n else ""))
+        why = bind_source_error(self.machine, source, pin)
+        if why:
+            raise ControllerError(why)
         eparam = self._eparam(eparam)
-        self._plc.bind_input(pin, name, eparam)
-        self.recorder.add(Action(self._plc.t, "bind", name, pin, eparam))
+        self._plc.bind_input(pin, name, eparam, source)
+        self.recorder.add(Action(self._plc.t, "bind", name, pin, eparam, source=source))
 
     @property
-    def bindings(self) -> dict[int, tuple[str, int]]:
-        """Input pin -> (procedure, eparam) of the inputs bound to procedures."""
+    def bindings(self) -> dict[tuple[str, int], tuple[str, int]]:
+        """(source, n) -> (procedure, eparam) of what is bound to procedures
+        (source "in", "vin", "vout" or "pls")."""
         return dict(self._plc.bindings)
 
-    def unbind_input(self, pin: int) -> None:
-        self._plc.unbind_input(self._int(pin, "input pin"))
+    def unbind_input(self, pin: int, source: str = "in") -> None:
+        self._plc.unbind_input(self._int(pin, "input pin"), source)
 
     def event(self, handler_name: str) -> bool:
         """A host event: starts the system procedure that handles it

@@ -157,8 +157,10 @@ class PLC:
         self._due_hw: list[tuple[int, str, int]] = []   # (tick, name, eparam)
         self.soft_eparam = 0               # gvarset(100041, e) from a software procedure
         self.last: dict[str, Process] = {}  # the latest run of each procedure
-        self.bindings: dict[int, tuple[str, int]] = {}   # input pin -> (procedure, eparam)
-        self._levels: dict[int, int] = {}                # last level seen of each bound pin
+        #: (source, n) -> (procedure, eparam): an input pin ("in", pin), a virtual input
+        #: or output ("vin"/"vout", 1..32) or a PLS's output ("pls", k) bound to a procedure
+        self.bindings: dict[tuple[str, int], tuple[str, int]] = {}
+        self._levels: dict[tuple[str, int], int] = {}    # last level seen of each bound source
         # advance() can be skipped while the machine is quiet and has no notes pending
         notes = getattr(machine, "pending_notes", None)
         if notes is None or not hasattr(machine, "quiet"):
@@ -381,8 +383,8 @@ class PLC:
         """A bound input went 0 -> 1 and the next tick will start its procedure."""
         if not self.bindings:
             return False
-        portget = self.machine.portget
-        return any(portget(pin) and not self._levels.get(pin) for pin in self.bindings)
+        level = self._level
+        return any(level(key) and not self._levels.get(key) for key in self.bindings)
 
     @property
     def software_running(self) -> list[str]:
@@ -750,29 +752,45 @@ class PLC:
         hw = self.hw
         return hw.slots[abi.SLOT_PROC] if hw is not None else self._proc
 
-    def bind_input(self, pin: int, name: str, eparam: int = 0) -> None:
-        """Start ``name`` whenever input ``pin`` goes from 0 to 1 (seen at the
-        beginning of a tick, as a start given from outside would be)."""
+    def bind_input(self, pin: int, name: str, eparam: int = 0, source: str = "in") -> None:
+        """Start ``name`` whenever ``source`` ``pin`` goes from 0 to 1 (seen at the
+        beginning of a tick, as a start given from outside would be): an input
+        ("in"), a virtual input or output ("vin", "vout": 1..32) or the output of
+        PLS ``pin`` ("pls": the seed's ``EventOn MyEvent MyPLS.PlsOutput = ON``)."""
         if name not in self.programs:
             raise KeyError(name)
-        self.bindings[pin] = (name, int(eparam))
-        self._levels[pin] = self.machine.portget(pin)
+        key = (source, pin)
+        self.bindings[key] = (name, int(eparam))
+        self._levels[key] = self._level(key)
 
-    def unbind_input(self, pin: int) -> None:
-        self.bindings.pop(pin, None)
-        self._levels.pop(pin, None)
+    def unbind_input(self, pin: int, source: str = "in") -> None:
+        self.bindings.pop((source, pin), None)
+        self._levels.pop((source, pin), None)
+
+    def _level(self, key: tuple[str, int]) -> int:
+        """The level now of a bound source."""
+        source, n = key
+        m = self.machine
+        if source == "in":
+            return m.portget(n)
+        if source == "vin":
+            return m.vio.vin >> (n - 1) & 1
+        if source == "vout":
+            return m.vio.vout >> (n - 1) & 1
+        p = m.pls.units.get(n)
+        return p.state if p is not None and p.enabled else 0
 
     def _input_edges(self) -> None:
-        portget = self.machine.portget
-        for pin, (name, eparam) in list(self.bindings.items()):
-            level = portget(pin)
-            if level and not self._levels.get(pin):
+        get = self._level
+        for key, (name, eparam) in list(self.bindings.items()):
+            level = get(key)
+            if level and not self._levels.get(key):
                 program = self.programs.get(name)
                 if program is not None and program.kind is Kind.HARDWARE:
                     self.start_hardware(name, eparam)
                 elif program is not None:
                     self.start_software(name, eparam)
-            self._levels[pin] = level
+            self._levels[key] = level
 
     def _apply_due(self, t: int) -> None:
         due = [d for d in self._due_hw if d[0] <= t]

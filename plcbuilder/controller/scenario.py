@@ -12,6 +12,7 @@ file (``--scenario FILE``), whose lines are the same::
     stop @ 5000                # press Stop (M02, then OFF)
     event GCODE_START @ 100    # __HANDLER_GCODE_START
     bind 9=M88:0 @ 0           # from then on, input 9 going 0 -> 1 starts M88
+    bind vin 1=M20 @ 0         # ... virtual input 1 (vin/vout 1..32), PLS 2's output (pls 2)
     write M03.speed=500 @ 10   # TARGET=VALUE @ MS: set once (SPEC §6 names)
     force in 2=1 @ 20          # TARGET=VALUE @ MS: hold until released
     release in 2 keep @ 30     # TARGET [keep|restore] @ MS (default restore)
@@ -37,6 +38,7 @@ from typing import Callable, Iterable, Optional
 
 from plcbuilder._support.files import read_bounded
 from plcbuilder._support.numbers import INT32, WORD32, parse_int_in, to_int32
+from plcbuilder.bytecode import softmc
 from plcbuilder.controller.forces import MODES, ForceError, parse_target
 
 MAX_SCENARIO_BYTES = 4 << 20
@@ -65,6 +67,7 @@ class Action:
     #: code offset, return offsets) there; a replay does it at that statement of
     #: tick ``t_ms`` (controller/rewind.py). None: before the tick runs.
     at: Optional[tuple] = None
+    source: str = "in"         # bind: what is bound ("in", "vin", "vout", "pls")
 
     def describe(self) -> str:
         if self.kind == "start":
@@ -74,7 +77,8 @@ class Action:
         if self.kind == "event":
             return f"event {self.name} @ {self.t_ms}"
         if self.kind == "bind":
-            return f"bind {self.a}={self.name}:{self.b} @ {self.t_ms}"
+            src = "" if self.source == "in" else f"{self.source} "
+            return f"bind {src}{self.a}={self.name}:{self.b} @ {self.t_ms}"
         if self.kind in ("write", "force"):
             return f"{self.kind} {self.name}={self.a} @ {self.t_ms}"
         if self.kind == "release":
@@ -176,15 +180,31 @@ def parse_event(text: str) -> Action:
     return Action(t, "event", body)
 
 
+BIND_SOURCES = ("in", "vin", "vout", "pls")
+
+
 def parse_bind(text: str) -> Action:
-    """``PIN=NAME[:EPARAM][@MS]``."""
+    """``[in|vin|vout|pls] N=NAME[:EPARAM][@MS]`` (a bare N is an input pin)."""
     body, t = _split_time(text, "bind")
     left, sep, right = body.partition("=")
     if not sep:
-        raise ScenarioError(f"bind needs PIN=NAME[:EPARAM]@MS, not {text!r}")
-    pin = parse_int(left, "the pin of bind", *PIN_RANGE)
+        raise ScenarioError(f"bind needs [in|vin|vout|pls] N=NAME[:EPARAM]@MS, not {text!r}")
+    words = left.split()
+    source = "in"
+    if len(words) == 2 and words[0].lower() in BIND_SOURCES:
+        source = words[0].lower()
+        left = words[1]
+    elif len(words) != 1:
+        raise ScenarioError(f"bind: {left.strip()!r} is not a pin or one of "
+                            f"in N, vin N, vout N, pls K")
+    if source == "in":
+        pin = parse_int(left, "the pin of bind", *PIN_RANGE)
+    elif source == "pls":
+        pin = parse_int(left, "the PLS of bind", 1, softmc.PLS_NUMBER_MAX)
+    else:
+        pin = parse_int(left, f"the {source} of bind", 1, softmc.VIRTUAL_BITS)
     start = parse_start(right)
-    return Action(t, "bind", start.name, pin, start.a)
+    return Action(t, "bind", start.name, pin, start.a, source=source)
 
 
 def _target(text: str, what: str) -> str:
@@ -315,7 +335,7 @@ def apply(controller, action: Action) -> None:
     elif action.kind == "event":
         controller.event(action.name)
     elif action.kind == "bind":
-        controller.bind_input(action.a, action.name, action.b)
+        controller.bind_input(action.a, action.name, action.b, action.source)
     elif action.kind == "write":
         controller.write(action.name, action.a)
     elif action.kind == "force":

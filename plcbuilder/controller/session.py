@@ -121,7 +121,7 @@ def check_scenario(sc: Scenario, controller) -> None:
         if a.kind in ("start", "bind") and a.name not in programs:
             loaded = ", ".join(sorted(programs)) or "none"
             raise UsageError(f"--start {a.name}: no procedure named {a.name} (loaded: {loaded})")
-        if a.kind in ("input", "bind") and not 0 <= a.a < n_in:
+        if (a.kind == "input" or a.kind == "bind" and a.source == "in") and not 0 <= a.a < n_in:
             raise UsageError(f"--input {a.a}: no such input (the machine has inputs "
                              f"0..{n_in - 1})")
         if a.kind == "adc" and not 0 <= a.a < 8:

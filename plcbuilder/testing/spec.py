@@ -479,7 +479,8 @@ def resolve(tc: TestCase, names: Names, machine_names: Optional[Names] = None) -
     for a, line in zip(tc.scenario.actions, tc.scenario_lines):
         if a.kind in ("start", "bind") and a.name not in procs:
             raise TestFileError(f"scenario: {unknown_proc(a.name)}", tc.file, line)
-        if a.kind in ("input", "bind") and not 0 <= a.a < n.inputs:
+        if (a.kind == "input" or a.kind == "bind" and a.source == "in") \
+                and not 0 <= a.a < n.inputs:
             raise TestFileError(f"scenario: no input {a.a} (the machine has inputs "
                                 f"0..{n.inputs - 1})", tc.file, line)
         if a.kind in ("write", "force", "release") and "." in a.name:

@@ -164,3 +164,71 @@ def test_run_report_lists_virtual_outputs(backend):
     assert rep["vouts"] == [4] and rep["vins"] == [9]
     assert rep["pls"] == []
     assert not of(events, Note)
+
+
+# ------------------------------------------------ software I/O starts events
+def _events_controller(backend, *extra, machine_config=None):
+    from plcbuilder.controller.controller import Controller
+    from plcbuilder.controller.machine_config import parse_machine
+    cfg = machine_config or parse_machine(
+        '[axes.X]\nrapid = 60000.0\naccel = 20000.0\nstart = 0.0\n'
+        '[[pls]]\naxis = "X"\noutput = 5\npositions = [10.0]\npolarity = 1\nenabled = true\n',
+        "machine.toml")
+    c = Controller(cfg, backend=backend)
+    c.load([compile_proc("main(){ gvarset(20000, eparam); exit(99); };", "M20"),
+            compile_proc("main(){ gvarset(VIN_1, 1); exit(99); };", "M21"),
+            compile_proc("main(){ g0moveA(3, 1, 2000); exit(99); };", "M22"),
+            *extra])
+    return c
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_virtual_input_starts_an_event(backend):
+    """The seed: "You can use software I/O to start events just as with standard
+    I/O" — ``OnEvent SoftwareInputEvent System.VIn.1 = ON``: ``bind vin 1=M20``
+    starts M20 when VIN.1 goes 0 -> 1 (seen at the beginning of the next tick,
+    as an input edge is)."""
+    from plcbuilder.controller.scenario import Scenario, drive
+    c = _events_controller(backend)
+    sc = Scenario.parse("bind vin 1=M20:7 @ 0\nstart M21 @ 10\n")
+    drive(c, sc, 100)
+    started = [(e.name, e.t_ms) for e in c.drain_events() if type(e).__name__ == "Started"]
+    assert started == [("M21", 10), ("M20", 11)]
+    assert c.variables()["M20"]["eparam"] == 7
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_virtual_output_and_a_pls_output_start_events(backend):
+    """The seed: "Programmable limit switches can use software outputs just as
+    with standard outputs" and a PLS "drives events: EventOn MyEvent
+    MyPLS.PlsOutput = ON". ``bind pls 1=M20`` starts M20 when PLS1's output
+    turns on (X crossing 10 mm); ``bind vout 3=M20`` when VOUT.3 does."""
+    from plcbuilder.controller.scenario import Scenario, drive
+    c = _events_controller(backend, compile_proc("main(){ gvarset(VOUT_3, 1); exit(99); };",
+                                                 "M23"))
+    sc = Scenario.parse("bind pls 1=M20:1 @ 0\nstart M22 @ 0\n"
+                        "bind vout 3=M20:3 @ 0\nstart M23 @ 500\n")
+    drive(c, sc, 600)
+    events = c.drain_events()
+    prints = [(p.t_ms, p.value) for p in of(events, Print)]
+    assert [v for _t, v in prints] == [1, 3]
+    crossed = prints[0][0]
+    assert 0 < crossed < 100 and c.machine.outputs_on() == [5]
+    assert prints[1][0] == 501
+
+
+def test_bind_sources_are_checked_and_recorded():
+    """``bind vin 33=…`` is refused naming the range; a binding is recorded as
+    the scenario line that replays it."""
+    from plcbuilder.controller.controller import ControllerError
+    from plcbuilder.controller.scenario import ScenarioError, Scenario
+    with pytest.raises(ScenarioError, match="1 to 32"):
+        Scenario.parse("bind vin 33=M20 @ 0")
+    with pytest.raises(ScenarioError, match="in N, vin N"):
+        Scenario.parse("bind led 3=M20 @ 0")
+    c = _events_controller("fast")
+    with pytest.raises(ControllerError, match="virtual inputs and outputs are 1..32"):
+        c.bind_input(0, "M20", source="vout")
+    c.bind_input(2, "M20", 5, source="pls")
+    assert "bind pls 2=M20:5 @ 0" in c.recorder.text(0)
+    assert Scenario.parse("bind pls 2=M20:5 @ 0").actions[0].source == "pls"
