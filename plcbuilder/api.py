@@ -240,6 +240,7 @@ class RunOptions:
     history: Optional[Path] = None       # the whole session as a trace file
     watch: Sequence[str] = ()            # PROC.var recorded each tick into the history
     breaks: Sequence[str] = ()           # "FILE:LINE[:CONDITION]": the run ends where one halts
+    scope: Sequence[str] = ()            # TG Motion: the oscilloscope's signals (the project's if ())
 
 
 @dataclass
@@ -298,6 +299,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
     config = tg.target
+    if config is not None and opts.scope:
+        config = replace(config, scope=tuple(opts.scope))
     if config is not None and opts.state is not None:
         config = replace(config, retained=_read_state(opts.state, config.name))
     try:

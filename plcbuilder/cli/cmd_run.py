@@ -92,6 +92,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="halt before FILE's line LINE runs (or the next line with code), "
                         "when COND (a PLC expression) is not 0; the run ends there and the "
                         "JSON's 'halted' says where (repeatable; docs/debugging.md)")
+    p.add_argument("--scope", action="append", default=[], metavar="SIGNAL",
+                   help="TG Motion: a signal the oscilloscope samples after each Program_04 "
+                        "(repeatable; 'in 9', 'out 7', 'adc 0', 'gvar 2000001', "
+                        "'Program.x'; default: the project's [tgmotion] oscilloscope)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--state", type=Path, metavar="FILE",
                    help="the controller's kept state (Huazhong's B registers): read from FILE "
@@ -134,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
                           gvarget_latency_ms=args.gvarget_latency, trigger=args.trigger,
                           pre_ms=args.pre, post_ms=args.post, trigger_mode=args.trigger_mode,
                           capture=args.capture, history=args.history, watch=tuple(args.watch),
-                          state=args.state, breaks=args.breaks)
+                          state=args.state, breaks=args.breaks, scope=tuple(args.scope))
         try:
             result = api.run(target, opts)
         except api.UsageError as exc:

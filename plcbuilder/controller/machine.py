@@ -33,7 +33,7 @@ from __future__ import annotations
 import struct
 from typing import Callable, Optional
 
-from plcbuilder.bytecode import abi, softmc
+from plcbuilder.bytecode import abi, softmc, targets
 from plcbuilder.bytecode.abi import AXES
 from plcbuilder.bytecode.semantics import wrap
 
@@ -49,6 +49,7 @@ STOP_MESSAGES = frozenset(abi.PLCCMD[n] for n in (
     "PLCCMD_MOTION_ABORT", "PLCCMD_MOTION_BREAK"))
 
 _PLS_FIRST, _PLS_END = softmc.PLS_FIRST, softmc.PLS_END
+_AX = targets.AX_BITS
 _M32 = 0xFFFFFFFF
 _M256 = (1 << 256) - 1
 _WORDS = struct.Struct("<8I")              # 8 words of 32 pins, from 32 little-endian bytes
@@ -160,7 +161,7 @@ class Machine(MachineForces):
             s[abi.GVAR_HW_DAC0 + ch] = (lambda _a, v, ch=ch: self._write_list(self._dac, ch, v))
             g[abi.GVAR_HW_PWM0 + ch] = (lambda _a, ch=ch: self._pwm[ch])
             s[abi.GVAR_HW_PWM0 + ch] = (lambda _a, v, ch=ch: self._write_list(self._pwm, ch, v))
-        g[abi.MOTION_CODE] = lambda _a: 0 if self.motion.busy else abi.MOTION_CODE_IDLE
+        g[abi.MOTION_CODE] = lambda _a: self.motion.motion_code
         s[abi.MOTION_CODE] = ro
         for i in range(6):
             g[abi.MACHINE_POS_BASE + i] = (lambda _a, i=i: self.motion.ipos[i])
@@ -385,7 +386,48 @@ class Machine(MachineForces):
     @property
     def motion_code(self) -> int:
         """What 6060 reads now."""
-        return 0 if self.motion.busy else abi.MOTION_CODE_IDLE
+        return self.motion.motion_code
+
+    def axis_status(self) -> dict[int, int]:
+        """Each configured axis's status word, with the Huazhong seed's AX_* bits
+        (``axis_stat(x)``): limits reached (the soft limit, or a hard-limit
+        switch active), homing, homed, stopped in position, moving. No backlash
+        compensation is modelled (AX_CMP_LAMP stays 0)."""
+        m = self.motion
+        home = set(m.move.homing) if m.move is not None else set()
+        ins = self.in_bits
+        out = {}
+        for i in m.present_idx:
+            w = 0
+            p = m.pos[i]
+            if m.soft_max[i] is not None and p >= m.soft_max[i]:
+                w |= _AX["AX_SLSP"]
+            if m.soft_min[i] is not None and p <= m.soft_min[i]:
+                w |= _AX["AX_SLSN"]
+            for sw in self.sensors.hard_limits:
+                if sw.axis == i and ((ins >> sw.pin) & 1) == sw.active:
+                    w |= _AX["AX_SLSP"] if sw.toward > 0 else _AX["AX_SLSN"]
+            if i in home:
+                w |= _AX["AX_HOME_LAMP"] | _AX["AX_HOME_GOING"]
+            if m.homed[i]:
+                w |= _AX["AX_HOME_FIN"]
+            if m.vel[i]:
+                w |= _AX["AX_MOVING_LAMP"]
+            elif m.move is None or i not in m.move.axes:
+                w |= _AX["AX_FSTOP_LAMP"]
+            out[i] = w
+        return out
+
+    def home_position(self, i: int) -> Optional[float]:
+        """Where axis i's home switch trips (0.01 mm): the edge of the machine
+        file's input marked ``home = true`` (or named like INPUT_HOME_X) on that
+        axis; None when it has none."""
+        for w in self.config.inputs:
+            if w.kind == "axis" and w.axis == AXES[i] and not w.hard_limit and \
+                    (w.home or "HOME" in w.name.upper()):
+                edge = w.below if w.below is not None else w.above
+                return None if edge is None else float(round(edge * 100))
+        return None
 
     # --------------------------------------------------------- internals
     def _recompute_inputs(self) -> None:

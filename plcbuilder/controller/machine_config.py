@@ -99,6 +99,7 @@ class InputConfig:
     off_delay_ms: int = 0
     value: int = 0
     hard_limit: bool = False        # a limit switch: motion into it stops with an error
+    home: bool = False              # the axis's home switch (where a job's G28 homes it)
 
 
 @dataclass(frozen=True)
@@ -288,7 +289,7 @@ def _kind(v: Any) -> str:
 _TOP_KEYS = {"name", "description", "io", "motion", "axes", "inputs", "outputs", "adc", "pls"}
 _AXIS_KEYS = {"rapid", "accel", "jog", "min", "max", "start", "offset", "rotary"}
 _INPUT_KEYS = {"pin", "name", "active", "axis", "below", "above", "output", "delay_ms",
-               "off_delay_ms", "value", "hard_limit"}
+               "off_delay_ms", "value", "hard_limit", "home"}
 _ADC_KEYS = {"channel", "name", "source", "value", "start", "end", "period_ms", "repeat",
              "axis", "scale", "offset", "noise", "seed", "min", "max"}
 _I32 = (-(1 << 31), (1 << 31) - 1)
@@ -364,8 +365,10 @@ def parse_machine(text: str, name: str = "<machine>") -> MachineConfig:
         kind = {"axis": "axis", "output": "output", "value": "constant"}[tied]
         common = dict(pin=pin, name=r.string(d, "name", p, ""),
                       active=r.integer(d, "active", p, 1, 0, 1),
-                      hard_limit=r.boolean(d, "hard_limit", p, False))
+                      hard_limit=r.boolean(d, "hard_limit", p, False),
+                      home=r.boolean(d, "home", p, False))
         for only, kinds in (("below", "axis"), ("above", "axis"), ("hard_limit", "axis"),
+                            ("home", "axis"),
                             ("delay_ms", "output"), ("off_delay_ms", "output")):
             if only in d and kind != kinds:
                 raise r.error(p + (only,), f"only for an input tied to an {kinds}")

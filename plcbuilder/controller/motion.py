@@ -29,7 +29,7 @@ import math
 from collections import deque
 from typing import Optional
 
-from plcbuilder.bytecode.abi import AXES
+from plcbuilder.bytecode.abi import AXES, MOTION_CODE_IDLE
 
 from .machine_config import MachineConfig
 
@@ -121,9 +121,10 @@ class Profile:
 class Move:
     """One coordinated straight-line move in progress."""
 
-    __slots__ = ("axes", "start", "unit", "profile", "t", "accel", "clip_note", "final")
+    __slots__ = ("axes", "start", "unit", "profile", "t", "accel", "clip_note", "final", "code",
+                 "homing", "stopped")
 
-    def __init__(self, axes, start, unit, profile, accel, clip_note, final):
+    def __init__(self, axes, start, unit, profile, accel, clip_note, final, code=0, homing=()):
         self.axes = axes            # axis indexes that take part
         self.start = start          # {axis: start position}
         self.unit = unit            # {axis: component of the unit direction}
@@ -132,6 +133,9 @@ class Move:
         self.accel = accel          # path acceleration (for a stop)
         self.clip_note = clip_note  # note to give when it ends at a soft limit, or None
         self.final = final          # {axis: exact end position} when it runs to the end
+        self.code = code            # what 6060 reads while it runs: 0 (G0, a PLC move) or 1 (G1)
+        self.homing = homing        # the axes this move homes (a G-code job's G28)
+        self.stopped = False        # a stop message cut it short
 
 
 class Motion:
@@ -186,16 +190,58 @@ class Motion:
         self.jogging = False
         self.soft_limits = True
         self._warned: set = set()
+        #: which axes have been homed since power-on (G28 of a G-code job)
+        self.homed = [False] * N_AXES
+        #: axis -> the desired position a TG Motion PLC wrote (TGM_Servo): the
+        #: axis follows it at up to its rapid speed while no move or jog runs
+        self.follow: dict[int, float] = {}
 
     @property
     def busy(self) -> bool:
-        """A PLC-commanded move or jog is running (6060 reads 0)."""
+        """A move or a jog is running (6060 reads 0, or 1 for a job's G1)."""
         return self.move is not None or self.jogging
+
+    @property
+    def motion_code(self) -> int:
+        """What 6060 reads: the code of the move running (0 for a G0 or PLC move
+        or a jog, 1 for a G-code job's G1), 0x4d when idle."""
+        m = self.move
+        if m is not None:
+            return m.code
+        return 0 if self.jogging else MOTION_CODE_IDLE
+
+    @property
+    def idle(self) -> bool:
+        """Nothing moves and nothing waits to move (a G-code job's next move may start)."""
+        return self.move is None and not self.jogging and not self.queue and not self.jog_cmds \
+            and not any(self.vel)
 
     @property
     def needs_advance(self) -> bool:
         return (self.move is not None or self.jogging or bool(self.queue)
-                or bool(self.jog_cmds) or self.hw_dir != 0)
+                or bool(self.jog_cmds) or self.hw_dir != 0 or bool(self.follow))
+
+    def servo_target(self, i: int, position: int) -> None:
+        """A desired position (0.01 mm, machine coordinates) for axis i, as a
+        TG Motion PLC writes it to a servo every cycle: the axis goes there at
+        up to its rapid speed (the drive follows; no profile of its own)."""
+        if self.present[i]:
+            self.follow[i] = float(position)
+
+    def _step_follow(self) -> bool:
+        moved = False
+        for i, target in list(self.follow.items()):
+            d = target - self.pos[i]
+            step = max(-self.vmax[i], min(self.vmax[i], d))
+            self.pos[i] += step
+            self.vel[i] = step
+            self.ipos[i] = round(self.pos[i])
+            moved = moved or step != 0.0
+            if abs(target - self.pos[i]) < 1e-9:
+                self.pos[i] = target
+                self.vel[i] = 0.0
+                del self.follow[i]
+        return moved
 
     def note(self, level: str, text: str) -> None:
         self.notes.append((level, text))
@@ -224,6 +270,15 @@ class Motion:
             _, flags, mask, distance, recorded = self.queue.popleft()
             self._start_move(flags, mask, distance, recorded)
 
+    def line_to(self, target: dict[int, float], feed: Optional[float] = None, code: int = 0,
+                homing: tuple = ()) -> None:
+        """A G-code job's move, starting now: each axis of ``target`` (machine
+        position, 0.01 mm) in one straight line, at the rapid speed (G0) or at
+        ``feed`` mm/min along the path (G1); ``homing``: the axes it homes."""
+        axes = [i for i in target if self.present[i]]
+        self._begin(axes, {i: self.pos[i] for i in axes}, {i: float(target[i]) for i in axes},
+                    None if feed is None else mm_per_min_to_internal(feed), code, homing)
+
     def _start_move(self, flags: int, mask: int, distance: int, recorded: dict) -> None:
         axes, start, target = [], {}, {}
         for i in range(N_AXES):
@@ -241,17 +296,29 @@ class Motion:
             axes.append(i)
             start[i] = self.pos[i]
             target[i] = float(tgt)
+        self._begin(axes, start, target)
+
+    def _begin(self, axes: list, start: dict, target: dict, vcap: Optional[float] = None,
+               code: int = 0, homing: tuple = ()) -> None:
+        """Start one straight line from ``start`` to ``target`` (no faster than
+        ``vcap`` along the path, 0.01 mm/ms, when given)."""
+        for i in axes:
+            self.follow.pop(i, None)
         delta = {i: target[i] - start[i] for i in axes}
         dist = math.sqrt(sum(d * d for d in delta.values()))
         if dist < 1e-9:
             # goes nowhere: busy for 1 ms all the same
-            self.move = Move([], {}, {}, Profile.trapezoid(0.0, 1.0, 1.0), 1.0, None, {})
+            self.move = Move([], {}, {}, Profile.trapezoid(0.0, 1.0, 1.0), 1.0, None, {}, code,
+                             homing)
             return
         unit = {i: u for i in axes if (u := delta[i] / dist) != 0.0}
         if not unit:                    # too small a step to have a direction
-            self.move = Move([], {}, {}, Profile.trapezoid(0.0, 1.0, 1.0), 1.0, None, {})
+            self.move = Move([], {}, {}, Profile.trapezoid(0.0, 1.0, 1.0), 1.0, None, {}, code,
+                             homing)
             return
         vmax = min(self.vmax[i] / abs(u) for i, u in unit.items())
+        if vcap is not None:
+            vmax = min(vmax, vcap)
         acc = min(self.amax[i] / abs(u) for i, u in unit.items())
         length, clip_note = dist, None
         if self.soft_limits:
@@ -273,7 +340,7 @@ class Motion:
                                  f"{AXES[i]} {fmt_mm(target[i])}")
         final = {} if clip_note else dict(target)
         self.move = Move(axes, start, unit, Profile.trapezoid(length, vmax, acc), acc,
-                         clip_note, final)
+                         clip_note, final, code, homing)
 
     def _step_move(self) -> None:
         m = self.move
@@ -289,6 +356,9 @@ class Motion:
             self.move = None
             if m.clip_note:
                 self.note("warning", m.clip_note)
+            elif m.homing and not m.stopped:
+                for i in m.homing:
+                    self.homed[i] = True
             return
         s, v = prof.at(m.t)
         for i in m.axes:
@@ -299,12 +369,14 @@ class Motion:
 
     def stop(self) -> None:
         """A stop message: decelerate the move, bring jogs to rest, drop waiting moves."""
+        self.follow.clear()
         self.queue.clear()
         self.recorded.clear()
         self.jog_cmds.clear()
         m = self.move
         if m is not None:
             new = m.profile.stop_from(m.t, m.accel)
+            m.stopped = True
             if new is not m.profile:
                 m.profile = new
                 m.final = {}
@@ -318,6 +390,7 @@ class Motion:
 
     def halt(self) -> None:
         """Stop everything at once (a hard limit): no deceleration."""
+        self.follow.clear()
         self.queue.clear()
         self.recorded.clear()
         self.jog_cmds.clear()
@@ -495,6 +568,8 @@ class Motion:
         elif self.jogging:
             self._step_jog()
             moved = True
+        elif self.follow:
+            moved = self._step_follow() or True
         if self.hw_dir and self.hw_last_write is not None \
                 and t_new - self.hw_last_write >= self.watchdog_ms:
             self.note("warning", f"jog watchdog: 8635 was not written again within "

@@ -196,25 +196,27 @@ class Checker:
         bank = T.BANKS.get(e.bank)
         if bank is None:
             self.diags.append(error("no-bank", f"no register bank '{e.bank}' (the banks are "
-                                    f"{', '.join(T.BANKS)})", e.bank_span))
+                                    f"{', '.join(T.STORAGE_BANKS)} and their views "
+                                    f"{e.bank[:1] if e.bank[:1] in T.STORAGE_BANKS else 'R'}_uc, "
+                                    f"_c, _ui, _i, _ul, _l)", e.bank_span))
             return
         n = _const(e.index)
         if n is not None and not 0 <= n < bank.size:
             self.diags.append(error("index-range", f"{e.bank}[{n}] is out of range: {e.bank} has "
                                     f"{bank.size} elements ({e.bank}[0] .. {e.bank}[{bank.size - 1}])",
                                     e.index.span))
-        if write and e.bank in T.HZ_READ_BANKS and e.bank != "P":
+        if write and bank.storage in T.HZ_READ_BANKS and bank.storage != "P":
             self.diags.append(warning("read-bank", f"{e.bank} is read from the "
-                                      f"{'machine' if e.bank == 'X' else 'CNC'} at the start of "
+                                      f"{'machine' if bank.storage == 'X' else 'CNC'} at the start of "
                                       f"every tick: this write is lost then", e.span))
 
     def _width(self, s: A.Assign) -> None:
         """Y[0] = 0x1ff; stores 0xff: say so (a write keeps the element's width)."""
         bank = T.BANKS.get(s.target.bank)
         v = _const(s.value) if s.op == "=" else None
-        if bank is not None and self.profile.banks and v is not None and not 0 <= v <= bank.mask:
+        if bank is not None and self.profile.banks and v is not None and not bank.fits(v):
             self.diags.append(warning("element-width", f"{s.target.bank} holds {bank.bits}-bit "
-                                      f"elements: this stores {v & bank.mask} "
+                                      f"elements: this stores {bank.stored(v)} "
                                       f"(0x{v & bank.mask:x}), not {v}", s.value.span))
 
     def _period(self, s: A.Assign) -> None:

@@ -28,6 +28,7 @@ from plcbuilder.lang.options import CompileOptions
 from plcbuilder.lang.parser import parse_tokens
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocessor
 from plcbuilder.lang.source import SourceSet, decode_source, read_source
+from plcbuilder.lang.targets import lower as lower_target
 
 COMPILER_VERSION = "1"
 
@@ -190,7 +191,9 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
     else:
         module, parse_diags = incremental.parse(pre.tokens, path)
     diags += parse_diags
-    checker = Checker(module, options.kind, options.strict, path, pre.sources.line,
+    checked, lowered = lower_target(module, options.target)    # the target's macros
+    diags += lowered
+    checker = Checker(checked, options.kind, options.strict, path, pre.sources.line,
                       syntax_errors=any(d.is_error for d in diags), target=options.target)
     check_diags, resolved, symbols = checker.run()
     diags += check_diags

@@ -34,6 +34,7 @@ The settings file::
     [tgmotion]
     cycle_time_us = 500            # 250, 500 or 1000
     cycle_time_program_01_us = 1000   # at least 100, no upper bound (also _02_, _03_)
+    oscilloscope = ["in 9", "Program.x"]   # what it samples after Program_04
     instruction_ns = 20            # modelled execution time of one instruction
 
 #include finds headers in the procedure's folder, include/, the folders of
@@ -123,6 +124,7 @@ class Settings:
     cycle_time_us: int = 500           # [tgmotion]
     program_periods_us: tuple[int, int, int] = (1000, 1000, 1000)
     instruction_ns: int = T.TGM_DEFAULT_INSTRUCTION_NS
+    oscilloscope: tuple[str, ...] = ()     # [tgmotion] the signals it samples (() default)
 
     def to_toml(self) -> str:
         """The settings file's text (every key written, with comments)."""
@@ -164,7 +166,10 @@ class Settings:
                     + "".join(line(f"cycle_time_program_0{i + 1}_us", str(v), "at least 100 (µs)")
                               for i, v in enumerate(self.program_periods_us))
                     + line("instruction_ns", str(self.instruction_ns),
-                           "modelled time of one instruction"))
+                           "modelled time of one instruction")
+                    + line("oscilloscope", "[" + ", ".join(_toml_str(x) for x in self.oscilloscope)
+                           + "]", "signals sampled after Program_04: \"in 9\", "
+                                  "\"gvar 2000001\", \"Program.x\" (empty: in/out word 0)"))
         return out
 
 
@@ -189,7 +194,7 @@ _SCHEMA: dict[str, dict[str, type]] = {
     "huazhong": {"parameters": str},
     "tgmotion": {"cycle_time_us": int, "cycle_time_program_01_us": int,
                  "cycle_time_program_02_us": int, "cycle_time_program_03_us": int,
-                 "instruction_ns": int},
+                 "instruction_ns": int, "oscilloscope": list},
 }
 
 
@@ -261,11 +266,21 @@ def parse_settings(text: str, file: Union[str, Path] = SETTINGS_FILE,
     if not 1 <= ns <= 1_000_000:
         raise ProjectError(f"must be from 1 to 1000000 ns, is {ns}", file,
                            _line_of(text, "tgmotion", "instruction_ns"), "tgmotion.instruction_ns")
+    scope = values.get("tgmotion.oscilloscope", [])
+    where = (file, _line_of(text, "tgmotion", "oscilloscope"), "tgmotion.oscilloscope")
+    if len(scope) > T.TGM_OSC_SIGNALS_MAX:
+        raise ProjectError(f"{len(scope)} signals: at most {T.TGM_OSC_SIGNALS_MAX}", *where)
+    for sig in scope:
+        try:
+            T.parse_signal(sig)
+        except T.ScopeError as exc:
+            raise ProjectError(str(exc), *where) from None
     return Settings(name=values.get("name", default_name) or default_name, machine=machine,
                     limits=limits, controller_address=address,
                     strict=values.get("build.strict", False), include=tuple(include),
                     target=target, parameters=parameters, cycle_time_us=cycle,
-                    program_periods_us=tuple(periods), instruction_ns=ns)
+                    program_periods_us=tuple(periods), instruction_ns=ns,
+                    oscilloscope=tuple(scope))
 
 
 def _check(text: str, file, table: str, key: str, value) -> None:
@@ -439,7 +454,7 @@ class Project:
         if st.target == T.TGMOTION:
             out.update(cycle_time_us=st.cycle_time_us,
                        program_periods_us=tuple(st.program_periods_us),
-                       instruction_ns=st.instruction_ns)
+                       instruction_ns=st.instruction_ns, scope=tuple(st.oscilloscope))
         return out
 
     @property

@@ -16,7 +16,9 @@ def test_new_huazhong_run_json_and_test(tmp_path, capsys):
     rep = json.loads(capsys.readouterr().out)
     assert rep["target_profile"] == "huazhong" and 7 in rep["outputs"]
     assert rep["registers"]["Y"]["0"] & 0x80 and rep["registers"]["P"] == {"0": 5}
-    assert rep["registers"]["F"] == {}                     # only the non-zero ones
+    # only the non-zero ones: the CNC's axis status words axis_stat(0..2), X, Y, Z
+    # standing still (AX_FSTOP_LAMP)
+    assert rep["registers"]["F"] == {"0": 0x20, "10": 0x20, "20": 0x20}
     assert rep["calls"]["init"] == 1 and rep["calls"]["plc1"] == 13
     assert main(["test", str(dest)]) == 0
     assert "4 passed, 0 failed" in capsys.readouterr().out

@@ -240,3 +240,95 @@ def test_the_trace_is_the_oscilloscope():
     assert 3 not in c.machine.outputs_on()
     rows = c.drain_sample_rows()
     assert len(rows) == 3 and all(r[4]["outputs"][0] & (1 << 3) for r in rows)
+
+
+# ------------------------------------------------ PLC_DATA's shared memories
+def test_tgm_system_header_mem_size_data_and_compatibility_id():
+    """The seed: "The actual size of the shared memory is contained in the
+    TGM_System.HEADER.Mem_Size_Data register", and its Program_Ini checks
+    `pHeader->Compatibility_Id != ID_COMPATIBILITY` (then returns 0)."""
+    src = tgm(head="#include <tgmotion.h>\n",
+              ini="size = gvarget(HEADER_MEM_SIZE_DATA);"
+                  "if (gvarget(HEADER_COMPATIBILITY_ID) != ID_COMPATIBILITY) exit(0);")
+    c = controller(src, "tgmotion")
+    c.step(2)
+    assert faults(c) == [] and c.variables()["plc"]["size"] == 524_288
+
+
+def test_tgm_servo_positions_statuses_and_desired_positions():
+    """The seed: "register values of all desired inputs must be loaded ... the
+    servo drive positions and statuses" and "sending the desired positions to the
+    servo drives": TGM_Servo, one block per axis; the axis follows the desired
+    position Program_04 writes every cycle."""
+    src = tgm(head="#include <tgmotion.h>\n",
+              p04="pos = gvarget(TGM_SERVO + SERVO_ACT_POSITION);"
+                  "st = gvarget(TGM_SERVO + SERVO_STATUS);"
+                  "if (want < 15000) want = want + 100;"
+                  "gvarset(TGM_SERVO + SERVO_DESIRED_POSITION, want);",
+              ini="want = gvarget(TGM_SERVO + SERVO_ACT_POSITION);")
+    c = controller(src, "tgmotion", cycle_time_us=1000)
+    c.step(10)
+    v = c.variables()["plc"]
+    assert 10000 < v["pos"] < 10400 and v["st"] & 0x3 == 0x3   # present, moving
+    c.step(600)                     # it follows at X's rapid speed (16.7 a ms)
+    v = c.variables()["plc"]
+    assert c.machine.axis_positions()["X"] == 15000 and v["pos"] == 15000
+    assert v["st"] == 0x5                               # present, in position
+    assert faults(c) == []
+
+
+def test_tgm_dio_words():
+    """The seed: "the values of digital and analog inputs" loaded, "digital and
+    analog output values" set "through writing the values in the respective
+    registers": TGM_Dio's DI, DO, AI and AO words."""
+    src = tgm(head="#include <tgmotion.h>\n",
+              p04="di = gvarget(DIO_DI); ai = gvarget(DIO_AI + 1);"
+                  "gvarset(DIO_DO, di << 1); gvarset(DIO_AO + 0, 77);")
+    c = controller(src, "tgmotion")
+    c.set_input(9, 1)
+    c.step(2)
+    v = c.variables()["plc"]
+    assert v["di"] & (1 << 9) and v["ai"] == 2048
+    assert 10 in c.machine.outputs_on() and c.machine.sample_fields()["dac"][0] == 77
+
+
+def test_rtwprintf_prints_in_the_run_log():
+    """The seed: "Diagnostic functions from the structure PLC_DATA are used to
+    output texts to RTX Server console ... string listing, variable value
+    listing (long type variable), formatted text listing": RtWprintf_String,
+    RtWprintf_Long and RtWprintf_Ex print in the run log, naming their line."""
+    from plcbuilder.controller.events import Log
+    src = tgm(ini="RtWprintf_Long(4321);\n  RtWprintf_Ex(2, 0-7);\n  RtWprintf_String(1);")
+    c = controller(src, "tgmotion")
+    c.step(1)
+    logs = [(e.source, e.text) for e in c.drain_events() if isinstance(e, Log)]
+    assert logs == [("Program_Ini", "RtWprintf_Long(4321) (plc.plc:1)"),
+                    ("Program_Ini", "RtWprintf_Ex(severity 2, -7) (plc.plc:2)"),
+                    ("Program_Ini", "RtWprintf_String(1) (plc.plc:3)")]
+
+
+def test_the_oscilloscope_samples_the_signals_picked():
+    """The seed: the oscilloscope "is used to capture the values of desired
+    registers within an exact time interval of Cycle_Time and their saving into
+    the TGM_Oscilloscope shared memory. This happens after Program_04 function is
+    executed." The signals are the project's choice (registers and variables)."""
+    src = tgm(head="#include <tgmotion.h>\n", p04="n4++; gvarset(TGM_DATA + 1, n4 * 2);"
+              "count = gvarget(TGM_OSC); last = gvarget(OSC_LAST + 1);")
+    c = controller(src, "tgmotion", cycle_time_us=1000,
+                   scope=("in 9", "plc.n4", "gvar 2000001"))
+    c.set_input(9, 1)
+    c.step(3)
+    rep = c.target_report()["oscilloscope"]
+    assert rep["signals"] == ["in 9", "plc.n4", "gvar 2000001"] and rep["samples"] == 3
+    assert [s[2:] for s in rep["last"]] == [[1, 1, 2], [1, 2, 4], [1, 3, 6]]
+    v = c.variables()["plc"]
+    assert (v["count"], v["last"]) == (2, 2)        # what the sample before this one held
+
+
+def test_an_oscilloscope_signal_that_does_not_exist_is_refused():
+    from plcbuilder.controller.controller import ControllerError
+    with pytest.raises(ControllerError, match="has no variable nope"):
+        controller(tgm(), "tgmotion", scope=("plc.nope",))
+    from plcbuilder.controller.targets import TargetConfig, TargetConfigError
+    with pytest.raises(TargetConfigError, match="not a signal"):
+        TargetConfig("tgmotion", scope=("output 3",)).check()

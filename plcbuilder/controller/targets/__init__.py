@@ -34,6 +34,9 @@ class TargetConfig:
     cycle_time_us: int = 500
     program_periods_us: tuple[int, int, int] = (1000, 1000, 1000)
     instruction_ns: int = T.TGM_DEFAULT_INSTRUCTION_NS
+    #: the signals the oscilloscope samples after each Program_04 ("in 9", "out 7",
+    #: "adc 0", "pwm 1", "dac 0", "gvar ADDR", "Program.var"); () for its default
+    scope: tuple[str, ...] = ()
 
     def check(self) -> None:
         """Raise TargetConfigError naming the first value out of range."""
@@ -58,6 +61,15 @@ class TargetConfig:
             if not isinstance(v, int) or isinstance(v, bool) or v < lo:
                 raise TargetConfigError(f"cycle_time_program_0{i + 1}_us must be at least {lo} "
                                         f"(µs), not {v!r}")
+        from plcbuilder.controller.targets.scope import ScopeError, parse_signal
+        if len(self.scope) > T.TGM_OSC_SIGNALS_MAX:
+            raise TargetConfigError(f"{len(self.scope)} oscilloscope signals: at most "
+                                    f"{T.TGM_OSC_SIGNALS_MAX}")
+        for text in self.scope:
+            try:
+                parse_signal(text)
+            except ScopeError as exc:
+                raise TargetConfigError(f"oscilloscope: {exc}") from None
         if not isinstance(self.instruction_ns, int) or not 1 <= self.instruction_ns <= 1_000_000:
             raise TargetConfigError(f"instruction_ns must be from 1 to 1000000, not "
                                     f"{self.instruction_ns!r}")

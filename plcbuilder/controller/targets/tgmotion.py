@@ -28,20 +28,34 @@ A call over its budget is a warning in the run log and an entry of
 cycles; the machine advances after the tick's cycles.
 
 TGM_Data, the shared memory of 512 KiB, is 131072 32-bit words at
-``TGM_DATA_BASE + i``; other addresses are the machine's registers.
+``TGM_DATA_BASE + i``. The other shared memories PLC_DATA points to are mapped
+onto the machine as far as the seed documents them: TGM_System's HEADER
+(``Mem_Size_Data``, ``Compatibility_Id``), TGM_Servo (each axis's position and
+status read, its desired position written: the axis follows it), TGM_Dio (the
+input and output words, ADC and DAC), TGM_Oscilloscope (the samples). Other
+addresses are the machine's registers. The diagnostic prints
+``RtWprintf_String``/``_Long``/``_Ex`` (compiled to writes of ``TGM_RTW_*``)
+are lines of the run log that name the line they came from.
+
+The oscilloscope samples the signals the project picks (controller/targets/
+scope.py) after each Program_04.
 """
 
 from __future__ import annotations
 
+import sys
 from collections import deque
 from typing import Optional
 
+from plcbuilder.bytecode import abi
 from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.semantics import wrap
-from plcbuilder.controller.events import Note
+from plcbuilder.controller.events import Log, Note
 from plcbuilder.controller.plc import Process
 from plcbuilder.controller.targets.base import TargetPLC
-from plcbuilder.controller.targets.calls import Call
+from plcbuilder.controller.targets import TargetConfigError
+from plcbuilder.controller.targets.calls import _RUN_CODE, Call
+from plcbuilder.controller.targets.scope import DEFAULT_SIGNALS, ScopeError, parse_signal, readers
 from plcbuilder.controller.vm import Host
 
 LOW = ("Program_03", "Program_02", "Program_01")      # highest of the three first
@@ -61,13 +75,17 @@ class TgMotionPLC(TargetPLC):
         self.periods = dict(zip(("Program_01", "Program_02", "Program_03"),
                                 config.program_periods_us))
         self.data: dict[int, int] = {}            # TGM_Data: word index -> value (0 if absent)
-        #: oscilloscope: (t_us, cycle, input word 0, output word 0), after each Program_04
+        #: oscilloscope: (t_us, cycle, value of each signal), after each Program_04
         self.scope: deque = deque(maxlen=SCOPE_SAMPLES)
+        self.signals = [parse_signal(t) for t in (config.scope or DEFAULT_SIGNALS)]
+        self._readers: list = []
         self.scope_count = 0
         self._scope_fields = None                 # the machine's fields at the tick's last sample
         self.missed: dict[str, int] = {}
         self._ini_due = False
         self._ini_call: Optional[Call] = None     # Program_Ini while it runs (over ticks)
+        self._severity = 0                        # RtWprintf_Ex's severity, written first
+        self._warned_ro: set = set()
         self._reset_schedule()
 
     def _reset_schedule(self) -> None:
@@ -80,6 +98,17 @@ class TgMotionPLC(TargetPLC):
 
     # ---------------------------------------------------------------- start
     def on_begin(self, p: Process) -> None:
+        def slot_of(var: str) -> int:
+            slot = self.var_slot(var)
+            if slot is None:
+                raise ScopeError(f"oscilloscope signal {var!r}: {self.program.name} has no "
+                                 f"variable {var} (its variables: "
+                                 f"{', '.join(self.program.var_names) or 'none'})")
+            return slot
+        try:
+            self._readers = readers(self.signals, self.machine, p.host.gvarget, slot_of, p.slots)
+        except ScopeError as exc:
+            raise TargetConfigError(str(exc)) from None
         self._reset_schedule()
         self._ini_due = True
         if self._ini_call is not None:
@@ -192,12 +221,10 @@ class TgMotionPLC(TargetPLC):
             self.over_budget(name, self._started_cycle[name], self._used[name], budget)
 
     def _sample(self, t_us: float, cycle: int) -> None:
-        """The oscilloscope's sample, right after Program_04."""
-        m = self.machine
+        """The oscilloscope's sample of the signals picked, right after Program_04."""
         self.scope_count += 1
-        self._scope_fields = m.sample_fields()
-        self.scope.append((round(t_us, 3), cycle, m.in_bits & 0xFFFFFFFF,
-                           m.out_bits & 0xFFFFFFFF))
+        self._scope_fields = self.machine.sample_fields()
+        self.scope.append((round(t_us, 3), cycle, *(r() for r in self._readers)))
 
     def _after_tick(self, t: int, ran) -> None:
         """The end of the tick as on myCNC, but the tick's sample (the trace) is
@@ -216,11 +243,16 @@ class TgMotionPLC(TargetPLC):
     def _target_host(self, base: Host) -> Host:
         data = self.data
         lo, hi = T.TGM_DATA_BASE, T.TGM_DATA_BASE + T.TGM_DATA_WORDS
+        mem_lo, mem_hi = T.TGM_SYSTEM_BASE, T.TGM_RTW_EX + 1
         get, put = base.gvarget, base.gvarset
 
         def gvarget(addr: int) -> int:
             if lo <= addr < hi:
                 return data.get(addr - lo, 0)
+            if mem_lo <= addr < mem_hi:
+                v = self._memory_get(addr)
+                if v is not None:
+                    return v
             return get(addr)
 
         def gvarset(addr: int, value: int) -> None:
@@ -230,11 +262,121 @@ class TgMotionPLC(TargetPLC):
                 else:
                     data.pop(addr - lo, None)
                 return
+            if mem_lo <= addr < mem_hi and self._memory_set(addr, value):
+                return
             put(addr, value)
 
         return Host(portset=base.portset, portclr=base.portclr, portget=base.portget,
                     gvarget=gvarget, gvarset=gvarset, g0move=base.g0move, plain=base.plain,
                     lat=0, pr=base.pr, raw_gvarset=gvarset, io=None)
+
+    # ------------------------------------------------------ shared memories
+    def _memory_get(self, addr: int) -> Optional[int]:
+        """A register of TGM_System, TGM_Servo, TGM_Dio or TGM_Oscilloscope; None
+        for an address none of them has (a plain register then)."""
+        m = self.machine
+        off = addr - T.TGM_SYSTEM_BASE
+        if off == T.TGM_SYSTEM_FIELDS["Mem_Size_Data"]:
+            return T.TGM_DATA_WORDS * 4
+        if off == T.TGM_SYSTEM_FIELDS["Compatibility_Id"]:
+            return T.TGM_COMPATIBILITY_ID
+        servo = self._servo(addr)
+        if servo is not None:
+            i, field = servo
+            mo = m.motion
+            if field == T.TGM_SERVO_FIELDS["Act_Position"]:
+                return mo.ipos[i]
+            if field == T.TGM_SERVO_FIELDS["Status"]:
+                st = T.TGM_SERVO_STATUS
+                w = st["SERVO_ST_PRESENT"] if mo.present[i] else 0
+                if mo.vel[i]:
+                    w |= st["SERVO_ST_MOVING"]
+                elif i not in mo.follow and (mo.move is None or i not in mo.move.axes):
+                    w |= st["SERVO_ST_IN_POSITION"]
+                return w
+            if field == T.TGM_SERVO_FIELDS["Desired_Position"]:
+                t = mo.follow.get(i)
+                return round(t) if t is not None else mo.ipos[i]
+            return None
+        off = addr - T.TGM_DIO_BASE
+        if 0 <= off < 32:
+            group, k = divmod(off, 8)
+            reg = (abi.GVAR_HW_INPUTS, abi.GVAR_HW_OUTPUTS)[group][k] if group < 2 else \
+                (abi.GVAR_HW_ADC0, abi.GVAR_HW_DAC0)[group - 2] + k
+            return m.gvarget(reg)
+        off = addr - T.TGM_OSC_BASE
+        if off == 0:
+            return self.scope_count
+        if 1 <= off <= len(self.signals):
+            last = self.scope[-1] if self.scope else None
+            return last[1 + off] if last is not None else 0
+        return None
+
+    def _memory_set(self, addr: int, value: int) -> bool:
+        """A write to a shared memory register; False when the address is not one."""
+        m = self.machine
+        if addr in (T.TGM_RTW_STRING, T.TGM_RTW_LONG, T.TGM_RTW_EX_SEVERITY, T.TGM_RTW_EX):
+            self._print(addr, value)
+            return True
+        if T.TGM_SYSTEM_BASE <= addr < T.TGM_SYSTEM_BASE + len(T.TGM_SYSTEM_FIELDS) or \
+                T.TGM_OSC_BASE <= addr <= T.TGM_OSC_BASE + len(self.signals):
+            self._read_only(addr, value)
+            return True
+        servo = self._servo(addr)
+        if servo is not None:
+            i, field = servo
+            if field == T.TGM_SERVO_FIELDS["Desired_Position"]:
+                m.quiet = False
+                m.motion.servo_target(i, value)
+                return True
+            self._read_only(addr, value)
+            return True
+        off = addr - T.TGM_DIO_BASE
+        if 0 <= off < 32:
+            group, k = divmod(off, 8)
+            if group == 1:
+                m.gvarset(abi.GVAR_HW_OUTPUTS[k], value)
+            elif group == 3:
+                m.gvarset(abi.GVAR_HW_DAC0 + k, value)
+            else:
+                self._read_only(addr, value)                  # DI and AI
+            return True
+        return False
+
+    def _read_only(self, addr: int, value: int) -> None:
+        if addr not in self._warned_ro:
+            self._warned_ro.add(addr)
+            self.events.append(Note(self.t, f"gvarset({addr}, {value}) ignored: that register "
+                                            f"of TG Motion's shared memory is read-only",
+                                    "warning"))
+
+    def _servo(self, addr: int) -> Optional[tuple[int, int]]:
+        off = addr - T.TGM_SERVO_BASE
+        if 0 <= off < T.TGM_SERVO_STRIDE * len(abi.AXES):
+            i, field = divmod(off, T.TGM_SERVO_STRIDE)
+            if self.machine.motion.present[i] and field in T.TGM_SERVO_FIELDS.values():
+                return i, field
+        return None
+
+    def _print(self, addr: int, value: int) -> None:
+        """RtWprintf_*: a line of the run log naming where it came from."""
+        if addr == T.TGM_RTW_EX_SEVERITY:
+            self._severity = value
+            return
+        where = ""
+        frame = sys._getframe(2)               # the interpreter that ran the gvarset
+        while frame is not None and frame.f_code is not _RUN_CODE:
+            frame = frame.f_back
+        if frame is not None and self.program is not None:
+            loc = self.program.location(frame.f_locals.get("pc", -1))
+            if loc:
+                where = f" ({loc[0]}:{loc[1]})"
+        name = {T.TGM_RTW_STRING: "RtWprintf_String", T.TGM_RTW_LONG: "RtWprintf_Long",
+                T.TGM_RTW_EX: "RtWprintf_Ex"}[addr]
+        sev = f"severity {self._severity}, " if addr == T.TGM_RTW_EX else ""
+        proc = self.program.proc_at(frame.f_locals.get("pc", -1)) if frame is not None else None
+        self.events.append(Log(self.t, proc or (self.program.name if self.program else ""),
+                               f"{name}({sev}{value}){where}"))
 
     # --------------------------------------------------------------- report
     def registers(self) -> dict[str, dict[str, int]]:
@@ -244,6 +386,7 @@ class TgMotionPLC(TargetPLC):
         out = super().report()
         out["cycles"] = self.cycle
         out["missed_releases"] = dict(sorted(self.missed.items()))
-        out["oscilloscope"] = {"samples": self.scope_count,
+        out["oscilloscope"] = {"signals": [s.text for s in self.signals],
+                               "samples": self.scope_count,
                                "last": [list(s) for s in list(self.scope)[-10:]]}
         return out
