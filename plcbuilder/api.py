@@ -241,6 +241,7 @@ class RunOptions:
     watch: Sequence[str] = ()            # PROC.var recorded each tick into the history
     breaks: Sequence[str] = ()           # "FILE:LINE[:CONDITION]": the run ends where one halts
     scope: Sequence[str] = ()            # TG Motion: the oscilloscope's signals (the project's if ())
+    gcode: Optional[Path] = None         # a G-code program the job runs from 0 ms (SPEC §10)
 
 
 @dataclass
@@ -285,6 +286,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     target = Path(target)
     sc = build_scenario(opts.scenario, opts.starts, opts.inputs, opts.adcs, opts.writes,
                         opts.forces)
+    if opts.gcode is not None:
+        sc.actions.insert(0, _gcode_action(Path(opts.gcode)))
     tg = _compile_target(target, opts)
     if any(not r.ok for r in tg.compiled):
         return RunResult(tg.compiled, None)
@@ -348,6 +351,15 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     if forces is not None:
         report["forces"] = forces
     return RunResult(tg.compiled, report)
+
+
+def _gcode_action(path: Path) -> Action:
+    """``--gcode FILE``: open and play it at 0 ms."""
+    from plcbuilder.controller.scenario import ScenarioError, read_gcode
+    try:
+        return Action(0, "gcode", str(path), 1, text=read_gcode(path))
+    except ScenarioError as exc:
+        raise UsageError(f"--gcode: {exc.message}") from None
 
 
 def _read_state(path: Path, target: str) -> Optional[tuple[int, ...]]:

@@ -92,6 +92,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="halt before FILE's line LINE runs (or the next line with code), "
                         "when COND (a PLC expression) is not 0; the run ends there and the "
                         "JSON's 'halted' says where (repeatable; docs/debugging.md)")
+    p.add_argument("--gcode", type=Path, metavar="FILE",
+                   help="run a G-code program as a job from 0 ms: G0/G1/G4/G28/G90/G91, S, "
+                        "Mnn starts procedure Mnn and waits for its exit or its "
+                        "PLCCMD_MOTION_CONTINUE; the JSON gains 'job' (docs/controller.md)")
     p.add_argument("--scope", action="append", default=[], metavar="SIGNAL",
                    help="TG Motion: a signal the oscilloscope samples after each Program_04 "
                         "(repeatable; 'in 9', 'out 7', 'adc 0', 'gvar 2000001', "
@@ -138,7 +142,8 @@ def run(args: argparse.Namespace) -> int:
                           gvarget_latency_ms=args.gvarget_latency, trigger=args.trigger,
                           pre_ms=args.pre, post_ms=args.post, trigger_mode=args.trigger_mode,
                           capture=args.capture, history=args.history, watch=tuple(args.watch),
-                          state=args.state, breaks=args.breaks, scope=tuple(args.scope))
+                          state=args.state, breaks=args.breaks, scope=tuple(args.scope),
+                          gcode=args.gcode)
         try:
             result = api.run(target, opts)
         except api.UsageError as exc:
@@ -209,6 +214,19 @@ def summary(rep: dict, out: term.Out) -> str:
     if rep.get("forces"):
         lines.append("forced: " + ", ".join(f"{f['target']}={f['value']} (from {f['since_ms']} ms)"
                                             for f in rep["forces"]))
+    job = rep.get("job")
+    if job:
+        end = f" at {job['ended_at_ms']} ms" if job["ended_at_ms"] is not None else ""
+        lines.append(f"job {job['file']}: {job['state']}{end}, line {job['line']} of "
+                     f"{job['lines']}" + (f": {job['error']}" if job["error"] else ""))
+        for m in job["mcodes"]:
+            ended = (f"{m['ended_at_ms']} ms, exit {m['exit_code']}"
+                     + (f" {m['exit_name']}" if m["exit_name"] else "")
+                     if m["ended_at_ms"] is not None else "still running")
+            cont = (f", continued at {m['continued_at_ms']} ms"
+                    if m["continued_at_ms"] is not None else "")
+            lines.append(f"  line {m['line']}: {m['code']} -> {m['procedure'] or '(none)'} "
+                         f"{m['started_at_ms']} -> {ended}{cont}")
     if "registers" in rep:
         for bank, vals in rep["registers"].items():
             if vals:

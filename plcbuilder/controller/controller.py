@@ -186,6 +186,8 @@ class Controller:
             by_name[p.name] = p
         plc = self._plc
         self._drop_halt()
+        if plc.job is not None:
+            plc.job.stop("the image was loaded again")
         plc.end_all()
         plc.programs = by_name
         self.debugger.rebind()                   # breakpoints stay on their lines
@@ -260,6 +262,8 @@ class Controller:
         name = "M02" if self._stop_presses % 2 == 1 else "OFF"
         plc = self._plc
         self.recorder.add(Action(plc.t, "stop"))
+        if plc.job is not None and (plc.job.active or plc.job.state == "paused"):
+            plc.job.stop("Stop pressed")
         p = plc.programs.get(name)
         if p is not None and p.kind is Kind.HARDWARE:
             plc.start_hardware(name, 0)
@@ -310,6 +314,89 @@ class Controller:
         self._plc.start_software(name)
         self.recorder.add(Action(self._plc.t, "event", key.removeprefix("HANDLER_")))
         return True
+
+    # ------------------------------------------------------ G-code jobs
+    def job_open(self, text: str, file: str = "job.nc", play: bool = False) -> None:
+        """Load a G-code program (SPEC §10; controller/job.py), checked whole:
+        a line it cannot run is refused naming the file and the line, and the
+        job loaded before stays. With ``play`` it starts at once."""
+        from plcbuilder.controller.gcode import GcodeError, parse
+        from plcbuilder.controller.job import Job
+        plc = self._plc
+        target = self.target.name if self.target is not None else "mycnc"
+        present = tuple(abi.AXES[i] for i in self.machine.motion.present_idx) \
+            if hasattr(self.machine, "motion") else abi.AXES
+        try:
+            program = parse(str(text), str(file), axes=present,
+                            functions="MSTB" if target == "huazhong" else "M")
+            self._check_homes(program)
+        except GcodeError as exc:
+            raise ControllerError(str(exc)) from None
+        old = plc.job
+        if old is not None and (old.active or old.state == "paused"):
+            old.stop("another program was opened")
+        plc.job = Job(plc, program)
+        self.recorder.add(Action(plc.t, "gcode", str(file), int(play), text=str(text)))
+        if play:
+            plc.job.play()
+
+    def _check_homes(self, program) -> None:
+        from plcbuilder.controller.gcode import GcodeError
+        home = getattr(self.machine, "home_position", None)
+        for b in program.blocks:
+            if b.motion != 28 or home is None:
+                continue
+            for i in b.axes:
+                if home(i) is None:
+                    raise GcodeError(f"G28: axis {abi.AXES[i]} has no home switch (an input "
+                                     f"with home = true in the machine file)", program.file,
+                                     b.line)
+            if not b.axes and all(home(i) is None for i in self.machine.motion.present_idx):
+                raise GcodeError("G28: no axis of the machine has a home switch (an input "
+                                 "with home = true in the machine file)", program.file, b.line)
+
+    def job_control(self, verb: str) -> None:
+        """``play``, ``pause``, ``stop`` or ``reset`` the job loaded (the Server
+        API's ProgramPlay/Pause/Stop/Reset, the IDE's Start menu)."""
+        job = self._plc.job
+        if verb not in ("play", "pause", "stop", "reset"):
+            raise ControllerError(f"unknown job command {verb!r} (play, pause, stop or reset)")
+        if job is None:
+            raise ControllerError("no G-code program is open (open one first)")
+        self.recorder.add(Action(self._plc.t, "job", verb))
+        getattr(job, verb)()
+
+    @property
+    def job(self):
+        """The G-code job (controller/job.py), or None."""
+        return self._plc.job
+
+    def job_report(self) -> Optional[dict]:
+        """The run report's ``job`` (SPEC §10), or None without one."""
+        job = self._plc.job
+        return job.report() if job is not None else None
+
+    def issue_code(self, letter: str, value: int) -> Optional[str]:
+        """The simulated CNC issues code ``letter`` ``value`` (a scenario's ``code
+        M3``): on myCNC an M code starts procedure M<value>; on Huazhong an M,
+        S, B or T code goes to the handler init() registered. Returns the
+        procedure started (myCNC), else None."""
+        letter = str(letter).upper()
+        value = self._int(value, "code")
+        plc = self._plc
+        issue = getattr(plc, "issue_function", None)
+        if issue is not None:
+            try:
+                issue(letter, value)
+            except ValueError as exc:
+                raise ControllerError(str(exc)) from None
+            self.recorder.add(Action(plc.t, "code", letter, value))
+            return None
+        if letter != "M":
+            raise ControllerError(f"{letter}{value}: on this target the CNC issues M codes only "
+                                  f"(S is the eparam of M03/M04 in a G-code job)")
+        name = self.start_mcode(value)
+        return name
 
     def shutdown(self, limit_ms: int = SHUTDOWN_LIMIT_MS) -> None:
         """Run ``__HANDLER_EXIT`` to its end (at most ``limit_ms`` of simulated

@@ -117,8 +117,23 @@ class Watched:
     type: str = "watch"
 
 
+@dataclass(frozen=True)
+class JobEvent:
+    """The G-code job (controller/job.py) read a line, started a procedure or
+    changed state: ``state`` is ready, starting, running, paused, ended, stopped
+    or error; ``line`` the line reached; ``text`` the line's text or the reason;
+    ``procedure`` the procedure it started (None otherwise)."""
+    t_ms: int
+    file: str
+    line: int
+    state: str
+    text: str
+    procedure: Optional[str] = None
+    type: str = "job"
+
+
 Event = (Started | Ended | Message | Print | Fault | Note | Log | Halted | Resumed | Forces
-         | Watched)
+         | Watched | JobEvent)
 
 
 @dataclass
@@ -148,7 +163,7 @@ def from_dict(d: dict):
     """The inverse of :func:`to_dict` for events (by their ``type``) and samples."""
     kinds = {"started": Started, "ended": Ended, "message": Message, "print": Print,
              "fault": Fault, "note": Note, "log": Log, "halted": Halted, "resumed": Resumed,
-             "forces": Forces, "watch": Watched}
+             "forces": Forces, "watch": Watched, "job": JobEvent}
     t = d.get("type")
     if t == "fault" and "calls" in d:
         d = dict(d, calls=tuple(tuple(c) for c in d["calls"]))

@@ -161,6 +161,8 @@ class PLC:
         #: or output ("vin"/"vout", 1..32) or a PLS's output ("pls", k) bound to a procedure
         self.bindings: dict[tuple[str, int], tuple[str, int]] = {}
         self._levels: dict[tuple[str, int], int] = {}    # last level seen of each bound source
+        #: the G-code job (controller/job.py), or None
+        self.job = None
         # advance() can be skipped while the machine is quiet and has no notes pending
         notes = getattr(machine, "pending_notes", None)
         if notes is None or not hasattr(machine, "quiet"):
@@ -376,8 +378,9 @@ class PLC:
     # -------------------------------------------------------------- state
     def idle(self) -> bool:
         """No procedure running and none due to start."""
+        job = self.job
         return self.hw is None and not self.sw and not self._pending_sw and not self._due_hw \
-            and not self._edge_due()
+            and not self._edge_due() and (job is None or not job.active)
 
     def _edge_due(self) -> bool:
         """A bound input went 0 -> 1 and the next tick will start its procedure."""
@@ -426,6 +429,9 @@ class PLC:
                                    s[abi.SLOT_VAR00], s[abi.SLOT_VAR00 + 1], p.name))
         s[abi.SLOT_MESSAGE] = 0
         self.machine.on_message(code)
+        job = self.job
+        if job is not None:
+            job.on_message(code, p.name)
 
     def _emit_notes(self, t: int, notes) -> None:
         """The machine's notes of tick t, as Note events."""
@@ -453,7 +459,9 @@ class PLC:
         while t < end:
             next_sw = t + (self.grid - t) % SOFTWARE_PERIOD_MS
             hw = self.hw
+            job = self.job
             if t == next_sw or self._due_hw or self.bindings or self.watching or \
+                    (job is not None and job.active) or \
                     (self.halting and hw is not None and hw.on_reference()):
                 if not self._tick(t, software=t == next_sw):
                     break                    # halted mid-tick: the rest waits
@@ -481,6 +489,9 @@ class PLC:
             self._apply_due(t)
         if self.bindings:
             self._input_edges()
+        job = self.job
+        if job is not None and job.active:
+            job.tick(t)
         soft = self._software_tick() if software and (self.sw or self._pending_sw) else []
         hw = self.hw
         if hw is not None:

@@ -18,6 +18,10 @@ file (``--scenario FILE``), whose lines are the same::
     release in 2 keep @ 30     # TARGET [keep|restore] @ MS (default restore)
     release all @ 40           # everything forced [keep|restore]
     upload 1c2d3e4f @ 0        # load the image here (a recorded session's upload)
+    gcode job.nc @ 100         # run a G-code program (relative to this file's folder)
+    gcode job.nc open @ 0      # only load it (the Server API's ProgramFileOpen)
+    job pause @ 900            # the job: play, pause, stop or reset
+    code M3 @ 50               # the CNC issues a code (Huazhong: M, S, B, T handlers)
 
 A target is ``PROC.var``, ``in N``, ``out N``, ``adc N``, ``pwm N``, ``dac N`` or
 ``gvar N`` (controller/forces.py).
@@ -43,7 +47,7 @@ from plcbuilder.controller.forces import MODES, ForceError, parse_target
 
 MAX_SCENARIO_BYTES = 4 << 20
 KINDS = ("start", "input", "adc", "stop", "event", "bind", "write", "force", "release",
-         "upload")
+         "upload", "gcode", "job", "code")
 
 
 class ScenarioError(ValueError):
@@ -68,6 +72,7 @@ class Action:
     #: tick ``t_ms`` (controller/rewind.py). None: before the tick runs.
     at: Optional[tuple] = None
     source: str = "in"         # bind: what is bound ("in", "vin", "vout", "pls")
+    text: str = ""             # gcode: the program's text (name: its file; a: 1 to play it)
 
     def describe(self) -> str:
         if self.kind == "start":
@@ -83,6 +88,12 @@ class Action:
             return f"{self.kind} {self.name}={self.a} @ {self.t_ms}"
         if self.kind == "release":
             return f"release {self.name} {MODES[self.b]} @ {self.t_ms}"
+        if self.kind == "gcode":
+            return f"gcode {self.name}{'' if self.a else ' open'} @ {self.t_ms}"
+        if self.kind == "job":
+            return f"job {self.name} @ {self.t_ms}"
+        if self.kind == "code":
+            return f"code {self.name}{self.a} @ {self.t_ms}"
         if self.kind == "upload":
             return f"upload {self.name} @ {self.t_ms}" if self.name else f"upload @ {self.t_ms}"
         return f"stop @ {self.t_ms}"
@@ -260,11 +271,61 @@ def parse_upload(text: str) -> Action:
     return Action(t, "upload", ident)
 
 
+def parse_gcode(text: str, base: Optional[Path] = None) -> Action:
+    """``FILE [open] [@MS]``: the program's text is read now (FILE relative to
+    ``base``, the scenario file's folder)."""
+    body, t = _split_time(text, "gcode")
+    words = body.split()
+    play = 1
+    if len(words) >= 2 and words[-1].lower() == "open":
+        play = 0
+        words = words[:-1]
+    if len(words) != 1:
+        raise ScenarioError(f"gcode needs FILE [open] @ MS, not {text!r}")
+    path = Path(words[0])
+    if not path.is_absolute() and base is not None:
+        path = base / path
+    return Action(t, "gcode", str(path), play, text=read_gcode(path))
+
+
+def read_gcode(path) -> str:
+    """The text of a G-code file (ScenarioError saying why it cannot be read)."""
+    try:
+        data = read_bounded(Path(path), MAX_SCENARIO_BYTES, "G-code file")
+        return data.decode("utf-8")
+    except OSError as exc:
+        raise ScenarioError(f"gcode: cannot read {path}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise ScenarioError(f"gcode: {path} is not UTF-8 text") from None
+
+
+JOB_VERBS = ("play", "pause", "stop", "reset")
+
+
+def parse_job(text: str) -> Action:
+    """``play|pause|stop|reset [@MS]``."""
+    body, t = _split_time(text, "job")
+    verb = body.strip().lower()
+    if verb not in JOB_VERBS:
+        raise ScenarioError(f"job needs play, pause, stop or reset, not {body.strip()!r}")
+    return Action(t, "job", verb)
+
+
+def parse_code(text: str) -> Action:
+    """``M3``, ``S1200``, ``T5``, ``B2`` ``[@MS]``: the CNC issues that code."""
+    body, t = _split_time(text, "code")
+    m = re.fullmatch(r"\s*([MmSsTtBb])\s*([0-9]+)\s*", body)
+    if not m:
+        raise ScenarioError(f"code needs a letter M, S, T or B and a number (code M3 @ 100), "
+                            f"not {body.strip()!r}")
+    return Action(t, "code", m.group(1).upper(), parse_int(m.group(2), "the code", 0, 1 << 31))
+
+
 _PARSERS: dict[str, Callable[[str], Action]] = {
     "start": parse_start, "input": parse_input, "adc": parse_adc,
     "stop": parse_stop, "event": parse_event, "bind": parse_bind,
     "write": parse_write, "force": parse_force, "release": parse_release,
-    "upload": parse_upload,
+    "upload": parse_upload, "job": parse_job, "code": parse_code,
 }
 
 
@@ -298,6 +359,9 @@ class Scenario:
             if kind not in _PARSERS and "@" in word and word.split("@")[0].lower() == "stop":
                 kind, rest = "stop", "@" + word.split("@", 1)[1] + rest
             parser = _PARSERS.get(kind)
+            if kind == "gcode":
+                base = Path(file).parent if file and not file.startswith("<") else None
+                parser = (lambda rest, base=base: parse_gcode(rest, base))
             if parser is None:
                 raise ScenarioError(f"unknown action {word!r} (one of {', '.join(KINDS)})",
                                     file, n)
@@ -347,12 +411,18 @@ def apply(controller, action: Action) -> None:
             controller.release(action.name, MODES[action.b])
     elif action.kind == "upload":
         controller.reload()
+    elif action.kind == "gcode":
+        controller.job_open(action.text, action.name, play=bool(action.a))
+    elif action.kind == "job":
+        controller.job_control(action.name)
+    elif action.kind == "code":
+        controller.issue_code(action.name, action.a)
     else:  # pragma: no cover
         raise ScenarioError(f"unknown action {action.kind!r}")
 
 
 #: Actions that can start a procedure (the run is not over while one is due).
-STARTING = frozenset({"start", "stop", "event", "bind", "upload"})
+STARTING = frozenset({"start", "stop", "event", "bind", "upload", "gcode", "job", "code"})
 #: Actions that can change an input (which may be bound to a procedure).
 _PIN_CHANGES = frozenset({"input", "write", "force", "release"})
 

@@ -259,5 +259,6 @@ class ReportCollector:
             "proc_name": st.proc_name,
             "running": st.running,
             "software": list(st.software),
+            "job": c.job_report() if hasattr(c, "job_report") else None,
             "forces": c.forces(),
         }

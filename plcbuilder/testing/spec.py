@@ -7,7 +7,8 @@ or more ``[[test]]`` tables.
 
 A test has a ``name``, a time limit ``ms`` (default 10000), an optional
 ``machine`` file (relative to the project), a ``scenario`` (the lines of a
-scenario file: start, input, adc, stop, event, bind, write, force, release) and one or more
+scenario file: start, input, adc, stop, event, bind, write, force, release), an
+optional ``gcode`` (a G-code program the job runs from 0 ms, SPEC §10) and one or more
 ``[[test.expect]]`` tables. An expectation has exactly one time selector
 (``at_ms``, ``by_ms``, ``during_ms``, ``at_end``) and one or more conditions.
 
@@ -38,7 +39,7 @@ TESTS_DIR = "tests"
 SELECTORS = ("at_ms", "by_ms", "during_ms", "at_end")
 CONDITIONS = ("outputs_on", "outputs_off", "inputs_on", "inputs_off", "pwm", "dac", "adc",
               "proc", "message", "print", "exit", "vars", "axes", "no_faults", "faults")
-TEST_KEYS = ("name", "ms", "machine", "scenario", "expect")
+TEST_KEYS = ("name", "ms", "machine", "scenario", "gcode", "expect")
 
 
 class TestFileError(Exception):
@@ -235,6 +236,9 @@ def _test(f: _File, i: int, t: dict, expect_base: int) -> TestCase:
         raise f.error(f"scenario must be a string of scenario lines, is {_type_word(scenario)}",
                       *at, "scenario")
     _scenario(f, tc, scenario, at)
+    gcode = t.get("gcode")
+    if gcode is not None:
+        _gcode(f, tc, gcode, at)
     expect = t.get("expect")
     if expect is None or expect == []:
         raise f.error(f"test {tc.name!r} expects nothing: add a [[test.expect]] table", *at)
@@ -264,6 +268,28 @@ def _scenario(f: _File, tc: TestCase, text: str, at: tuple) -> None:
              if raw.split("#", 1)[0].strip()]
     tc.scenario = sc
     tc.scenario_lines = lines[:len(sc.actions)]
+
+
+def _gcode(f: _File, tc: TestCase, text, at: tuple) -> None:
+    """``gcode = "..."``: the job runs the G-code program from 0 ms. It is
+    padded with blank lines so that its line numbers are the test file's: an
+    error, the job's line and its M-codes' lines name lines of the .toml."""
+    from plcbuilder.controller.gcode import GcodeError, parse
+    from plcbuilder.controller.scenario import Action
+    if not isinstance(text, str) or not text.strip():
+        raise f.error("gcode must be a string holding a G-code program", *at, "gcode")
+    key_line = f.line(*at, "gcode") or 1
+    first = key_line
+    src = f.loc.lines[key_line - 1] if key_line - 1 < len(f.loc.lines) else ""
+    if re.search(r"=\s*(\"\"\"|''')\s*$", src):
+        first = key_line + 1
+    padded = "\n" * (first - 1) + text
+    try:
+        parse(padded, str(f.path), functions="MSTB")    # the words; the target's at run time
+    except GcodeError as exc:
+        raise TestFileError(f"gcode: {exc.message}", f.path, exc.line) from None
+    tc.scenario.actions.insert(0, Action(0, "gcode", str(f.path), 1, text=padded))
+    tc.scenario_lines.insert(0, key_line)
 
 
 def _expectation(f: _File, tc: TestCase, e: dict, at: tuple) -> Expectation:

@@ -18,14 +18,14 @@ def test_build_reports_every_procedure_and_writes_the_image(project, capsys):
     out = capsys.readouterr().out
     assert f"{project}/hardware/M03.plc: ok: 0 errors, 0 warnings; hardware procedure M03, " in out
     assert "/512 bytes" in out and "/16384 bytes" in out
-    assert "hardware total: " in out and "/8192 bytes (10 procedures)" in out
+    assert "hardware total: " in out and "/8192 bytes (11 procedures)" in out
     assert f"wrote {project}/build/eeprom.rom" in out
-    assert out.rstrip().splitlines()[-1].startswith("Build All ok: 12 procedures, 0 errors")
+    assert out.rstrip().splitlines()[-1].startswith("Build All ok: 13 procedures, 0 errors")
     assert read_image((project / "build" / "eeprom.rom").read_bytes()).get("M80")
     # unchanged procedures are not compiled again
     assert main(["build", str(project), "--color", "never"]) == 0
     out = capsys.readouterr().out
-    assert "(unchanged)" in out and "(0 compiled, 12 unchanged)" in out
+    assert "(unchanged)" in out and "(0 compiled, 13 unchanged)" in out
     assert f"up to date: {project}/build/eeprom.rom" in out
 
 
@@ -49,7 +49,7 @@ def test_quiet_prints_only_problems(project, capsys):
     assert main(["build", str(project), "-q", "--color", "never"]) == 0
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith(f"{project}/hardware/M05.plc:") and "warning:" in out[0]
-    assert out[-1].startswith("Build All ok: 12 procedures, 0 errors, 1 warning")
+    assert out[-1].startswith("Build All ok: 13 procedures, 0 errors, 1 warning")
     assert not any("hardware total" in line or ": ok:" in line for line in out)
 
 

@@ -66,6 +66,7 @@ def _live_session(project: Path, rng: random.Random, ms: int = 6000):
                 c.event("GCODE_START")
         except api.ControllerError:
             pass
+    run(1)                                    # the tick the last action applies to
     end = c.t_ms - 1
     return c, _trace(h, end), end
 

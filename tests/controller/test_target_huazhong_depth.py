@@ -180,3 +180,48 @@ def test_a_handler_must_be_a_procedure_of_the_program():
     r = compile_source(HEAD + "init(){ set_m_func(onm); }\nplc1(){}\nplc2(){}\nonm(){ }",
                        "plc.plc", CompileOptions(target="huazhong"))
     assert r.ok and "onm" in dict(r.program.procs)         # a handler is compiled in
+
+
+def test_a_g_code_job_calls_the_handlers_and_g28_homes():
+    """Item 7: the handlers are "called when the simulated CNC issues that code
+    (from a scenario, the IDE, or the G-code job)", and item 6: "a Huazhong
+    program that waits for AX_HOME_FIN works against the machine model": G28 X0
+    homes X (to its home switch), the job goes on when each handler returned."""
+    c = _hz("if (axis_stat(0) & AX_HOME_FIN) Y[0] |= 0x02;",
+            init="set_m_func(onm); set_s_func(ons);", rest=HANDLERS)
+    c.job_open("G28 X0\nS900 M03\nG0 X50\nM05\nM30\n", "job.nc", play=True)
+    c.step(200)
+    assert 1 not in c.machine.outputs_on()
+    c.run_until_idle(20_000)
+    rep = c.job_report()
+    assert rep["state"] == "ended" and faults(c) == []
+    assert [(m["code"], m["procedure"], m["exit_code"]) for m in rep["mcodes"]] == \
+        [("S900", "ons", 0), ("M3", "onm", 0), ("M5", "onm", 0)]
+    assert c.machine.axis_positions()["X"] == 5000
+    assert 1 in c.machine.outputs_on()                # homed: Y0.1 on
+    assert c.machine.gvarget(T.CNC_G_BASE + 5) == 900
+
+
+def test_a_scenario_code_line_calls_a_handler():
+    """Item 7: "called when the simulated CNC issues that code (from a
+    scenario ...)": ``code M3 @ 10``."""
+    from plcbuilder.controller.scenario import Scenario, drive
+    c = _hz("", init="set_m_func(onm);", rest=HANDLERS)
+    drive(c, Scenario.parse("code M3 @ 10\ncode M5 @ 20\n"), 30)
+    assert c.variables()["plc"]["n"] == 2 and c.machine.outputs_on() == []
+    assert "code M3 @ 10" in c.recorder.text(30)
+
+
+def test_g28_needs_a_home_switch():
+    """Bad input: G28 of an axis without a home switch is refused naming the line."""
+    from plcbuilder.controller.controller import Controller, ControllerError
+    from plcbuilder.controller.machine_config import parse_machine
+    from plcbuilder.controller.targets import TargetConfig
+    from tests.controller._targets import compiled
+    c = Controller(parse_machine("[axes.X]\n[axes.Z]\n", "m.toml"),
+                   target=TargetConfig("huazhong"))
+    c.load([compiled("init(){}\nplc1(){}\nplc2(){}", "huazhong")])
+    with pytest.raises(ControllerError, match=r"job\.nc:2: G28: axis Z has no home switch"):
+        c.job_open("G0 X1\nG28 Z0\n", "job.nc")
+    with pytest.raises(ControllerError, match=r"job\.nc:1: G28: no axis"):
+        c.job_open("G28\n", "job.nc")

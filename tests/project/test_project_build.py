@@ -10,7 +10,7 @@ from plcbuilder.image import Limits, read_image, read_romfs
 from plcbuilder.project import Project, build_project, create_project
 from plcbuilder.project.build import CACHE_FILE
 
-EXAMPLE_HW = ["M02", "M03", "M05", "M07", "M08", "M09", "M71", "M80", "M81", "OFF"]
+EXAMPLE_HW = ["M02", "M03", "M05", "M07", "M08", "M09", "M71", "M80", "M81", "M84", "OFF"]
 EXAMPLE_SW = ["LUBE", "__HANDLER_INIT"]
 
 
@@ -41,8 +41,8 @@ def test_example_project_builds(example):
     assert r.ok, [str(d) for d in r.all_diagnostics]
     assert r.all_diagnostics == []                       # not even a warning
     assert [p.name for p in r.procedures] == EXAMPLE_HW + EXAMPLE_SW
-    assert calls[0] == (0, 12, "") and calls[-1] == (12, 12, "__HANDLER_INIT")
-    assert [c[0] for c in calls] == list(range(13))
+    assert calls[0] == (0, 13, "") and calls[-1] == (13, 13, "__HANDLER_INIT")
+    assert [c[0] for c in calls] == list(range(14))
     assert r.image_written and r.image_path.exists() and "wrote" in r.image_message
     image = read_image(r.image_path.read_bytes())
     assert image.names(Kind.HARDWARE) == sorted(EXAMPLE_HW)
@@ -72,16 +72,16 @@ def test_same_sources_give_identical_outputs(example, tmp_path):
 def test_incremental_build_reuses_unchanged_procedures(example):
     r1 = build_project(example)
     first = outputs(example)
-    assert (r1.compiled, r1.reused) == (12, 0)
+    assert (r1.compiled, r1.reused) == (13, 0)
     r2 = build_project(example)
-    assert (r2.compiled, r2.reused) == (0, 12)
+    assert (r2.compiled, r2.reused) == (0, 13)
     assert all(p.cached for p in r2.procedures) and r2.ok and r2.image_written
     assert outputs(example) == first
     # change one procedure: only it is compiled again
     m07 = example.hardware_dir / "M07.plc"
     m07.write_text(m07.read_text().replace("portset(OUTPUT_MIST);", "portset(OUTPUT_MIST);\n  a=1;"))
     r3 = build_project(example)
-    assert (r3.compiled, r3.reused) == (1, 11)
+    assert (r3.compiled, r3.reused) == (1, 12)
     assert not r3.get("M07").cached and r3.get("M03").cached
     assert outputs(example)["M07.bin"] != first["M07.bin"]
     # its warning (a assigned, never read) comes back from the cache next time
@@ -100,14 +100,14 @@ def test_headers_are_part_of_the_cache_key(example):
     pins.write_text(pins.read_text().replace("#define OUTPUT_MIST         2",
                                              "#define OUTPUT_MIST         12"))
     r = build_project(example)
-    assert r.compiled == 12                    # every example procedure includes pins.h
+    assert r.compiled == 13                    # every example procedure includes pins.h
     m07 = Program.from_bytes((example.build_dir / "M07.bin").read_bytes())
     fresh = build_project(example, use_cache=False)
     assert fresh.get("M07").binary == m07.to_bytes()
     # a header that shadows include/pins.h (the procedure's folder is searched first)
     (example.hardware_dir / "pins.h").write_text(pins.read_text())
     r = build_project(example)
-    assert r.compiled == 10 and r.reused == 2  # the hardware ones
+    assert r.compiled == 11 and r.reused == 2  # the hardware ones
 
 
 def test_broken_cache_or_missing_binary_is_rebuilt(example):
@@ -115,10 +115,10 @@ def test_broken_cache_or_missing_binary_is_rebuilt(example):
     good = outputs(example)
     (example.build_dir / CACHE_FILE).write_text("{not json")
     r = build_project(example)
-    assert r.compiled == 12 and outputs(example) == good
+    assert r.compiled == 13 and outputs(example) == good
     (example.build_dir / "M03.bin").unlink()
     r = build_project(example)
-    assert (r.compiled, r.reused) == (1, 11) and outputs(example) == good
+    assert (r.compiled, r.reused) == (1, 12) and outputs(example) == good
     (example.build_dir / "M05.bin").write_bytes(b"garbage")
     r = build_project(example)
     assert not r.get("M05").cached and outputs(example) == good
@@ -126,7 +126,7 @@ def test_broken_cache_or_missing_binary_is_rebuilt(example):
     doc["procedures"]["hardware/M08"]["diagnostics"] = [{"severity": "bogus"}]
     (example.build_dir / CACHE_FILE).write_text(json.dumps(doc))
     r = build_project(example)
-    assert (r.compiled, r.reused) == (1, 11) and outputs(example) == good
+    assert (r.compiled, r.reused) == (1, 12) and outputs(example) == good
 
 
 def test_errors_keep_the_previous_image(example):
@@ -313,7 +313,7 @@ def test_worker_processes_give_the_same_build(example, tmp_path):
     assert outputs(example) == outputs(Project.open(other))
     strip = lambda r: [(p.name, p.kind, p.size, p.crc32, p.binary, [(d.code, d.message) for d in
                         p.diagnostics]) for p in r.procedures]  # noqa: E731
-    assert strip(serial) == strip(parallel) and parallel.compiled == 12
+    assert strip(serial) == strip(parallel) and parallel.compiled == 13
 
 
 def test_unchanged_rebuild_reads_no_source(example, monkeypatch):
@@ -337,7 +337,7 @@ def test_unchanged_rebuild_reads_no_source(example, monkeypatch):
         return real_bounded(path, *args, **kw)
     monkeypatch.setattr(build_module, "read_bounded", guarded_bounded)
     r = build_project(example)
-    assert (r.compiled, r.reused) == (0, 12) and r.ok and "up to date" in r.image_message
+    assert (r.compiled, r.reused) == (0, 13) and r.ok and "up to date" in r.image_message
 
 
 def test_a_same_size_edit_within_the_timestamp_is_seen(example):
@@ -476,7 +476,7 @@ def test_a_damaged_diagnostic_in_the_cache_compiles_again(example, row):
     doc["procedures"]["hardware/M08"]["diagnostics"] = [row]
     (example.build_dir / CACHE_FILE).write_text(json.dumps(doc))
     r = build_project(example)
-    assert (r.compiled, r.reused) == (1, 11) and not r.get("M08").cached
+    assert (r.compiled, r.reused) == (1, 12) and not r.get("M08").cached
     assert all(isinstance(pb.diagnostics, list) for pb in r.procedures)
 
 

@@ -7,7 +7,7 @@ import pytest
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.project import Project, ProjectError, build_project, create_project
 
-HW = ["M02", "M03", "M05", "M07", "M08", "M09", "M71", "M80", "M81", "OFF"]
+HW = ["M02", "M03", "M05", "M07", "M08", "M09", "M71", "M80", "M81", "M84", "OFF"]
 SW = ["LUBE", "__HANDLER_INIT"]
 
 

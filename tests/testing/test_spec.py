@@ -75,7 +75,7 @@ def test_an_unknown_key_names_the_known_ones(tmp_path):
     assert e.line == 16 and "unknown key 'pwms'" in e.message
     assert all(k in e.message for k in SELECTORS + CONDITIONS)
     e = error_of(GOOD.replace('ms = 50', 'timeout = 50'), tmp_path / "b")
-    assert e.line == 3 and "name, ms, machine, scenario, expect" in e.message
+    assert e.line == 3 and "name, ms, machine, scenario, gcode, expect" in e.message
 
 
 def test_two_time_selectors_are_refused(tmp_path):

@@ -124,7 +124,8 @@ class TargetPLC(PLC):
         raise KeyError(f"the {self.target} target has no software PLC")
 
     def idle(self) -> bool:
-        return self.hw is None
+        job = self.job
+        return self.hw is None and (job is None or not job.active)
 
     def next_due(self) -> Optional[int]:
         return None
@@ -135,6 +136,9 @@ class TargetPLC(PLC):
         end = t + ms
         while t < end:
             self.t = t
+            job = self.job
+            if job is not None and job.active:
+                job.tick(t)
             p = self.hw
             if p is not None:
                 self.tick(t, p)

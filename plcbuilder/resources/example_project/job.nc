@@ -1,0 +1,13 @@
+(An example job: run it with  plcbuilder run . --gcode job.nc  or Start > Run G-code)
+G90
+S12000 M03          (spindle on: S is M03's eparam, 12000 on PWM0)
+G0 X10 Y10          (rapid to the start)
+M08                 (flood coolant on)
+G1 X100 F3000       (cut at 3000 mm/min)
+G4 P0.5             (dwell half a second)
+M84                 (probe: M84 lets the next move run and cancels it on contact)
+G1 Z-100 F1200      (down until the probe touches the surface at Z -50)
+G0 Z20              (up again)
+M09                 (coolant off)
+M05                 (spindle off)
+M30                 (the end)
