@@ -288,7 +288,8 @@ class Job:
         if issue is not None:                         # a target: its handlers
             if letter == "M" and optional:
                 return
-            call = self._record(b.line, f"{letter}{value}", None, value, t)
+            code = f"M{value:02d}" if letter == "M" else f"{letter}{value}"
+            call = self._record(b.line, code, None, value, t)
             box = {}
 
             def done(handler, code, box=box, call=call):

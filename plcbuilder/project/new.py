@@ -29,6 +29,8 @@ EXAMPLE = ("resources", "example_project")
 #: the example project of each target (docs/targets.md)
 EXAMPLES = {"mycnc": EXAMPLE, "huazhong": ("resources", "example_huazhong"),
             "tgmotion": ("resources", "example_tgmotion")}
+#: settings an example sets beyond the defaults: what TG Motion's oscilloscope samples
+EXAMPLE_SETTINGS = {"tgmotion": {"oscilloscope": ("in 9", "out 7", "Program.target_x")}}
 PINS = ("resources", "include", "pins.h")
 MACHINE = ("resources", "machine", "default.toml")
 
@@ -79,7 +81,9 @@ def create_project(dest: Union[str, Path], name: Optional[str] = None,
         (tmp / INCLUDE_DIR).mkdir(exist_ok=True)
         (tmp / INCLUDE_DIR / "pins.h").write_bytes(pins.read_bytes())
         (tmp / DEFAULT_MACHINE).write_bytes(machine.read_bytes())
-        (tmp / SETTINGS_FILE).write_text(Settings(name=project_name, target=target).to_toml(), encoding="utf-8")
+        (tmp / SETTINGS_FILE).write_text(Settings(name=project_name, target=target,
+                                                  **EXAMPLE_SETTINGS.get(target, {})).to_toml(),
+                                         encoding="utf-8")
         try:
             os.replace(tmp, dest)          # POSIX: also replaces an empty folder
         except OSError:

@@ -21,7 +21,7 @@ def test_new_huazhong_run_json_and_test(tmp_path, capsys):
     assert rep["registers"]["F"] == {"0": 0x20, "10": 0x20, "20": 0x20}
     assert rep["calls"]["init"] == 1 and rep["calls"]["plc1"] == 13
     assert main(["test", str(dest)]) == 0
-    assert "4 passed, 0 failed" in capsys.readouterr().out
+    assert "5 passed, 0 failed" in capsys.readouterr().out
 
 
 def test_new_tgmotion_run_reports_calls_and_budget(tmp_path, capsys):

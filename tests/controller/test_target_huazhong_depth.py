@@ -196,7 +196,7 @@ def test_a_g_code_job_calls_the_handlers_and_g28_homes():
     rep = c.job_report()
     assert rep["state"] == "ended" and faults(c) == []
     assert [(m["code"], m["procedure"], m["exit_code"]) for m in rep["mcodes"]] == \
-        [("S900", "ons", 0), ("M3", "onm", 0), ("M5", "onm", 0)]
+        [("S900", "ons", 0), ("M03", "onm", 0), ("M05", "onm", 0)]
     assert c.machine.axis_positions()["X"] == 5000
     assert 1 in c.machine.outputs_on()                # homed: Y0.1 on
     assert c.machine.gvarget(T.CNC_G_BASE + 5) == 900
