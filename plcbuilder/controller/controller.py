@@ -570,7 +570,15 @@ class Controller:
             image=tuple({"name": p.name, "kind": p.kind.label, "size": p.code_size,
                          "crc32": self._crc.get(p.name, 0)}
                         for p in sorted(plc.programs.values(), key=lambda q: q.name)),
+            job=self._job_state(),
         )
+
+    def _job_state(self) -> dict:
+        job = self._plc.job
+        if job is None:
+            return {}
+        return {"file": job.program.file, "state": job.state, "line": job.line,
+                "lines": job.program.lines, "error": job.error}
 
     def target_report(self) -> dict:
         """What a target adds to the run report (registers, calls, budget

@@ -204,12 +204,14 @@ class ControllerStatus:
     image_crc32: Optional[str] = None      # the uploaded image's CRC-32 (hex), None if none
     speed: dict = field(default_factory=dict)      # {"mode", "factor", "dropped_ms", …}
     server: dict = field(default_factory=dict)     # {"clients", "uploads", "error", …}
+    #: the G-code job: {file, state, line, lines, error} ({} without one)
+    job: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         # Shallow: every field holds plain values already (asdict deep-copied each
         # image entry, 30 ms for 1,000 procedures on every ``state``).
         d = {k: getattr(self, k) for k in self.__dataclass_fields__}
-        for k in ("axes", "speed", "server"):
+        for k in ("axes", "speed", "server", "job"):
             d[k] = dict(d[k])
         for k in ("software", "inputs", "outputs", "pwm", "dac", "adc", "image"):
             d[k] = list(d[k])
@@ -222,7 +224,7 @@ class ControllerStatus:
         for k in ("software", "inputs", "outputs", "pwm", "dac", "adc", "image"):
             if k in kw:
                 kw[k] = tuple(kw[k] or ())
-        for k in ("axes", "speed", "server"):
+        for k in ("axes", "speed", "server", "job"):
             if k in kw and not isinstance(kw[k], dict):
                 kw[k] = {}
         return cls(**kw)

@@ -61,6 +61,10 @@ class Act:
     EMBEDDED = "embedded"
     ABOUT = "about"
     BUILD_UPLOAD_START = "build_upload_start"
+    RUN_GCODE = "run_gcode"
+    PAUSE_GCODE = "pause_gcode"
+    PLAY_GCODE = "play_gcode"
+    STOP_GCODE = "stop_gcode"
     # the debugger (plcbuilder.ide.debug.actions makes these)
     PAUSE = "pause"
     STEP_OVER = "step_over"
@@ -193,6 +197,15 @@ def build_actions(win) -> dict[str, QAction]:
       "Start the procedure of the current editor with the last eparam")
     A(Act.STOP, "S&top", win.stop, "Shift+F5", "stop",
       "Stop: the first press starts M02, the second OFF")
+    A(Act.RUN_GCODE, "Run &G-code Program…", lambda: win.run_actions.run_gcode(), None, None,
+      "Run a G-code program as a job: its M-codes start their procedures "
+      "(docs/controller.md, G-code jobs)")
+    A(Act.PAUSE_GCODE, "Pause G-code Program", lambda: win.run_actions.job("pause"), None, None,
+      "Pause the G-code job (its move decelerates; Continue goes on)")
+    A(Act.PLAY_GCODE, "Continue G-code Program", lambda: win.run_actions.job("play"), None, None,
+      "Continue the paused G-code job, or run it again from its first line")
+    A(Act.STOP_GCODE, "Stop G-code Program", lambda: win.run_actions.job("stop"), None, None,
+      "Stop the G-code job (its move decelerates; __HANDLER_GCODE_STOP runs)")
     A(Act.RUN_TESTS, "Run &Tests", lambda: (win.tests_dock.show(), win.tests_dock.raise_(),
                                             win.tests_panel.run_tests()), "Ctrl+T", None,
       "Build the project and run its scenario tests (tests/*.toml)")
@@ -254,6 +267,7 @@ def build_menus(win) -> None:
         m.addAction(a(name))
     m = mb.addMenu("&Run")
     for name in (Act.START, Act.START_CURRENT, Act.BUILD_UPLOAD_START, Act.STOP, None,
+                 Act.RUN_GCODE, Act.PAUSE_GCODE, Act.PLAY_GCODE, Act.STOP_GCODE, None,
                  Act.RUN_TESTS, None, Act.SAVE_RECORDING, Act.REPLAY_SESSION):
         m.addAction(a(name)) if name else m.addSeparator()
     m.addSeparator()

@@ -330,6 +330,8 @@ class _Worker(threading.Thread):
                 self.watched = list(result.get("variables", []))
             elif verb == "event":
                 result = client.event(args[0])
+            elif verb == "job":
+                result = client.job(*args)
             elif verb == "variables":
                 self.variables_pending = False
                 variables, target = client.variables_and_target()
@@ -568,6 +570,12 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
     def stop(self) -> None:
         """Press Stop (the first time starts M02, the second OFF)."""
         self._send("stop")
+
+    def job(self, verb: str, text: Optional[str] = None, file: Optional[str] = None,
+            play: bool = False) -> None:
+        """The G-code job (docs/controller.md): ``open`` (and ``play``) a program,
+        or ``play``, ``pause``, ``stop``, ``reset`` it."""
+        self._send("job", verb, text, file, play)
 
     def set_input(self, pin: int, v: int) -> None:
         self._send("input", int(pin), 1 if v else 0)

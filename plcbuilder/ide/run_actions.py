@@ -301,6 +301,42 @@ class RunActions(QObject):
         else:
             self.start_procedure()
 
+    # ------------------------------------------------------------ G-code jobs
+    #: the file dialog's filter for G-code programs
+    GCODE_FILTER = "G-code programs (*.nc *.ngc *.gcode *.tap *.cnc *.txt);;All files (*)"
+
+    def run_gcode(self, path: Optional[str] = None) -> bool:
+        """Run a G-code program as a job on the controller (docs/controller.md,
+        "G-code jobs"): asks for the file when not given. The controller checks it
+        whole first; a line it cannot run comes back as an error naming it."""
+        if self.connection is None:
+            self.sig_message.emit("No controller to run a G-code program on", 4000)
+            return False
+        if path is None:
+            from PySide6.QtWidgets import QFileDialog
+            start = str(self.project.root) if self.project is not None else ""
+            path, _ = QFileDialog.getOpenFileName(self.parent(), "Run G-code Program", start,
+                                                  self.GCODE_FILTER)
+            if not path:
+                return False
+        from plcbuilder.link.protocol import MAX_JOB_TEXT
+        try:
+            text = read_bounded(Path(path), MAX_JOB_TEXT, "G-code program").decode("utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            why = getattr(exc, "strerror", None) or str(exc)
+            QMessageBox.warning(self.parent(), "Run G-code Program",
+                                f"Cannot read {path}:\n\n{why}")
+            return False
+        self.connection.job("open", text, str(path), True)
+        self.sig_message.emit(f"G-code program {Path(path).name}: play", 4000)
+        return True
+
+    def job(self, verb: str) -> None:
+        """Pause, play, stop or reset the G-code job."""
+        if self.connection is not None:
+            self.connection.job(verb)
+            self.sig_message.emit(f"G-code program: {verb}", 3000)
+
     def stop(self) -> None:
         """Stop: the first press starts M02, the second OFF (the controller decides)."""
         if self.connection is not None:
@@ -348,8 +384,8 @@ class RunActions(QObject):
             args += ["--machine", str(p.machine_path)]
         if p.variables_path.is_file():
             args += ["--variables", str(p.variables_path)]
-        if (p.root / "IO.DAT").is_file():
-            args += ["--io-dat", str(p.root / "IO.DAT")]
+        # always: the controller generates a missing IO.DAT (the softMC seed)
+        args += ["--io-dat", str(p.root / "IO.DAT")]
         lim = p.limits
         args += ["--limits", f"{lim.hw_proc},{lim.hw_total},{lim.sw_proc}"]
         if getattr(p, "target", "mycnc") != "mycnc":

@@ -339,6 +339,15 @@ class Client:
         """``__HANDLER_GCODE_START`` or ``__HANDLER_GCODE_STOP``."""
         return self.request("event", handler=handler)
 
+    def job(self, verb: str, text: Optional[str] = None, file: Optional[str] = None,
+            play: bool = False) -> dict:
+        """The G-code job: ``open`` (``text``, ``file``; ``play`` starts it too),
+        ``play``, ``pause``, ``stop`` or ``reset``."""
+        fields: dict = {"verb": verb}
+        if verb == "open":
+            fields.update(text=text or "", file=file or "job.nc", play=bool(play))
+        return self.request("job", **fields)
+
     def ping(self) -> dict:
         return self.request("ping")
 

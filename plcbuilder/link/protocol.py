@@ -105,7 +105,7 @@ _MAX_ID_TEXT = 64
 #: only ever looks a type up in these sets.
 REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state", "variables",
                       "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping",
-                      "registers", "recording", "watch"}
+                      "registers", "recording", "watch", "job"}
                      | {"set_breakpoints", "debug_continue", "debug_pause", "debug_step",
                         "debug_run_to", "debug_state", "debug_evaluate"}
                      | {"debug_step_back", "debug_run_back"})
@@ -117,6 +117,11 @@ FORCE_REQUESTS = frozenset({"write", "force", "release", "release_all", "forces"
 REQUESTS = REQUESTS | FORCE_REQUESTS
 #: How a release leaves its target: its current value, or the program's (the wiring).
 RELEASE_MODES = ("keep", "restore")
+
+#: What the ``job`` request does to the G-code job (controller/job.py)
+JOB_VERBS = ("open", "play", "pause", "stop", "reset")
+#: The longest G-code program a ``job`` request carries, in characters.
+MAX_JOB_TEXT = MAX_FRAME - 8192
 
 #: Addresses one ``registers`` request may read at most.
 MAX_REGISTERS = 256

@@ -231,6 +231,29 @@ class Service(DebugVerbs):
         started = self._on_sim(lambda: self.sim.controller.event(handler))
         return {"handler": handler, "started": bool(started)}
 
+    def handle_job(self, msg: dict, session: Session) -> dict:
+        """The G-code job (SPEC §10): ``open`` (``text``, ``file``; ``play``: start it
+        too), ``play``, ``pause``, ``stop``, ``reset``."""
+        verb = protocol.field_str(msg, "verb", max_len=16)
+        if verb not in protocol.JOB_VERBS:
+            raise BadRequest(f"job: verb must be one of {', '.join(protocol.JOB_VERBS)}")
+        if verb == "open":
+            text = protocol.field_str(msg, "text", max_len=protocol.MAX_JOB_TEXT)
+            file = protocol.field_str(msg, "file", "job.nc", max_len=4096)
+            play = bool(msg.get("play", False))
+
+            def go():
+                self.sim.controller.job_open(text, file, play=play)
+        else:
+            def go():
+                self.sim.controller.job_control(verb)
+
+        def done():
+            go()
+            return self.sim.controller.job_report(), self.sim.controller.t_ms
+        job, t = self._on_sim(done)
+        return {"job": {k: v for k, v in job.items() if k != "mcodes"}, "t_ms": t}
+
     # ---------------------------------------------------------------- I/O
     def handle_input(self, msg: dict, session: Session) -> dict:
         pin = protocol.field_int(msg, "pin", lo=0, hi=1 << 16)

@@ -21,7 +21,10 @@ def test_tree_lists_io_dat_and_the_controller_gets_it(make_window, tmp_path, qtb
     settle(qtbot, win)
     texts = {it.text(0) for it in win.tree._all_items()}
     assert "Input presets  ·  IO.DAT" not in texts
-    assert "--io-dat" not in win.run_actions.controller_args()
+    # passed all the same: the controller generates a missing IO.DAT ("File IO.DAT is
+    # generated automatically if it does not exist on the flash disk", the softMC seed)
+    args = win.run_actions.controller_args()
+    assert args[args.index("--io-dat") + 1] == str(root / "IO.DAT")
 
     (root / "IO.DAT").write_text("INP=0x01\nDIP=0x00\n", encoding="ascii")
     win.tree.refresh()

@@ -53,7 +53,7 @@ def test_tree_shows_huazhong_structure(window, tmp_path):
     ("huazhong", "Huazhong PLC: init(), plc1(), plc2()."),
     ("tgmotion", "TG Motion PLC: Program_Ini(), Program_01(), Program_02(), Program_03(), "
                  "Program_04(), Program_05()."),
-    ("mycnc", "10 hardware and 2 software procedures.")])
+    ("mycnc", "11 hardware and 2 software procedures.")])
 def test_the_welcome_page_names_the_targets_procedures(window, tmp_path, target, says):
     """It said '1 hardware and 0 software procedures' for a TG Motion project."""
     project = api.create_project(tmp_path / target, target=target)

@@ -262,3 +262,21 @@ def test_a_long_step_stops_at_its_wall_time_budget(paused):
     paused.step_budget = 2.0
     r = req(paused, "step", ms=10)
     assert r["complete"] and r["stepped"] == 10
+
+
+def test_job_open_play_pause_stop_over_the_link(paused):
+    """SPEC §10: the G-code job from the IDE (the ``job`` request): open and play
+    a program, its M-code starts its procedure, the state says where it is; a
+    line it cannot run is refused naming it."""
+    r = req(paused, "job", verb="open", text="S7 M03\nG4 P1\nM05\n", file="job.nc", play=True)
+    assert r["job"]["state"] in ("starting", "running") and r["job"]["file"] == "job.nc"
+    req(paused, "step", ms=300)         # after __HANDLER_GCODE_START, if the image has it
+    st = req(paused, "state")
+    assert st["job"]["line"] == 2 and st["job"]["state"] == "running"
+    assert req(paused, "job", verb="pause")["job"]["state"] == "paused"
+    assert req(paused, "job", verb="stop")["job"]["state"] == "stopped"
+    with pytest.raises(Refused) as e:
+        req(paused, "job", verb="open", text="G2 X1\n", file="bad.nc")
+    assert e.value.reason.startswith("bad.nc:1: G2 is not supported")
+    with pytest.raises(BadRequest):
+        req(paused, "job", verb="rewind")

@@ -3,6 +3,7 @@ name, faults and controller notes. A click on a fault opens its source line."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Iterable, Optional
 
 from PySide6 import QtCore, QtWidgets
@@ -21,10 +22,10 @@ Signal = QtCore.Signal
 T, SRC, KIND_LABEL, TEXT, CATEGORY, COLOUR, FILE, LINE = range(8)
 
 KINDS = (("print", "Prints"), ("message", "Messages"), ("procedure", "Procedures"),
-         ("fault", "Faults"), ("log", "Logpoints"), ("note", "Notes"))
+         ("job", "Job"), ("fault", "Faults"), ("log", "Logpoints"), ("note", "Notes"))
 _COLOURS = {"fault": style.FAULT_COLOUR, "error": style.FAULT_COLOUR, "warning": "#b35c00",
             "print": "#2f6db5", "link": "#808080", "message": "#8a52b8",
-            "log": "#2e8b7a"}
+            "log": "#2e8b7a", "job": "#1f6f8b"}
 
 
 def _fmt_t(t_ms: Optional[int]) -> str:
@@ -61,6 +62,15 @@ def event_row(e) -> Optional[tuple]:
     if isinstance(e, ev.Note):
         colour = e.level if e.level in ("warning", "error") else "note"
         return (_fmt_t(e.t_ms), "controller", e.level, e.text, "note", colour, None, None)
+    if isinstance(e, ev.JobEvent):          # the G-code job: a line read, a procedure started
+        if e.procedure:
+            text = f"line {e.line}: starts {e.procedure}"
+        elif e.state == "running":
+            text = f"line {e.line}: {e.text}"
+        else:
+            text = f"{e.state} at line {e.line}: {e.text}"
+        colour = "error" if e.state == "error" else "job"
+        return (_fmt_t(e.t_ms), Path(e.file).name, "job", text, "job", colour, None, None)
     if getattr(e, "type", None) == "log":   # a logpoint's message (the debugger)
         return (_fmt_t(e.t_ms), e.source, "log", e.text, "log", "log", None, None)
     if isinstance(e, dict):                 # an event kind this IDE does not know

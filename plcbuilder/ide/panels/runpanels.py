@@ -501,6 +501,11 @@ class RunPanels(QtCore.QObject):
             parts.append(f"<b>Running {self._running}</b>")
         else:
             parts.append("Idle")
+        job = getattr(st, "job", None)
+        if job:                         # the G-code job: its file, line and state
+            from pathlib import Path
+            parts.append(f"G-code {Path(str(job.get('file', ''))).name} line "
+                         f"{job.get('line', 0)}/{job.get('lines', 0)} {job.get('state', '')}")
         soft = st.software
         if soft:
             parts.append("software: " + ", ".join(map(str, soft[:4]))

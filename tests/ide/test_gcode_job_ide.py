@@ -1,0 +1,61 @@
+"""The IDE runs a G-code program (SPEC §10, docs/controller.md "G-code jobs"):
+Run › Run G-code Program… opens the job on the controller; the run log shows
+the lines it reads and the procedures it starts, the run panels' status line
+where it is; Pause, Continue and Stop reach it."""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("PySide6")
+
+from plcbuilder.api import events as ev  # noqa: E402
+from plcbuilder.ide.actions import Act  # noqa: E402
+
+WAIT = 30_000
+
+
+def _log_texts(panels) -> list[str]:
+    rows = panels.log.rows
+    return [rows.row(i)[3] for i in range(rows.rowCount())]
+
+
+def test_run_gcode_program_from_the_run_menu(live_uploaded, qtbot, monkeypatch, tmp_path):
+    win, panels = live_uploaded
+    root = win.project.root
+    job = root / "job.nc"
+    run_menu = next(a.menu() for a in win.menuBar().actions() if a.text() == "&Run")
+    assert win.action(Act.RUN_GCODE) in run_menu.actions()
+    from PySide6.QtWidgets import QFileDialog
+    monkeypatch.setattr(QFileDialog, "getOpenFileName",
+                        staticmethod(lambda *a, **k: (str(job), "")))
+    win.run_actions.set_speed("max")
+    win.action(Act.RUN_GCODE).trigger()
+    qtbot.waitUntil(lambda: any("starts M03" in t for t in _log_texts(panels)), timeout=WAIT)
+    qtbot.waitUntil(lambda: any(t.startswith("ended at line 13") for t in _log_texts(panels)),
+                    timeout=60_000)
+    texts = _log_texts(panels)
+    assert "line 3: starts M03" in texts and any(t.startswith("line 3: S12000 M03") for t in texts)
+    assert any("starts M84" in t for t in texts)
+    qtbot.waitUntil(lambda: "G-code job.nc line 13/13 ended" in panels.proc.status.plain_text(),
+                    timeout=WAIT)
+
+
+def test_a_bad_program_is_refused_naming_its_line(live_uploaded, qtbot, tmp_path):
+    win, panels = live_uploaded
+    bad = tmp_path / "bad.nc"
+    bad.write_text("M03\nG2 X1 Y1\n")
+    errors = []
+    win.connection.sig_error.connect(errors.append)
+    win.connection.sig_refused.connect(lambda verb, why: errors.append(f"{verb}: {why}"))
+    assert win.run_actions.run_gcode(str(bad))
+    qtbot.waitUntil(lambda: any("bad.nc:2: G2 is not supported" in e for e in errors),
+                    timeout=WAIT)
+
+
+def test_the_log_row_of_a_job_event():
+    from plcbuilder.ide.panels.log import event_row
+    row = event_row(ev.JobEvent(1200, "/p/job.nc", 7, "running", "M08", "M08"))
+    assert row[1] == "job.nc" and row[2] == "job" and row[3] == "line 7: starts M08"
+    row = event_row(ev.JobEvent(1300, "/p/job.nc", 9, "error", "job.nc:9: M71 faulted"))
+    assert row[3] == "error at line 9: job.nc:9: M71 faulted" and row[5] == "error"
