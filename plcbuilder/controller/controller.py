@@ -371,6 +371,25 @@ class Controller:
         """The G-code job (controller/job.py), or None."""
         return self._plc.job
 
+    @property
+    def job_runner(self):
+        """The job as the Server API's program commands drive it (controller/job.py)."""
+        runner = getattr(self, "_job_runner", None)
+        if runner is None:
+            from plcbuilder.controller.job import JobRunner
+            runner = self._job_runner = JobRunner(self)
+        return runner
+
+    def handwheel(self, axis: str, distance_mm: float) -> None:
+        """One incremental rapid move of ``axis`` by ``distance_mm`` (a handwheel
+        click: the Server API's SetPendant), recorded (scenario ``move X=0.1``)."""
+        axis = str(axis).upper()
+        if axis not in abi.AXES:
+            raise ControllerError(f"no axis {axis!r} (one of {' '.join(abi.AXES)})")
+        units = round(float(distance_mm) * 100)
+        self.machine.g0move(0, 1 << abi.AXES.index(axis), units)
+        self.recorder.add(Action(self._plc.t, "move", axis, units))
+
     def job_report(self) -> Optional[dict]:
         """The run report's ``job`` (SPEC §10), or None without one."""
         job = self._plc.job

@@ -393,3 +393,63 @@ class Job:
                 else None,
                 "error": self.error, "mcodes": [c.to_dict() for c in self.calls],
                 "mcode_count": self.call_count}
+
+
+# -------------------------------------------------------- the Server API's runner
+#: the job's states as the Server API's program commands name them
+API_STATES = {"ready": "idle", "starting": "running", "running": "running",
+              "paused": "paused", "ended": "done", "stopped": "stopped", "error": "stopped"}
+
+
+@dataclass(frozen=True)
+class RunnerStatus:
+    """Where the job is, as the Server API's program commands read it
+    (link/server_api.py's JobStatus has the same fields)."""
+    state: str = "idle"                 # idle | running | paused | stopped | done
+    name: Optional[str] = None
+    path: Optional[str] = None
+    line: int = 0
+    paused_line: Optional[int] = None
+    lines: int = 0
+    size: int = 0
+    estimate_s: Optional[float] = None
+
+
+class JobRunner:
+    """The controller's G-code job as the Server API drives it (ProgramFileOpen,
+    ProgramPlay, ProgramPause, ProgramStop, ProgramReset, SetPendant): every
+    call goes through the controller, which checks and records it."""
+
+    def __init__(self, controller):
+        self.c = controller
+        self._name: Optional[str] = None
+        self._path: Optional[str] = None
+        self._size = 0
+
+    def open(self, name: str, text: str, path: Optional[str] = None) -> None:
+        self.c.job_open(text, path or name, play=False)
+        self._name, self._path, self._size = name, path, len(text.encode("utf-8"))
+
+    def play(self) -> None:
+        self.c.job_control("play")
+
+    def pause(self) -> None:
+        self.c.job_control("pause")
+
+    def stop(self) -> None:
+        self.c.job_control("stop")
+
+    def reset(self) -> None:
+        self.c.job_control("reset")
+
+    def move(self, axis: str, distance_mm: float) -> None:
+        self.c.handwheel(axis, distance_mm)
+
+    def status(self) -> RunnerStatus:
+        job = self.c.job
+        if job is None:
+            return RunnerStatus()
+        return RunnerStatus(API_STATES.get(job.state, "idle"),
+                            self._name or job.program.file, self._path or job.program.file,
+                            job.line, job.line if job.state == "paused" else None,
+                            job.program.lines, self._size)

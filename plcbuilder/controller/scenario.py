@@ -22,6 +22,7 @@ file (``--scenario FILE``), whose lines are the same::
     gcode job.nc open @ 0      # only load it (the Server API's ProgramFileOpen)
     job pause @ 900            # the job: play, pause, stop or reset
     code M3 @ 50               # the CNC issues a code (Huazhong: M, S, B, T handlers)
+    move X=0.1 @ 60            # a handwheel click: X 0.1 mm at rapid (Server API SetPendant)
 
 A target is ``PROC.var``, ``in N``, ``out N``, ``adc N``, ``pwm N``, ``dac N`` or
 ``gvar N`` (controller/forces.py).
@@ -47,7 +48,7 @@ from plcbuilder.controller.forces import MODES, ForceError, parse_target
 
 MAX_SCENARIO_BYTES = 4 << 20
 KINDS = ("start", "input", "adc", "stop", "event", "bind", "write", "force", "release",
-         "upload", "gcode", "job", "code")
+         "upload", "gcode", "job", "code", "move")
 
 
 class ScenarioError(ValueError):
@@ -94,6 +95,8 @@ class Action:
             return f"job {self.name} @ {self.t_ms}"
         if self.kind == "code":
             return f"code {self.name}{self.a} @ {self.t_ms}"
+        if self.kind == "move":
+            return f"move {self.name}={self.a / 100:g} @ {self.t_ms}"
         if self.kind == "upload":
             return f"upload {self.name} @ {self.t_ms}" if self.name else f"upload @ {self.t_ms}"
         return f"stop @ {self.t_ms}"
@@ -321,11 +324,20 @@ def parse_code(text: str) -> Action:
     return Action(t, "code", m.group(1).upper(), parse_int(m.group(2), "the code", 0, 1 << 31))
 
 
+def parse_move(text: str) -> Action:
+    """``AXIS=MM [@MS]``: a handwheel click (an incremental rapid move)."""
+    body, t = _split_time(text, "move")
+    m = re.fullmatch(r"\s*([XYZABCUVWxyzabcuvw])\s*=\s*([+-]?(?:\d+\.?\d*|\.\d+))\s*", body)
+    if not m:
+        raise ScenarioError(f"move needs AXIS=MM (move X=0.1 @ 100), not {body.strip()!r}")
+    return Action(t, "move", m.group(1).upper(), round(float(m.group(2)) * 100))
+
+
 _PARSERS: dict[str, Callable[[str], Action]] = {
     "start": parse_start, "input": parse_input, "adc": parse_adc,
     "stop": parse_stop, "event": parse_event, "bind": parse_bind,
     "write": parse_write, "force": parse_force, "release": parse_release,
-    "upload": parse_upload, "job": parse_job, "code": parse_code,
+    "upload": parse_upload, "job": parse_job, "code": parse_code, "move": parse_move,
 }
 
 
@@ -417,6 +429,8 @@ def apply(controller, action: Action) -> None:
         controller.job_control(action.name)
     elif action.kind == "code":
         controller.issue_code(action.name, action.a)
+    elif action.kind == "move":
+        controller.handwheel(action.name, action.a / 100)
     else:  # pragma: no cover
         raise ScenarioError(f"unknown action {action.kind!r}")
 

@@ -252,3 +252,31 @@ def test_job_events_name_the_line_and_the_procedure(backend):
     jobs = [(e.state, e.line, e.procedure) for e in of(ev, JobEvent)]
     assert ("running", 1, None) in jobs and ("running", 2, "M10") in jobs
     assert jobs[-1][0] == "ended"
+
+
+def test_the_server_apis_job_runner(backend):
+    """The Server API's program commands drive the job through
+    ``Controller.job_runner`` (open, play, pause, stop, reset, status, and the
+    handwheel's move, recorded as ``move X=…``)."""
+    c = controller(proc("M10", wait(50) + " exit(99);"), backend=backend)
+    r = c.job_runner
+    assert r.status().state == "idle" and r.status().name is None
+    r.open("job.nc", "M10\nG0 X120\n", "/p/job.nc")
+    st = r.status()
+    assert (st.state, st.name, st.path, st.lines, st.size) == ("idle", "job.nc", "/p/job.nc", 2, 12)
+    r.play()
+    c.step(10)
+    assert r.status().state == "running" and r.status().line == 1
+    r.pause()
+    assert r.status().state == "paused" and r.status().paused_line == 1
+    r.play()
+    c.run_until_idle(5000)
+    assert r.status().state == "done" and c.machine.axis_positions()["X"] == 12000
+    r.reset()
+    assert r.status().state == "idle" and r.status().line == 0
+    r.move("x", -2.5)
+    c.step(500)
+    assert c.machine.axis_positions()["X"] == 11750
+    assert "move X=-2.5 @" in c.recorder.text(c.t_ms)
+    with pytest.raises(ControllerError, match="no axis 'Q'"):
+        r.move("Q", 1)
