@@ -513,7 +513,9 @@ def decode_image(msg: dict, max_image: int = MAX_IMAGE) -> bytes:
 
 #: upload's optional ``target``: the target profile the image is for (docs/targets.md)
 TARGET_KEYS = {"name": str, "parameters": list, "cycle_time_us": int,
-               "program_periods_us": list, "instruction_ns": int}
+               "program_periods_us": list, "instruction_ns": int, "scope": list}
+#: the target keys whose lists hold strings (TG Motion's oscilloscope signals)
+TARGET_TEXT_LISTS = frozenset({"scope"})
 
 
 def decode_target(msg: dict) -> Optional[dict]:
@@ -528,8 +530,10 @@ def decode_target(msg: dict) -> Optional[dict]:
         want = TARGET_KEYS.get(key)
         if want is None:
             raise BadRequest(f"upload: unknown target key {key!r}")
+        item = str if key in TARGET_TEXT_LISTS else int
         if type(value) is not want or (want is list and len(value) > 100) or \
-                (want is list and not all(type(v) is int for v in value)):
+                (want is list and not all(type(v) is item and
+                                          (item is int or len(v) <= 128) for v in value)):
             raise BadRequest(f"upload: target {key!r} has the wrong type")
     return t
 

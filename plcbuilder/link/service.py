@@ -182,7 +182,7 @@ class Service(DebugVerbs):
         config = None
         if name != "mycnc":
             fields = dict(target)
-            for key in ("parameters", "program_periods_us"):
+            for key in ("parameters", "program_periods_us", "scope"):
                 if key in fields:
                     fields[key] = tuple(fields[key])
             kept = current.retained() if current.target is not None and \

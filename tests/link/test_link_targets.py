@@ -98,3 +98,27 @@ def test_b_kept_across_a_restart_of_the_server(tmp_path):
         srv.service.load_state(state)
     srv.close(shutdown=False)
     assert state.read_text() == "[1, 2"            # a file it could not read is left alone
+
+
+def test_upload_carries_the_oscilloscopes_signals():
+    """Item 9 of issue 27: the oscilloscope samples the signals the project picks
+    ([tgmotion] oscilloscope), also on the controller the IDE uploads to."""
+    from plcbuilder.controller.controller import Controller
+    from plcbuilder.link import protocol
+    from plcbuilder.link.pacing import Simulation
+    from plcbuilder.link.service import Service, Session
+    from tests.controller._targets import compiled, tgm
+    from tests.link.linkkit import image_of
+    svc = Service(Simulation(Controller(), "pause"))
+    target = {"name": "tgmotion", "scope": ["in 9", "plc.n"]}
+    msg = {"type": "upload", "image": protocol.encode_image(image_of([compiled(tgm(p04="n++;"),
+                                                                               "tgmotion")])),
+           "target": target}
+    assert svc.handle_upload(msg, Session())["accepted"]
+    c = svc.sim.controller
+    c.step(2)
+    assert c.target_report()["oscilloscope"]["signals"] == ["in 9", "plc.n"]
+    bad = dict(msg, target={"name": "tgmotion", "scope": [3]})
+    import pytest
+    with pytest.raises(protocol.BadRequest):
+        protocol.decode_target(bad)
