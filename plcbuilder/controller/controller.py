@@ -35,6 +35,8 @@ from plcbuilder.controller.watch import VariableWatch, check_name
 HANDLER_INIT = "__HANDLER_INIT"
 HANDLER_EXIT = "__HANDLER_EXIT"
 SHUTDOWN_LIMIT_MS = 10_000
+#: Controller.job_runner before it is first asked for (made then)
+_NO_RUNNER_YET = object()
 
 
 def _as_int(value) -> int:
@@ -336,6 +338,7 @@ class Controller:
         if old is not None and (old.active or old.state == "paused"):
             old.stop("another program was opened")
         plc.job = Job(plc, program)
+        plc.job.size = len(str(text).encode("utf-8"))
         self.recorder.add(Action(plc.t, "gcode", str(file), int(play), text=str(text)))
         if play:
             plc.job.play()
@@ -373,12 +376,18 @@ class Controller:
 
     @property
     def job_runner(self):
-        """The job as the Server API's program commands drive it (controller/job.py)."""
-        runner = getattr(self, "_job_runner", None)
-        if runner is None:
+        """The job as the Server API's program commands drive it (controller/job.py;
+        link/server_api.py's JobRunner). Settable: a test puts another in its
+        place, or None for a controller without one."""
+        runner = getattr(self, "_job_runner", _NO_RUNNER_YET)
+        if runner is _NO_RUNNER_YET:
             from plcbuilder.controller.job import JobRunner
             runner = self._job_runner = JobRunner(self)
         return runner
+
+    @job_runner.setter
+    def job_runner(self, runner) -> None:
+        self._job_runner = runner
 
     def handwheel(self, axis: str, distance_mm: float) -> None:
         """One incremental rapid move of ``axis`` by ``distance_mm`` (a handwheel
@@ -596,8 +605,14 @@ class Controller:
         job = self._plc.job
         if job is None:
             return {}
+        last = job.calls[-1] if job.calls else None
+        if last is not None:
+            last.update()
+            last = {"line": last.line, "code": last.code, "procedure": last.procedure,
+                    "exit_code": last.exit_code}
         return {"file": job.program.file, "state": job.state, "line": job.line,
-                "lines": job.program.lines, "error": job.error}
+                "lines": job.program.lines, "error": job.error, "last_call": last,
+                "mcode_count": job.call_count}
 
     def target_report(self) -> dict:
         """What a target adds to the run report (registers, calls, budget

@@ -122,13 +122,15 @@ class JobEvent:
     """The G-code job (controller/job.py) read a line, started a procedure or
     changed state: ``state`` is ready, starting, running, paused, ended, stopped
     or error; ``line`` the line reached; ``text`` the line's text or the reason;
-    ``procedure`` the procedure it started (None otherwise)."""
+    ``procedure`` the procedure it started (None otherwise); ``exit_code``, when
+    set, says that procedure (or a Huazhong handler) ended with it."""
     t_ms: int
     file: str
     line: int
     state: str
     text: str
     procedure: Optional[str] = None
+    exit_code: Optional[int] = None
     type: str = "job"
 
 

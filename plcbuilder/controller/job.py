@@ -71,6 +71,14 @@ class McodeCall:
     exit_code: Optional[int] = None
     continued_at_ms: Optional[int] = None
     process: object = field(default=None, repr=False)
+    reported: bool = field(default=False, repr=False)     # its end is in a JobEvent
+
+    def update(self) -> bool:
+        """Take the end from the procedure once it has one; whether it has ended."""
+        p = self.process
+        if p is not None and self.ended_at_ms is None and p.ended_at is not None:
+            self.ended_at_ms, self.exit_code = p.ended_at, p.exit_code
+        return self.ended_at_ms is not None
 
     def to_dict(self) -> dict:
         return {"line": self.line, "code": self.code, "procedure": self.procedure,
@@ -88,6 +96,7 @@ class Job:
         self.program = program
         self.state = "ready"
         self.error: Optional[str] = None
+        self.size = 0                  # the program's bytes (the Server API's GetSVariable8109)
         self._rewind()
 
     def _rewind(self) -> None:
@@ -99,6 +108,8 @@ class Job:
         self.speed = 0
         self.calls: list[McodeCall] = []
         self.call_count = 0
+        self.open_calls: list[McodeCall] = []   # called, their end not reported yet
+        self._tail: Optional[tuple] = None      # (index, ms): the estimate after a block
         self.started_at: Optional[int] = None
         self.ended_at: Optional[int] = None
         self.wait: Optional[tuple] = None
@@ -158,6 +169,8 @@ class Job:
         """The job's step at the beginning of tick t."""
         if not self.active:
             return
+        if self.open_calls:
+            self.report_ends(t)
         while self.active:
             if self.wait is not None and not self._waited(t):
                 return
@@ -224,9 +237,8 @@ class Job:
 
     def _judge(self, call: McodeCall) -> bool:
         """A function's procedure ended: record it; an error stops the job."""
-        p = call.process
-        if p is not None and call.ended_at_ms is None:
-            call.ended_at_ms, call.exit_code = p.ended_at, p.exit_code
+        call.update()
+        self.report_ends(self.plc.t)
         code = call.exit_code
         if code == FAULT_EXIT or code in ERROR_EXITS:
             what = "faulted" if code == FAULT_EXIT else \
@@ -298,6 +310,7 @@ class Job:
                 if handler is not None and code is None:
                     call.exit_code = FAULT_EXIT
             issue(letter, value, done)
+            self.open_calls.append(call)
             self.wait = ("function", box, call)
             return
         if letter != "M":                             # pragma: no cover - the parser refuses
@@ -320,6 +333,7 @@ class Job:
         plc.start_hardware(name, eparam)
         call = self._record(b.line, code, name, eparam, t)
         call.process = plc.hw
+        self.open_calls.append(call)
         self._event(t, "running", b.text, name)
         self.wait = ("proc", call)
 
@@ -364,7 +378,27 @@ class Job:
             return False
         return True
 
+    def report_ends(self, t: int) -> None:
+        """A JobEvent for each called procedure that has ended since: the run
+        log's "line 3: M03 exit 99" (a procedure the job went on from after its
+        PLCCMD_MOTION_CONTINUE included, even after the job's end). The PLC calls
+        it as a procedure ends; the job's tick for a Huazhong handler's end."""
+        still = []
+        for c in self.open_calls:
+            if not c.update():
+                still.append(c)
+            elif not c.reported and (c.procedure is not None or c.process is not None):
+                c.reported = True
+                code = c.exit_code
+                what = "faulted" if code == FAULT_EXIT else \
+                    f"exit {code} {abi.exit_name(code) or ''}".rstrip()
+                who = c.procedure if c.code == c.procedure else f"{c.code} ({c.procedure})"
+                self.plc.events.append(JobEvent(t, self.program.file, c.line, self.state,
+                                                f"{who} {what}", c.procedure, code))
+        self.open_calls = still
+
     def _finish(self, state: str, why: str) -> None:
+        self.report_ends(self.plc.t)
         self.state = state
         self.ended_at = self.plc.t
         self._event(self.plc.t, state, why)
@@ -380,13 +414,72 @@ class Job:
         self.plc.events.append(JobEvent(t, self.program.file, self.line, state, text,
                                         procedure))
 
+    # ----------------------------------------------------------- time left
+    def estimate_ms(self) -> float:
+        """The job's time left, ms: its moves (at their feed or the rapid speeds,
+        accelerating as the machine does) and dwells from where it is; the
+        procedures' own time cannot be known before they run, and is not in it."""
+        if self.state in ("ended", "stopped", "error"):
+            return 0.0
+        mo = self.plc.machine.motion
+        blocks = self.program.blocks
+        pos = {i: float(mo.pos[i]) for i in mo.present_idx}
+        total, first = 0.0, self.index
+        absolute, feed = self.absolute, self.feed
+        if self.step > 0 and first < len(blocks):
+            b = blocks[first]
+            w = self.wait or ("",)
+            if self.step > len(b.functions) + 1:          # its dwell or move has begun
+                first += 1
+                if w[0] == "dwell":
+                    total += max(0, w[1] - self.plc.t)
+                elif w[0] == "paused-dwell":
+                    total += w[1]
+                elif self.target is not None and w[0] in ("motion", "resume", "paused-motion"):
+                    target, tfeed = self.target[0], self.target[1]
+                    move = mo.move
+                    if w[0] == "motion" and move is not None:
+                        total += max(0.0, move.profile.t_end - move.t)
+                    else:
+                        total += mo.line_ms(pos, target, tfeed)
+                    pos.update(target)
+        key = (first, tuple(sorted(pos.items())), absolute, feed)
+        if self._tail is None or self._tail[0] != key:
+            self._tail = (key, self._rest_ms(first, pos, absolute, feed))
+        return total + self._tail[1]
+
+    def _rest_ms(self, first: int, pos: dict, absolute: bool, feed: Optional[float]) -> float:
+        m = self.plc.machine
+        mo = m.motion
+        total = 0.0
+        for b in self.program.blocks[first:]:
+            if b.absolute is not None:
+                absolute = b.absolute
+            if b.feed is not None:
+                feed = b.feed
+            if b.dwell_ms is not None:
+                total += b.dwell_ms
+            elif b.motion == 28:
+                axes = list(b.axes) or [i for i in mo.present_idx
+                                        if m.home_position(i) is not None]
+                target = {i: m.home_position(i) for i in axes}
+                speeds = [mo.jog_default[i] for i in axes]
+                total += mo.line_ms(pos, target, float(min(speeds)) if speeds else None)
+                pos.update(target)
+            elif b.motion is not None:
+                target = {i: (round(v * 100) + mo.offset[i]) if absolute
+                          else pos.get(i, 0.0) + round(v * 100) for i, v in b.axes.items()}
+                total += mo.line_ms(pos, target, feed if b.motion == 1 else None)
+                pos.update(target)
+            if b.end is not None:
+                break
+        return total
+
     # ------------------------------------------------------------- report
     def report(self) -> dict:
         """The ``job`` entry of the run report (SPEC §10)."""
         for c in self.calls:
-            p = c.process
-            if p is not None and c.ended_at_ms is None and p.ended_at is not None:
-                c.ended_at_ms, c.exit_code = p.ended_at, p.exit_code
+            c.update()
         return {"file": self.program.file, "state": self.state, "line": self.line,
                 "lines": self.program.lines, "started_at_ms": self.started_at,
                 "ended_at_ms": self.ended_at if self.state in ("ended", "stopped", "error")
@@ -422,13 +515,13 @@ class JobRunner:
 
     def __init__(self, controller):
         self.c = controller
+        self._job = None                # the job this runner opened, and its name and path
         self._name: Optional[str] = None
         self._path: Optional[str] = None
-        self._size = 0
 
     def open(self, name: str, text: str, path: Optional[str] = None) -> None:
         self.c.job_open(text, path or name, play=False)
-        self._name, self._path, self._size = name, path, len(text.encode("utf-8"))
+        self._job, self._name, self._path = self.c.job, name, path
 
     def play(self) -> None:
         self.c.job_control("play")
@@ -443,13 +536,22 @@ class JobRunner:
         self.c.job_control("reset")
 
     def move(self, axis: str, distance_mm: float) -> None:
+        job = self.c.job
+        if job is not None and job.active:
+            from plcbuilder.controller.controller import ControllerError
+            raise ControllerError("the handwheel moves an axis while no G-code job runs "
+                                  "(ProgramPause or ProgramStop first)")
         self.c.handwheel(axis, distance_mm)
 
     def status(self) -> RunnerStatus:
         job = self.c.job
         if job is None:
             return RunnerStatus()
-        return RunnerStatus(API_STATES.get(job.state, "idle"),
-                            self._name or job.program.file, self._path or job.program.file,
-                            job.line, job.line if job.state == "paused" else None,
-                            job.program.lines, self._size)
+        if job is self._job:
+            name, path = self._name, self._path
+        else:                           # opened by a scenario, the IDE or plcbuilder run
+            from pathlib import PurePath
+            name, path = PurePath(job.program.file).name, job.program.file
+        return RunnerStatus(API_STATES.get(job.state, "idle"), name, path, job.line,
+                            job.line if job.state == "paused" else None, job.program.lines,
+                            job.size, round(job.estimate_ms() / 1000, 3))

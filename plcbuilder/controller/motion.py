@@ -279,6 +279,22 @@ class Motion:
         self._begin(axes, {i: self.pos[i] for i in axes}, {i: float(target[i]) for i in axes},
                     None if feed is None else mm_per_min_to_internal(feed), code, homing)
 
+    def line_ms(self, start: dict[int, float], target: dict[int, float],
+                feed: Optional[float] = None) -> float:
+        """How long :meth:`line_to` would take from ``start`` to ``target`` (0.01 mm,
+        by axis index) at the rapid speeds or ``feed`` mm/min, accelerating as a
+        move does (soft limits aside): a G-code job's time left."""
+        delta = {i: target[i] - start[i] for i in target if self.present[i]}
+        dist = math.sqrt(sum(d * d for d in delta.values()))
+        unit = {i: d / dist for i, d in delta.items() if d} if dist >= 1e-9 else {}
+        if not unit:
+            return 1.0
+        vmax = min(self.vmax[i] / abs(u) for i, u in unit.items())
+        if feed is not None:
+            vmax = min(vmax, mm_per_min_to_internal(feed))
+        acc = min(self.amax[i] / abs(u) for i, u in unit.items())
+        return Profile.trapezoid(dist, vmax, acc).t_end
+
     def _start_move(self, flags: int, mask: int, distance: int, recorded: dict) -> None:
         axes, start, target = [], {}, {}
         for i in range(N_AXES):

@@ -273,6 +273,9 @@ class PLC:
             self.debugger.ended(p)
         self.events.append(Ended(self.t, p.name, p.kind.label, code, abi.exit_name(code),
                                  p.slots[abi.SLOT_VEXIT]))
+        job = self.job
+        if job is not None and job.open_calls:      # a procedure the G-code job called
+            job.report_ends(self.t)
         if p is self.hw:
             self.hw = None
             self._proc = p.slots[abi.SLOT_PROC]

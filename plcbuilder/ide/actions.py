@@ -368,7 +368,8 @@ def update_actions(win) -> None:
         win.action(Act.TOGGLE_COMMENT).setEnabled(False)
     run = win.connection is not None and has_project
     for name in (Act.UPLOAD, Act.START, Act.START_CURRENT, Act.STOP, Act.RESET_CONTROLLER,
-                 Act.BUILD_UPLOAD_START):
+                 Act.BUILD_UPLOAD_START, Act.RUN_GCODE, Act.PAUSE_GCODE, Act.PLAY_GCODE,
+                 Act.STOP_GCODE):
         win.action(name).setEnabled(run)
     if Act.BUILD_UPLOAD_START in win._actions:          # the workbench's actions
         win.action(Act.BUILD_UPLOAD_START).setEnabled(run)

@@ -90,6 +90,7 @@ class RunActions(QObject):
         self.last_eparam = 0
         self.last_start = ""
         self.pending_start: Optional[tuple[str, int]] = None   # after BUILD_UPLOAD_START
+        self.pending_gcode: Optional[tuple[str, str]] = None   # (text, path), likewise
         self._image_check_due = False
         self.build_runner = BuildRunner(self)
         self.build_runner.sig_progress.connect(self._on_build_progress)
@@ -241,13 +242,15 @@ class RunActions(QObject):
         self.sig_message.emit(f"Start {name} (eparam {eparam})", 4000)
         return True
 
-    def stale_reasons(self) -> list[str]:
+    def stale_reasons(self, exclude: Optional[str] = None) -> list[str]:
         """Why Start would not run what the editors show (empty: it would, or
-        no controller is connected to tell)."""
+        no controller is connected to tell). ``exclude``: a file whose editor's
+        text is sent as it is (a G-code program), not a reason."""
         if self.project is None or not self.connected():
             return []
         from plcbuilder.ide.image_state import stale_reasons
-        unsaved = [ed.path for ed in self.editors.modified_editors()]
+        unsaved = [ed.path for ed in self.editors.modified_editors()
+                   if exclude is None or Path(ed.path).resolve() != Path(exclude).resolve()]
         st = getattr(self.connection, "last_state", None)
         loaded = getattr(self.connection, "uploaded_crc", None) or getattr(st, "image_crc32", None)
         return stale_reasons(self.project, unsaved, loaded)
@@ -304,31 +307,58 @@ class RunActions(QObject):
     # ------------------------------------------------------------ G-code jobs
     #: the file dialog's filter for G-code programs
     GCODE_FILTER = "G-code programs (*.nc *.ngc *.gcode *.tap *.cnc *.txt);;All files (*)"
+    GCODE_SUFFIXES = (".nc", ".ngc", ".gcode", ".tap", ".cnc")
 
     def run_gcode(self, path: Optional[str] = None) -> bool:
         """Run a G-code program as a job on the controller (docs/controller.md,
-        "G-code jobs"): asks for the file when not given. The controller checks it
-        whole first; a line it cannot run comes back as an error naming it."""
+        "G-code jobs"): asks for the file when not given (the current editor's
+        when it holds one is offered). An open editor's text is what runs, saved
+        or not; when the controller would not run the procedures the editors
+        show, it asks first, as Start does. The controller checks the program
+        whole; a line it cannot run comes back as an error naming it."""
         if self.connection is None:
             self.sig_message.emit("No controller to run a G-code program on", 4000)
             return False
         if path is None:
             from PySide6.QtWidgets import QFileDialog
             start = str(self.project.root) if self.project is not None else ""
+            ed = self.editors.current_editor()
+            if ed is not None and Path(ed.path).suffix.lower() in self.GCODE_SUFFIXES:
+                start = str(ed.path)
             path, _ = QFileDialog.getOpenFileName(self.parent(), "Run G-code Program", start,
                                                   self.GCODE_FILTER)
             if not path:
                 return False
         from plcbuilder.link.protocol import MAX_JOB_TEXT
-        try:
-            text = read_bounded(Path(path), MAX_JOB_TEXT, "G-code program").decode("utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            why = getattr(exc, "strerror", None) or str(exc)
-            QMessageBox.warning(self.parent(), "Run G-code Program",
-                                f"Cannot read {path}:\n\n{why}")
-            return False
+        ed = self.editors.editor_for(path)
+        if ed is not None:                      # what the editor shows, saved or not
+            text = ed.text()
+            if len(text.encode("utf-8")) > MAX_JOB_TEXT:
+                QMessageBox.warning(self.parent(), "Run G-code Program",
+                                    f"{Path(path).name} is over {MAX_JOB_TEXT} bytes")
+                return False
+        else:
+            try:
+                text = read_bounded(Path(path), MAX_JOB_TEXT, "G-code program").decode("utf-8")
+            except (OSError, UnicodeDecodeError) as exc:
+                why = getattr(exc, "strerror", None) or str(exc)
+                QMessageBox.warning(self.parent(), "Run G-code Program",
+                                    f"Cannot read {path}:\n\n{why}")
+                return False
+        name = Path(path).name
+        reasons = self.stale_reasons(exclude=str(path))
+        if reasons:
+            answer = self.ask_stale_start(f"the G-code program {name}", reasons)
+            if answer is None:
+                return False
+            if answer == "build":
+                self.pending_gcode = (text, str(path))
+                if not self._build(Step.BUILD_UPLOAD_START):
+                    self.pending_gcode = None
+                    return False
+                return True
         self.connection.job("open", text, str(path), True)
-        self.sig_message.emit(f"G-code program {Path(path).name}: play", 4000)
+        self.sig_message.emit(f"G-code program {name}: play", 4000)
         return True
 
     def job(self, verb: str) -> None:
@@ -500,6 +530,8 @@ class RunActions(QObject):
         upload = self.step in (Step.BUILD_THEN_UPLOAD, Step.BUILD_UPLOAD_START)
         start, self.pending_start = (self.pending_start if self.step is Step.BUILD_UPLOAD_START
                                      else None), None
+        gcode, self.pending_gcode = (self.pending_gcode if self.step is Step.BUILD_UPLOAD_START
+                                     else None), None
         self.step = Step.IDLE
         if isinstance(result, BaseException):
             self.sig_message.emit(f"Build failed: {result}", 8000)
@@ -513,10 +545,15 @@ class RunActions(QObject):
             self.sig_message.emit(f"Build failed: {e} error{'s' * (e != 1)}, "
                                   f"{w} warning{'s' * (w != 1)}", 8000)
         self.sig_build_finished.emit(result)
-        if upload and result.ok and self.upload_image() and start is not None:
-            self.connection.start(*start)       # the link uploads first: requests run in order
-            self.sig_message.emit(f"Built, uploaded and started {start[0]} "
-                                  f"(eparam {start[1]})", 5000)
+        if upload and result.ok and self.upload_image():
+            if gcode is not None:               # the link uploads first: requests run in order
+                self.connection.job("open", gcode[0], gcode[1], True)
+                self.sig_message.emit(f"Built, uploaded and ran the G-code program "
+                                      f"{Path(gcode[1]).name}", 5000)
+            elif start is not None:
+                self.connection.start(*start)
+                self.sig_message.emit(f"Built, uploaded and started {start[0]} "
+                                      f"(eparam {start[1]})", 5000)
 
     def _connect_to_address(self, address: str) -> None:
         host, _, port = address.rpartition(":")

@@ -14,8 +14,8 @@ reason; the connection stays open either way. Numbers may be decimal or
 The commands are those of myCNC's published list (its Server API page), one
 ``cmd_<name>`` method each in :class:`Commands`; the ones with no meaning on
 the simulated controller answer why (:data:`NOT_HERE`), and the program
-commands drive a G-code job runner through :class:`JobRunner` (none yet:
-they say so). What a command changes goes through ``Controller.write``,
+commands drive the controller's G-code job runner through :class:`JobRunner`
+(``Controller.job_runner``, controller/job.py). What a command changes goes through ``Controller.write``,
 which records it, so replays and stepping back do it too.
 
 The connections are served by the controller server's own selector loop
@@ -72,8 +72,8 @@ def _args(args: list[str], n: int, usage: str) -> list[str]:
 
 # ===================================================================== G-code jobs
 
-#: Why the program commands cannot answer yet: SPEC §10's job runner is not in
-#: this controller; :func:`job_runner` finds it once the controller has one.
+#: Why the program commands cannot answer on a controller whose ``job_runner``
+#: is None (the simulated one has SPEC §10's: :func:`job_runner` finds it).
 NO_JOB_RUNNER = "no G-code job runner in this controller yet"
 
 #: Largest G-code program ProgramFileOpen reads, or ProgramBegin/ProgramAppend collect.

@@ -280,3 +280,40 @@ def test_the_server_apis_job_runner(backend):
     assert "move X=-2.5 @" in c.recorder.text(c.t_ms)
     with pytest.raises(ControllerError, match="no axis 'Q'"):
         r.move("Q", 1)
+
+
+def test_the_run_panels_get_each_called_procedures_exit(backend):
+    """Issue 27.11: "reporting the job's line, the procedures it called and their
+    exit codes in the JSON report and the run panels": a JobEvent with the exit
+    code when each procedure the job called ends (one it went on from after its
+    PLCCMD_MOTION_CONTINUE too), and the state's job names the last call."""
+    c = controller(proc("M10", wait(30) + " exit(99);"),
+                   proc("M11", "message=PLCCMD_MOTION_CONTINUE; " + wait(300) + " exit(7);"),
+                   backend=backend)
+    ev = run_job(c, "M10\nM11\nG4 P0.1\nM30\n")
+    exits = [(e.line, e.procedure, e.exit_code, e.text) for e in of(ev, JobEvent)
+             if e.exit_code is not None]
+    assert exits == [(1, "M10", 99, "M10 exit 99 plc_exit_normal"),
+                     (2, "M11", 7, f"M11 exit 7 {abi.exit_name(7)}")]
+    end = {e.name: e.t_ms for e in of(ev, Ended)}
+    assert [e.t_ms for e in of(ev, JobEvent) if e.exit_code is not None] == \
+        [end["M10"], end["M11"]]                         # in the tick each one ends
+    st = c.state().job
+    assert st["last_call"] == {"line": 2, "code": "M11", "procedure": "M11", "exit_code": 7}
+    assert st["mcode_count"] == 2
+
+
+def test_the_estimate_of_the_time_left(backend):
+    """GetEstimateTime (the Server API): the moves at their feed or the rapid
+    speeds, accelerating as the axes do, and the dwells, from where the job is."""
+    c = controller(backend=backend)
+    r = c.job_runner
+    r.open("job.nc", "G0 X150\nG1 X160 F600\nG4 P0.5\nG91 G0 Y-20\nM30\n")
+    first = r.status().estimate_s
+    r.play()
+    c.step(400)
+    mid = r.status().estimate_s
+    c.run_until_idle(10_000)
+    took = (c.job.ended_at - c.job.started_at) / 1000
+    assert first == pytest.approx(took, abs=0.01) and mid == pytest.approx(took - 0.4, abs=0.01)
+    assert r.status().estimate_s == 0.0

@@ -335,7 +335,10 @@ def test_echomode(line):
     assert line.ask("GetMCC") == "OK 77"
 
 
-def test_program_commands_without_a_job_runner_say_so(line, tmp_path):
+def test_program_commands_without_a_job_runner_say_so(served, line, tmp_path):
+    """A controller with no job runner (``job_runner`` None) says so; the simulated
+    controller has one (tests/link/test_server_api_job.py)."""
+    _controller(served, lambda c: setattr(c, "job_runner", None))
     g = tmp_path / "job.nc"
     g.write_text("G0 X10\nM30\n")
     for cmd in (f"ProgramFileOpen {g}", "ProgramBegin", "ProgramPlay", "ProgramPause",

@@ -63,7 +63,9 @@ def event_row(e) -> Optional[tuple]:
         colour = e.level if e.level in ("warning", "error") else "note"
         return (_fmt_t(e.t_ms), "controller", e.level, e.text, "note", colour, None, None)
     if isinstance(e, ev.JobEvent):          # the G-code job: a line read, a procedure started
-        if e.procedure:
+        if e.procedure and getattr(e, "exit_code", None) is not None:
+            text = f"line {e.line}: {e.text}"           # "line 3: M03 exit 99 plc_exit_normal"
+        elif e.procedure:
             text = f"line {e.line}: starts {e.procedure}"
         elif e.state == "running":
             text = f"line {e.line}: {e.text}"

@@ -504,8 +504,16 @@ class RunPanels(QtCore.QObject):
         job = getattr(st, "job", None)
         if job:                         # the G-code job: its file, line and state
             from pathlib import Path
-            parts.append(f"G-code {Path(str(job.get('file', ''))).name} line "
-                         f"{job.get('line', 0)}/{job.get('lines', 0)} {job.get('state', '')}")
+            text = (f"G-code {Path(str(job.get('file', ''))).name} line "
+                    f"{job.get('line', 0)}/{job.get('lines', 0)} {job.get('state', '')}")
+            last = job.get("last_call")
+            if isinstance(last, dict) and last.get("code"):     # the procedure it called last
+                code = last.get("exit_code")
+                text += (f", line {last.get('line')} {last.get('code')} → "
+                         f"{last.get('procedure') or 'no procedure'} "
+                         + ("running" if code is None and last.get("procedure")
+                            else "" if code is None else f"exit {code}")).rstrip()
+            parts.append(text)
         soft = st.software
         if soft:
             parts.append("software: " + ", ".join(map(str, soft[:4]))

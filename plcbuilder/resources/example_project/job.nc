@@ -1,4 +1,4 @@
-(An example job: run it with  plcbuilder run . --gcode job.nc  or Start > Run G-code)
+(An example job: run it with  plcbuilder run . --gcode job.nc  or Run > Run G-code Program)
 G90
 S12000 M03          (spindle on: S is M03's eparam, 12000 on PWM0)
 G0 X10 Y10          (rapid to the start)
