@@ -1,0 +1,183 @@
+"""myCNC's Server API program commands on the simulated controller's own G-code
+job runner (SPEC §10, docs/editors.md "The Server API", docs/controller.md
+"G-code jobs"): a real socket, and ``nc`` as the manual shows it. The
+commands' answers with a stand-in runner are in test_server_api.py."""
+
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from plcbuilder.bytecode.program import Kind
+from plcbuilder.link.server import ControllerServer
+from tests.link.linkkit import compile_programs, image_of
+from tests.link.test_server_api import Line
+
+WAIT_S = 30.0
+
+
+@pytest.fixture(scope="module")
+def job_image():
+    return image_of(compile_programs(["M03", "M05", "M08"], {
+        "M03": (Kind.HARDWARE,
+                "main(){ portset(3); gvarset(5000, eparam); timer=300; "
+                "do{ timer--; }while(timer>0); exit(99); }"),
+        "M08": (Kind.HARDWARE, "main(){ portset(8); exit(99); }")}))
+
+
+@pytest.fixture
+def served(job_image):
+    srv = ControllerServer(port=0, image=job_image, server_api=("127.0.0.1", 0))
+    srv.start()
+    yield srv
+    srv.close()
+
+
+@pytest.fixture
+def line(served):
+    c = Line(served.server_api.address)
+    yield c
+    c.close()
+
+
+def _on_sim(served, fn):
+    return served.sim.call(lambda: fn(served.controller))
+
+
+def _until(ask, command: str, want, timeout: float = WAIT_S) -> str:
+    """Ask ``command`` until its reply is ``want`` (or matches it, a callable)."""
+    end = time.monotonic() + timeout
+    while True:
+        got = ask(command)
+        if (want(got) if callable(want) else got == want) or time.monotonic() > end:
+            return got
+        time.sleep(0.02)
+
+
+def test_programfileopen_and_play_run_a_job_that_calls_m03(served, line, tmp_path):
+    """SPEC §10: the job runs "the Server API's program commands" too; "`S` (the
+    next `M03`/`M04`'s eparam), `Mnn` (stop motion, start procedure `Mnn` ...)"."""
+    g = tmp_path / "part.nc"
+    g.write_text("S1500 M03\nG0 X101\nM08\nM30\n")
+    ask = line.ask
+    assert ask(f"ProgramFileOpen {g}") == f"OK {g}"
+    assert ask("GetWorkState") == "OK idle"                     # open is not play
+    assert ask("GetJobName") == f"OK {g.resolve()}"
+    assert ask("GetSVariable8020") == f"OK {g.resolve()}"
+    assert ask("GetSVariable8107") == "OK part.nc"
+    assert ask("GetSVariable8108") == f"OK {g.resolve().parent}"
+    assert ask("GetSVariable8109") == "OK 0.000"
+    estimate = ask("GetEstimateTime")
+    assert re.fullmatch(r"OK \d+\.\d{3}", estimate) and float(estimate[3:]) > 0
+    assert ask("GetPausedLine") == "OK 0"
+    assert ask("ProgramPlay") == "OK"
+    assert _until(ask, "GetIVariable 5000", "OK 1500") == "OK 1500"       # M03's eparam is S
+    assert _until(ask, "GetHWOutputBit 8", "OK 1") == "OK 1"
+    assert _until(ask, "GetWorkState", "OK idle") == "OK idle"
+    assert ask("GetHWOutputBit 3") == "OK 1"
+    assert ask("GetMachinePosition").startswith("OK X 101.00 ")
+    assert ask("GetEstimateTime") == "OK 0.000"
+    job = _on_sim(served, lambda c: c.job_report())
+    assert job["state"] == "ended" and job["line"] == 4
+    assert [(m["line"], m["procedure"], m["eparam"], m["exit_code"]) for m in job["mcodes"]] == [
+        (1, "M03", 1500, 99), (3, "M08", 0, 99)]
+    # the job's commands are in the session's recording, so a replay runs it again
+    rec = _on_sim(served, lambda c: c.recorder.text(c.t_ms))
+    assert f"gcode {g}" in rec and "job play @" in rec
+
+
+def test_pause_the_handwheel_continue_stop_and_reset(served, line, tmp_path):
+    """ProgramPause holds the job (GetPausedLine names its line); SetPendant moves an
+    axis through the runner while it is paused, not while it runs; ProgramStop
+    and ProgramReset end and rewind it."""
+    g = tmp_path / "long.nc"
+    g.write_text("G1 X110 F120\nM30\n")                  # 10 mm at 120 mm/min: 5 s
+    ask = line.ask
+    assert ask(f"ProgramFileOpen {g}") == f"OK {g}"
+    assert ask("ProgramPlay") == "OK"
+    assert _until(ask, "GetWorkState", "OK job running") == "OK job running"
+    assert _until(ask, "GetMachinePosition",
+                  lambda r: float(r.split()[2]) > 100.05).startswith("OK X 100.")
+    assert ask("SetPendant 10;0x0201") == "OK X 0.000"          # X, 0.1 mm a click
+    assert ask("SetPendant 12;0x0201") == ("ERROR the handwheel moves an axis while no G-code "
+                                           "job runs (ProgramPause or ProgramStop first)")
+    assert ask("ProgramPause") == "OK"
+    assert ask("GetWorkState") == "OK job paused" and ask("GetPausedLine") == "OK 1"
+    assert _until(ask, "GetMCC", "OK 77") == "OK 77"             # the move has decelerated
+    x0 = float(ask("GetMachinePosition").split()[2])
+    assert ask("SetPendant 15;0x0201") == "OK X 0.500"
+    assert _until(ask, "GetMachinePosition",
+                  lambda r: abs(float(r.split()[2]) - (x0 + 0.5)) < 0.006) \
+        .startswith(f"OK X {x0 + 0.5:.2f}")
+    assert "move X=0.5 @" in _on_sim(served, lambda c: c.recorder.text(c.t_ms))
+    assert ask("ProgramPlay") == "OK" and ask("GetWorkState") == "OK job running"
+    assert ask("ProgramStop") == "OK"
+    assert ask("GetPausedLine") == "OK 0"
+    assert _on_sim(served, lambda c: c.job.state) == "stopped"
+    assert ask("ProgramReset") == "OK"
+    assert _on_sim(served, lambda c: (c.job.state, c.job.line)) == ("ready", 0)
+
+
+def test_a_program_sent_line_by_line_and_one_that_cannot_run(served, line, tmp_path):
+    ask = line.ask
+    assert ask("ProgramPlay") == "ERROR no G-code program is open (open one first)"
+    assert ask("ProgramBegin") == "OK"
+    assert ask("ProgramAppend S800 M3") == "OK 1"
+    assert ask("ProgramAppend M30") == "OK 2"
+    assert ask("ProgramEnd") == "OK 2"
+    assert ask("GetJobName") == "OK (server api)"
+    assert ask("ProgramPlay") == "OK"
+    assert _until(ask, "GetIVariable 5000", "OK 800") == "OK 800"
+    bad = tmp_path / "bad.nc"
+    bad.write_text("M03\nG2 X1 Y1\n")
+    assert ask(f"ProgramFileOpen {bad}").startswith(
+        f"ERROR {bad.resolve()}:2: G2 is not supported")
+    assert ask("GetJobName") == "OK (server api)"               # the job before stays
+
+
+# ---------------------------------------------------------------- the manual's example
+
+def _manual_job_example() -> tuple[list[str], list[str]]:
+    """The piped nc example of docs/editors.md that runs the example project's
+    job.nc: its commands (the ``$`` lines) and the lines it shows."""
+    text = (Path(__file__).resolve().parents[2] / "docs" / "editors.md").read_text()
+    m = re.search(r"<!-- server-api-job -->\s*```\n(.*?)```", text, re.S)
+    assert m, "docs/editors.md lost its Server API G-code job example"
+    lines = m.group(1).splitlines()
+    return [x[2:] for x in lines if x.startswith("$ ")], [x for x in lines if not x.startswith("$")]
+
+
+@pytest.mark.skipif(shutil.which("nc") is None, reason="nc is not installed")
+def test_the_manuals_job_example_gives_the_replies_it_shows(tmp_path):
+    """ProgramFileOpen job.nc + ProgramPlay on a controller started as the manual
+    starts it, in a project made by plcbuilder new: M03 runs with S12000."""
+    commands, shown = _manual_job_example()
+    assert commands[0].split() == ["plcbuilder", "controller", "--image", "build/eeprom.rom",
+                                   "--server-api", "4266", "&"]
+    proj = tmp_path / "proj"
+    run = lambda *a: subprocess.run([sys.executable, "-m", "plcbuilder", *a],  # noqa: E731
+                                    capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert run("new", str(proj)).returncode == 0
+    assert run("build", str(proj)).returncode == 0
+    proc = subprocess.Popen([sys.executable, "-m", "plcbuilder", "controller", "--image",
+                             "build/eeprom.rom", "--server-api", "0", "--runtime-file",
+                             str(tmp_path / "rt.json")], cwd=proj, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        port = None
+        for _ in range(10):
+            out = proc.stdout.readline()
+            if "Server API on" in out:
+                port = int(out.split(":")[-1].split()[0])
+                break
+        assert port is not None
+        r = subprocess.run(["bash", "-c", commands[1].replace("4266", str(port))], cwd=proj,
+                           capture_output=True, timeout=60)
+        assert r.stdout.decode().replace("\r\n", "\n").splitlines() == shown
+    finally:
+        proc.terminate()
+        proc.wait(20)
