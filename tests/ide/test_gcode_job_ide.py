@@ -84,6 +84,7 @@ def test_the_program_an_editor_shows_is_what_runs(live_uploaded, qtbot):
     qtbot.waitUntil(lambda: "line 1: M03 exit 99 plc_exit_normal" in _log_texts(panels),
                     timeout=WAIT)
     assert job.read_text() == on_disk
+    win.editor_stack.close_editor(ed, force=True)       # unsaved: the window would ask
 
 
 def test_a_procedure_changed_since_the_upload_is_asked_about_first(live_uploaded, qtbot,
