@@ -149,7 +149,8 @@ __all__ = [
     "write_image", "TestFileError", "TestOptions", "TestRun", "junit_xml", "test", "write_junit",
     "cobertura_xml", "coverage_totals", "write_cobertura",
     "Capturer", "History", "Trace", "TriggerError", "parse_trigger", "watched_variables", "load_trace", "save_trace",
-    "export_trace", "compare_traces", "TraceFileError", "ExportError", "CompareError",
+    "export_trace", "trace_exporters", "trace_export_suffixes", "compare_traces",
+    "TraceFileError", "ExportError", "CompareError",
 ]
 
 DEFAULT_MS = 60_000
@@ -367,7 +368,7 @@ def _write_state(path: Path, target: str, kept: list[int]) -> None:
 
 def _save_trace(trace, path: Path, option: str) -> None:
     try:
-        if path.suffix.lower() in (".vcd", ".csv"):
+        if trace_export.can_export(path):
             trace_export.export(trace, path)
         else:
             trace_file.save(trace, path)
@@ -541,12 +542,26 @@ def save_trace(trace: Trace, path) -> None:
     trace_file.save(trace, path)
 
 
-def export_trace(trace: Trace, path, fmt: Optional[str] = None, *, per_tick: bool = False,
-                 split_bits: bool = False) -> str:
-    """Export as CSV (per change, or ``per_tick``) or VCD (``split_bits``: its
-    numbers as one-bit lanes, for PulseView); raises ExportError."""
+def export_trace(trace: Trace, path, fmt: Optional[str] = None, **chosen: bool) -> str:
+    """Export as CSV (per change, or ``per_tick=True``) or VCD (``split_bits=True``:
+    its numbers as one-bit lanes, for PulseView): the ways of
+    ``plcbuilder.trace.export.EXPORTERS``. Returns the format; raises ExportError."""
     _load()
-    return trace_export.export(trace, path, fmt, per_tick=per_tick, split_bits=split_bits)
+    return trace_export.export(trace, path, fmt, **chosen)
+
+
+def trace_exporters():
+    """The ways to export a trace, in the order the IDE offers them (each with
+    ``fmt``, ``option``, ``flag``, ``label``, ``help``): the command line's
+    export options and the IDE's file-dialog filters are made from them."""
+    from plcbuilder.trace.export import EXPORTERS
+    return EXPORTERS
+
+
+def trace_export_suffixes() -> str:
+    """The export formats as a sentence's end: '.vcd or .csv'."""
+    from plcbuilder.trace.export import suffixes_text
+    return suffixes_text()
 
 
 def compare_traces(a: Trace, b: Trace, align: str = "none",

@@ -67,6 +67,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="compile in controller compatibility mode")
     p.add_argument("-I", "--include", dest="include", action="append", default=[], type=Path,
                    metavar="DIR", help="search DIR for #include files (repeatable)")
+    from plcbuilder import api
+    formats = api.trace_export_suffixes()
     p.add_argument("--trace", type=Path, metavar="FILE.csv",
                    help="write one CSV row per tick (streamed; gzip if it ends in .gz)")
     g = p.add_argument_group("traces and triggers (docs/traces.md)")
@@ -82,9 +84,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="single: one capture; normal: re-arm after each (FILE-2, FILE-3, …); "
                         "auto: also capture when no trigger came for pre+post ms")
     g.add_argument("--capture", type=Path, metavar="FILE",
-                   help="write the capture: .plctrace (reopens in the IDE), .vcd or .csv")
+                   help=f"write the capture: .plctrace (reopens in the IDE), {formats}")
     g.add_argument("--history", type=Path, metavar="FILE",
-                   help="write the whole session as a trace: .plctrace, .vcd or .csv")
+                   help=f"write the whole session as a trace: .plctrace, {formats}")
     g.add_argument("--watch", action="append", default=[], metavar="PROC.var",
                    help="record a variable every tick into the history (repeatable)")
     p.add_argument("--break", dest="breaks", action="append", default=[],
