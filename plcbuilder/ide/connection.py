@@ -48,7 +48,7 @@ if TYPE_CHECKING:
 
 Signal = QtCore.Signal
 
-__all__ = ["ControllerConnection", "SPEED_CHOICES", "parse_speed"]
+__all__ = ["ControllerConnection", "SPEED_CHOICES"]
 
 #: What :meth:`ControllerConnection.set_speed` understands (any number is N× real time).
 SPEED_CHOICES = ("realtime", "2", "10", "100", "max", "pause")
@@ -83,29 +83,6 @@ def _link():
 
 def _telemetry_queue(speed: Optional[tuple[str, Optional[float]]] = None) -> int:
     return TELEMETRY_QUEUE
-
-
-def parse_speed(mode) -> tuple[str, Optional[float]]:
-    """``"realtime"``, ``"max"``, ``"pause"``, or a factor (``"10"``, ``10``, ``"10x"``)
-    -> (protocol mode, factor). Raises ValueError."""
-    if isinstance(mode, (int, float)) and not isinstance(mode, bool):
-        factor = float(mode)
-    else:
-        text = str(mode).strip().lower()
-        if text in ("realtime", "real-time", "real time", "1", "1x", "1×"):
-            return "realtime", None
-        if text in ("max", "maximum", "fast", "pause", "paused"):
-            return ("pause" if text.startswith("paus") else "max"), None
-        try:
-            factor = float(text.rstrip("x×"))
-        except ValueError:
-            raise ValueError(f"unknown speed {mode!r}: use realtime, max, pause or a factor "
-                             "such as 10") from None
-    if factor == 1.0:
-        return "realtime", None
-    if not 0.001 <= factor <= 10000:
-        raise ValueError(f"speed factor {factor:g} is out of range (0.001 to 10000)")
-    return "factor", factor
 
 
 # ===================================================================== worker
@@ -577,6 +554,7 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
 
     def set_speed(self, mode) -> None:
         """``"realtime"``, ``"max"``, ``"pause"`` or a factor (``"10"``: 10× real time)."""
+        from plcbuilder.link.protocol import parse_speed
         try:
             m, factor = parse_speed(mode)
         except ValueError as exc:

@@ -11,7 +11,7 @@ import pytest
 pytest.importorskip("PySide6")
 
 from plcbuilder.controller import events as ev  # noqa: E402
-from plcbuilder.ide.connection import ControllerConnection, parse_speed  # noqa: E402
+from plcbuilder.ide.connection import ControllerConnection  # noqa: E402
 from plcbuilder.api import image_of as build_image  # noqa: E402
 
 WAIT = 15_000      # ms: generous bounds for a loaded CI machine; passing runs take far less
@@ -68,19 +68,6 @@ class Recorder:
 
     def ended(self, name: str):
         return [e for e in self.events if isinstance(e, ev.Ended) and e.name == name]
-
-
-def test_parse_speed():
-    assert parse_speed("realtime") == ("realtime", None)
-    assert parse_speed("10") == ("factor", 10.0)
-    assert parse_speed("2.5x") == ("factor", 2.5)
-    assert parse_speed(1) == ("realtime", None)
-    assert parse_speed("max") == ("max", None)
-    assert parse_speed("pause") == ("pause", None)
-    with pytest.raises(ValueError):
-        parse_speed("warp")
-    with pytest.raises(ValueError):
-        parse_speed("1e9")
 
 
 def test_embedded_upload_start_and_telemetry(qtbot, conn):
