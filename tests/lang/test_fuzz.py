@@ -4,6 +4,7 @@ programs never give anything but diagnostics. (scripts/fuzz.py runs longer.)"""
 import random
 
 import lark
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.lark import from_lark
@@ -24,6 +25,7 @@ PROGRAMS = from_lark(GRAMMAR, explicit={"NAME": NAMES, "NUMBER": NUMBERS,
                                         "COMMENT": st.sampled_from(["//c\n", "/* c */"])})
 
 
+@pytest.mark.slow
 @settings(max_examples=2000, deadline=None, database=None,
           suppress_health_check=list(HealthCheck))
 @given(PROGRAMS)
