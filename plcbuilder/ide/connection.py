@@ -284,63 +284,16 @@ class _Worker(threading.Thread):
             next_state = min(next_state, time.monotonic() + STATE_INTERVAL)
 
     def _run_command(self, client: Client, verb: str, args: tuple) -> None:
+        """One command from the GUI: its ``_do_<verb>`` method, a debugger verb,
+        or a plain request; the result is posted (unless the method posted what
+        it had, returning POSTED), a refusal as an error."""
         link = _link()[0]
+        handler = getattr(self, "_do_" + verb, None)
         try:
-            if verb == "upload":
-                self.image, self.target = args[0], args[1]
-                result = client.upload(args[0], target=args[1])
-            elif verb == "start":
-                result = client.start(args[0], int(args[1]))
-            elif verb == "stop":
-                result = client.stop()
-            elif verb == "input":
-                result = client.set_input(int(args[0]), int(args[1]))
-            elif verb == "adc":
-                result = client.set_adc(int(args[0]), int(args[1]))
-            elif verb == "speed":
-                self.speed = (args[0], args[1])
-                result = client.speed(args[0], args[1])
-            elif verb == "reset":
-                result = client.reset()
-            elif verb == "watch":
-                result = client.request(verb, **args[0])
-                self.watched = list(result.get("variables", []))
-            elif verb == "event":
-                result = client.event(args[0])
-            elif verb == "variables":
-                self.variables_pending = False
-                variables, target = client.variables_and_target()
-                self.post("variables", variables)
-                if target:
-                    self.post("target_report", target)
-                return
-            elif verb == "registers":
-                self.registers_pending = False
-                self.post("registers", client.registers(args[0]))
-                return
-            elif verb == "set_breakpoints":
-                fields = args[0]
-                if fields["breakpoints"]:
-                    self.breakpoints[fields["file"]] = fields["breakpoints"]
-                else:
-                    self.breakpoints.pop(fields["file"], None)
-                self.debugging = self.debugging or bool(self.breakpoints)
-                result = client.request(verb, **fields)
-                self.post("breakpoints", (fields["file"], result.get("breakpoints", [])))
+            if handler is not None:
+                result = handler(client, *args)
             elif verb in DEBUG_VERBS:
-                self.debugging = self.debugging or verb not in FORCE_VERBS
-                if verb == "debug_state":
-                    self._debug_state(client)
-                    return
-                if verb == "forces":
-                    self.post("forces", client.request("forces").get("forces", []))
-                    return
-                result = client.request(verb, **(args[0] if args else {}))
-                self.post("result", (verb, result))
-                self._debug_state(client)
-                if verb in FORCE_VERBS:
-                    self.post("forces", client.request("forces").get("forces", []))
-                return
+                result = self._debug_verb(client, verb, args)
             else:
                 result = client.request(verb, **(args[0] if args else {}))
         except link.ConnectionLost:
@@ -352,9 +305,83 @@ class _Worker(threading.Thread):
             self.post("error", f"{verb}: {exc.reason}")
             self.post("refused", (verb, exc.reason))
             return
+        if result is POSTED:
+            return
         self.post("result", (verb, result))
         if verb in ("upload", "reset", "start", "stop") and self.debugging:
             self._debug_state(client)
+
+    # One method a verb (the GUI's ``_send(verb, *args)``): its result, or POSTED.
+    def _do_upload(self, client: Client, image: bytes, target: Optional[dict]):
+        self.image, self.target = image, target
+        return client.upload(image, target=target)
+
+    def _do_start(self, client: Client, name: str, eparam: int):
+        return client.start(name, int(eparam))
+
+    def _do_stop(self, client: Client):
+        return client.stop()
+
+    def _do_input(self, client: Client, pin: int, value: int):
+        return client.set_input(int(pin), int(value))
+
+    def _do_adc(self, client: Client, channel: int, value: int):
+        return client.set_adc(int(channel), int(value))
+
+    def _do_speed(self, client: Client, mode: str, factor: Optional[float]):
+        self.speed = (mode, factor)
+        return client.speed(mode, factor)
+
+    def _do_reset(self, client: Client):
+        return client.reset()
+
+    def _do_watch(self, client: Client, fields: dict):
+        result = client.request("watch", **fields)
+        self.watched = list(result.get("variables", []))
+        return result
+
+    def _do_event(self, client: Client, handler: str):
+        return client.event(handler)
+
+    def _do_variables(self, client: Client):
+        self.variables_pending = False
+        variables, target = client.variables_and_target()
+        self.post("variables", variables)
+        if target:
+            self.post("target_report", target)
+        return POSTED
+
+    def _do_registers(self, client: Client, addresses: list):
+        self.registers_pending = False
+        self.post("registers", client.registers(addresses))
+        return POSTED
+
+    def _do_set_breakpoints(self, client: Client, fields: dict):
+        if fields["breakpoints"]:
+            self.breakpoints[fields["file"]] = fields["breakpoints"]
+        else:
+            self.breakpoints.pop(fields["file"], None)
+        self.debugging = self.debugging or bool(self.breakpoints)
+        result = client.request("set_breakpoints", **fields)
+        self.post("breakpoints", (fields["file"], result.get("breakpoints", [])))
+        return result
+
+    def _debug_verb(self, client: Client, verb: str, args: tuple):
+        """A debugger request (or write/force/release): the result, the halted
+        state after it, and after a force the list of forces, each posted."""
+        self.debugging = self.debugging or verb not in FORCE_VERBS
+        if verb == "debug_state":
+            self._debug_state(client)
+            return POSTED
+        if verb == "forces":
+            self.post("forces", client.request("forces").get("forces", []))
+            return POSTED
+        result = client.request(verb, **(args[0] if args else {}))
+        self.post("result", (verb, result))
+        self._debug_state(client)
+        if verb in FORCE_VERBS:
+            self.post("forces", client.request("forces").get("forces", []))
+        return POSTED
 
     def _debug_state(self, client: Client) -> None:
         try:
@@ -373,6 +400,10 @@ class _Worker(threading.Thread):
 
 class _Stop(Exception):
     pass
+
+
+#: what a worker's ``_do_<verb>`` returns when it has posted its results itself
+POSTED = object()
 
 
 # ================================================================= QObject
@@ -656,56 +687,80 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
                 self.missed += payload.missed
                 continue
             flush()                     # keep the order of telemetry and the rest
-            if kind == "state":
-                self.last_state = payload
-                if self._upload_done:           # this state knows the uploaded image
-                    self.uploaded_crc, self._upload_done = None, False
-                self.sig_state.emit(payload, self.missed)
-            elif kind == "connected":
-                self.address, self.welcome = payload
-                self.connected = True
-                if self.halted is not None:     # a new controller runs
-                    self.halted = None
-                    self.sig_resumed.emit(0)
-                self.sig_connected.emit(self.address)
-            elif kind == "disconnected":
-                was = self.connected
-                self.connected = False
-                if was or payload:
-                    self.sig_disconnected.emit(str(payload))
-            elif kind == "child":
-                self.child_pid = payload
-            elif kind == "error":
-                self.sig_error.emit(str(payload))
-            elif kind == "variables":
-                self.sig_variables.emit(dict(payload))
-            elif kind == "registers":
-                self.sig_registers.emit(dict(payload))
-            elif kind == "target_report":
-                self.sig_target_report.emit(dict(payload))
-            elif kind == "result":
-                verb, result = payload
-                if verb == "upload":
-                    self._upload_done = True
-                self.sig_result.emit(verb, dict(result) if isinstance(result, dict) else {})
-            elif kind == "note":
-                self.sig_note.emit(str(payload))
-            elif kind in ("debug_state", "halted", "resumed"):
-                self._on_debug_state(kind, payload)
-            elif kind == "refused":
-                if payload[0] == "upload":
-                    self.uploaded_crc = None
-                self.sig_refused.emit(*payload)
-            elif kind == "breakpoints":
-                self.sig_breakpoints.emit(*payload)
-            elif kind == "breakpoints_refused":
-                self.sig_breakpoints_refused.emit(*payload)
-            elif kind == "forces":
-                self._on_forces(payload)
-            elif kind == "debugger":
-                self.debugger = bool(payload)
-            elif kind == "stopped":
-                pass
+            handler = getattr(self, "_mail_" + kind, None)
+            if handler is not None:
+                handler(payload)
         flush()
         if not self._inbox.empty():             # more than one drain's worth: the rest soon
             self._pump.start(PUMP_INTERVAL_MS)
+
+    # One method a kind of mail from the worker (its ``post(kind, payload)``).
+    def _mail_state(self, status) -> None:
+        self.last_state = status
+        if self._upload_done:                   # this state knows the uploaded image
+            self.uploaded_crc, self._upload_done = None, False
+        self.sig_state.emit(status, self.missed)
+
+    def _mail_connected(self, payload) -> None:
+        self.address, self.welcome = payload
+        self.connected = True
+        if self.halted is not None:             # a new controller runs
+            self.halted = None
+            self.sig_resumed.emit(0)
+        self.sig_connected.emit(self.address)
+
+    def _mail_disconnected(self, reason) -> None:
+        was = self.connected
+        self.connected = False
+        if was or reason:
+            self.sig_disconnected.emit(str(reason))
+
+    def _mail_child(self, pid) -> None:
+        self.child_pid = pid
+
+    def _mail_error(self, text) -> None:
+        self.sig_error.emit(str(text))
+
+    def _mail_note(self, text) -> None:
+        self.sig_note.emit(str(text))
+
+    def _mail_variables(self, variables) -> None:
+        self.sig_variables.emit(dict(variables))
+
+    def _mail_registers(self, registers) -> None:
+        self.sig_registers.emit(dict(registers))
+
+    def _mail_target_report(self, report) -> None:
+        self.sig_target_report.emit(dict(report))
+
+    def _mail_result(self, payload) -> None:
+        verb, result = payload
+        if verb == "upload":
+            self._upload_done = True
+        self.sig_result.emit(verb, dict(result) if isinstance(result, dict) else {})
+
+    def _mail_debug_state(self, halted) -> None:
+        self._on_debug_state("debug_state", halted)
+
+    def _mail_halted(self, payload) -> None:
+        self._on_debug_state("halted", payload)
+
+    def _mail_resumed(self, payload) -> None:
+        self._on_debug_state("resumed", payload)
+
+    def _mail_refused(self, payload) -> None:
+        if payload[0] == "upload":
+            self.uploaded_crc = None
+        self.sig_refused.emit(*payload)
+
+    def _mail_breakpoints(self, payload) -> None:
+        self.sig_breakpoints.emit(*payload)
+
+    def _mail_breakpoints_refused(self, payload) -> None:
+        self.sig_breakpoints_refused.emit(*payload)
+
+    def _mail_forces(self, forces) -> None:
+        self._on_forces(forces)
+
+    def _mail_debugger(self, available) -> None:
+        self.debugger = bool(available)
