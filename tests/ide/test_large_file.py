@@ -15,6 +15,7 @@ from tests.ide.test_main_window import (make_window, project, prompts, settings,
                                         settle, win)
 
 
+@pytest.mark.slow
 def test_typing_in_a_large_file_right_after_opening_it(win, project, qtbot, monkeypatch):  # noqa: F811
     big = project / "hardware" / "M10.plc"
     big.write_text(big_source(2.7))

@@ -33,6 +33,7 @@ def test_grammar_generated_programs(text):
     check_one(text.encode("utf-8", "surrogatepass"))
 
 
+@pytest.mark.slow
 def test_mutated_programs():
     rng = random.Random(20261121)
     corpus = seeds()
@@ -41,6 +42,7 @@ def test_mutated_programs():
         check_one(data, software=i % 5 == 0, strict=i % 7 == 0)
 
 
+@pytest.mark.slow
 def test_large_programs():
     """Programs around and beyond what 16-bit code addresses reach (64 KiB of
     code, 32 KiB jumps), under the default and raised limits: a diagnostic,
