@@ -5,6 +5,7 @@ hands the GIL back to the window often."""
 
 import sys
 import time
+
 import pytest
 
 
