@@ -8,7 +8,6 @@ import time
 
 import pytest
 
-
 from plcbuilder.ide import completion
 from plcbuilder.ide.diagnostics_worker import GIL_SWITCH_S
 from plcbuilder.ide.lint import LARGE_TEXT, NEAR_LINES
