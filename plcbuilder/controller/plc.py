@@ -656,7 +656,7 @@ class PLC:
             # record again (machine._sample: the cached sample_fields() dict,
             # None once something changed), so that it is not asked
             seen, seen_proc = _NEVER, None
-            while t < stop:
+            for t in range(t, stop):
                 self.t = t
                 try:
                     at = resume()
@@ -664,17 +664,19 @@ class PLC:
                     hw.at = at
                     return t + 1 if self._run_after(t, hw, exc) else t
                 code = slots[message_slot]
-                if code:
-                    send(hw, code)
-                if rec and (code or machine._sample is not seen or slots[proc_slot] != seen_proc):
-                    seen_proc = slots[proc_slot]
-                    record(t, name, seen_proc, code)
-                    seen = machine._sample if only and not code else _NEVER
-                t += 1
+                if code or rec:
+                    if code:
+                        send(hw, code)
+                    if rec and (code or machine._sample is not seen
+                                or slots[proc_slot] != seen_proc):
+                        seen_proc = slots[proc_slot]
+                        record(t, name, seen_proc, code)
+                        seen = machine._sample if only and not code else _NEVER
                 if notes_pending or not machine.quiet:
-                    advance(t - 1)
+                    advance(t)
                 else:
                     machine.t_ms += 1              # advance() would do only this
+            t = stop
             hw.at = at
             if t == end:
                 return t
