@@ -189,6 +189,8 @@ class PLC:
 
     # ------------------------------------------------------------- hosts
     def _host(self, name: str, kind: Kind) -> Host:
+        """The Host a procedure runs on (the one place a procedure's host is
+        made; an expression's is :meth:`Host.for_expression`)."""
         m = self.machine
         events = self.events
         raw = m.gvarset
@@ -198,9 +200,7 @@ class PLC:
             events.append(Print(self.t, addr, value, name))
             raw(addr, value)
 
-        common = dict(portset=m.portset, portclr=m.portclear, portget=m.portget,
-                      gvarget=m.gvarget, g0move=m.g0move, plain=m.is_plain_register, pr=pr,
-                      raw_gvarset=raw, io=m if hasattr(m, "in_bits") else None)
+        io = m if hasattr(m, "in_bits") else None
         if kind is Kind.HARDWARE:
             def gvarset(addr: int, value: int) -> None:
                 if lo <= addr <= hi:
@@ -208,31 +208,34 @@ class PLC:
                 else:
                     raw(addr, value)
 
-            return Host(**common, gvarset=gvarset, lat=self.latency)
+            own = dict(gvarset=gvarset, lat=self.latency)
+        else:
+            def starthw(n: int) -> None:
+                self._request_hardware(n, name)
 
-        def starthw(n: int) -> None:
-            self._request_hardware(n, name)
+            def seteparam(v: int) -> None:
+                self.soft_eparam = v
 
-        def seteparam(v: int) -> None:
-            self.soft_eparam = v
+            softjog = m.soft_jog
+            jog_lo, jog_hi = abi.SOFT_JOG_BASE, abi.SOFT_JOG_BASE + 7
 
-        softjog = m.soft_jog
-        jog_lo, jog_hi = abi.SOFT_JOG_BASE, abi.SOFT_JOG_BASE + 7
+            def sw_gvarset(addr: int, value: int) -> None:
+                if addr == abi.SOFT_START_HW:
+                    starthw(value)
+                elif addr == abi.SOFT_START_EPARAM:
+                    seteparam(value)
+                elif jog_lo <= addr <= jog_hi:
+                    softjog(addr - jog_lo, value)
+                elif lo <= addr <= hi:
+                    pr(addr, value)
+                else:
+                    raw(addr, value)
 
-        def sw_gvarset(addr: int, value: int) -> None:
-            if addr == abi.SOFT_START_HW:
-                starthw(value)
-            elif addr == abi.SOFT_START_EPARAM:
-                seteparam(value)
-            elif jog_lo <= addr <= jog_hi:
-                softjog(addr - jog_lo, value)
-            elif lo <= addr <= hi:
-                pr(addr, value)
-            else:
-                raw(addr, value)
-
-        return Host(**common, gvarset=sw_gvarset, lat=0, starthw=starthw, seteparam=seteparam,
-                    softjog=softjog, software=True)
+            own = dict(gvarset=sw_gvarset, lat=0, starthw=starthw, seteparam=seteparam,
+                       softjog=softjog, software=True)
+        return Host(portset=m.portset, portclr=m.portclear, portget=m.portget,
+                    gvarget=m.gvarget, g0move=m.g0move, plain=m.is_plain_register, pr=pr,
+                    raw_gvarset=raw, io=io, **own)
 
     def _spawn(self, program: Program, eparam: int) -> Process:
         eparam = wrap(int(eparam))

@@ -143,6 +143,16 @@ class Host:
         #: before pc), ``table(program, base)`` (the kinds with K_BREAK where marked)
         self.debug = None
 
+    def for_expression(self, write=None) -> "Host":
+        """The host an expression (a breakpoint condition, an evaluate) runs on
+        through the reference interpreter: this one's reads and its writes, or
+        ``write`` (a function refusing them) in place of each write; no
+        latency, no debugger."""
+        return Host(portset=write or self.portset, portclr=write or self.portclr,
+                    portget=self.portget, gvarget=self.gvarget,
+                    gvarset=write or self.gvarset, g0move=write or self.g0move,
+                    plain=self.plain)
+
 
 # ------------------------------------------------------------- pre-decoding
 # The interpreter walks the bytes once per program into per-offset tables
