@@ -29,14 +29,11 @@ from __future__ import annotations
 from typing import Iterator, Optional
 
 from plcbuilder.bytecode import semantics
+from plcbuilder.bytecode.abi import MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET
 from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST, Op, UNARY,
                                          size_of, validate)
 from plcbuilder.bytecode.program import Program
 from plcbuilder.bytecode.semantics import c_div, c_mod, wrap
-
-TICK_BUDGET = 100_000
-MAX_CALL_DEPTH = 16
-STACK_LIMIT = 1024
 
 FAULT_DIV = "division by zero"
 FAULT_MOD = "modulo by zero"
