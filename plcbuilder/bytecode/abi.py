@@ -16,6 +16,15 @@ from typing import Optional
 
 from plcbuilder.bytecode import softmc
 
+# ----------------------------------------------------------------- VM limits
+#: (one place: the interpreters fault past them, the checker warns of them)
+#: instructions one procedure may run in one tick
+TICK_BUDGET = 100_000
+#: how deep CALLs may nest
+MAX_CALL_DEPTH = 16
+#: values on the evaluation stack
+STACK_LIMIT = 1024
+
 # --------------------------------------------------------------- PLC defines
 PLCCMD: dict[str, int] = {
     "PLCCMD_MOTION_CONTINUE": 1001,

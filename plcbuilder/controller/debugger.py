@@ -108,28 +108,12 @@ class Watch:
         at = debugger._at_of(process.program.name)      # kept up to date in place
 
         def brk(pc: int, rets, _d=debugger, _p=process, _at=at) -> bool:
-            # (the common case written out: asked at every watched statement start)
+            # asked at every watched statement start: the common case (no
+            # step going on, no breakpoint at pc) answered here at once
             if _d._busy:                    # a step or a run-to goes on
                 return _d._reached(_p, pc, rets)
             bps = _at.get(pc)
-            if bps is None:
-                return False
-            for bp in bps:
-                if bp.code is not None and not _d._holds(bp, _p):
-                    continue
-                bp.hits += 1
-                hit = bp.hit
-                if hit is not None:
-                    mode, n = hit
-                    k = bp.hits
-                    if mode == "eq" and k != n or mode == "ge" and k < n \
-                            or mode == "every" and k % n:
-                        continue
-                if bp.log is not None:
-                    _d._log(_p, bp.log)
-                    continue
-                return _d._halt_at("breakpoint", _p, pc, rets, bp)
-            return False
+            return bps is not None and _d._breakpoints_at(_p, pc, rets, bps)
 
         self.brk = brk
 
@@ -474,11 +458,8 @@ class Debugger:
         cond = bp.bound.get(p.program.name)
         if cond is None:
             return False
-        h = p.host
-        host = vm.Host(portset=h.portset, portclr=h.portclr, portget=h.portget,
-                       gvarget=h.gvarget, gvarset=h.gvarset, g0move=h.g0move, plain=h.plain)
         try:
-            next(vm.run_reference(cond, p.slots, host))
+            next(vm.run_reference(cond, p.slots, p.host.for_expression()))
         except vm.ProcExit as done:
             return done.code != 0
         except vm.VMFault as exc:
@@ -638,12 +619,10 @@ class Debugger:
             p = self._procedure(procedure)
         p.sync()
         bound = bind(cond, p.program)
-        h = p.host
 
         def refused(*_a):
             raise DebugError("an expression to evaluate may not write")
-        host = vm.Host(portset=refused, portclr=refused, portget=h.portget, gvarget=h.gvarget,
-                       gvarset=refused, g0move=refused, plain=h.plain)
+        host = p.host.for_expression(write=refused)
         try:
             next(vm.run_reference(bound, list(p.slots), host))
         except vm.ProcExit as done:

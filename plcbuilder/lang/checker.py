@@ -475,7 +475,8 @@ class Checker:
                         chain = " -> ".join(f"{c}()" for c in cycle)
                         self.diags.append(warning(
                             "recursion", f"recursion: {chain}", span,
-                            "calls nest at most 16 deep at run time; deeper is a runtime fault"))
+                            f"calls nest at most {abi.MAX_CALL_DEPTH} deep at run time; deeper is a "
+                            "runtime fault"))
                 elif color[nxt] == 0:
                     color[nxt] = 1
                     path.append(nxt)
