@@ -128,6 +128,11 @@ class PlcProtocol(LanguageServerProtocol):
                 self.reply_error(None, INVALID_REQUEST,
                                  f"a request's id is an integer or a string, not {_describe(mid)}")
                 return
+            if "result" in raw or "error" in raw:
+                self.reply_error(reply_id, INVALID_REQUEST,
+                                 "a message with a method is a request or a notification: it has "
+                                 "no result or error")
+                return
             params = raw.get("params")
             if params is not None and not isinstance(params, (dict, list)):
                 if has_id:
@@ -201,8 +206,11 @@ class PlcProtocol(LanguageServerProtocol):
             cls = self.get_message_type(method) or JsonRPCRequestMessage
         else:
             cls = self.get_message_type(method) or JsonRPCNotification
-        if "params" not in raw and cls in (JsonRPCRequestMessage, JsonRPCNotification):
-            raw = dict(raw, params=None)
+        if cls in (JsonRPCRequestMessage, JsonRPCNotification):
+            # pygls's own classes take exactly their fields (an unknown method's
+            # request may carry others)
+            raw = {k: raw.get(k) for k in ("jsonrpc", "id", "method", "params") if k in raw or
+                   k == "params"}
         try:
             return self._converter.structure(raw, cls)
         except Exception as exc:  # noqa: BLE001 - the envelope is valid: the params are not

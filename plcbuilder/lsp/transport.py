@@ -39,8 +39,8 @@ log = logging.getLogger(__name__)
 
 #: Seconds a TCP connection has to send ``initialize`` before it is closed.
 INIT_TIMEOUT = 5.0
-#: TCP sessions at once (a connection beyond is closed at once; connections
-#: that never initialize make room after INIT_TIMEOUT).
+#: TCP sessions at once; when full, the oldest connection that has not
+#: initialized is closed to make room (none: the newcomer is closed).
 MAX_SESSIONS = 32
 #: How often the interpreter hands the GIL between threads while the check
 #: worker compiles: at Python's default (5 ms) every step of a request waited
@@ -62,6 +62,9 @@ class Session:
         self.protocol.on_exit = self._exit
         self.frames = FrameReader(max_body)
         self.exit_code: Optional[int] = None
+        self.started = 0.0                  # (TCP) when it connected, who, its writer
+        self.peer = None
+        self.transport_writer = None
 
     @property
     def initialized(self) -> bool:
@@ -181,10 +184,20 @@ async def _tcp(make_server, host, port, ready, init_timeout, max_sessions, max_b
     async def client(reader: asyncio.StreamReader, writer: asyncio.StreamWriter):
         peer = writer.get_extra_info("peername")
         if len(sessions) >= max_sessions:
-            log.warning("connection from %s closed: %d sessions already", peer, len(sessions))
-            writer.close()
-            return
+            # full: the oldest connection that has not initialized makes room; when
+            # every one is an editor's session, the newcomer is turned away
+            idle = [x for x in sessions if not x.initialized]
+            if not idle:
+                log.warning("connection from %s closed: %d sessions already", peer, len(sessions))
+                writer.close()
+                return
+            oldest = min(idle, key=lambda x: x.started)
+            log.warning("connection from %s closed to make room: it had not initialized",
+                        oldest.peer)
+            sessions.discard(oldest)
+            oldest.transport_writer.close()
         session = Session(make_server(), writer, max_body)
+        session.started, session.peer, session.transport_writer = loop.time(), peer, writer
         sessions.add(session)
         deadline = loop.time() + init_timeout
         try:

@@ -50,6 +50,10 @@ def test_a_message_that_is_not_a_request_is_an_invalid_request(project):
         assert m["id"] == "x" and m["error"]["code"] == -32600
         m = _error(c, b'{"jsonrpc":"2.0","id":5,"method":12}')
         assert m["id"] == 5 and m["error"]["code"] == -32600
+        m = _error(c, b'{"jsonrpc":"2.0","id":8,"method":"x","result":1}')
+        assert m["id"] == 8 and m["error"]["code"] == -32600
+        m = _error(c, b'{"jsonrpc":"2.0","id":9,"method":"plc/x","extra":1}')
+        assert m["id"] == 9 and m["error"]["code"] == -32601
         m = _error(c, b'{"jsonrpc":"2.0","id":6,"method":"x","params":{"a":NaN}}')
         assert m["id"] is None and m["error"]["code"] == -32700
         # a response from the client to nothing the server asked: no answer
