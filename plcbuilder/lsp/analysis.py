@@ -29,6 +29,8 @@ allows.
 
 from __future__ import annotations
 
+import logging
+import traceback
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -47,6 +49,8 @@ from plcbuilder.lsp.access import Access
 from plcbuilder.lsp.positions import UTF16, Lines, span_range
 from plcbuilder.lsp.projects import HEADER_SUFFIXES, Context, Projects
 
+log = logging.getLogger(__name__)
+
 SOURCE = "plcbuilder"
 PLC_LANGUAGE = "plc"
 PLC_SUFFIX = ".plc"
@@ -63,7 +67,9 @@ def uri_path(uri: str) -> Optional[Path]:
         p = to_fs_path(uri)
     except (ValueError, TypeError):
         return None
-    return Path(p) if p else None
+    if not p or "\x00" in p:
+        return None                    # no file has such a name
+    return Path(p)
 
 
 def builtin_path(name: str) -> Optional[Path]:
@@ -367,8 +373,16 @@ class Analysis:
             if incremental is None:
                 incremental = self._incremental[uri] = Incremental()
         reader = self._reader(job, incremental)
-        return compile_source(text, name, ctx.options, file_path=path,
-                              read_file=reader, incremental=incremental)
+        try:
+            return compile_source(text, name, ctx.options, file_path=path,
+                                  read_file=reader, incremental=incremental)
+        except Exception as exc:  # noqa: BLE001 - a compiler bug: one diagnostic, and the log
+            log.exception("compiling %s failed", name)
+            detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+            return CompileResult(procedure_name(name), name, ctx.options.kind, None,
+                                 [error("internal", f"internal compiler error: {detail}",
+                                        Span.point(name, 1, 1))],
+                                 SourceSet(), None, ctx.options.limit)
 
     def _reader(self, job: Job, incremental: Optional[Incremental]):
         """How a compile of ``job`` reads a header: the editor's text when it is
@@ -540,6 +554,6 @@ class Analysis:
 def _key(p: Path) -> Path:
     try:
         return p.resolve()
-    except (OSError, RuntimeError):
+    except (OSError, RuntimeError, ValueError):
         return p.absolute()
 

@@ -44,6 +44,11 @@ def test_files_outside_the_workspace_are_not_read(project, tmp_path):
                                 dict(at(uri, line, col), context={"includeDeclaration": True})) == []
             assert c.result("textDocument/semanticTokens/full", doc) == {"data": []}
             assert c.result("textDocument/completion", at(uri, 1, 10))["items"] == []
+        # names no file has: nothing, not an internal error
+        for uri in (project.as_uri() + "/hardware/a%00b.plc", "file://%00/x.plc",
+                    "file:///" + "a/" * 3000 + "x.plc", "untitled:Untitled-1"):
+            assert c.result("textDocument/hover", at(uri, 0, 0)) is None
+            assert c.result("textDocument/documentSymbol", {"textDocument": {"uri": uri}}) == []
         # a document the client opens outside the workspace is its own text only:
         # the headers beside it are not read
         outside = tmp_path / "other" / "M09.plc"

@@ -109,3 +109,17 @@ def test_the_built_in_headers_are_read(tmp_path):
     assert loc.uri.endswith("/resources/include/pins.h")
     text = an.read(uri_path(loc.uri))
     assert text.split("\n")[loc.range.start.line].startswith("#define OUTPUT_SPINDLE")
+
+
+def test_a_compiler_bug_is_a_diagnostic_not_silence(tmp_path, monkeypatch):
+    import plcbuilder.lsp.analysis as analysis
+
+    def broken(*args, **kwargs):
+        raise OSError(36, "File name too long")
+    monkeypatch.setattr(analysis, "compile_source", broken)
+    an = Analysis(access=Access(default=tmp_path))
+    uri = (tmp_path / "a.plc").as_uri()
+    an.open(uri, "main() { exit(99); }\n", 1)
+    got = an.check(uri)[uri]
+    assert [d.code for d in got] == ["internal"]
+    assert got[0].message == "internal compiler error: OSError: [Errno 36] File name too long"
