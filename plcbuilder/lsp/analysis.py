@@ -283,8 +283,8 @@ class Analysis:
         return Job(uri, generation, dict(self.docs), dict(self._by_path))
 
     def compute(self, job: Job) -> Outcome:
-        """(On the worker) compile what the check needs; nothing of the loop's
-        state is changed."""
+        """(On the worker) compile what the check needs. The open documents, the
+        results and the diagnostics kept are the loop's: only apply changes them."""
         uri = job.uri
         out = Outcome(uri, versions={u: d.version for u, d in job.docs.items()})
         if not self._is_plc_in(job, uri):
@@ -335,11 +335,6 @@ class Analysis:
                     seen.add(key)
                     out.append(d)
         return out
-
-    def compile(self, uri: str) -> Optional[CompileResult]:
-        """Compile a document now (its open text, or the file)."""
-        job = self.plan(uri)
-        return self._compile(job, uri, self.context(uri))
 
     # ------------------------------------------------------------ private
     def _owned_elsewhere(self, uri: str) -> bool:
