@@ -60,9 +60,8 @@ def test_a_document_over_the_source_limit_is_not_compiled(project):
 
 def test_hover_is_answered_while_a_heavy_check_runs(project):
     """A large document (just under the limit) takes seconds to check; a hover
-    on another file meanwhile is answered within 100 ms (the median of nine: a
-    collection of the garbage collector stops every thread now and then, up to
-    ~0.1 s while the compile holds a million objects)."""
+    on another file meanwhile is answered within 100 ms (the median of nine;
+    measured: 1-5 ms, the slowest 4-19 ms on a loaded machine)."""
     from bench_compile import procedure
 
     c = start_server(project)
@@ -85,6 +84,7 @@ def test_hover_is_answered_while_a_heavy_check_runs(project):
                      and m["params"]["uri"] == heavy]
         assert published == [], "the heavy check ended before the hovers: not heavy enough"
         assert statistics.median(times) < 0.1, times
+        assert max(times) < 0.5, times             # (no collection of the whole heap meanwhile)
         c.diagnostics(heavy, 300)
     finally:
         stop_server(c)
