@@ -87,7 +87,7 @@ def _end(c: LspClient) -> bool:
 
 
 def _traceback_sent(c: LspClient) -> bool:
-    return any("Traceback" in json.dumps(m) or "traceback" in json.dumps(m) for m in c.received)
+    return any("Traceback" in json.dumps(m) or "traceback" in json.dumps(m) for m in c.arrived)
 
 
 # ---------------------------------------------------------------- 24.3
@@ -146,7 +146,7 @@ def attack_heavy_documents() -> dict:
         try:
             c.wait(lambda m: m.get("method") == "textDocument/publishDiagnostics"
                    and m["params"]["uri"] == uri and m["params"]["version"] == 39, 600)
-            versions = [m["params"]["version"] for m in c.received
+            versions = [m["params"]["version"] for m in c.arrived
                         if m.get("method") == "textDocument/publishDiagnostics"
                         and m["params"]["uri"] == uri]
             t.case(f"38 changes in a burst: {len(versions) - 1} checks published",
@@ -205,7 +205,7 @@ def attack_outside_reads() -> dict:
         h = c.request("textDocument/hover", at(uri, 1, 15), 30)
         t.case("an opened document's header beside it", refused=MARK not in json.dumps(h))
         time.sleep(0.5)
-        leaked = any(MARK in json.dumps(m) or "12345" in json.dumps(m) for m in c.received)
+        leaked = any(MARK in json.dumps(m) or "12345" in json.dumps(m) for m in c.arrived)
         t.case("no message carries the secret", refused=not leaked)
         t.case("stdio session ends", refused=_end(c), crashed=c.proc.returncode != 0)
 

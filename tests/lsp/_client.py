@@ -38,7 +38,7 @@ class Client:
         self.proc = proc
         self.messages: "queue.Queue[dict]" = queue.Queue()
         self.seen: list[dict] = []
-        self.received: list[dict] = []
+        self.arrived: list[dict] = []
         self._next = 0
         threading.Thread(target=self._read, daemon=True).start()
 
@@ -86,7 +86,7 @@ class Client:
                 m = self.messages.get(timeout=left)
             except queue.Empty:
                 continue
-            self.received.append(m)
+            self.arrived.append(m)
             if self.check is not None:
                 self.check(m)
             if pred(m):

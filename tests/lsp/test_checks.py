@@ -80,7 +80,7 @@ def test_hover_is_answered_while_a_heavy_check_runs(project):
             h = c.result("textDocument/hover", at(small, 3, 18))
             times.append(time.perf_counter() - t)
             assert "GVAR_CURRENT_MOTION_CODE" in h["contents"]["value"]
-        published = [m for m in c.received if m.get("method") == "textDocument/publishDiagnostics"
+        published = [m for m in c.arrived if m.get("method") == "textDocument/publishDiagnostics"
                      and m["params"]["uri"] == heavy]
         assert published == [], "the heavy check ended before the hovers: not heavy enough"
         assert statistics.median(times) < 0.1, times
@@ -105,7 +105,7 @@ def test_a_newer_change_supersedes_the_check_of_the_older_text(project):
         assert any(d["severity"] == 1 for d in got["params"]["diagnostics"])
         time.sleep(0.5)
         c.request("shutdown")
-        versions = [m["params"]["version"] for m in c.received
+        versions = [m["params"]["version"] for m in c.arrived
                     if m.get("method") == "textDocument/publishDiagnostics"
                     and m["params"]["uri"] == uri]
         assert versions == sorted(versions) and versions[-1] == 11
@@ -166,7 +166,7 @@ def test_only_plc_documents_are_checked(project):
         assert c.result("textDocument/completion", at(toml, 0, 1))["items"] == []
         time.sleep(0.5)
         c.request("shutdown")
-        checked = {m["params"]["uri"] for m in c.received
+        checked = {m["params"]["uri"] for m in c.arrived
                    if m.get("method") == "textDocument/publishDiagnostics"}
         assert toml not in checked and c_header not in checked
         assert header in checked and plc in checked
