@@ -10,6 +10,10 @@ of the same file timed between the keystrokes (so both see the same load);
 median of the keystrokes of each kind (a character typed into a name and
 deleted again; Enter pressed and taken back).
 
+Then (issue 24.3) a hover on another file while a large file is checked,
+beside the same hover on the idle server, and a 10 MB document over the
+source limit (:func:`hover_during_a_heavy_check`).
+
     .venv/bin/python scripts/bench.py lsp
     PLCB_BENCH_BEFORE=/tmp/old .venv/bin/python scripts/bench.py lsp   # an older checkout beside it
     PLCB_BENCH_TREE=/tmp/old .venv/bin/python scripts/bench.py lsp     # another checkout alone
@@ -150,8 +154,100 @@ def keystroke_to_diagnostics(lines: int = LINES, reps: int = REPS) -> list[str]:
     return out
 
 
+HOVER_ROUNDS = 3
+#: hovers timed in each round, idle and during the heavy check
+HOVERS = 7
+SMALL = "#include pins.h\nmain()\n{\n  code = gvarget(6060);\n  exit(99);\n};\n"
+
+
+def _open(c, uri: str, text: str) -> None:
+    c.notify("textDocument/didOpen", {"textDocument": {
+        "uri": uri, "languageId": "plc", "version": 1, "text": text}})
+
+
+def _hover_time(c, uri: str) -> float:
+    t = time.perf_counter()
+    r = c.request("textDocument/hover", {"textDocument": {"uri": uri},
+                                         "position": {"line": 3, "character": 18}}, 300)
+    assert r.get("result") and "GVAR_CURRENT_MOTION_CODE" in r["result"]["contents"]["value"], r
+    return time.perf_counter() - t
+
+
+def hover_during_a_heavy_check(rounds: int = HOVER_ROUNDS) -> list[str]:
+    """Issue 24.3: a hover on another file while a large file (just under the
+    1 MiB limit) is checked, against the same hover on the idle server; and a
+    10 MB document (over the limit): how long until its diagnostics, and a
+    hover sent right after opening it. Each round starts a fresh server of
+    each checkout, the checkouts taking turns (PLCB_BENCH_BEFORE as above)."""
+    from bench_compile import procedure
+    from tests.lsp._client import LspClient
+
+    trees = {"after": Path(os.environ.get("PLCB_BENCH_TREE") or ROOT).resolve()}
+    if os.environ.get("PLCB_BENCH_BEFORE"):
+        trees = {"before": Path(os.environ["PLCB_BENCH_BEFORE"]).resolve(), **trees}
+    body = procedure(3000, 3000)
+    heavy = "#include pins.h\n" + body * max(1, 1_000_000 // len(body))
+    huge = "main() {\n" + "  x = x + 1;\n" * (10_000_000 // 13) + "};\n"
+    got = {n: {"idle": [], "busy": [], "first": [], "check": [], "huge": [], "huge_hover": []}
+           for n in trees}
+    with tempfile.TemporaryDirectory() as d:
+        for r in range(rounds):
+            for name, tree in trees.items():
+                root = Path(d) / f"{name}{r}"
+                for sub in ("software", "hardware", "include"):
+                    (root / sub).mkdir(parents=True)
+                (root / "plcbuilder.toml").write_text('name = "bench"\n[limits]\nsw_proc = 65536\n')
+                small = (root / "hardware" / "M03.plc").as_uri()
+                c = LspClient(_server(tree, root))
+                try:
+                    c.request("initialize", {"processId": None, "rootUri": root.as_uri(),
+                                             "capabilities": {}}, 120)
+                    c.notify("initialized", {})
+                    _open(c, small, SMALL)
+                    c.diagnostics(small, 120)
+                    _hover_time(c, small)                      # the index made once
+                    got[name]["idle"] += [_hover_time(c, small) for _ in range(HOVERS)]
+                    big = (root / "software" / "HEAVY.plc").as_uri()
+                    t0 = time.perf_counter()
+                    _open(c, big, heavy)
+                    time.sleep(0.3)                            # the check has started
+                    busy = [_hover_time(c, small) for _ in range(HOVERS)]
+                    got[name]["first"].append(busy[0])
+                    got[name]["busy"] += busy
+                    c.diagnostics(big, 600)
+                    got[name]["check"].append(time.perf_counter() - t0)
+                    huge_uri = (root / "software" / "HUGE.plc").as_uri()
+                    t0 = time.perf_counter()
+                    _open(c, huge_uri, huge)
+                    got[name]["huge_hover"].append(_hover_time(c, small))
+                    c.diagnostics(huge_uri, 600)
+                    got[name]["huge"].append(time.perf_counter() - t0)
+                    c.request("shutdown", None, 120)
+                    c.notify("exit")
+                finally:
+                    c.close()
+    med = statistics.median
+    out = []
+    for name, tree in trees.items():
+        g = got[name]
+        idle, first, busy = med(g["idle"]), med(g["first"]), med(g["busy"])
+        out += [
+            f"{name} ({tree}): hover on another file 0.3 s into the check of a "
+            f"{len(heavy.encode()) // 1024} KiB file ({med(g['check']):.1f} s): {first * 1000:.1f} ms "
+            f"(goal <= 100 ms) = {first / idle:.1f}x the same hover on the idle server "
+            f"({idle * 1000:.1f} ms); the {HOVERS} hovers sent one after another from then: "
+            f"median "
+            f"{busy * 1000:.1f} ms, slowest {max(g['busy']) * 1000:.0f} ms",
+            f"  a 10 MB document: diagnostics after {med(g['huge']) * 1000:.0f} ms; a hover "
+            f"sent right after opening it answered in {med(g['huge_hover']) * 1000:.0f} ms",
+        ]
+    out.append(f"(median of {rounds} rounds, a fresh server each" +
+               (", the servers taking turns)" if len(trees) > 1 else ")"))
+    return out
+
+
 def run() -> list[str]:
-    return keystroke_to_diagnostics()
+    return keystroke_to_diagnostics() + hover_during_a_heavy_check()
 
 
 if __name__ == "__main__":
