@@ -126,8 +126,8 @@ def compile_source(text: str, path: str = "<input>", options: CompileOptions = C
                                      root=options.root), text, path, file_path, options)
     with incremental.lock:
         try:
-            return _compile(Preprocessor(options.include_dirs, root=options.root,
-                                         tokens=incremental.tokens),
+            return _compile(Preprocessor(options.include_dirs, read_file or read_source,
+                                         root=options.root, tokens=incremental.tokens),
                             text, path, file_path, options, incremental)
         except BaseException:
             incremental.reset()
