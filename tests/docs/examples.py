@@ -6,9 +6,10 @@ An example is a fenced block of README.md or docs/*.md that is
   on the next), each followed by the output it prints (stdout and stderr, as a
   terminal shows them). The output is compared: a line that is only ``…`` (or
   ``...``) stands for any number of lines, and ``…`` inside a line for any text;
-- or any other shell block right after an ``<!-- example -->`` comment: its
-  lines run as a script, and each command must succeed (its output is not shown,
-  so it is not compared).
+- or any other shell block (or ```` ```python ```` block) right after an
+  ``<!-- example -->`` comment: it runs as a script (``set -e``; Python with this
+  checkout's ``python``) and must succeed (its output is not shown, so it is not
+  compared).
 
 An ``<!-- example: KEY=VALUE … -->`` comment right before a block (blank lines
 between allowed) sets it up; values may be quoted as in the shell:
@@ -19,12 +20,16 @@ between allowed) sets it up; values may be quoted as in the shell:
 - ``before="COMMANDS"``: hidden set-up, run first (it must succeed);
 - ``file=PATH`` (on a non-shell block, e.g. ```` ```c ````): the block is not run
   but written to PATH for this page's later examples;
+- ``needs=TOOL,…``: skipped (saying so) where a program it runs is not installed;
 - ``skip="WHY"``: a ``console`` block that is shown but not run, and why.
 
 Each example runs in a fresh temporary folder (``HOME`` is ``home/me`` in it, so
 ``/home/me/…`` paths print as shown), with this checkout's ``plcbuilder`` first on
-``PATH`` and ``scripts/run`` standing for ``plcbuilder``, as README.md says.
-Background jobs (``&``) are ended when the block ends.
+``PATH``, and ``scripts/run`` and ``.venv/bin/plcbuilder`` standing for it, as in a
+checkout (README.md).
+A ``$ COMMAND &`` runs in the background: the block goes on once it has printed as
+many lines as shown under it (a server saying it is ready); background jobs are
+ended (SIGTERM) when the block ends.
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ from __future__ import annotations
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -44,7 +50,7 @@ PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
 _FENCE_OPEN = re.compile(r"^(```+|~~~+)\s*([\w+-]*)[^\n]*$")
 _COMMENT = re.compile(r"^<!--\s*example\b:?(.*?)-->\s*$", re.S)
-_SHELLS = {"console", "sh", "shell", "bash", ""}
+_SHELLS = {"console", "sh", "shell", "bash", "", "python"}
 ELLIPSES = ("…", "...")
 TIMEOUT_S = 60
 
@@ -85,9 +91,9 @@ def _options(text: str, where: str) -> dict:
         raise ExampleError(f"{where}: cannot read the example comment: {exc}") from None
     for w in words:
         key, eq, value = w.partition("=")
-        if key not in ("project", "cd", "before", "file", "skip") or (not eq and key != "skip"):
+        if key not in ("project", "cd", "before", "file", "needs", "skip") or (not eq and key != "skip"):
             raise ExampleError(f"{where}: unknown example option {w!r} "
-                               f"(project=, cd=, before=, file=, skip=)")
+                               f"(project=, cd=, before=, file=, needs=, skip=)")
         opts[key] = value
     return opts
 
@@ -206,6 +212,8 @@ def prepare(ex: Example, tmp: Path) -> Path:
     scripts.mkdir()
     (scripts / "run").write_text(f'#!/bin/sh\nexec "{plcb}" "$@"\n')
     (scripts / "run").chmod(0o755)
+    (tmp / ".venv" / "bin").mkdir(parents=True)
+    (tmp / ".venv" / "bin" / "plcbuilder").symlink_to(plcb)
     env = _env(tmp)
     project = ex.options.get("project", "myproject")
     if project:
@@ -217,13 +225,6 @@ def prepare(ex: Example, tmp: Path) -> Path:
         p.write_text(text, encoding="utf-8")
     cwd = tmp / ex.options.get("cd", "")
     cwd.mkdir(parents=True, exist_ok=True)
-    before = ex.options.get("before")
-    if before:
-        r = subprocess.run(["bash", "-c", before], cwd=cwd, env=env, text=True,
-                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=TIMEOUT_S)
-        if r.returncode:
-            raise AssertionError(f"{ex.id}: the set-up before={before!r} failed "
-                                 f"(exit {r.returncode}):\n{r.stdout}")
     return cwd
 
 
@@ -235,21 +236,32 @@ def run(ex: Example, tmp: Optional[Path] = None) -> list[str]:
     tmp = Path(tmp).resolve()
     cwd = prepare(ex, tmp)
     env = _env(tmp)
-    end_jobs = "trap 'j=$(jobs -p); [ -n \"$j\" ] && kill $j 2>/dev/null; wait' EXIT\n"
+    script = "trap 'j=$(jobs -p); [ -n \"$j\" ] && kill $j 2>/dev/null; wait' EXIT\n"
+    if ex.options.get("before"):
+        script += (f"{{\n{ex.options['before']}\n}} >'{tmp}/.before.log' 2>&1 || "
+                   f"{{ echo 'the set-up before= failed:'; cat '{tmp}/.before.log'; exit 97; }}\n")
     if not ex.console:
-        script = end_jobs + "set -e\n" + ex.body + "\n"
-        r = subprocess.run(["bash", "-c", script], cwd=cwd, env=env, text=True,
-                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=TIMEOUT_S)
+        body = ex.body if ex.info != "python" else f"python - <<'PLCB_EOF'\n{ex.body}\nPLCB_EOF"
+        r = _bash(script + "set -e\n" + body + "\n", cwd, env)
         if r.returncode:
             return [f"{ex.id}: the commands failed (exit {r.returncode}):\n{r.stdout}"]
         return []
     todo = steps(ex.body)
-    script = end_jobs
     for n, st in enumerate(todo):
-        script += f"printf '%s\\n' '{_MARK.format(n)}'\n{st.command}\n"
-    r = subprocess.run(["bash", "-c", script], cwd=cwd, env=env, text=True,
-                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=TIMEOUT_S)
+        script += f"printf '%s\\n' '{_MARK.format(n)}'\n"
+        if st.command.rstrip().endswith("&") and not st.command.rstrip().endswith("&&"):
+            # in the background: what it prints by the time it has printed the lines
+            # shown (a server saying it is ready), then the block goes on
+            log, want = f"'{tmp}/.bg-{n}.log'", len([l for l in st.expected if l.strip()])
+            script += (f"{st.command.rstrip()[:-1]} >{log} 2>&1 &\n"
+                       f"for _ in $(seq 300); do [ $(wc -l <{log}) -ge {want} ] && break; "
+                       f"sleep 0.1; done; cat {log}\n")
+        else:
+            script += st.command + "\n"
+    r = _bash(script, cwd, env)
     out = r.stdout.replace(str(tmp / "home" / "me"), "/home/me")
+    if r.returncode == 97 and _MARK.format(0) not in out:
+        return [f"{ex.id}: {out}"]
     chunks = re.split(r"^@@plcb-doctest-\d+@@\n", out, flags=re.M)[1:]
     chunks += [""] * (len(todo) - len(chunks))
     problems = []
@@ -259,6 +271,16 @@ def run(ex: Example, tmp: Optional[Path] = None) -> list[str]:
             problems.append(f"{ex.id}: $ {st.command}\n--- the manual shows:\n{shown}\n"
                             f"--- it prints:\n{actual.rstrip()}")
     return problems
+
+
+def _bash(script: str, cwd: Path, env: dict) -> subprocess.CompletedProcess:
+    return subprocess.run(["bash", "-c", script], cwd=cwd, env=env, text=True,
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=TIMEOUT_S)
+
+
+def missing(ex: Example) -> list[str]:
+    """The programs the example ``needs`` that are not installed here."""
+    return [t for t in ex.options.get("needs", "").split(",") if t and not shutil.which(t)]
 
 
 def all_examples() -> list[Example]:

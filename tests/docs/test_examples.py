@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from tests.docs.examples import all_examples, run
+from tests.docs.examples import all_examples, missing, run
 
 EXAMPLES = all_examples()
 
@@ -18,5 +18,7 @@ def test_the_manual_has_examples():
 def test_example(example, tmp_path):
     if "skip" in example.options:
         pytest.skip(example.options["skip"] or "marked skip")
+    if missing(example):
+        pytest.skip(f"{', '.join(missing(example))} is not installed here")
     problems = run(example, tmp_path)
     assert not problems, "\n\n".join(problems)

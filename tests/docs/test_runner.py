@@ -86,3 +86,24 @@ def test_background_jobs_end_with_the_block(tmp_path):
     t0 = time.monotonic()
     assert run(ex, tmp_path) == []
     assert time.monotonic() - t0 < 20
+
+
+def test_a_failing_set_up_is_reported(tmp_path):
+    ex = _one("<!-- example: project= before=\"echo nope; false\" -->\n"
+              "```console\n$ echo hi\nhi\n```\n")
+    problems = run(ex, tmp_path)
+    assert problems and "the set-up before= failed:\nnope" in problems[0]
+
+
+def test_a_background_command_shows_what_it_printed_when_ready(tmp_path):
+    ex = _one("<!-- example: project= -->\n```console\n"
+              "$ (sleep 0.5; echo ready; sleep 30) &\nready\n$ echo next\nnext\n```\n")
+    assert run(ex, tmp_path) == []
+
+
+def test_a_marked_python_block_runs_and_must_succeed(tmp_path):
+    ok = _one("<!-- example: project= -->\n```python\nimport plcbuilder\n```\n")
+    assert run(ok, tmp_path / "ok") == []
+    bad = _one("<!-- example: project= -->\n```python\nfrom plcbuilder import nope\n```\n")
+    problems = run(bad, tmp_path / "bad")
+    assert problems and "ImportError" in problems[0]
