@@ -248,7 +248,8 @@ def run(ex: Example, tmp: Optional[Path] = None) -> list[str]:
         return []
     todo = steps(ex.body)
     for n, st in enumerate(todo):
-        script += f"printf '%s\\n' '{_MARK.format(n)}'\n"
+        # the marker between two commands keeps $? (for an `echo $?`)
+        script += f"_r=$?; printf '%s\\n' '{_MARK.format(n)}'; (exit $_r)\n"
         if st.command.rstrip().endswith("&") and not st.command.rstrip().endswith("&&"):
             # in the background: what it prints by the time it has printed the lines
             # shown (a server saying it is ready), then the block goes on

@@ -59,7 +59,7 @@ def test_elisions():
 
 def test_the_runner_passes_a_true_example_and_fails_a_wrong_output(tmp_path):
     ok = _one("<!-- example: project= -->\n```console\n$ echo hello; echo oops >&2\n"
-              "hello\noops\n$ echo $?\n0\n```\n")
+              "hello\noops\n$ echo $?\n0\n$ false\n$ echo $?\n1\n```\n")
     assert run(ok, tmp_path / "ok") == []
     wrong = _one("<!-- example: project= -->\n```console\n$ echo hello\nhullo\n```\n")
     problems = run(wrong, tmp_path / "wrong")
