@@ -17,7 +17,8 @@ between allowed) sets it up; values may be quoted as in the shell:
 - ``project=NAME``: the fresh ``plcbuilder new`` project (default ``myproject``);
   ``project=`` makes none;
 - ``cd=DIR``: run in that folder of the example's temporary folder;
-- ``before="COMMANDS"``: hidden set-up, run first (it must succeed);
+- ``before="COMMANDS"``: hidden set-up, run first (it must succeed); ``$FIXTURES``
+  is tests/docs/fixtures/, for what is too long to say in the comment;
 - ``file=PATH`` (on a non-shell block, e.g. ```` ```c ````): the block is not run
   but written to PATH for this page's later examples;
 - ``needs=TOOL,…``: skipped (saying so) where a program it runs is not installed;
@@ -47,8 +48,9 @@ from typing import Optional
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
 
-_FENCE_OPEN = re.compile(r"^(```+|~~~+)\s*([\w+-]*)[^\n]*$")
+_FENCE_OPEN = re.compile(r"^([ \t]*)(```+|~~~+)\s*([\w+-]*)[^\n]*$")
 _COMMENT = re.compile(r"^<!--\s*example\b:?(.*?)-->\s*$", re.S)
 _SHELLS = {"console", "sh", "shell", "bash", "", "python"}
 ELLIPSES = ("…", "...")
@@ -109,12 +111,13 @@ def examples(page: Path, text: Optional[str] = None) -> list[Example]:
     while i < len(lines):
         line = lines[i]
         m = _FENCE_OPEN.match(line)
-        if m:
-            fence, info = m.group(1), m.group(2).lower()
+        if m:               # (a block in a list item is indented: its lines lose that)
+            indent, fence, info = len(m.group(1)), m.group(2), m.group(3).lower()
             j = i + 1
-            while j < len(lines) and not lines[j].startswith(fence[:3]):
+            while j < len(lines) and not lines[j].lstrip().startswith(fence[:3]):
                 j += 1
-            body = "\n".join(lines[i + 1:j])
+            body = "\n".join(l[indent:] if l[:indent].isspace() else l.lstrip()
+                             for l in lines[i + 1:j])
             opts = pending
             where = f"{page.name}:{i + 1}"
             if opts is not None and "file" in opts:
@@ -127,11 +130,11 @@ def examples(page: Path, text: Optional[str] = None) -> list[Example]:
             pending = None
             i = j + 1
             continue
-        if line.startswith("<!--") and re.match(r"<!--\s*example\b", line):
+        if re.match(r"\s*<!--\s*example\b", line):
             k = i
             while "-->" not in lines[k] and k + 1 < len(lines):
                 k += 1
-            c = _COMMENT.match("\n".join(lines[i:k + 1]))
+            c = _COMMENT.match("\n".join(lines[i:k + 1]).strip())
             if c is None:
                 raise ExampleError(f"{page.name}:{i + 1}: cannot read the example comment")
             pending, pending_line = _options(c.group(1).strip(), f"{page.name}:{i + 1}"), i + 1
@@ -198,7 +201,7 @@ def _env(tmp: Path) -> dict:
     home.mkdir(parents=True, exist_ok=True)
     env.update(HOME=str(home), PATH=f"{Path(sys.executable).parent}"
                f"{os.pathsep}{env.get('PATH', '')}", COLUMNS="100", NO_COLOR="1",
-               PYTHONUNBUFFERED="1", LC_ALL="C.UTF-8")
+               PYTHONUNBUFFERED="1", LC_ALL="C.UTF-8", FIXTURES=str(FIXTURES))
     env.pop("DISPLAY", None)
     env.pop("WAYLAND_DISPLAY", None)
     return env

@@ -107,3 +107,8 @@ def test_a_marked_python_block_runs_and_must_succeed(tmp_path):
     bad = _one("<!-- example: project= -->\n```python\nfrom plcbuilder import nope\n```\n")
     problems = run(bad, tmp_path / "bad")
     assert problems and "ImportError" in problems[0]
+
+
+def test_an_indented_block_in_a_list_item_is_an_example():
+    ex = _one("- a list item:\n\n  <!-- example: project= -->\n  ```console\n  $ echo hi\n  hi\n  ```\n")
+    assert ex.body == "$ echo hi\nhi" and ex.options == {"project": ""}
