@@ -116,7 +116,7 @@ def examples(page: Path, text: Optional[str] = None) -> list[Example]:
             j = i + 1
             while j < len(lines) and not lines[j].lstrip().startswith(fence[:3]):
                 j += 1
-            body = "\n".join(l[indent:] if l[:indent].isspace() else l.lstrip()
+            body = "\n".join(l[indent:] if not l[:indent].strip() else l.lstrip()
                              for l in lines[i + 1:j])
             opts = pending
             where = f"{page.name}:{i + 1}"

@@ -110,5 +110,7 @@ def test_a_marked_python_block_runs_and_must_succeed(tmp_path):
 
 
 def test_an_indented_block_in_a_list_item_is_an_example():
-    ex = _one("- a list item:\n\n  <!-- example: project= -->\n  ```console\n  $ echo hi\n  hi\n  ```\n")
-    assert ex.body == "$ echo hi\nhi" and ex.options == {"project": ""}
+    ex = _one("- a list item:\n\n  <!-- example: project= -->\n  ```console\n  $ echo hi\n    hi\n  ```\n")
+    assert ex.body == "$ echo hi\n  hi" and ex.options == {"project": ""}
+    ex = _one("```console\n$ echo '  hi'\n  hi\n```\n")
+    assert ex.body == "$ echo '  hi'\n  hi"
