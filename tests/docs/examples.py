@@ -35,6 +35,7 @@ ended (SIGTERM) when the block ends.
 
 from __future__ import annotations
 
+import atexit
 import os
 import re
 import shlex
@@ -220,8 +221,10 @@ def prepare(ex: Example, tmp: Path) -> Path:
     env = _env(tmp)
     project = ex.options.get("project", "myproject")
     if project:
-        subprocess.run([str(plcb), "new", project], cwd=tmp, env=env, check=True,
-                       stdout=subprocess.DEVNULL, timeout=TIMEOUT_S)
+        shutil.copytree(_new_project(), tmp / project, symlinks=True)
+        toml = tmp / project / "plcbuilder.toml"          # its name is the folder's
+        toml.write_text(toml.read_text(encoding="utf-8").replace(
+            'name = "plcb_template"', f'name = "{project}"', 1), encoding="utf-8")
     for name, text in ex.files.items():
         p = tmp / name
         p.parent.mkdir(parents=True, exist_ok=True)
@@ -229,6 +232,22 @@ def prepare(ex: Example, tmp: Path) -> Path:
     cwd = tmp / ex.options.get("cd", "")
     cwd.mkdir(parents=True, exist_ok=True)
     return cwd
+
+
+_TEMPLATE: list[Path] = []
+
+
+def _new_project() -> Path:
+    """A ``plcbuilder new`` project, made once per process (each example gets a copy:
+    the command's output names the folder, its files do not)."""
+    if not _TEMPLATE:
+        base = Path(tempfile.mkdtemp(prefix="plcb-doc-template-"))
+        atexit.register(shutil.rmtree, base, True)
+        plcb = Path(sys.executable).parent / "plcbuilder"
+        subprocess.run([str(plcb), "new", "plcb_template"], cwd=base, env=_env(base),
+                       check=True, stdout=subprocess.DEVNULL, timeout=TIMEOUT_S)
+        _TEMPLATE.append(base / "plcb_template")
+    return _TEMPLATE[0]
 
 
 def run(ex: Example, tmp: Optional[Path] = None) -> list[str]:
