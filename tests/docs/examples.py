@@ -303,7 +303,9 @@ def _bash(script: str, cwd: Path, env: dict) -> subprocess.CompletedProcess:
 
 def missing(ex: Example) -> list[str]:
     """The programs the example ``needs`` that are not installed here."""
-    return [t for t in ex.options.get("needs", "").split(",") if t and not shutil.which(t)]
+    path = f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"
+    return [t for t in ex.options.get("needs", "").split(",")
+            if t and not shutil.which(t, path=path)]
 
 
 def all_examples() -> list[Example]:
