@@ -276,7 +276,7 @@ def run(ex: Example, tmp: Optional[Path] = None) -> list[str]:
             # in the background: what it prints by the time it has printed the lines
             # shown (a server saying it is ready), then the block goes on
             log, want = f"'{tmp}/.bg-{n}.log'", len([l for l in st.expected if l.strip()])
-            script += (f"{st.command.rstrip()[:-1]} >{log} 2>&1 &\n"
+            script += (f": >{log}; {st.command.rstrip()[:-1]} >{log} 2>&1 &\n"
                        f"for _ in $(seq 300); do [ $(wc -l <{log}) -ge {want} ] && break; "
                        f"sleep 0.1; done; cat {log}\n")
         else:
