@@ -40,6 +40,7 @@ import os
 import re
 import shlex
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -297,8 +298,18 @@ def run(ex: Example, tmp: Optional[Path] = None) -> list[str]:
 
 
 def _bash(script: str, cwd: Path, env: dict) -> subprocess.CompletedProcess:
-    return subprocess.run(["bash", "-c", script], cwd=cwd, env=env, text=True,
-                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=TIMEOUT_S)
+    """Run the script in its own process group; one that outlives TIMEOUT_S is ended
+    whole (a server it started too) and reported with what it printed."""
+    proc = subprocess.Popen(["bash", "-c", script], cwd=cwd, env=env, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            start_new_session=True)
+    try:
+        out, _ = proc.communicate(timeout=TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        out, _ = proc.communicate()
+        out += f"\n(still running after {TIMEOUT_S} s: ended)\n"
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out)
 
 
 def missing(ex: Example) -> list[str]:
