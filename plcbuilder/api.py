@@ -332,7 +332,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     forces = report.pop("forces", None)          # (the forces stay last)
     report["halted"] = _halted_report(c.debugger.halted_state()) if opts.breaks else None
     if history is not None:
-        report["capture"] = _save_capture(capturer, opts) if capturer is not None else None
+        if capturer is not None:         # (no trigger asked for: no capture to speak of)
+            report["capture"] = _save_capture(capturer, opts)
         if opts.history is not None:
             _save_trace(history.snapshot(meta={"target": str(target)}), opts.history, "--history")
             report["history"] = {"file": str(opts.history), "bytes": history.nbytes()}

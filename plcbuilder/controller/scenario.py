@@ -31,7 +31,7 @@ procedure started at t runs in tick t and sees an input set at t.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Iterable, Optional
 
@@ -65,6 +65,9 @@ class Action:
     #: code offset, return offsets) there; a replay does it at that statement of
     #: tick ``t_ms`` (controller/rewind.py). None: before the tick runs.
     at: Optional[tuple] = None
+    #: where it was written: ``FILE:LINE`` of a scenario file ("" for an option or a
+    #: recording); an error about the action names it
+    src: str = field(default="", compare=False, repr=False)
 
     def describe(self) -> str:
         if self.kind == "start":
@@ -264,7 +267,9 @@ class Scenario:
         return sorted(self.actions, key=lambda a: a.t_ms)   # stable: given order within a tick
 
     @classmethod
-    def parse(cls, text: str, file: str = "<scenario>") -> "Scenario":
+    def parse(cls, text: str, file: str = "<scenario>", first_line: int = 1) -> "Scenario":
+        """The actions of a scenario text; ``first_line`` is the file's line of its
+        first line (a scenario inside a test file), for the places actions keep."""
         out = cls()
         for n, raw in enumerate(text.splitlines(), 1):
             line = raw.split("#", 1)[0].strip()
@@ -282,9 +287,9 @@ class Scenario:
                 raise ScenarioError(f"unknown action {word!r} (one of {', '.join(KINDS)})",
                                     file, n)
             try:
-                out.add(parser(rest))
-            except ScenarioError as exc:
-                raise ScenarioError(exc.message, file, n) from None
+                out.add(replace(parser(rest), src=f"{file}:{first_line + n - 1}"))
+            except ScenarioError as exc:      # said as the line is written
+                raise ScenarioError(exc.message.replace(f"--{kind}", kind), file, n) from None
         return out
 
     @classmethod
@@ -351,7 +356,12 @@ def drive(controller, scenario: Scenario, limit_ms: int, *, until_idle: bool = T
     while True:
         t = c.t_ms
         while i < n and actions[i].t_ms <= t:
-            apply(c, actions[i])
+            try:
+                apply(c, actions[i])
+            except Exception as exc:         # the controller's refusal, said where
+                if actions[i].src:
+                    exc.args = (f"{actions[i].src}: {exc}",)
+                raise
             i += 1
         if t >= limit_ms:
             return limit_ms

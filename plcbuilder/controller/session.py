@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import gzip
 import io
+from dataclasses import replace
 from pathlib import Path
 from typing import Optional, Sequence
 
@@ -99,11 +100,12 @@ def build_scenario(scenario: Optional[Path] = None, starts: Sequence[str] = (),
     try:
         if scenario is not None:
             sc.extend(Scenario.load(scenario).actions)
-        sc.extend(parse_start(s) for s in starts)
-        sc.extend(parse_input(s) for s in inputs)
-        sc.extend(parse_adc(s) for s in adcs)
-        sc.extend(parse_write(s) for s in writes)
-        sc.extend(parse_force(s) for s in forces)
+        for option, parse, texts in (("--start", parse_start, starts),
+                                     ("--input", parse_input, inputs),
+                                     ("--adc", parse_adc, adcs),
+                                     ("--write", parse_write, writes),
+                                     ("--force", parse_force, forces)):
+            sc.extend(replace(parse(s), src=f"{option} {s}") for s in texts)
     except ScenarioError as exc:
         raise UsageError(str(exc)) from None
     return sc
@@ -120,17 +122,18 @@ def check_scenario(sc: Scenario, controller) -> None:
     for a in sc.actions:
         if a.kind in ("start", "bind") and a.name not in programs:
             loaded = ", ".join(sorted(programs)) or "none"
-            raise UsageError(f"--start {a.name}: no procedure named {a.name} (loaded: {loaded})")
+            raise UsageError(f"{a.src or '--start ' + a.name}: no procedure named {a.name} "
+                             f"(loaded: {loaded})")
         if a.kind in ("input", "bind") and not 0 <= a.a < n_in:
-            raise UsageError(f"--input {a.a}: no such input (the machine has inputs "
-                             f"0..{n_in - 1})")
+            raise UsageError(f"{a.src or '--input ' + str(a.a)}: no such input (the machine "
+                             f"has inputs 0..{n_in - 1})")
         if a.kind == "adc" and not 0 <= a.a < 8:
-            raise UsageError(f"--adc {a.a}: no such ADC channel (0..7)")
+            raise UsageError(f"{a.src or '--adc ' + str(a.a)}: no such ADC channel (0..7)")
         if a.kind in ("write", "force", "release") and a.name != "all":
             try:
                 controller.forces.check(a.name)
             except ValueError as exc:
-                raise UsageError(f"--{a.kind}: {exc}") from None
+                raise UsageError(f"{a.src or '--' + a.kind}: {exc}") from None
 
 
 def run_session(c: Controller, sc: Scenario, limit_ms: int, *, trace: Optional[Path] = None,
