@@ -353,6 +353,48 @@ def test_inputs_panel_sends_and_shows(qtbot, panels, fake):
     assert "Disconnected" in panels.proc.status.text()
 
 
+@pytest.mark.parametrize("target", ["huazhong", "mycnc"])
+@pytest.mark.parametrize("width", [420, 300])
+def test_the_inputs_grid_fits_its_dock_with_long_pin_names(qtbot, panels, target, width):
+    """Wave 2 of issue 26: on a Huazhong project the bank-bit labels
+    (``10  X1.2 INPUT_LIMIT_MIN_X``) made the Inputs dock's grid wider than the
+    dock, with a horizontal scroll bar. The labels fit: the bank bit is the
+    head (not the pin number too), and a name too long for its toggle goes
+    without its INPUT_ and is shortened in its middle; the tooltip and the
+    filter have it whole."""
+    panels.set_target(target)
+    panels.set_pin_names(default_pin_names()[0], {})
+    dock = panels.dock("inputs")
+    dock.setFloating(True)
+    dock.resize(width, 500)
+    dock.show()
+    qtbot.waitExposed(dock)
+    QtWidgets.QApplication.processEvents()
+    inputs = panels.inputs
+    scroll = inputs.findChild(QtWidgets.QScrollArea)
+    assert not scroll.horizontalScrollBar().isVisible()
+    assert inputs.grid_host.width() <= scroll.viewport().width()
+    shown = inputs.shown_pins()
+    assert 10 in shown
+    b = inputs.button(10)
+    head = "X1.2" if target == "huazhong" else "10"
+    assert b.text() == f"{head}  INPUT_LIMIT_MIN_X"          # the whole label
+    assert "INPUT_LIMIT_MIN_X" in b.toolTip() and "Input 10" in b.toolTip()
+    for pin in shown:
+        t = inputs.button(pin)
+        assert t.isVisible() and t.geometry().right() <= inputs.grid_host.width()
+        drawn = t.shown_text()
+        assert drawn.startswith(t.head)
+        assert t.fontMetrics().horizontalAdvance(drawn) <= t.width() - t._chrome()
+    if width == 300:                     # too narrow for the whole name: shortened
+        assert b.shown_text() != b.text() and b.shown_text().endswith("_X")
+    inputs.filter.setText("limit_min_x")
+    assert inputs.shown_pins() == [10]
+    if target == "huazhong":
+        inputs.filter.setText("x1.2")
+        assert inputs.shown_pins() == [10]
+
+
 def test_watch_panel_orders_and_follows(qtbot, panels, fake):
     fake.connected = True
     fake.sig_state.emit(ControllerStatus(t_ms=10, running="M03", software=(), proc=70), 0)

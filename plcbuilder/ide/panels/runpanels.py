@@ -219,11 +219,13 @@ class RunPanels(QtCore.QObject):
         Huazhong target each is first the bank bit it is (X0.0, Y0.7)."""
         inputs, outputs = dict(inputs), dict(outputs)
         self._pin_names = (inputs, outputs)
+        own_inputs = inputs
         if self.target == "huazhong":
             inputs = bit_names(max(64, max(inputs, default=0) + 1), "X", inputs)
             outputs = bit_names(max(64, max(outputs, default=0) + 1), "Y", outputs)
         self.lanes.set_pin_names(inputs, outputs)
-        self.inputs.set_pin_names(inputs)
+        # the toggles say the bank bit where the pin number would be (not both)
+        self.inputs.set_pin_names(own_inputs, "X" if self.target == "huazhong" else None)
 
     def set_forces(self, forces: list) -> None:
         """What is forced: the watch, the inputs and the lanes mark it."""
