@@ -125,6 +125,54 @@ def test_model_ingests_samples():
     assert m.epoch == epoch + 1 and len(m) == 2 and m.active_outputs == set()
 
 
+def test_held_samples_are_kept_as_any_other(monkeypatch):
+    """Issue 26.4: a batch that only holds the newest value (the telemetry's
+    steps while nothing changes) takes a short way in; the buffers and what
+    the model found are exactly those of the long way, also across the ring's
+    wrap and after a message or a change."""
+    from plcbuilder.ide.panels import model as model_mod
+    rng = np.random.default_rng(7)
+    fast, slow = RunModel(capacity=53), RunModel(capacity=53)
+    monkeypatch.setattr(slow, "_holds", lambda samples: False)
+    held = 0
+    t = 0
+    last = sample(0)
+    for _ in range(120):
+        batch = []
+        for _ in range(int(rng.integers(1, 9))):
+            t += int(rng.integers(1, 30))
+            if rng.random() < 0.25:          # a change (sometimes with a message)
+                last = sample(t, proc=int(rng.integers(0, 3)), outputs=int(rng.integers(0, 4)),
+                              inputs=int(rng.integers(0, 2)) << 9, pwm=(int(rng.integers(0, 9)),),
+                              message=int(rng.random() < 0.3) * 100)
+                batch.append(last)
+            else:                            # a hold, as StepSamples makes it
+                batch.append(model_mod.ev.Sample(**{**last.__dict__, "t_ms": t, "message": 0}))
+        held += fast._holds(batch)
+        fast.add_samples(batch)
+        slow.add_samples(batch)
+        for a, b in zip((fast.time, *fast._value_buffers()), (slow.time, *slow._value_buffers())):
+            assert a.total == b.total and np.array_equal(a.views(), b.views())
+        assert (fast.active_outputs, fast.active_inputs, fast.proc_values, fast.running,
+                fast.last_sample, fast.version) == (slow.active_outputs, slow.active_inputs,
+                                                     slow.proc_values, slow.running,
+                                                     slow.last_sample, slow.version)
+    assert held > 10                         # the short way was taken
+
+
+def test_ring_buffer_repeats_its_last_row_across_the_wrap():
+    rb = RingBuffer(5, 2)
+    rb.repeat_last(3)                        # nothing written yet: nothing to repeat
+    assert rb.total == 0
+    rb.extend(np.array([[1, 10], [2, 20], [3, 30]]))
+    rb.repeat_last(4)
+    assert rb.total == 7 and rb.view(0).tolist() == [3, 3, 3, 3, 3]
+    assert rb.views(last=6).shape == (2, 5)
+    rb.append((4, 40))
+    rb.repeat_last(12)                       # more than the capacity
+    assert rb.total == 20 and rb.view(1).tolist() == [40] * 5 and rb.latest().tolist() == [4, 40]
+
+
 def test_model_keeps_messages_bounded():
     m = RunModel(capacity=10, messages=50)
     rows = m.add_events([ev.Message(t, 131, None, 1, 2, "M03") for t in range(120)]
