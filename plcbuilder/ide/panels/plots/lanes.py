@@ -37,7 +37,7 @@ class LanesPanel(TimePanel):
         self.show_inputs.toggled.connect(self._mark_dirty)
         self.toolbar.extra.addWidget(self.show_inputs)
 
-        self.widget = style.plot_widget(style.time_axis())
+        self.widget = style.plot_widget(style.time_axis(), menu=False)
         self.plot = self.widget.getPlotItem()
         style.style_plot(self.plot, bottom="time (s)", bottom_units=None, grid=(True, False))
         self.add_time_plot(self.plot)
