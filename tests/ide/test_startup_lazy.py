@@ -92,12 +92,22 @@ def test_the_trees_descriptions_come_after_the_first_paint_a_batch_at_a_time(
         return [it.text(0) for it in tree._all_items() if it.data(0, ROLE_DESCRIPTION)]
 
     assert described() == [] and tree.describing() and w.busy()
+    # counted after each turn that reads some (polling would see several turns
+    # at once on a busy machine)
+    counts, painted_then = [], []
+    describe_some = tree._describe_some
+
+    def counted(batch):
+        painted_then.append(w._painted)
+        describe_some(batch)
+        counts.append(len(described()))
+    tree._describe_some = counted
     qtbot.waitUntil(lambda: w._painted)
-    qtbot.waitUntil(lambda: 0 < len(described()))
-    first = len(described())
-    assert first <= DESCRIBE_BATCH                      # the rest on later turns
     _workbench.settle(qtbot, w)
-    assert not tree.describing() and len(described()) > first
+    assert not tree.describing() and len(counts) >= 2 and all(painted_then)
+    assert counts[0] <= DESCRIBE_BATCH                   # the rest on later turns
+    assert all(b - a <= DESCRIBE_BATCH for a, b in zip(counts, counts[1:]))
+    assert counts[-1] > counts[0]
     assert tree.find_item("S007").data(0, ROLE_DESCRIPTION) == "job number 7"
     assert tree.find_item("M03").data(0, ROLE_DESCRIPTION) == "spindle on, clockwise"
     # once painted, a refresh reads them on the next turns, not before returning
