@@ -522,6 +522,19 @@ class Debugger:
             events.append(Halted(self.plc.t, self.halted_state()))
         self._told = h
 
+    def unannounce(self) -> None:
+        """Take back the announcement of the last halt (while its event is
+        not taken yet) and forget it: the halt was a replay's own, to do an
+        action where it was done live (controller/scenario.py, ``Action.at``);
+        nobody halted there."""
+        if self._told is not None:
+            events = self.plc.events
+            for k in range(len(events) - 1, -1, -1):
+                if isinstance(events[k], Halted):
+                    del events[k]
+                    break
+        self._told = None
+
     # ------------------------------------------------------------ commands
     def pause(self) -> None:
         """Halt at the end of the current tick (now, between ticks)."""

@@ -130,10 +130,24 @@ def check_scenario(sc: Scenario, controller) -> None:
         if a.kind == "adc" and not 0 <= a.a < 8:
             raise UsageError(f"{a.src or '--adc ' + str(a.a)}: no such ADC channel (0..7)")
         if a.kind in ("write", "force", "release") and a.name != "all":
+            proc = a.name.partition(".")[0] if "." in a.name else None
+            if proc is not None and proc not in controller.programs and proc in programs:
+                _check_variable(a, programs[proc])      # of the image an upload line loads
+                continue
             try:
                 controller.forces.check(a.name)
             except ValueError as exc:
                 raise UsageError(f"{a.src or '--' + a.kind}: {exc}") from None
+
+
+def _check_variable(a, program) -> None:
+    """A write, force or release of ``PROC.var`` where PROC is in the image a
+    recording's upload line loads (not loaded yet when the run starts)."""
+    var = a.name.partition(".")[2]
+    if var not in program.slot_names().values() and var not in ("command", "parameter"):
+        own = ", ".join(program.var_names) or "none of its own"
+        raise UsageError(f"--{a.kind}: {a.name}: {program.name} has no variable {var!r} "
+                         f"(its variables: {own})")
 
 
 def run_session(c: Controller, sc: Scenario, limit_ms: int, *, trace: Optional[Path] = None,
@@ -183,8 +197,11 @@ def run_session(c: Controller, sc: Scenario, limit_ms: int, *, trace: Optional[P
 
 def _watched(c: Controller, name: str) -> tuple[str, str]:
     """(procedure, variable) of a watched ``PROC.var``; UsageError naming what is wrong."""
+    programs = c.programs
+    if getattr(c, "replay_image", None) is not None:   # loaded later, by an upload line
+        programs = {**{p.name: p for p in c.replay_image}, **programs}
     try:
-        return check_name(c.programs, name)
+        return check_name(programs, name)
     except ValueError as exc:
         raise UsageError(f"--watch {exc}") from None
 

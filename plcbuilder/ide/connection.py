@@ -103,6 +103,7 @@ class _Worker(threading.Thread):
         self.stopping = threading.Event()
         self.client: Optional[Client] = None
         self.child: Optional[ControllerProcess] = None
+        self.child_told = False                 # the GUI knows the child's pid
         self.image: Optional[bytes] = None      # re-uploaded after a restart
         self.target: Optional[dict] = None      # the image's target profile (docs/targets.md)
         self.speed: Optional[tuple[str, Optional[float]]] = None
@@ -206,6 +207,9 @@ class _Worker(threading.Thread):
                     self.child.stop()
                 self.child = process.ControllerProcess(self.extra_args)
                 self.post("child", self.child.pid)
+            elif not self.child_told:                # started before (prestart)
+                self.post("child", self.child.pid)
+            self.child_told = True
             ep = self._wait_endpoint(self.child)
             host, port, token = ep.host, ep.port, ep.token
         else:
@@ -505,6 +509,8 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
         self.uploaded_crc: Optional[str] = None
         self._upload_done = False
         self.forces: list = []                  # the last list of forces
+        #: (arguments, ControllerProcess) started by prestart(), not connected yet
+        self._prestarted: Optional[tuple] = None
 
     # -------------------------------------------------------------- lifecycle
     @property
@@ -523,11 +529,31 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
     def embedded(self) -> bool:
         return self._worker is not None and self._worker.embedded
 
+    def prestart(self, extra_args: Sequence[str] = ()) -> None:
+        """Start the child process of :meth:`start_embedded` with these
+        arguments now (returns at once); the start that follows with the same
+        arguments connects to it rather than start another."""
+        self._drop_prestarted()
+        from plcbuilder.link.process import ControllerProcess
+        self._prestarted = (tuple(extra_args), ControllerProcess(extra_args))
+
     def start_embedded(self, extra_args: Sequence[str] = ()) -> None:
         """Run a controller as a child process and connect to it (restarting it
         with backoff whenever it dies). ``extra_args`` go to ``plcbuilder
         controller`` (say ``["--machine", path]``)."""
-        self._begin(_Worker(self._inbox, embedded=True, extra_args=extra_args))
+        worker = _Worker(self._inbox, embedded=True, extra_args=extra_args)
+        pre, self._prestarted = self._prestarted, None
+        if pre is not None:
+            if pre[0] == tuple(extra_args) and pre[1].alive():
+                worker.child = pre[1]           # started before the window painted
+            else:
+                pre[1].stop()
+        self._begin(worker)
+
+    def _drop_prestarted(self) -> None:
+        pre, self._prestarted = self._prestarted, None
+        if pre is not None:
+            pre[1].stop()
 
     def connect_to(self, host: str, port: int, token: str) -> None:
         """Talk to a controller that is already running (reconnecting with backoff
@@ -536,6 +562,7 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
 
     def shutdown(self, timeout: float = 5.0) -> None:
         """Disconnect and end the embedded controller (waits for it, at most ``timeout``)."""
+        self._drop_prestarted()
         w, self._worker = self._worker, None
         if w is not None:
             w.stopping.set()
