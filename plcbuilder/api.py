@@ -16,10 +16,10 @@ nothing here keeps global state or prints.
 from __future__ import annotations
 
 import importlib
-from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable, Optional, Sequence
 
+from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.abi import proc_name
@@ -121,10 +121,17 @@ def __getattr__(name: str):
 _LOADED = False
 
 
-def _load() -> None:
-    """Every lazy name into this module (its functions use them as globals).
-    Once all of them: one name loaded on its own (``api.run_suite``) is not all."""
+def _load(*names: str) -> None:
+    """Lazy names into this module (its functions use them as globals): those
+    named, or (no names) every one. A function loads only what it uses, so a
+    command pays for its own stages only (``check`` does not load the controller)."""
     global _LOADED
+    if names:
+        g = globals()
+        for name in names:
+            if name not in g:
+                __getattr__(name)
+        return
     if not _LOADED:
         for name in _LAZY:
             if name not in globals():
@@ -166,7 +173,7 @@ def load_program(path) -> Program:
 def image_of(sources: dict[str, str]) -> bytes:
     """An eeprom.rom of hardware procedures ``{name: source}`` with the built-in
     headers only (raises ValueError naming the first that does not compile)."""
-    _load()
+    _load("compile_source", "write_image")
     items = []
     for name, text in sources.items():
         r = compile_source(text, f"{name}.plc")
@@ -177,13 +184,13 @@ def image_of(sources: dict[str, str]) -> bytes:
 
 
 def disassemble(program: Program, source_line: Optional[Callable[[str, int], Optional[str]]] = None) -> str:
-    _load()
+    _load("disasm")
     return disasm.render_text(program, source_line)
 
 
 def instructions(program: Program) -> list:
     """The disassembly as records (one per instruction, with its source line)."""
-    _load()
+    _load("disasm")
     return disasm.instructions(program)
 
 
@@ -196,7 +203,7 @@ def options_for(path, *, software: bool = False, strict: Optional[bool] = None,
     project (``project``, or the one it sits in), else with the options given.
     ``strict`` None: as its project says (not strict outside a project).
     Raises ProjectError when its project's settings cannot be read."""
-    _load()
+    _load("Project", "kind_of")
     if project is None:
         project = Project.find_for(path)
     if project is not None:
@@ -271,7 +278,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
 
     Bad usage raises :class:`UsageError`; compile errors come back as the
     procedures' diagnostics with ``report`` None."""
-    _load()
+    _load("UsageError", "build_scenario", "Controller", "ControllerError", "Action",
+          "run_session", "load_machine", "default_machine", "ConfigError")
     opts = options or RunOptions()
     limit = DEFAULT_MS if opts.ms is None else opts.ms
     if not 0 <= limit <= MAX_MS:
@@ -286,6 +294,7 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     try:
         mconf = load_machine(machine_path) if machine_path is not None else default_machine()
         if tg.io_dat is not None:
+            _load("with_io_dat", "load_io_dat")
             mconf = with_io_dat(mconf, load_io_dat(tg.io_dat))
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
@@ -306,6 +315,7 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     history = capturer = None
     watch = list(opts.watch)
     if opts.trigger is not None or opts.history is not None or watch:
+        _load("History", "Capturer", "TriggerError", "parse_trigger", "watched_variables")
         history = History(c.machine)
     if opts.trigger is not None:
         if opts.capture is None:
@@ -361,6 +371,7 @@ def _write_state(path: Path, target: str, kept: list[int]) -> None:
 
 
 def _save_trace(trace, path: Path, option: str) -> None:
+    _load("trace_export", "trace_file")
     try:
         if path.suffix.lower() in (".vcd", ".csv"):
             trace_export.export(trace, path)
@@ -396,6 +407,8 @@ def _save_capture(capturer, opts: RunOptions) -> Optional[dict]:
 def _set_breaks(c: Controller, breaks: Sequence[str], target: Path) -> None:
     """``--break FILE:LINE[:CONDITION]`` options, set on the loaded controller
     (a bad one raises UsageError naming it)."""
+    if breaks:
+        _load("compile_condition", "DebugError")
     by_file: dict[str, list[dict]] = {}
     for text in breaks:
         parts = str(text).split(":", 2)
@@ -453,6 +466,7 @@ def _replay_image(c: Controller, programs: list, sc) -> Optional[str]:
     uploads = [a for a in sc.actions if a.kind == "upload"]
     if not uploads:
         return None
+    _load("image_id")
     c.replay_image = list(programs)
     have = image_id(programs)
     other = sorted({a.name for a in uploads if a.name and a.name != have})
@@ -463,6 +477,7 @@ def _replay_image(c: Controller, programs: list, sc) -> Optional[str]:
 
 
 def _compile_target(target: Path, opts: RunOptions) -> _Target:
+    _load("compile_file", "Project", "ProjectError", "kind_of")
     if target.is_dir():
         return _compile_project(target, opts)
     if not target.exists():
@@ -478,11 +493,13 @@ def _compile_target(target: Path, opts: RunOptions) -> _Target:
     config = None
     if options.target != "mycnc":
         project = Project.find_for(target)
+        _load("TargetConfig")
         config = _target_config(project) if project is not None else TargetConfig(options.target)
     return _Target([program] if program else [], [r], None, None, program, config)
 
 
 def _compile_project(root: Path, opts: RunOptions) -> _Target:
+    _load("compile_all", "load_variables", "DEFAULT_MACHINE", "io_dat_of", "TargetConfig")
     try:
         project = Project.open(root)
         procs = project.procedures()
@@ -526,25 +543,25 @@ def _target_config(project: Project) -> TargetConfig:
 
 def load_trace(path) -> Trace:
     """Reopen a trace file (``.plctrace``); raises TraceFileError saying why not."""
-    _load()
+    _load("trace_file")
     return trace_file.load(path)
 
 
 def save_trace(trace: Trace, path) -> None:
     """Save a trace as a ``.plctrace`` file, atomically; raises TraceFileError."""
-    _load()
+    _load("trace_file")
     trace_file.save(trace, path)
 
 
 def export_trace(trace: Trace, path, fmt: Optional[str] = None, *, per_tick: bool = False) -> str:
     """Export as CSV (per change, or ``per_tick``) or VCD; raises ExportError."""
-    _load()
+    _load("trace_export")
     return trace_export.export(trace, path, fmt, per_tick=per_tick)
 
 
 def compare_traces(a: Trace, b: Trace) -> "trace_compare.Difference":
     """The first tick where two traces differ, and in which signals."""
-    _load()
+    _load("trace_compare")
     return trace_compare.compare(a, b)
 
 
@@ -617,7 +634,7 @@ def test(project, options: Optional[TestOptions] = None, progress=None) -> TestR
     """``plcbuilder test``: build the project once (writing nothing), read
     ``tests/*.toml``, run every test (or those ``select`` picks), judge them.
     A project that cannot be opened raises :class:`UsageError`."""
-    _load()
+    _load("prepare", "SuiteError", "run_suite", "UsageError")
     opts = options or TestOptions()
     try:
         suite = prepare(project, opts.select, strict=opts.strict)

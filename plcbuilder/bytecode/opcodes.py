@@ -18,8 +18,9 @@ from __future__ import annotations
 
 import enum
 import struct
-from dataclasses import dataclass
 from typing import Iterator, Optional
+
+from plcbuilder._support.records import dataclass
 
 
 class Op(enum.IntEnum):

@@ -24,9 +24,9 @@ it generates, filling in its own operand expressions.
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass, field
 from typing import Callable, Optional
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode.opcodes import BINARY as BINARY_OPS, UNARY as UNARY_OPS, Op
 
 INT_MIN = -0x80000000

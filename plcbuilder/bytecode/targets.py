@@ -22,8 +22,9 @@ their meaning:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Optional
+
+from plcbuilder._support.records import dataclass
 
 MYCNC = "mycnc"
 HUAZHONG = "huazhong"

@@ -9,9 +9,9 @@ names that table here.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Optional
 
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import Op
 

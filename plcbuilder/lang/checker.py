@@ -8,10 +8,9 @@ the code generator never has to guess.
 
 from __future__ import annotations
 
-import difflib
-from dataclasses import dataclass, field
 from typing import Optional
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi, semantics
 from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.program import Kind
@@ -353,6 +352,7 @@ class Checker:
                                                            "sizeof"):
             return
         if p is None:
+            import difflib
             close = difflib.get_close_matches(c.name, list(self.res.procs) + list(FUNCTIONS), n=1)
             hints = [f"did you mean {close[0]}()?"] if close else []
             self.diags.append(error("undefined-procedure", f"no procedure or function named '{c.name}'",

@@ -9,10 +9,10 @@ bytes.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from itertools import accumulate
 from typing import Optional
 
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.opcodes import LONG_FORM, Op, Operand, encode, fits, size_of
 from plcbuilder.bytecode.program import Kind, LineEntry, Program

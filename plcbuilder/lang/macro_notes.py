@@ -9,9 +9,9 @@ of the define it came from (:attr:`Tok.macro`); nothing else is needed.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Optional
 
+from plcbuilder._support.records import replace
 from plcbuilder.diagnostics import Diagnostic, Related, Severity
 from plcbuilder.lang.preprocess import Define, Preprocessed
 from plcbuilder.lang.tokens import Tok

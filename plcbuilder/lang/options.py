@@ -7,10 +7,10 @@ files are compiled) and the IDE's first paint do not load lark. The pipeline
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode.kind import Kind
 
 __all__ = ["CompileOptions"]

@@ -8,10 +8,10 @@ dropped, so columns are the same for every stage.
 from __future__ import annotations
 
 import errno
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder._support.files import FileRefused, read_bounded
 from plcbuilder.diagnostics import Diagnostic, Span, error, warning
 

@@ -15,9 +15,9 @@ has is refused on the others with a hint that names the target that has it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Optional
 
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode import targets as T
 
 COMPOUND_OPS = ("|=", "&=", "^=", "+=", "-=")
