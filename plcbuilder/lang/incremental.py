@@ -23,7 +23,7 @@ diagnostic and byte for byte, as a compile from scratch.
 
 from __future__ import annotations
 
-import threading
+from _thread import allocate_lock
 from typing import Optional
 
 from plcbuilder.diagnostics import Diagnostic
@@ -42,7 +42,7 @@ class Incremental:
         self.tokens = TokenCache()
         self.parsed: Optional[Parsed] = None
         self.code = CodeCache()
-        self.lock = threading.Lock()
+        self.lock = allocate_lock()
 
     def parse(self, toks: list[Tok], main_file: str) -> tuple[A.Module, list[Diagnostic]]:
         self.parsed = parse_incremental(toks, self.parsed, main_file)
