@@ -11,8 +11,9 @@ characters (not bytes): the IDE converts to Scintilla's byte offsets itself.
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
 from typing import Callable, Iterable, NamedTuple, Optional
+
+from plcbuilder._support.records import dataclass
 
 
 class Severity(enum.IntEnum):
@@ -89,6 +90,10 @@ def warning(code: str, message: str, span: Optional[Span], *hints: str,
 
 # ---------------------------------------------------------------- rendering
 
+#: the most of a source line a rendered diagnostic shows (around the column)
+MAX_SHOWN = 160
+
+
 def render_text(diag: Diagnostic, source_line: Callable[[str, int], Optional[str]] | None = None,
                 colorize: Callable[[str, str], str] | None = None) -> str:
     """Render one diagnostic the way compilers do::
@@ -110,12 +115,18 @@ def render_text(diag: Diagnostic, source_line: Callable[[str, int], Optional[str
         text = source_line(s.file, s.line)
         if text is not None:
             text = text.rstrip("\n").replace("\t", " ")
-            out.append("    " + c("source", text))
             start = max(s.col - 1, 0)
             if s.end_line == s.line:
                 width = max(s.end_col - s.col, 1)
             else:
                 width = max(len(text) - start, 1)
+            if len(text) > MAX_SHOWN:           # a very long line: the part around the column
+                lo = max(0, min(start - MAX_SHOWN // 4, len(text) - MAX_SHOWN))
+                hi = lo + MAX_SHOWN
+                width = max(1, min(width, hi - start))
+                text = ("..." if lo else "") + text[lo:hi] + ("..." if hi < len(text) else "")
+                start += (3 if lo else 0) - lo
+            out.append("    " + c("source", text))
             out.append("    " + " " * start + c("caret", "^" + "~" * (width - 1)))
     for h in diag.hints:
         out.append("  " + c("hint", "hint:") + " " + h)

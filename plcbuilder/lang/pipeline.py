@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import os
 import sys
-import threading
+from _thread import allocate_lock
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
@@ -30,13 +30,15 @@ from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocesso
 from plcbuilder.lang.source import SourceSet, decode_source, read_source
 
 COMPILER_VERSION = "1"
+#: the most diagnostics of one code a compile reports (then one that says how many more)
+MAX_SAME = 100
 
 #: The recursion limit while compiling: the preprocessor expands a chain of
 #: #defines (each naming the next) one Python frame a link, and a chain may be
 #: longer than Python's default limit allows. (The checker and generator recurse
 #: over the tree too, but the parser caps its depth at 256 levels.)
 RECURSION_LIMIT = 4000
-_limit_lock = threading.Lock()
+_limit_lock = allocate_lock()
 _limit_users = 0                   # compiles running (in any thread)
 _limit_saved: Optional[int] = None  # the limit to restore when the last one ends
 
@@ -185,6 +187,15 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
             if word not in ("include", "define"):
                 diags.append(error("strict", f"#{word} is not accepted by the controller's "
                                              "compiler (--strict)", span))
+    if pre.too_large:
+        # only the start of the text was read: parsing it would report its
+        # cut-off end (an unclosed block, a missing main) as mistakes
+        diags = add_macro_notes(diags, pre)
+        diags.sort(key=lambda d: (d.sort_key(), d.severity))
+        symbols = Symbols()
+        symbols.defines = {n: (d.text, d.span) for n, d in pre.defines.items()}
+        return CompileResult(name, path, options.kind, None, diags, pre.sources, None,
+                             options.limit, symbols, A.Module([]), list(pre.includes))
     if incremental is None:
         module, parse_diags = parse_tokens(pre.tokens)
     else:
@@ -219,8 +230,30 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
                                "split it into procedures started one after another"))
     diags = add_macro_notes(diags, pre)
     diags.sort(key=lambda d: (d.sort_key(), d.severity))
-    return CompileResult(name, path, options.kind, program, diags, pre.sources, size, options.limit,
-                         symbols, module, list(pre.includes))
+    return CompileResult(name, path, options.kind, program, cap_repeated(diags), pre.sources, size,
+                         options.limit, symbols, module, list(pre.includes))
+
+
+def cap_repeated(diags: list[Diagnostic], limit: int = MAX_SAME) -> list[Diagnostic]:
+    """At most ``limit`` diagnostics of one code (the first, in order), and
+    then one saying how many more there are: thousands of one mistake (a
+    character the language lacks, pasted all over) are not thousands of lines."""
+    counts: dict[str, int] = {}
+    for d in diags:
+        counts[d.code] = counts.get(d.code, 0) + 1
+    if all(n <= limit for n in counts.values()):
+        return diags
+    out, seen = [], {}
+    for d in diags:
+        k = seen[d.code] = seen.get(d.code, 0) + 1
+        if k <= limit:
+            out.append(d)
+        elif k == limit + 1:
+            more = counts[d.code] - limit
+            out.append(Diagnostic(d.severity, "too-many-diagnostics",
+                                  f"{more} more '{d.code}' {d.severity.label}"
+                                  f"{'s' if more != 1 else ''} from here on, not shown", d.span))
+    return out
 
 
 def _file_namer(path: str, file_path: Optional[Path]):

@@ -14,9 +14,12 @@ from plcbuilder.lang.pipeline import CompileOptions, compile_source
 from plcbuilder.lang.source import MAX_SOURCE_BYTES
 from plcbuilder.project.model import Project, ProjectError, kind_of
 
-__all__ = ["CONDITION_FILE", "compile_condition"]
+__all__ = ["CONDITION_FILE", "MAX_CONDITION", "compile_condition"]
 
 CONDITION_FILE = "<condition>"
+#: the longest condition (or evaluated expression) compiled: a compile takes
+#: time in proportion to the text, and a condition is an expression of a line
+MAX_CONDITION = 2000
 
 
 def compile_condition(text: str, context=None) -> "bytes | list[Diagnostic]":
@@ -32,6 +35,10 @@ def compile_condition(text: str, context=None) -> "bytes | list[Diagnostic]":
                       Span.point(CONDITION_FILE, 1, 1))]
     if "\n" in text or "\r" in text:
         return [error("condition", "a condition is one line", Span.point(CONDITION_FILE, 1, 1))]
+    if len(text) > MAX_CONDITION:
+        return [error("condition", f"a condition is at most {MAX_CONDITION} characters "
+                                   f"(this one has {len(text)})", Span.point(CONDITION_FILE, 1, 1),
+                      "name the value in the procedure and test that")]
     head: list[str] = []
     path = Path(context) if context is not None else None
     options = CompileOptions()
