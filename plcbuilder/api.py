@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import importlib
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Optional, Sequence
 
 from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder._support.files import atomic_write, read_bounded
@@ -27,6 +26,10 @@ from plcbuilder.bytecode.kind import Kind
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
                                     summary)
 from plcbuilder.lang.options import CompileOptions
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Optional, Sequence
 
 if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type checkers
     from plcbuilder.bytecode.program import MAGIC, LoadError, Program

@@ -11,9 +11,13 @@ characters (not bytes): the IDE converts to Scintilla's byte offsets itself.
 from __future__ import annotations
 
 import enum
-from typing import Callable, Iterable, NamedTuple, Optional
+from collections import namedtuple
 
 from plcbuilder._support.records import dataclass
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Iterable, Optional
 
 
 class Severity(enum.IntEnum):
@@ -26,14 +30,11 @@ class Severity(enum.IntEnum):
         return self.name.lower()
 
 
-class Span(NamedTuple):
+class Span(namedtuple("Span", "file line col end_line end_col")):
     """Where something is: 1-based line and column, ``end_col`` exclusive.
-    A named tuple: made for every token, so it must be cheap to create."""
-    file: str
-    line: int
-    col: int
-    end_line: int
-    end_col: int
+    A named tuple: made for every token, so it must be cheap to create.
+    Fields: ``file`` (str), ``line``, ``col``, ``end_line``, ``end_col`` (int)."""
+    __slots__ = ()
 
     @classmethod
     def point(cls, file: str, line: int, col: int, length: int = 1) -> "Span":

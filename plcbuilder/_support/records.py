@@ -5,8 +5,9 @@ The standard ``dataclasses`` costs a command's start-up more than the whole
 compile of a small file: importing it loads ``inspect`` (and with it ``ast``,
 ``dis``, ``tokenize``), and each class gets three functions written and
 compiled from source (``__init__``, ``__repr__``, ``__eq__``). Here a class
-gets one: its ``__init__``; ``__repr__``, ``__eq__`` and ``__hash__`` are
-shared functions reading the class's field names. The result behaves as the
+gets only its ``__init__``, and that compiled once per shape of fields (how
+many, which have defaults) and renamed for the class; ``__repr__``, ``__eq__``
+and ``__hash__`` are shared functions reading the class's field names. The result behaves as the
 standard one for what this project uses (the same constructor, repr, equality,
 hashing, ``frozen``, ``slots``, ``eq=False``, ``field(default_factory=…,
 init=, repr=, compare=)`` and ``__post_init__``), and the standard module's
@@ -18,7 +19,10 @@ the same without that import.
 
 from __future__ import annotations
 
-__all__ = ["dataclass", "field", "replace", "fields_of", "FrozenInstanceError"]
+import builtins
+from types import FunctionType
+
+__all__ = ["dataclass", "field", "replace", "fields_of", "asdict", "FrozenInstanceError"]
 
 
 class _Missing:
@@ -104,6 +108,40 @@ class _DataclassFields:
         return made
 
 
+#: compiled __init__ code by the shape of a class's fields (see _init_code)
+_TEMPLATES: dict = {}
+
+
+def _init_code(kinds: tuple, frozen: bool, post_init: bool):
+    """The code of an ``__init__`` for fields of these kinds ('p' a parameter,
+    'f' a parameter whose default is a factory's, 'd'/'F' not a parameter, set
+    to a default/a factory's value, '-' not set), with the fields named a0,
+    a1, …: compiled once per shape and renamed for each class (compiling is
+    most of what making a class costs)."""
+    key = (kinds, frozen, post_init)
+    code = _TEMPLATES.get(key)
+    if code is None:
+        params, body = [], []
+        for i, k in enumerate(kinds):
+            if k == "-":
+                continue
+            if k in "pf":
+                params.append(f"a{i}")
+            if k == "f":
+                body.append(f"    if a{i} is MISSING: a{i} = _f{i}()")
+            value = {"p": f"a{i}", "f": f"a{i}", "d": f"_d{i}", "F": f"_f{i}()"}[k]
+            body.append(f"    __record_set(self, 'a{i}', {value})" if frozen
+                        else f"    self.a{i} = {value}")
+        if post_init:
+            body.append("    self.__post_init__()")
+        src = f"def __init__(self{''.join(', ' + p for p in params)}):\n" \
+            + ("\n".join(body) or "    pass") + "\n"
+        ns: dict = {}
+        exec(compile(src, "<record>", "exec"), {}, ns)       # noqa: S102 - our own source
+        code = _TEMPLATES[key] = ns["__init__"].__code__
+    return code
+
+
 def dataclass(cls=None, /, *, frozen: bool = False, slots: bool = False, eq: bool = True,
               repr: bool = True):
     """A record class: ``@dataclass``, ``@dataclass(frozen=True)``, ``slots=True``, ``eq=False``."""
@@ -127,42 +165,44 @@ def _make(cls, frozen: bool, slots: bool, eq: bool, want_repr: bool):
         types[name] = annotation
     names = list(specs)
 
-    # __init__: the one function written for the class
-    g = {"MISSING": MISSING, "__record_set": object.__setattr__}
-    params, body, seen_default = [], [], False
-    for name in names:
+    # __init__: the one function made for the class
+    kinds, defaults, g = [], [], {"MISSING": MISSING, "__record_set": object.__setattr__,
+                                  "__builtins__": builtins}
+    seen_default = False
+    for i, name in enumerate(names):
         f = specs[name]
         if f.init:
             if f.default is not MISSING:
-                g[f"_d_{name}"] = f.default
-                params.append(f"{name}=_d_{name}")
+                kinds.append("p")
+                defaults.append(f.default)
                 seen_default = True
             elif f.default_factory is not MISSING:
-                g[f"_f_{name}"] = f.default_factory
-                params.append(f"{name}=MISSING")
-                body.append(f"    if {name} is MISSING: {name} = _f_{name}()")
+                kinds.append("f")
+                defaults.append(MISSING)
+                g[f"_f{i}"] = f.default_factory
                 seen_default = True
             else:
                 if seen_default:
                     raise TypeError(f"non-default argument '{name}' follows default argument")
-                params.append(name)
-            value = name
+                kinds.append("p")
         elif f.default_factory is not MISSING:
-            g[f"_f_{name}"] = f.default_factory
-            value = f"_f_{name}()"
+            kinds.append("F")
+            g[f"_f{i}"] = f.default_factory
         elif f.default is not MISSING:
-            g[f"_d_{name}"] = f.default
-            value = f"_d_{name}"
+            kinds.append("d")
+            g[f"_d{i}"] = f.default
         else:
-            continue
-        body.append(f"    __record_set(self, {name!r}, {value})" if frozen
-                    else f"    self.{name} = {value}")
-    if "__post_init__" in {k for b in cls.__mro__ for k in b.__dict__}:
-        body.append("    self.__post_init__()")
-    src = f"def __init__(self, {', '.join(params)}):\n" + ("\n".join(body) or "    pass") + "\n"
-    exec(src, g)                                     # noqa: S102 - our own generated source
-    init = g["__init__"]
+            kinds.append("-")
+    code = _init_code(tuple(kinds), frozen, hasattr(cls, "__post_init__"))
+    rename = {f"a{i}": name for i, name in enumerate(names)}
+    code = code.replace(
+        co_varnames=tuple(rename.get(v, v) for v in code.co_varnames),
+        co_names=tuple(rename.get(v, v) for v in code.co_names),
+        co_consts=tuple(rename.get(c, c) if type(c) is str else c for c in code.co_consts),
+        co_qualname=f"{cls.__qualname__}.__init__")
+    init = FunctionType(code, g, "__init__", tuple(defaults) or None)
     init.__qualname__ = f"{cls.__qualname__}.__init__"
+    init.__module__ = cls.__module__
 
     extra = {"__init__": init, "__record_fields__": specs, "__record_types__": types,
              "__record_repr__": tuple(n for n in names if specs[n].repr),
@@ -223,3 +263,27 @@ def replace(obj, **changes):
         if f.init and name not in changes:
             changes[name] = getattr(obj, name)
     return cls(**changes)
+
+
+_PLAIN = frozenset((int, str, float, bool, bytes, type(None)))
+
+
+def asdict(obj):
+    """A record as a dict, records, lists, tuples and dicts in it converted
+    the same way, and copied (``dataclasses.asdict``)."""
+    cls = type(obj)
+    if cls in _PLAIN:
+        return obj
+    if hasattr(cls, "__record_fields__"):
+        return {n: asdict(getattr(obj, n)) for n in cls.__record_fields__}
+    if isinstance(obj, tuple) and hasattr(obj, "_fields"):           # a namedtuple
+        return cls(*[asdict(v) for v in obj])
+    if isinstance(obj, (list, tuple)):
+        return cls(asdict(v) for v in obj)
+    if isinstance(obj, dict):
+        return cls((asdict(k), asdict(v)) for k, v in obj.items())
+    if hasattr(cls, "__dataclass_fields__"):
+        import dataclasses
+        return dataclasses.asdict(obj)
+    import copy
+    return copy.deepcopy(obj)

@@ -5,7 +5,10 @@ line numbers for messages: where a parse error is, and where a key is
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING, Optional
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 if TYPE_CHECKING:
     import tomllib

@@ -11,7 +11,6 @@ included), 1 on compile errors, 2 on bad usage.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from plcbuilder.cli import term
@@ -148,6 +147,7 @@ def run(args: argparse.Namespace) -> int:
             out.print(f"plcbuilder run: not run: {', '.join(bad)} did not compile", err=True)
             return 1
         if args.json:
+            import json
             out.print(json.dumps(result.report))
         else:
             out.print(summary(result.report, out))

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 #: Subcommand modules, in the order ``--help`` lists them.
@@ -13,10 +14,43 @@ COMMANDS = ("gui", "check", "compile", "disasm", "run", "test", "new", "build",
             "desktop")
 
 
+def _columns() -> int:
+    """The terminal's width, as ``shutil.get_terminal_size`` finds it."""
+    try:
+        cols = int(os.environ.get("COLUMNS", "0"))
+    except ValueError:
+        cols = 0
+    if cols <= 0:
+        try:
+            cols = os.get_terminal_size(sys.__stdout__.fileno()).columns
+        except (AttributeError, ValueError, OSError):
+            cols = 0
+    return cols or 80
+
+
+class _Formatter(argparse.HelpFormatter):
+    """argparse's, told the width: argparse asks ``shutil`` for it, and
+    importing shutil (with its compression modules) is a tenth of a bare
+    Python start, paid by every command for a help text it rarely prints."""
+
+    def __init__(self, prog, indent_increment=2, max_help_position=24, width=None):
+        super().__init__(prog, indent_increment, max_help_position,
+                         _columns() - 2 if width is None else width)
+
+
+class _Parser(argparse.ArgumentParser):
+    """The parser of the command line and of each command (the subcommands'
+    parsers are of the parent's class): with :class:`_Formatter`."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
+
+
 def build_parser(only: tuple[str, ...] | None = None) -> argparse.ArgumentParser:
     """The command line's parser: every command, or ``only`` those named (a
     command starts without importing the others' modules)."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="plcbuilder",
         description="PLC Builder: edit, compile and simulate myCNC PLC procedures.")
     from plcbuilder import __version__

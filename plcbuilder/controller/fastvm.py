@@ -54,9 +54,8 @@ from __future__ import annotations
 
 import re
 import zlib
-from dataclasses import dataclass, field
-from typing import Callable, Iterator, Optional
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi, semantics
 from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST,
                                          NO_FALLTHROUGH, STACK_EFFECT, UNARY, Instruction, Op,
@@ -67,6 +66,10 @@ from plcbuilder.controller import vm
 from plcbuilder.controller.vm import (FAULT_DEPTH, FAULT_DIV, FAULT_END, FAULT_MOD,
                                       MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET, Halted, Handoff,
                                       Host, Migrate, ProcExit, VMFault)
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Iterator, Optional
 
 __all__ = ["Unsupported", "translate", "make_runner", "factory", "io_shape"]
 

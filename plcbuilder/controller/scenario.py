@@ -31,13 +31,16 @@ procedure started at t runs in tick t and sees an input set at t.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterable, Optional
 
+from plcbuilder._support.records import dataclass
 from plcbuilder._support.files import read_bounded
 from plcbuilder._support.numbers import INT32, WORD32, parse_int_in, to_int32
 from plcbuilder.controller.forces import MODES, ForceError, parse_target
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Iterable, Optional
 
 MAX_SCENARIO_BYTES = 4 << 20
 KINDS = ("start", "input", "adc", "stop", "event", "bind", "write", "force", "release",

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Optional, Union
-
 from plcbuilder._support.records import dataclass, field
-
 from plcbuilder.diagnostics import Span
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional, Union
 
 
 # ------------------------------------------------------------- expressions
@@ -63,7 +64,8 @@ class Index:
     span: Span
 
 
-Expr = Union[Num, Name, Call, Unary, Binary, Paren, Index]
+if TYPE_CHECKING:
+    Expr = Union[Num, Name, Call, Unary, Binary, Paren, Index]
 
 
 # -------------------------------------------------------------- statements
@@ -126,7 +128,8 @@ class Empty:
     span: Span
 
 
-Stmt = Union[Assign, IncDec, CallStmt, If, DoWhile, While, Block, Empty]
+if TYPE_CHECKING:
+    Stmt = Union[Assign, IncDec, CallStmt, If, DoWhile, While, Block, Empty]
 
 
 @dataclass(slots=True, eq=False)

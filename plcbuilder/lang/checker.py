@@ -8,8 +8,6 @@ the code generator never has to guess.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi, semantics
 from plcbuilder.bytecode import targets as T
@@ -18,6 +16,10 @@ from plcbuilder.diagnostics import Diagnostic, Related, Span, error, warning
 from plcbuilder.lang import ast as A
 from plcbuilder.lang.builtins import FUNCTIONS, PREDEFINED, REGISTERS, VALUE_TWIN, slot_names
 from plcbuilder.lang.targets import feature_hint, near_miss, profile
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 
 SHIFT_OPS = {"<<", ">>"}

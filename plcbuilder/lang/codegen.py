@@ -10,7 +10,6 @@ bytes.
 from __future__ import annotations
 
 from itertools import accumulate
-from typing import Optional
 
 from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode import targets as T
@@ -21,6 +20,10 @@ from plcbuilder.diagnostics import Span
 from plcbuilder.lang import ast as A
 from plcbuilder.lang.builtins import FUNCTIONS
 from plcbuilder.lang.checker import Resolved, const_value
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 
 #: Code is addressed with 16 bits: a CALL's target (Operand.ABS16) is below this,

@@ -24,7 +24,6 @@ diagnostic and byte for byte, as a compile from scratch.
 from __future__ import annotations
 
 from _thread import allocate_lock
-from typing import Optional
 
 from plcbuilder.diagnostics import Diagnostic
 from plcbuilder.lang import ast as A
@@ -32,6 +31,10 @@ from plcbuilder.lang.codegen import CodeCache
 from plcbuilder.lang.parser import Parsed, parse_incremental
 from plcbuilder.lang.preprocess import TokenCache
 from plcbuilder.lang.tokens import Tok
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 
 class Incremental:

@@ -26,7 +26,10 @@ from __future__ import annotations
 
 from _thread import allocate_lock
 from pathlib import Path
-from typing import Optional
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 _HERE = Path(__file__).resolve().parent
 FORMAT = 1

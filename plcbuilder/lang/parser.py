@@ -28,14 +28,16 @@
 from __future__ import annotations
 
 from _thread import allocate_lock
-from typing import Optional
 
 from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
 from plcbuilder.lang.lalr import Tables, Trial, accepts, tables
-from plcbuilder.lang.syntax_errors import c_statement_header, syntax_error, token_span
 from plcbuilder.lang.tokens import Tok
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 MAX_DEPTH = 256
 MAX_SYNTAX_ERRORS = 25
@@ -431,6 +433,7 @@ class _Run:
         if end == _DEEP:
             if not builder.too_deep:
                 builder.too_deep = True
+                from plcbuilder.lang.syntax_errors import token_span
                 builder.diags.append(_too_deep(token_span(toks, result)))
         else:
             rec.give_up(result)
@@ -728,6 +731,7 @@ class _Recovery:
                 self.hi = reads.hi
 
     def _on_error(self, kind: str, idx: int) -> bool:
+        from plcbuilder.lang.syntax_errors import c_statement_header, syntax_error, token_span
         run = self.run
         if idx <= self.last_error_idx and kind != "$END":
             # no progress at this token: drop it
@@ -803,6 +807,7 @@ class _Recovery:
         """Bring the parser to a state that accepts ``target``: feed made-up tokens
         (closing an expression, a parenthesis, a statement), and where that cannot
         work, discard the partial construct from the parser's stacks (yacc-style)."""
+        from plcbuilder.lang.syntax_errors import token_span
         run = self.run
         ss, vs = run.ss, run.vs
         while True:
@@ -839,6 +844,7 @@ class _Recovery:
         return None
 
     def give_up(self, idx: int) -> None:
+        from plcbuilder.lang.syntax_errors import token_span
         if not self.diags:
             self.diags.append(error("syntax", "cannot parse this", token_span(self.toks, idx)))
 

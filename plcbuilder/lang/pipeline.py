@@ -14,7 +14,6 @@ import sys
 from _thread import allocate_lock
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Optional
 
 from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode.program import Kind, Program
@@ -28,6 +27,10 @@ from plcbuilder.lang.options import CompileOptions
 from plcbuilder.lang.parser import parse_tokens
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocessor
 from plcbuilder.lang.source import SourceSet, decode_source, read_source
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 COMPILER_VERSION = "1"
 #: the most diagnostics of one code a compile reports (then one that says how many more)

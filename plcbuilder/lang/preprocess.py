@@ -26,7 +26,6 @@ import bisect
 import os
 import re
 from pathlib import Path
-from typing import Optional, Sequence
 
 from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder.diagnostics import Diagnostic, Related, Span, error, warning
@@ -35,6 +34,10 @@ from plcbuilder.lang.builtin_headers import (BUILTIN_PREFIX, builtin_header,  # 
 from plcbuilder.lang.builtins import KEYWORDS
 from plcbuilder.lang.source import SourceFile, SourceSet, normalise, read_source
 from plcbuilder.lang.tokens import Tok, Tokenizer
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional, Sequence
 
 MAX_INCLUDE_DEPTH = 32
 MAX_TOKENS = 200_000

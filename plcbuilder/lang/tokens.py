@@ -10,11 +10,14 @@ runs it over the editor's text (its tokens survive syntax errors).
 from __future__ import annotations
 
 import re
-from typing import Optional
 
 from plcbuilder._support.records import dataclass
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang.builtins import KEYWORDS
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 PUNCT = {
     "<<": "SHL", ">>": "SHR", "<=": "LE", ">=": "GE", "==": "EQ", "!=": "NE",

@@ -49,7 +49,6 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Optional, Union
 
 from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder._support.files import atomic_write, read_bounded
@@ -59,6 +58,10 @@ from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.kind import Kind
 from plcbuilder.image.limits import MAX_LIMIT, Limits
 from plcbuilder.lang.options import CompileOptions
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional, Union
 
 SETTINGS_FILE = "plcbuilder.toml"
 HARDWARE_DIR = "hardware"
