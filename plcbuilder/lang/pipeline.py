@@ -205,7 +205,8 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
         module, parse_diags = incremental.parse(pre.tokens, path)
     diags += parse_diags
     checker = Checker(module, options.kind, options.strict, path, pre.sources.line,
-                      syntax_errors=any(d.is_error for d in diags), target=options.target)
+                      syntax_errors=any(d.is_error for d in diags), target=options.target,
+                      defines=pre.defines)
     check_diags, resolved, symbols = checker.run()
     diags += check_diags
     symbols.defines = {n: (d.text, d.span) for n, d in pre.defines.items()}
