@@ -6,8 +6,9 @@
     .venv/bin/python scripts/attack.py 17.4 fuzz       # items whose name contains a word
     PLCB_ATTACK_SECONDS=20 .venv/bin/python scripts/attack.py   # longer
 
-Modules: ``attack_link`` (the controller server), and ``attack_image`` and
-``attack_files`` when present; each defines ``ATTACKS: list[tuple[str,
+Modules: ``attack_link`` (the controller server), and ``attack_image``,
+``attack_files`` and ``attack_sources`` (hostile PLC sources and breakpoint
+conditions) when present; each defines ``ATTACKS: list[tuple[str,
 callable]]`` whose callables return ``{"tried", "refused", "accepted",
 "crashed"}``. ``accepted`` counts attacks that got through, ``crashed`` the
 times the target died or stopped answering (an attack that raises counts as
@@ -29,7 +30,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
 
-MODULES = ("attack_link", "attack_image", "attack_files")
+MODULES = ("attack_link", "attack_image", "attack_files", "attack_sources")
 KEYS = ("tried", "refused", "accepted", "crashed")
 
 
