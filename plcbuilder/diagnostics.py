@@ -30,6 +30,9 @@ class Severity(enum.IntEnum):
         return self.name.lower()
 
 
+_new = tuple.__new__        # Span(...) without a Python call in between: one is made per token
+
+
 class Span(namedtuple("Span", "file line col end_line end_col")):
     """Where something is: 1-based line and column, ``end_col`` exclusive.
     A named tuple: made for every token, so it must be cheap to create.
@@ -52,7 +55,7 @@ class Span(namedtuple("Span", "file line col end_line end_col")):
             end_line, end_col = other[3], other[4]
         else:
             end_line, end_col = self[3], self[4]
-        return Span(self[0], start_line, start_col, end_line, end_col)
+        return _new(Span, (self[0], start_line, start_col, end_line, end_col))
 
 
 @dataclass(frozen=True)

@@ -92,10 +92,6 @@ class AstBuilder:
         self.items: list = []     # the top-level items (procedures, None for a stray ';')
 
     # ---------------------------------------------------------- helpers
-    @staticmethod
-    def _span(tok: Tok) -> Span:
-        return tok.span
-
     def _d(self, node) -> int:
         return self.depth.get(id(node), 0)
 
@@ -132,88 +128,88 @@ class AstBuilder:
 
     def proc_def(self, c):
         name, _lp, _rp, body = c
-        ns = self._span(name)
+        ns = name.span
         return A.ProcDef(name.value, ns, body, ns.cover(body.span))
 
     def block(self, c):
         lb, *stmts, rb = c
-        end = self._span(rb)
-        node = A.Block(stmts, self._span(lb).cover(end), end)
+        end = rb.span
+        node = A.Block(stmts, lb.span.cover(end), end)
         return self._nest(node, *stmts)
 
     # ---------------------------------------------------------- statements
     def assign(self, c):
         name, _eq, value, semi = c
-        target = A.Name(name.value, self._span(name))
-        return self._nest(A.Assign(target, value, target.span.cover(self._span(semi))), value)
+        target = A.Name(name.value, name.span)
+        return self._nest(A.Assign(target, value, target.span.cover(semi.span)), value)
 
     def compound(self, c):
         name, op, value, semi = c
-        target = A.Name(name.value, self._span(name))
-        return self._nest(A.Assign(target, value, target.span.cover(self._span(semi)), op[0],
+        target = A.Name(name.value, name.span)
+        return self._nest(A.Assign(target, value, target.span.cover(semi.span), op[0],
                                    op[1]), value)
 
     def index_assign(self, c):
         target, eq, value, semi = c
-        return self._nest(A.Assign(target, value, target.span.cover(self._span(semi)), "=",
-                                   self._span(eq)), target, value)
+        return self._nest(A.Assign(target, value, target.span.cover(semi.span), "=",
+                                   eq.span), target, value)
 
     def index_compound(self, c):
         target, op, value, semi = c
-        return self._nest(A.Assign(target, value, target.span.cover(self._span(semi)), op[0],
+        return self._nest(A.Assign(target, value, target.span.cover(semi.span), op[0],
                                    op[1]), target, value)
 
     def compound_op(self, c):
         tok = c[0]
-        return (tok.value, self._span(tok))
+        return (tok.value, tok.span)
 
     def index(self, c):
         name, _lb, expr, rb = c
-        ns = self._span(name)
-        return self._nest(A.Index(name.value, ns, expr, ns.cover(self._span(rb))), expr)
+        ns = name.span
+        return self._nest(A.Index(name.value, ns, expr, ns.cover(rb.span)), expr)
 
     def inc(self, c):
         name, _op, semi = c
-        target = A.Name(name.value, self._span(name))
-        return A.IncDec(target, "++", target.span.cover(self._span(semi)))
+        target = A.Name(name.value, name.span)
+        return A.IncDec(target, "++", target.span.cover(semi.span))
 
     def dec(self, c):
         name, _op, semi = c
-        target = A.Name(name.value, self._span(name))
-        return A.IncDec(target, "--", target.span.cover(self._span(semi)))
+        target = A.Name(name.value, name.span)
+        return A.IncDec(target, "--", target.span.cover(semi.span))
 
     def call_stmt(self, c):
         call, semi = c
-        return self._nest(A.CallStmt(call, call.span.cover(self._span(semi))), call)
+        return self._nest(A.CallStmt(call, call.span.cover(semi.span)), call)
 
     def if_stmt(self, c):
         kw, _lp, cond, _rp, then = c
-        return self._nest(A.If(cond, then, None, self._span(kw).cover(then.span)), cond, then)
+        return self._nest(A.If(cond, then, None, kw.span.cover(then.span)), cond, then)
 
     def if_else(self, c):
         kw, _lp, cond, _rp, then, el, orelse = c
-        return self._nest(A.If(cond, then, orelse, self._span(kw).cover(orelse.span), self._span(el)),
+        return self._nest(A.If(cond, then, orelse, kw.span.cover(orelse.span), el.span),
                           cond, then, orelse)
 
     def do_while(self, c):
         kw, body, wh, _lp, cond, _rp, semi = c
-        return self._nest(A.DoWhile(body, cond, self._span(kw).cover(self._span(semi)), self._span(wh)),
+        return self._nest(A.DoWhile(body, cond, kw.span.cover(semi.span), wh.span),
                           body, cond)
 
     def while_stmt(self, c):
         kw, _lp, cond, _rp, body = c
-        ws = self._span(kw)
+        ws = kw.span
         return self._nest(A.While(cond, body, ws.cover(body.span), ws), cond, body)
 
     def empty(self, c):
-        return A.Empty(self._span(c[0]))
+        return A.Empty(c[0].span)
 
     # ---------------------------------------------------------- expressions
     def call(self, c):
         name, lp, *rest = c
         args = rest[0] if len(rest) == 2 else []
-        ns = self._span(name)
-        node = A.Call(name.value, ns, args, ns.cover(self._span(rest[-1])))
+        ns = name.span
+        node = A.Call(name.value, ns, args, ns.cover(rest[-1].span))
         return self._nest(node, *args)
 
     def args(self, c):
@@ -221,12 +217,20 @@ class AstBuilder:
 
     def binary(self, c):
         left, op, right = c
-        node = A.Binary(op.value, left, right, left.span.cover(right.span), self._span(op))
-        return self._nest(node, left, right)
+        node = A.Binary(op.value, left, right, left.span.cover(right.span), op.span)
+        depth = self.depth                  # _nest, unrolled: the commonest node
+        d = depth.get(id(left), 0)
+        r = depth.get(id(right), 0)
+        if r > d:
+            d = r
+        if d >= MAX_DEPTH:
+            return self._nest(node, left, right)
+        depth[id(node)] = d + 1
+        return node
 
     def unary(self, c):
         op, operand = c
-        node = A.Unary(op.value, operand, self._span(op).cover(operand.span))
+        node = A.Unary(op.value, operand, op.span.cover(operand.span))
         return self._nest(node, operand)
 
     def number(self, c):
@@ -237,11 +241,11 @@ class AstBuilder:
 
     def name(self, c):
         tok = c[0]
-        return A.Name(tok.value, self._span(tok))
+        return A.Name(tok.value, tok.span)
 
     def paren(self, c):
         lp, expr, rp = c
-        return self._nest(A.Paren(expr, self._span(lp).cover(self._span(rp))), expr)
+        return self._nest(A.Paren(expr, lp.span.cover(rp.span)), expr)
 
 
 def _callbacks(t: Tables, builder: "AstBuilder") -> list:
@@ -378,6 +382,8 @@ class _Run:
     def __init__(self, t: Tables, builder: AstBuilder, calls: list, toks: list[Tok],
                  previous: Optional[Parsed], main_file: Optional[str]):
         self.t, self.builder, self.calls, self.toks = t, builder, calls, toks
+        #: per rule: (the nonterminal it makes, how many values it pops, its callback)
+        self.reduce = [(r[0], r[1], fn) for r, fn in zip(t.rules, calls)]
         self.prev = previous if previous is not None and previous.marks else None
         self.main_file = main_file
         self.list_state = t.list_state
@@ -459,7 +465,8 @@ class _Run:
         """Feed the tokens from ``self.pos`` (and then the end of the input) to
         the parser: lark's ``parse_from_state``, with the loop unrolled."""
         toks, n = self.toks, len(self.toks)
-        states, rules, calls = self.t.states, self.t.rules, self.calls
+        states, reduce = self.t.states, self.reduce
+        chains = _CHAINS
         ss, vs = self.ss, self.vs
         limit = STACK_LIMIT
         pos = self.pos
@@ -470,21 +477,18 @@ class _Run:
             if kind == "BAD":
                 pos += 1
                 continue
-            state = ss[-1]
-            while True:
-                act = states[state].get(kind)
-                if act is None:
-                    self.pos = pos + 1
-                    return _ERROR, pos
-                if act >= 0:
-                    ss.append(act)
-                    vs.append(t)
-                    break
-                act = -1 - act
-                origin, size = rules[act][:2]
-                fn = calls[act]
-                if fn is None:                  # a ?rule's only child
-                    ss.pop()
+            act = states[ss[-1]].get(kind)
+            while act is not None and act < 0:     # reduce (as often as it takes)
+                origin, size, fn = reduce[~act]
+                if fn is None:
+                    # a ?rule's only child is its value: only the top state
+                    # changes, and a run of them (an operand climbing the
+                    # precedence levels, a dozen) is looked up at once
+                    key = (ss[-2], ss[-1], kind)
+                    hit = chains.get(key)
+                    if hit is None:
+                        hit = chains[key] = _chain(states, reduce, ss[-2], origin, kind)
+                    ss[-1], act = hit
                 else:
                     if size:
                         kids = vs[-size:]
@@ -493,8 +497,13 @@ class _Run:
                     else:
                         kids = []
                     vs.append(fn(kids))
-                state = states[ss[-1]][origin]
-                ss.append(state)
+                    ss.append(states[ss[-1]][origin])
+                act = states[ss[-1]].get(kind)
+            if act is None:
+                self.pos = pos + 1
+                return _ERROR, pos
+            ss.append(act)                          # shift
+            vs.append(t)
             self.last = pos
             pos += 1
             if len(ss) > limit:
@@ -621,6 +630,18 @@ class _Run:
 
 
 _FAILED = object()
+#: (the state below, the top state, the next token's kind) -> (the top state
+#: after the run of one-child reductions the token causes, the action then)
+_CHAINS: dict = {}
+
+
+def _chain(states: list, reduce: list, below: int, origin: str, kind: str) -> tuple:
+    top = states[below][origin]
+    act = states[top].get(kind)
+    while act is not None and act < 0 and reduce[~act][2] is None:
+        top = states[below][reduce[~act][0]]
+        act = states[top].get(kind)
+    return top, act
 
 def _moved_diag(d: Diagnostic, file: Optional[str], lines: int) -> Diagnostic:
     if not lines:

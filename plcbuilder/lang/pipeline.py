@@ -9,6 +9,7 @@ input becomes diagnostics, never an exception.
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
 from _thread import allocate_lock
@@ -44,30 +45,41 @@ RECURSION_LIMIT = 4000
 _limit_lock = allocate_lock()
 _limit_users = 0                   # compiles running (in any thread)
 _limit_saved: Optional[int] = None  # the limit to restore when the last one ends
+_gc_was_on = False                 # the collector was on when the first compile started
 
 
 @contextmanager
-def _recursion_limit():
-    """Raise the recursion limit to RECURSION_LIMIT while the block runs. The
-    limit is global to the process: the first compile to start raises it and
-    the last to end restores it, so concurrent compiles do not undo each other."""
-    global _limit_users, _limit_saved
+def _compiling():
+    """While the block runs: the recursion limit at least RECURSION_LIMIT, and
+    Python's cyclic garbage collector paused. A compile makes a few objects a
+    token (tokens, spans, nodes) and keeps most of them to its end: the
+    collector went through them again and again, a third to two fifths of a
+    compile's time, for garbage a compile does not make (its objects refer
+    to their children, never back). Both are global to the process: the
+    first compile to start sets them and the last to end puts them back, so
+    concurrent compiles do not undo each other."""
+    global _limit_users, _limit_saved, _gc_was_on
     with _limit_lock:
         if _limit_users == 0:
             old = sys.getrecursionlimit()
             _limit_saved = old if old < RECURSION_LIMIT else None
             if _limit_saved is not None:
                 sys.setrecursionlimit(RECURSION_LIMIT)
+            _gc_was_on = gc.isenabled()
+            gc.disable()
         _limit_users += 1
     try:
         yield
     finally:
         with _limit_lock:
             _limit_users -= 1
-            if _limit_users == 0 and _limit_saved is not None:
-                if sys.getrecursionlimit() == RECURSION_LIMIT:   # unless changed meanwhile
-                    sys.setrecursionlimit(_limit_saved)
-                _limit_saved = None
+            if _limit_users == 0:
+                if _limit_saved is not None:
+                    if sys.getrecursionlimit() == RECURSION_LIMIT:   # unless changed meanwhile
+                        sys.setrecursionlimit(_limit_saved)
+                    _limit_saved = None
+                if _gc_was_on:
+                    gc.enable()
 
 
 # ====================================================================== options
@@ -172,7 +184,7 @@ def _failed(path: str, options: CompileOptions, diags: list[Diagnostic]) -> Comp
 
 def _compile(pp: Preprocessor, text: str, path: str, file_path: Optional[Path],
              options: CompileOptions, incremental: Optional[Incremental] = None) -> CompileResult:
-    with _recursion_limit():
+    with _compiling():
         return _compile_preprocessed(pp.run_text(text, path, file_path), path, file_path, options,
                                      incremental)
 
