@@ -24,7 +24,7 @@ from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.abi import proc_name
 from plcbuilder.bytecode.kind import Kind
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
-                                    summary)
+                                    summary, summary_counts)
 from plcbuilder.lang.options import CompileOptions
 
 TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
@@ -152,6 +152,7 @@ __all__ = [
     "default_machine",
     "disassemble", "error", "events", "image_of", "instructions", "kind_of", "load_machine", "load_program",
     "load_variables", "options_for", "proc_name", "read_image", "render_text", "run", "summary",
+    "summary_counts",
     "write_image", "TestFileError", "TestOptions", "TestRun", "junit_xml", "test", "write_junit",
     "Capturer", "History", "Trace", "TriggerError", "parse_trigger", "watched_variables", "load_trace", "save_trace",
     "export_trace", "compare_traces", "TraceFileError", "ExportError",

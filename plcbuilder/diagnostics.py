@@ -142,7 +142,11 @@ def render_text(diag: Diagnostic, source_line: Callable[[str, int], Optional[str
 
 def summary(diags: Iterable[Diagnostic]) -> str:
     diags = list(diags)
-    e = sum(1 for d in diags if d.severity == Severity.ERROR)
-    w = sum(1 for d in diags if d.severity == Severity.WARNING)
+    return summary_counts(sum(1 for d in diags if d.severity == Severity.ERROR),
+                          sum(1 for d in diags if d.severity == Severity.WARNING))
+
+
+def summary_counts(errors: int, warnings: int) -> str:
+    """``1 error, 2 warnings``."""
     part = lambda n, word: f"{n} {word}{'' if n == 1 else 's'}"  # noqa: E731
-    return f"{part(e, 'error')}, {part(w, 'warning')}"
+    return f"{part(errors, 'error')}, {part(warnings, 'warning')}"
