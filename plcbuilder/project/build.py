@@ -52,16 +52,12 @@ from __future__ import annotations
 
 import hashlib
 import json
-import multiprocessing
 import os
 import re
 import threading
 import time
 import zlib
-from concurrent.futures import ProcessPoolExecutor
-from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
-from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Callable, Iterator, Optional
@@ -77,6 +73,7 @@ from plcbuilder.lang.source import MAX_SOURCE_BYTES
 from plcbuilder.lang.builtin_headers import source_text
 from plcbuilder.lang.preprocess import builtin_header
 from plcbuilder._support.files import atomic_write, read_bounded, remove_temp_files
+from plcbuilder._support.records import dataclass
 from plcbuilder.project.model import Procedure, Project
 
 try:
@@ -547,6 +544,9 @@ def _compile_many(work: list, done: Callable[[int, tuple], None], jobs: Optional
 def _in_workers(work: list, jobs: int) -> Iterator[tuple]:
     """The outcomes of work in order, from a pool of worker processes, for as
     long as the pool works (the caller compiles what is left)."""
+    import multiprocessing              # (an unchanged rebuild starts no worker: not loaded)
+    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
     methods = multiprocessing.get_all_start_methods()
     if "fork" in methods and threading.active_count() == 1:
         ctx = multiprocessing.get_context("fork")    # inherits everything loaded here
@@ -595,10 +595,27 @@ def _real(p: Path) -> Path:
         return p.absolute()
 
 
+@lru_cache(maxsize=64)
+def _real_folder(folder: Path, root: Path, stamp) -> Path:
+    """A folder's real path (``root``, the project's, and ``stamp``, the
+    folder's identity, in the key: either changed, it is resolved again)."""
+    return _real(folder)
+
+
 def _outside_problem(proc: Procedure, root: Path) -> Optional[Diagnostic]:
     """A source file that is a link out of the project: an error, and it is not
     read (its lines would be echoed in diagnostics)."""
-    real = _real(proc.path)
+    path = proc.path
+    try:
+        # a file that is no link lies where its folder really is: one lstat,
+        # not a walk of every folder of its path (a thousand procedures)
+        folder = path.parent
+        st = os.lstat(folder)
+        if os.path.islink(path) or os.path.islink(folder):
+            raise OSError
+        real = _real_folder(folder, root, (st.st_ino, st.st_dev, st.st_mtime_ns)) / path.name
+    except OSError:
+        real = _real(path)
     if real.is_relative_to(root):
         return None
     return error("source-outside-project",
