@@ -16,17 +16,20 @@ nothing here keeps global state or prints.
 from __future__ import annotations
 
 import importlib
-from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Optional, Sequence
 
+from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.abi import proc_name
 from plcbuilder.bytecode.kind import Kind
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
-                                    summary)
+                                    summary, summary_counts)
 from plcbuilder.lang.options import CompileOptions
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Optional, Sequence
 
 if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type checkers
     from plcbuilder.bytecode.program import MAGIC, LoadError, Program
@@ -125,10 +128,17 @@ def __getattr__(name: str):
 _LOADED = False
 
 
-def _load() -> None:
-    """Every lazy name into this module (its functions use them as globals).
-    Once all of them: one name loaded on its own (``api.run_suite``) is not all."""
+def _load(*names: str) -> None:
+    """Lazy names into this module (its functions use them as globals): those
+    named, or (no names) every one. A function loads only what it uses, so a
+    command pays for its own stages only (``check`` does not load the controller)."""
     global _LOADED
+    if names:
+        g = globals()
+        for name in names:
+            if name not in g:
+                __getattr__(name)
+        return
     if not _LOADED:
         for name in _LAZY:
             if name not in globals():
@@ -146,10 +156,11 @@ __all__ = [
     "default_machine",
     "disassemble", "error", "events", "image_of", "instructions", "kind_of", "load_machine", "load_program",
     "load_variables", "options_for", "proc_name", "read_image", "render_text", "run", "summary",
+    "summary_counts",
     "write_image", "TestFileError", "TestOptions", "TestRun", "junit_xml", "test", "write_junit",
     "cobertura_xml", "coverage_totals", "write_cobertura",
     "Capturer", "History", "Trace", "TriggerError", "parse_trigger", "watched_variables", "load_trace", "save_trace",
-    "export_trace", "trace_exporters", "trace_export_suffixes", "compare_traces",
+    "export_trace", "trace_exporters", "compare_traces",
     "TraceFileError", "ExportError", "CompareError",
 ]
 
@@ -172,7 +183,7 @@ def load_program(path) -> Program:
 def image_of(sources: dict[str, str]) -> bytes:
     """An eeprom.rom of hardware procedures ``{name: source}`` with the built-in
     headers only (raises ValueError naming the first that does not compile)."""
-    _load()
+    _load("compile_source", "write_image")
     items = []
     for name, text in sources.items():
         r = compile_source(text, f"{name}.plc")
@@ -183,13 +194,13 @@ def image_of(sources: dict[str, str]) -> bytes:
 
 
 def disassemble(program: Program, source_line: Optional[Callable[[str, int], Optional[str]]] = None) -> str:
-    _load()
+    _load("disasm")
     return disasm.render_text(program, source_line)
 
 
 def instructions(program: Program) -> list:
     """The disassembly as records (one per instruction, with its source line)."""
-    _load()
+    _load("disasm")
     return disasm.instructions(program)
 
 
@@ -202,7 +213,7 @@ def options_for(path, *, software: bool = False, strict: Optional[bool] = None,
     project (``project``, or the one it sits in), else with the options given.
     ``strict`` None: as its project says (not strict outside a project).
     Raises ProjectError when its project's settings cannot be read."""
-    _load()
+    _load("Project", "kind_of")
     if project is None:
         project = Project.find_for(path)
     if project is not None:
@@ -277,7 +288,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
 
     Bad usage raises :class:`UsageError`; compile errors come back as the
     procedures' diagnostics with ``report`` None."""
-    _load()
+    _load("UsageError", "build_scenario", "Controller", "ControllerError", "Action",
+          "run_session", "load_machine", "default_machine", "ConfigError")
     opts = options or RunOptions()
     limit = DEFAULT_MS if opts.ms is None else opts.ms
     if not 0 <= limit <= MAX_MS:
@@ -292,6 +304,7 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     try:
         mconf = load_machine(machine_path) if machine_path is not None else default_machine()
         if tg.io_dat is not None:
+            _load("with_io_dat", "load_io_dat")
             mconf = with_io_dat(mconf, load_io_dat(tg.io_dat))
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
@@ -312,6 +325,7 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     history = capturer = None
     watch = list(opts.watch)
     if opts.trigger is not None or opts.history is not None or watch:
+        _load("History", "Capturer", "TriggerError", "parse_trigger", "watched_variables")
         history = History(c.machine)
     if opts.trigger is not None:
         if opts.capture is None:
@@ -368,6 +382,7 @@ def _write_state(path: Path, target: str, kept: list[int]) -> None:
 
 
 def _save_trace(trace, path: Path, option: str) -> None:
+    _load("trace_export", "trace_file")
     try:
         if trace_export.can_export(path):
             trace_export.export(trace, path)
@@ -403,6 +418,8 @@ def _save_capture(capturer, opts: RunOptions) -> Optional[dict]:
 def _set_breaks(c: Controller, breaks: Sequence[str], target: Path) -> None:
     """``--break FILE:LINE[:CONDITION]`` options, set on the loaded controller
     (a bad one raises UsageError naming it)."""
+    if breaks:
+        _load("compile_condition", "DebugError")
     by_file: dict[str, list[dict]] = {}
     for text in breaks:
         parts = str(text).split(":", 2)
@@ -460,6 +477,7 @@ def _replay_image(c: Controller, programs: list, sc) -> Optional[str]:
     uploads = [a for a in sc.actions if a.kind == "upload"]
     if not uploads:
         return None
+    _load("image_id")
     c.replay_image = list(programs)
     have = image_id(programs)
     other = sorted({a.name for a in uploads if a.name and a.name != have})
@@ -470,6 +488,7 @@ def _replay_image(c: Controller, programs: list, sc) -> Optional[str]:
 
 
 def _compile_target(target: Path, opts: RunOptions) -> _Target:
+    _load("compile_file", "Project", "ProjectError", "kind_of")
     if target.is_dir():
         return _compile_project(target, opts)
     if not target.exists():
@@ -485,11 +504,13 @@ def _compile_target(target: Path, opts: RunOptions) -> _Target:
     config = None
     if options.target != "mycnc":
         project = Project.find_for(target)
+        _load("TargetConfig")
         config = _target_config(project) if project is not None else TargetConfig(options.target)
     return _Target([program] if program else [], [r], None, None, program, config)
 
 
 def _compile_project(root: Path, opts: RunOptions) -> _Target:
+    _load("compile_all", "load_variables", "DEFAULT_MACHINE", "io_dat_of", "TargetConfig")
     try:
         project = Project.open(root)
         procs = project.procedures()
@@ -533,13 +554,13 @@ def _target_config(project: Project) -> TargetConfig:
 
 def load_trace(path) -> Trace:
     """Reopen a trace file (``.plctrace``); raises TraceFileError saying why not."""
-    _load()
+    _load("trace_file")
     return trace_file.load(path)
 
 
 def save_trace(trace: Trace, path) -> None:
     """Save a trace as a ``.plctrace`` file, atomically; raises TraceFileError."""
-    _load()
+    _load("trace_file")
     trace_file.save(trace, path)
 
 
@@ -547,7 +568,7 @@ def export_trace(trace: Trace, path, fmt: Optional[str] = None, **chosen: bool) 
     """Export as CSV (per change, or ``per_tick=True``) or VCD (``split_bits=True``:
     its numbers as one-bit lanes, for PulseView): the ways of
     ``plcbuilder.trace.export.EXPORTERS``. Returns the format; raises ExportError."""
-    _load()
+    _load("trace_export")
     return trace_export.export(trace, path, fmt, **chosen)
 
 
@@ -559,18 +580,12 @@ def trace_exporters():
     return EXPORTERS
 
 
-def trace_export_suffixes() -> str:
-    """The export formats as a sentence's end: '.vcd or .csv'."""
-    from plcbuilder.trace.export import suffixes_text
-    return suffixes_text()
-
-
 def compare_traces(a: Trace, b: Trace, align: str = "none",
                    offset_ms: int = 0) -> "trace_compare.Difference":
     """The first tick where two traces differ, and in which signals; ``b``
     lined up with ``a`` first (``align``: none, start or trigger, then
     ``offset_ms`` more). Raises CompareError when they cannot be lined up so."""
-    _load()
+    _load("trace_compare")
     return trace_compare.compare(a, b, align, offset_ms)
 
 
@@ -645,7 +660,7 @@ def test(project, options: Optional[TestOptions] = None, progress=None) -> TestR
     The tests of a file with a mistake are left out (the file is in
     ``errors``); the others run. A project that cannot be opened raises
     :class:`UsageError`."""
-    _load()
+    _load("prepare", "SuiteError", "run_suite", "UsageError")
     opts = options or TestOptions()
     try:
         suite = prepare(project, opts.select, strict=opts.strict)

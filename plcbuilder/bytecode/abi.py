@@ -12,9 +12,11 @@ name gives the first name listed.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from plcbuilder.bytecode import softmc
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 # ----------------------------------------------------------------- VM limits
 #: (one place: the interpreters fault past them, the checker warns of them)

@@ -27,7 +27,10 @@ the last write to this PLS did: ``PLS_OK`` or a refusal code), POSITION 10..25
 
 from __future__ import annotations
 
-from typing import Optional
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 VIN_WORD = 30000
 VOUT_WORD = 30001

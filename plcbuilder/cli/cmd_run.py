@@ -11,7 +11,6 @@ included), 1 on compile errors, 2 on bad usage.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from plcbuilder.cli import term
@@ -67,8 +66,6 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="compile in controller compatibility mode")
     p.add_argument("-I", "--include", dest="include", action="append", default=[], type=Path,
                    metavar="DIR", help="search DIR for #include files (repeatable)")
-    from plcbuilder import api
-    formats = api.trace_export_suffixes()
     p.add_argument("--trace", type=Path, metavar="FILE.csv",
                    help="write one CSV row per tick (streamed; gzip if it ends in .gz)")
     g = p.add_argument_group("traces and triggers (docs/traces.md)")
@@ -84,9 +81,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="single: one capture; normal: re-arm after each (FILE-2, FILE-3, …); "
                         "auto: also capture when no trigger came for pre+post ms")
     g.add_argument("--capture", type=Path, metavar="FILE",
-                   help=f"write the capture: .plctrace (reopens in the IDE), {formats}")
+                   help="write the capture: .plctrace (reopens in the IDE), or by its suffix "
+                        "any format `plcbuilder trace export` writes (.vcd, .csv)")
     g.add_argument("--history", type=Path, metavar="FILE",
-                   help=f"write the whole session as a trace: .plctrace, {formats}")
+                   help="write the whole session as a trace: .plctrace, or by its suffix any "
+                        "format `plcbuilder trace export` writes")
     g.add_argument("--watch", action="append", default=[], metavar="PROC.var",
                    help="record a variable every tick into the history (repeatable)")
     p.add_argument("--break", dest="breaks", action="append", default=[],
@@ -150,6 +149,7 @@ def run(args: argparse.Namespace) -> int:
             out.print(f"plcbuilder run: not run: {', '.join(bad)} did not compile", err=True)
             return 1
         if args.json:
+            import json
             out.print(json.dumps(result.report))
         else:
             out.print(summary(result.report, out))

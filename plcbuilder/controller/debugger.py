@@ -23,14 +23,17 @@ Halting stops the whole controller: the PLC keeps the rest of the tick
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
-from typing import Optional
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import Op, size_of, validate
 from plcbuilder.bytecode.program import LoadError, Program
 from plcbuilder.controller import halted_state, vm
 from plcbuilder.controller.events import Halted, Log, Resumed
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 REASONS = ("breakpoint", "step", "pause", "fault")
 HIT_MODES = ("eq", "ge", "every")

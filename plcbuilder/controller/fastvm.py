@@ -54,9 +54,9 @@ from __future__ import annotations
 
 import re
 import zlib
-from dataclasses import dataclass, field
-from typing import Callable, Iterator, NamedTuple, Optional
+from collections import namedtuple
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi, semantics
 from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST,
                                          NO_FALLTHROUGH, STACK_EFFECT, UNARY, Instruction, Op,
@@ -67,6 +67,10 @@ from plcbuilder.controller import vm
 from plcbuilder.controller.vm import (FAULT_DEPTH, FAULT_DIV, FAULT_END, FAULT_MOD,
                                       MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET, Halted, Handoff,
                                       Host, Migrate, ProcExit, VMFault)
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Iterator, Optional
 
 __all__ = ["Unsupported", "translate", "make_runner", "factory", "io_shape"]
 
@@ -1280,12 +1284,12 @@ _NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff, "Hal
               "__builtins__": {"len": len, "range": range}}
 
 
-class _Translated(NamedTuple):
-    """A cache entry: one program translated for one host shape."""
-    code: bytes                        # the program's code (the key has only its CRC)
-    make: Optional[Callable]           # the compiled make(s, host, debug), or None
-    why_not: str                       # why it was not translated ("" when it was)
-    answers_sync: bool                 # its tick ends answer SYNC
+#: A cache entry: one program translated for one host shape: ``code`` the
+#: program's code (the key has only its CRC), ``make`` the compiled
+#: make(s, host, debug) or None, ``why_not`` why it was not translated ("" when
+#: it was), ``answers_sync`` whether its tick ends answer SYNC. (collections'
+#: namedtuple: typing.NamedTuple would load typing at every command's start.)
+_Translated = namedtuple("_Translated", "code make why_not answers_sync")
 
 
 _CACHE: dict[tuple, _Translated] = {}

@@ -23,9 +23,7 @@ Everything is deterministic: the same calls give the same events and samples.
 
 from __future__ import annotations
 
-import inspect
-from collections import deque
-from typing import Callable, Iterable, NamedTuple, Optional
+from collections import deque, namedtuple
 
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind, Program
@@ -36,6 +34,10 @@ from plcbuilder.controller.events import (Ended, Fault, Message, Note, Print, Sa
 from plcbuilder.controller.forces import ForcedSlots
 from plcbuilder.controller.vm import HALT, Halted, Handoff, Host, Migrate, ProcExit, VMFault
 
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Iterable, Optional
+
 SOFTWARE_PERIOD_MS = 100
 #: Exit code reported for a procedure that ended with a runtime fault (not in the seed's table).
 FAULT_EXIT_CODE = -1
@@ -44,14 +46,12 @@ EVENT_BUFFER = 200_000
 SAMPLE_BUFFER = 120_000
 
 
-class SampleRow(NamedTuple):
-    """One tick's sample as the PLC records it (:meth:`PLC.take_samples` makes
-    :class:`~plcbuilder.controller.events.Sample` of it)."""
-    t: int
-    running: Optional[str]             # the hardware procedure running, or None
-    proc: int
-    message: int                       # the first message sent in the tick, or 0
-    fields: dict                       # the machine's sample_fields() (do not modify)
+#: One tick's sample as the PLC records it (:meth:`PLC.take_samples` makes
+#: :class:`~plcbuilder.controller.events.Sample` of it): ``t``; ``running`` the
+#: hardware procedure running, or None; ``proc``; ``message`` the first message
+#: sent in the tick, or 0; ``fields`` the machine's sample_fields() (do not
+#: modify). (collections' namedtuple: typing's would load typing at start-up.)
+SampleRow = namedtuple("SampleRow", "t running proc message fields")
 
 
 #: "no sample recorded yet": differs from every real one
@@ -560,6 +560,7 @@ class PLC:
         (suspended at a tick end, or not started yet)."""
         if p.watched or p.ended_at is not None or p.gen is None:
             return
+        import inspect                  # (debugging only: not loaded at start)
         if self.backend == "fast" and inspect.getgeneratorstate(p.gen) == inspect.GEN_CREATED:
             p.set_gen(fastvm.make_runner(p.program, p.slots, p.host, watched=True))
             p.syncing, p.watched = None, True            # not started: watched code from the start
@@ -575,6 +576,7 @@ class PLC:
             p.watched = True
             return
         gen = p.gen
+        import inspect                  # (debugging only: not loaded at start)
         if inspect.getgeneratorstate(gen) == inspect.GEN_CREATED:     # not started yet
             new = vm.run_reference(p.program, p.slots, p.host)
         else:

@@ -37,13 +37,16 @@ reaches that code offset (the disassembler's) with that call stack in tick t.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable, Iterable, Optional
 
+from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder._support.files import read_bounded
 from plcbuilder._support.numbers import INT32, WORD32, parse_int_in, to_int32
 from plcbuilder.controller.forces import MODES, ForceError, parse_target
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Iterable, Optional
 
 MAX_SCENARIO_BYTES = 4 << 20
 KINDS = ("start", "input", "adc", "stop", "event", "bind", "write", "force", "release",

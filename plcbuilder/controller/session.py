@@ -13,20 +13,24 @@ raises :class:`UsageError`. Nothing here prints.
 
 from __future__ import annotations
 
-import gzip
 import io
 from dataclasses import replace
 from pathlib import Path
-from typing import Optional, Sequence
 
 from plcbuilder.bytecode import abi
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import Ended, Fault, Log, Message, Note, Print, Started
-from plcbuilder.controller.history import History
-from plcbuilder.controller.trigger import Capturer
 from plcbuilder.controller.watch import check_name
 from plcbuilder.controller.scenario import (Scenario, ScenarioError, drive, parse_adc,
                                             parse_force, parse_input, parse_start, parse_write)
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional, Sequence
+
+if TYPE_CHECKING:                   # (a run without --trigger or --history does not load them)
+    from plcbuilder.controller.history import History
+    from plcbuilder.controller.trigger import Capturer
 
 __all__ = ["CHUNK_MS", "ReportCollector", "TraceWriter", "UsageError", "build_scenario",
            "check_scenario", "run_session"]
@@ -52,6 +56,7 @@ class TraceWriter:
         self.axis_idx = [abi.AXES.index(a) for a in axes]
         try:
             if self.path.suffix == ".gz":
+                import gzip
                 raw = gzip.open(self.path, "wb", compresslevel=3)
                 self.f = io.TextIOWrapper(raw, encoding="ascii", newline="")
             else:

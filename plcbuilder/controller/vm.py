@@ -26,14 +26,16 @@ each operator computes is :mod:`plcbuilder.bytecode.semantics`):
 
 from __future__ import annotations
 
-from typing import Iterator, Optional
-
 from plcbuilder.bytecode import semantics
 from plcbuilder.bytecode.abi import MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET
 from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST, Op, UNARY,
                                          size_of, validate)
 from plcbuilder.bytecode.program import Program
 from plcbuilder.bytecode.semantics import c_div, c_mod, wrap
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Iterator, Optional
 
 FAULT_DIV = "division by zero"
 FAULT_MOD = "modulo by zero"

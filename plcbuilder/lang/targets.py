@@ -15,10 +15,12 @@ has is refused on the others with a hint that names the target that has it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Optional
-
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode import targets as T
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 COMPOUND_OPS = ("|=", "&=", "^=", "+=", "-=")
 

@@ -258,12 +258,6 @@ def options() -> list[Exporter]:
     return [e for e in EXPORTERS if e.option is not None]
 
 
-def suffixes_text() -> str:
-    """The formats as a sentence's end: '.vcd or .csv'."""
-    names = [f".{f}" for f in formats()]
-    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " or " + names[-1]
-
-
 def can_export(path: Union[str, Path]) -> bool:
     """Whether ``path``'s suffix is an export format."""
     return Path(path).suffix.lower().lstrip(".") in formats()

@@ -223,8 +223,9 @@ def test_each_way_of_exporting_is_one_row_and_every_front_end_offers_it(tmp_path
                                                                       capsys):
     """Issue 28: adding an export format is one row of EXPORTERS. A row added
     here (JSON lines, picked by --pretty) is offered by `trace export`
-    (--format, its flag and help), `run --capture`'s help and the IDE's
-    Export Trace dialog, and written by each, with nothing else changed."""
+    (--format, its flag and help), written by `run --history`/`--capture`
+    (by the suffix) and offered by the IDE's Export Trace dialog, with
+    nothing else changed."""
     import json
 
     from tests.cli._run import run_cli
@@ -253,8 +254,11 @@ def test_each_way_of_exporting_is_one_row_and_every_front_end_offers_it(tmp_path
     assert ", " in (tmp_path / "p.jsonl").read_text()
     code, out, err = run_cli(capsys, "trace", "export", src, tmp_path / "p.csv", "--pretty")
     assert code == 2 and "--pretty is for JSONL, not CSV" in err
-    code, out, _err = run_cli(capsys, "run", "--help")
-    assert ".vcd, .csv or .jsonl" in " ".join(out.split())
+    prog = tmp_path / "M90.plc"
+    prog.write_text("main(){ portset(3); timer=5; do{timer--;}while(timer>0); exit(99); };\n")
+    code, out, err = run_cli(capsys, "run", prog, "--history", tmp_path / "h.jsonl")
+    assert code == 0, err
+    assert '"out 3", 1]' in (tmp_path / "h.jsonl").read_text()
 
     from plcbuilder.ide import trace_actions     # no Qt object is made: the dialog's filters
     assert trace_actions.export_filter().split(";;")[-2:] == [
