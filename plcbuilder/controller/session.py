@@ -14,9 +14,9 @@ raises :class:`UsageError`. Nothing here prints.
 from __future__ import annotations
 
 import io
-from dataclasses import replace
 from pathlib import Path
 
+from plcbuilder._support.records import replace
 from plcbuilder.bytecode import abi
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import Ended, Fault, Log, Message, Note, Print, Started
