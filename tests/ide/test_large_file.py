@@ -44,4 +44,6 @@ def test_typing_in_a_large_file_right_after_opening_it(win, project, qtbot, monk
     assert typed < 10, typed
     assert win.lint.worker.pending()        # the compile is still waiting for the pause
     qtbot.waitUntil(lambda: not win.lint.worker.pending(), timeout=120_000)
-    assert any(d.span and d.span.line == 5 for d in win.lint.store.for_file(str(big)))
+    # past the compiler's token limit, the one diagnostic is that limit (issue 23.17:
+    # no false "expected '}'" after it), for the text as typed
+    assert [d.code for d in win.lint.store.for_file(str(big))] == ["too-large"]
