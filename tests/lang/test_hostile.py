@@ -154,17 +154,25 @@ def test_hostile_sources_compile_about_as_fast_as_an_ordinary_one():
 
 # --------------------------------------------------------------- conditions
 def test_a_condition_compiles_in_time_linear_in_its_length():
-    """Issue 24.2: 800/1,600/3,200 '(' took 2.2/5.6/16.4 s."""
-    for n in (800, 1_600):
-        code = compile_condition("(" * n)
-        assert [d.code for d in code] == ["nesting-too-deep"]
-    assert [d.code for d in compile_condition("(" * 3_200)] == ["condition"]    # too long
-    t1 = best_of(compile_condition, "(" * 450 + "x")
-    t4 = best_of(compile_condition, "(" * 1_800 + "x")
-    assert t4 < 8.0 * t1 + 0.02, (t1, t4)
-    t_deep = best_of(compile_condition, "(" * 250 + "x")              # within the limit: recovery
-    t_flat = best_of(compile_condition, "x+" * 125 + "x")
-    assert t_deep < 20 * t_flat + 0.05, (t_deep, t_flat)
+    """Issue 24.2: 800/1,600/3,200 '(' took 2.2/5.6/16.4 s. Brackets past
+    MAX_CONDITION_DEPTH and text past MAX_CONDITION_CHARS are refused before
+    the compiler sees them; within the limits the worst shapes (recovery at
+    the deepest nesting, an operator run) cost about what an ordinary
+    condition of the same length costs."""
+    from plcbuilder.project.conditions import MAX_CONDITION_DEPTH
+    assert [d.code for d in compile_condition("(" * 800)] == ["condition-too-deep"]
+    for n in (1_600, 3_200):
+        assert [d.code for d in compile_condition("(" * n)] == ["condition-too-long"]
+    assert best_of(compile_condition, "(" * 3_200) < 0.01
+    size = MAX_CONDITION_CHARS - 2 * MAX_CONDITION_DEPTH - 1
+    ordinary = "(" * MAX_CONDITION_DEPTH + "x+" * (size // 2) + "x" + ")" * MAX_CONDITION_DEPTH
+    t_flat = best_of(compile_condition, ordinary)
+    for hostile in ("(" * MAX_CONDITION_DEPTH + "x" + ")" * MAX_CONDITION_DEPTH + "+" * size,
+                    "(" * MAX_CONDITION_DEPTH + "-" * size + "x" + ")" * MAX_CONDITION_DEPTH,
+                    "(" * MAX_CONDITION_DEPTH + "x y " * (size // 4) + ")" * MAX_CONDITION_DEPTH):
+        assert len(hostile) <= MAX_CONDITION_CHARS
+        t = best_of(compile_condition, hostile)
+        assert t < 4 * t_flat + 0.05, (hostile[:40], t, t_flat)
 
 
 def test_a_condition_has_a_length_limit():
