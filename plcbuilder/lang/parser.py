@@ -86,20 +86,25 @@ class AstBuilder:
 
     def __init__(self):
         self.toks: list[Tok] = []
-        self.depth: dict[int, int] = {}
+        #: each node's nesting depth, keyed by the node itself: the key keeps it
+        #: alive for the parse, so a node made after one was dropped (a subtree
+        #: cut off too deep, values popped by error recovery) never takes over
+        #: its address and with it its depth (keyed by id(), a name after a cut
+        #: expression could inherit 250 levels and turn its statement Empty)
+        self.depth: dict = {}
         self.diags: list[Diagnostic] = []
         self.too_deep = False
         self.items: list = []     # the top-level items (procedures, None for a stray ';')
 
     # ---------------------------------------------------------- helpers
     def _d(self, node) -> int:
-        return self.depth.get(id(node), 0)
+        return self.depth.get(node, 0)
 
     def _nest(self, node, *kids):
         depth = self.depth
         d = 0
         for k in kids:
-            kd = depth.get(id(k), 0)
+            kd = depth.get(k, 0)
             if kd > d:
                 d = kd
         d += 1
@@ -115,7 +120,7 @@ class AstBuilder:
             else:
                 node = A.Empty(node.span)
             d = 1
-        depth[id(node)] = d
+        depth[node] = d
         return node
 
     # ---------------------------------------------------------- module
@@ -219,13 +224,13 @@ class AstBuilder:
         left, op, right = c
         node = A.Binary(op.value, left, right, left.span.cover(right.span), op.span)
         depth = self.depth                  # _nest, unrolled: the commonest node
-        d = depth.get(id(left), 0)
-        r = depth.get(id(right), 0)
+        d = depth.get(left, 0)
+        r = depth.get(right, 0)
         if r > d:
             d = r
         if d >= MAX_DEPTH:
             return self._nest(node, left, right)
-        depth[id(node)] = d + 1
+        depth[node] = d + 1
         return node
 
     def unary(self, c):
