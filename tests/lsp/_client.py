@@ -55,8 +55,11 @@ class Client:
                 name, _, value = line.decode("ascii").partition(":")
                 if name.strip().lower() == "content-length":
                     length = int(value.strip())
-            body = out.read(length)
-            self.messages.put(json.loads(body))
+            self._got(json.loads(out.read(length)))
+
+    def _got(self, msg: dict) -> None:
+        """One message read (on the reader thread): queued for :meth:`wait`."""
+        self.messages.put(msg)
 
     # ------------------------------------------------------------ sending
     def send_raw(self, data: bytes) -> None:
