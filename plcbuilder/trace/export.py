@@ -272,8 +272,8 @@ def exporter(fmt: str, path: Union[str, Path] = "", **chosen: bool) -> Exporter:
         if name not in known:
             raise ExportError(f"{path}: no export option {name!r}")
     if fmt not in formats():
-        raise ExportError(f"{path}: export as {' or '.join(sorted(formats()))} (from the file's suffix, "
-                          f"or say which)")
+        raise ExportError(f"{path}: export as {' or '.join(sorted(formats()))} (from the "
+                          f"file's suffix, or say which)")
     ways = [e for e in EXPORTERS if e.fmt == fmt]
     for name in picked:
         if not any(e.option == name for e in ways):
