@@ -16,17 +16,20 @@ nothing here keeps global state or prints.
 from __future__ import annotations
 
 import importlib
-from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Optional, Sequence
 
+from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.abi import proc_name
 from plcbuilder.bytecode.kind import Kind
 from plcbuilder.diagnostics import (Diagnostic, Related, Severity, Span, error, render_text,
-                                    summary)
+                                    summary, summary_counts)
 from plcbuilder.lang.options import CompileOptions
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Optional, Sequence
 
 if TYPE_CHECKING:                    # loaded on first use (_LAZY): for the type checkers
     from plcbuilder.bytecode.program import MAGIC, LoadError, Program
@@ -125,10 +128,17 @@ def __getattr__(name: str):
 _LOADED = False
 
 
-def _load() -> None:
-    """Every lazy name into this module (its functions use them as globals).
-    Once all of them: one name loaded on its own (``api.run_suite``) is not all."""
+def _load(*names: str) -> None:
+    """Lazy names into this module (its functions use them as globals): those
+    named, or (no names) every one. A function loads only what it uses, so a
+    command pays for its own stages only (``check`` does not load the controller)."""
     global _LOADED
+    if names:
+        g = globals()
+        for name in names:
+            if name not in g:
+                __getattr__(name)
+        return
     if not _LOADED:
         for name in _LAZY:
             if name not in globals():
@@ -146,10 +156,12 @@ __all__ = [
     "default_machine",
     "disassemble", "error", "events", "image_of", "instructions", "kind_of", "load_machine", "load_program",
     "load_variables", "options_for", "proc_name", "read_image", "render_text", "run", "summary",
+    "summary_counts",
     "write_image", "TestFileError", "TestOptions", "TestRun", "junit_xml", "test", "write_junit",
     "cobertura_xml", "coverage_totals", "write_cobertura",
     "Capturer", "History", "Trace", "TriggerError", "parse_trigger", "watched_variables", "load_trace", "save_trace",
-    "export_trace", "compare_traces", "TraceFileError", "ExportError", "CompareError",
+    "export_trace", "trace_exporters", "compare_traces",
+    "TraceFileError", "ExportError", "CompareError",
 ]
 
 DEFAULT_MS = 60_000
@@ -171,7 +183,7 @@ def load_program(path) -> Program:
 def image_of(sources: dict[str, str]) -> bytes:
     """An eeprom.rom of hardware procedures ``{name: source}`` with the built-in
     headers only (raises ValueError naming the first that does not compile)."""
-    _load()
+    _load("compile_source", "write_image")
     items = []
     for name, text in sources.items():
         r = compile_source(text, f"{name}.plc")
@@ -182,13 +194,13 @@ def image_of(sources: dict[str, str]) -> bytes:
 
 
 def disassemble(program: Program, source_line: Optional[Callable[[str, int], Optional[str]]] = None) -> str:
-    _load()
+    _load("disasm")
     return disasm.render_text(program, source_line)
 
 
 def instructions(program: Program) -> list:
     """The disassembly as records (one per instruction, with its source line)."""
-    _load()
+    _load("disasm")
     return disasm.instructions(program)
 
 
@@ -201,7 +213,7 @@ def options_for(path, *, software: bool = False, strict: Optional[bool] = None,
     project (``project``, or the one it sits in), else with the options given.
     ``strict`` None: as its project says (not strict outside a project).
     Raises ProjectError when its project's settings cannot be read."""
-    _load()
+    _load("Project", "kind_of")
     if project is None:
         project = Project.find_for(path)
     if project is not None:
@@ -278,7 +290,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
 
     Bad usage raises :class:`UsageError`; compile errors come back as the
     procedures' diagnostics with ``report`` None."""
-    _load()
+    _load("UsageError", "build_scenario", "Controller", "ControllerError", "Action",
+          "run_session", "load_machine", "default_machine", "ConfigError")
     opts = options or RunOptions()
     limit = DEFAULT_MS if opts.ms is None else opts.ms
     if not 0 <= limit <= MAX_MS:
@@ -296,6 +309,7 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     try:
         mconf = load_machine(machine_path) if machine_path is not None else default_machine()
         if tg.io_dat is not None:
+            _load("with_io_dat", "load_io_dat")
             io = load_io_dat(tg.io_dat)
             io_note = io.note
             mconf = with_io_dat(mconf, io)
@@ -320,6 +334,7 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     history = capturer = None
     watch = list(opts.watch)
     if opts.trigger is not None or opts.history is not None or watch:
+        _load("History", "Capturer", "TriggerError", "parse_trigger", "watched_variables")
         history = History(c.machine)
     if opts.trigger is not None:
         if opts.capture is None:
@@ -342,7 +357,8 @@ def run(target, options: Optional[RunOptions] = None) -> RunResult:
     forces = report.pop("forces", None)          # (the forces stay last)
     report["halted"] = _halted_report(c.debugger.halted_state()) if opts.breaks else None
     if history is not None:
-        report["capture"] = _save_capture(capturer, opts) if capturer is not None else None
+        if capturer is not None:         # (no trigger asked for: no capture to speak of)
+            report["capture"] = _save_capture(capturer, opts)
         if opts.history is not None:
             _save_trace(history.snapshot(meta={"target": str(target)}), opts.history, "--history")
             report["history"] = {"file": str(opts.history), "bytes": history.nbytes()}
@@ -386,8 +402,9 @@ def _write_state(path: Path, target: str, kept: list[int]) -> None:
 
 
 def _save_trace(trace, path: Path, option: str) -> None:
+    _load("trace_export", "trace_file")
     try:
-        if path.suffix.lower() in (".vcd", ".csv"):
+        if trace_export.can_export(path):
             trace_export.export(trace, path)
         else:
             trace_file.save(trace, path)
@@ -421,6 +438,8 @@ def _save_capture(capturer, opts: RunOptions) -> Optional[dict]:
 def _set_breaks(c: Controller, breaks: Sequence[str], target: Path) -> None:
     """``--break FILE:LINE[:CONDITION]`` options, set on the loaded controller
     (a bad one raises UsageError naming it)."""
+    if breaks:
+        _load("compile_condition", "DebugError")
     by_file: dict[str, list[dict]] = {}
     for text in breaks:
         parts = str(text).split(":", 2)
@@ -478,6 +497,7 @@ def _replay_image(c: Controller, programs: list, sc) -> Optional[str]:
     uploads = [a for a in sc.actions if a.kind == "upload"]
     if not uploads:
         return None
+    _load("image_id")
     c.replay_image = list(programs)
     have = image_id(programs)
     other = sorted({a.name for a in uploads if a.name and a.name != have})
@@ -488,6 +508,7 @@ def _replay_image(c: Controller, programs: list, sc) -> Optional[str]:
 
 
 def _compile_target(target: Path, opts: RunOptions) -> _Target:
+    _load("compile_file", "Project", "ProjectError", "kind_of")
     if target.is_dir():
         return _compile_project(target, opts)
     if not target.exists():
@@ -503,11 +524,14 @@ def _compile_target(target: Path, opts: RunOptions) -> _Target:
     config = None
     if options.target != "mycnc":
         project = Project.find_for(target)
+        _load("TargetConfig")
         config = _target_config(project) if project is not None else TargetConfig(options.target)
     return _Target([program] if program else [], [r], None, None, program, config)
 
 
 def _compile_project(root: Path, opts: RunOptions) -> _Target:
+    _load("compile_all", "load_variables", "DEFAULT_MACHINE", "io_dat_of", "io_dat_path",
+          "TargetConfig")
     try:
         project = Project.open(root)
         procs = project.procedures()
@@ -551,22 +575,30 @@ def _target_config(project: Project) -> TargetConfig:
 
 def load_trace(path) -> Trace:
     """Reopen a trace file (``.plctrace``); raises TraceFileError saying why not."""
-    _load()
+    _load("trace_file")
     return trace_file.load(path)
 
 
 def save_trace(trace: Trace, path) -> None:
     """Save a trace as a ``.plctrace`` file, atomically; raises TraceFileError."""
-    _load()
+    _load("trace_file")
     trace_file.save(trace, path)
 
 
-def export_trace(trace: Trace, path, fmt: Optional[str] = None, *, per_tick: bool = False,
-                 split_bits: bool = False) -> str:
-    """Export as CSV (per change, or ``per_tick``) or VCD (``split_bits``: its
-    numbers as one-bit lanes, for PulseView); raises ExportError."""
-    _load()
-    return trace_export.export(trace, path, fmt, per_tick=per_tick, split_bits=split_bits)
+def export_trace(trace: Trace, path, fmt: Optional[str] = None, **chosen: bool) -> str:
+    """Export as CSV (per change, or ``per_tick=True``) or VCD (``split_bits=True``:
+    its numbers as one-bit lanes, for PulseView): the ways of
+    ``plcbuilder.trace.export.EXPORTERS``. Returns the format; raises ExportError."""
+    _load("trace_export")
+    return trace_export.export(trace, path, fmt, **chosen)
+
+
+def trace_exporters():
+    """The ways to export a trace, in the order the IDE offers them (each with
+    ``fmt``, ``option``, ``flag``, ``label``, ``help``): the command line's
+    export options and the IDE's file-dialog filters are made from them."""
+    from plcbuilder.trace.export import EXPORTERS
+    return EXPORTERS
 
 
 def compare_traces(a: Trace, b: Trace, align: str = "none",
@@ -574,7 +606,7 @@ def compare_traces(a: Trace, b: Trace, align: str = "none",
     """The first tick where two traces differ, and in which signals; ``b``
     lined up with ``a`` first (``align``: none, start or trigger, then
     ``offset_ms`` more). Raises CompareError when they cannot be lined up so."""
-    _load()
+    _load("trace_compare")
     return trace_compare.compare(a, b, align, offset_ms)
 
 
@@ -649,7 +681,7 @@ def test(project, options: Optional[TestOptions] = None, progress=None) -> TestR
     The tests of a file with a mistake are left out (the file is in
     ``errors``); the others run. A project that cannot be opened raises
     :class:`UsageError`."""
-    _load()
+    _load("prepare", "SuiteError", "run_suite", "UsageError")
     opts = options or TestOptions()
     try:
         suite = prepare(project, opts.select, strict=opts.strict)

@@ -11,8 +11,13 @@ characters (not bytes): the IDE converts to Scintilla's byte offsets itself.
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
-from typing import Callable, Iterable, NamedTuple, Optional
+from collections import namedtuple
+
+from plcbuilder._support.records import dataclass
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Iterable, Optional
 
 
 class Severity(enum.IntEnum):
@@ -25,14 +30,14 @@ class Severity(enum.IntEnum):
         return self.name.lower()
 
 
-class Span(NamedTuple):
+_new = tuple.__new__        # Span(...) without a Python call in between: one is made per token
+
+
+class Span(namedtuple("Span", "file line col end_line end_col")):
     """Where something is: 1-based line and column, ``end_col`` exclusive.
-    A named tuple: made for every token, so it must be cheap to create."""
-    file: str
-    line: int
-    col: int
-    end_line: int
-    end_col: int
+    A named tuple: made for every token, so it must be cheap to create.
+    Fields: ``file`` (str), ``line``, ``col``, ``end_line``, ``end_col`` (int)."""
+    __slots__ = ()
 
     @classmethod
     def point(cls, file: str, line: int, col: int, length: int = 1) -> "Span":
@@ -50,7 +55,7 @@ class Span(NamedTuple):
             end_line, end_col = other[3], other[4]
         else:
             end_line, end_col = self[3], self[4]
-        return Span(self[0], start_line, start_col, end_line, end_col)
+        return _new(Span, (self[0], start_line, start_col, end_line, end_col))
 
 
 @dataclass(frozen=True)
@@ -89,6 +94,10 @@ def warning(code: str, message: str, span: Optional[Span], *hints: str,
 
 # ---------------------------------------------------------------- rendering
 
+#: the most of a source line a rendered diagnostic shows (around the column)
+MAX_SHOWN = 160
+
+
 def render_text(diag: Diagnostic, source_line: Callable[[str, int], Optional[str]] | None = None,
                 colorize: Callable[[str, str], str] | None = None) -> str:
     """Render one diagnostic the way compilers do::
@@ -110,12 +119,18 @@ def render_text(diag: Diagnostic, source_line: Callable[[str, int], Optional[str
         text = source_line(s.file, s.line)
         if text is not None:
             text = text.rstrip("\n").replace("\t", " ")
-            out.append("    " + c("source", text))
             start = max(s.col - 1, 0)
             if s.end_line == s.line:
                 width = max(s.end_col - s.col, 1)
             else:
                 width = max(len(text) - start, 1)
+            if len(text) > MAX_SHOWN:           # a very long line: the part around the column
+                lo = max(0, min(start - MAX_SHOWN // 4, len(text) - MAX_SHOWN))
+                hi = lo + MAX_SHOWN
+                width = max(1, min(width, hi - start))
+                text = ("..." if lo else "") + text[lo:hi] + ("..." if hi < len(text) else "")
+                start += (3 if lo else 0) - lo
+            out.append("    " + c("source", text))
             out.append("    " + " " * start + c("caret", "^" + "~" * (width - 1)))
     for h in diag.hints:
         out.append("  " + c("hint", "hint:") + " " + h)
@@ -127,7 +142,11 @@ def render_text(diag: Diagnostic, source_line: Callable[[str, int], Optional[str
 
 def summary(diags: Iterable[Diagnostic]) -> str:
     diags = list(diags)
-    e = sum(1 for d in diags if d.severity == Severity.ERROR)
-    w = sum(1 for d in diags if d.severity == Severity.WARNING)
+    return summary_counts(sum(1 for d in diags if d.severity == Severity.ERROR),
+                          sum(1 for d in diags if d.severity == Severity.WARNING))
+
+
+def summary_counts(errors: int, warnings: int) -> str:
+    """``1 error, 2 warnings``."""
     part = lambda n, word: f"{n} {word}{'' if n == 1 else 's'}"  # noqa: E731
-    return f"{part(e, 'error')}, {part(w, 'warning')}"
+    return f"{part(errors, 'error')}, {part(warnings, 'warning')}"

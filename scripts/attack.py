@@ -6,8 +6,10 @@
     .venv/bin/python scripts/attack.py 17.4 fuzz       # items whose name contains a word
     PLCB_ATTACK_SECONDS=20 .venv/bin/python scripts/attack.py   # longer
 
-Modules: ``attack_link`` (the controller server), and ``attack_image``,
-``attack_files`` and ``attack_dap`` (the debug adapter, Build All) when present; each defines ``ATTACKS: list[tuple[str,
+Modules: ``attack_link`` (the controller server), ``attack_lsp`` (the
+language server), and ``attack_image``, ``attack_files``, ``attack_sources``
+(hostile PLC sources and breakpoint conditions) and ``attack_dap`` (the debug
+adapter, Build All) when present; each defines ``ATTACKS: list[tuple[str,
 callable]]`` whose callables return ``{"tried", "refused", "accepted",
 "crashed"}``. ``accepted`` counts attacks that got through, ``crashed`` the
 times the target died or stopped answering (an attack that raises counts as
@@ -29,7 +31,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
 
-MODULES = ("attack_link", "attack_image", "attack_files", "attack_dap")
+MODULES = ("attack_link", "attack_image", "attack_files", "attack_sources", "attack_dap",
+           "attack_lsp")
 KEYS = ("tried", "refused", "accepted", "crashed")
 
 

@@ -153,30 +153,43 @@ def pacing_at_10000x() -> dict:
 
 # ------------------------------------------------------------------ 17.2
 
+def _through_idle_sockets(out: dict, proc, rounds: int, idle_count: int, open_idle,
+                          answered) -> dict:
+    """``rounds`` times: ``idle_count`` connections made by ``open_idle()`` and
+    left open, then ``answered()`` says whether a real client got its answer
+    (the attack refused) or not (accepted); a dead controller crashed."""
+    for _ in range(rounds):
+        out["tried"] += 1
+        idle = []
+        try:
+            for _ in range(idle_count):
+                idle.append(open_idle())
+            time.sleep(0.2)
+            out["refused" if answered() else "accepted"] += 1
+        finally:
+            for s in idle:
+                s.close()
+    if not _alive(proc):
+        out["crashed"] += 1
+    return out
+
+
+def _client_answered(proc) -> bool:
+    try:
+        with proc.connect(timeout=5, connect_timeout=5) as c:
+            c.state()
+        return True
+    except LinkError:
+        return False
+
+
 def idle_sockets_lock_out() -> dict:
     """100 idle sockets without a token, then a client with the token."""
-    out = _counts()
     with controller() as proc:
         host, port = proc.address
-        for _ in range(5):
-            out["tried"] += 1
-            idle = []
-            try:
-                for _ in range(100):
-                    idle.append(socket.create_connection((host, port), timeout=5))
-                time.sleep(0.2)
-                try:
-                    with proc.connect(timeout=5, connect_timeout=5) as c:
-                        c.state()
-                    out["refused"] += 1
-                except LinkError:
-                    out["accepted"] += 1
-            finally:
-                for s in idle:
-                    s.close()
-        if not _alive(proc):
-            out["crashed"] += 1
-    return out
+        return _through_idle_sockets(
+            _counts(), proc, 5, 100, lambda: socket.create_connection((host, port), timeout=5),
+            lambda: _client_answered(proc))
 
 
 # ------------------------------------------------------------------ 24.6
@@ -204,27 +217,18 @@ def server_api_idle_sockets() -> dict:
     """64 Server API connections that never send a command, then a client: it
     must get its answer (they locked every client out: "too many Server API
     clients (16)", still at 90 s)."""
-    out = _counts()
     port = _free_port()
+
+    def answered() -> bool:
+        try:
+            return _api_ask(port, "GetMCC") == "OK 77"
+        except OSError:
+            return False
+
     with controller(extra=["--server-api", str(port)]) as proc:
-        for _ in range(5):
-            out["tried"] += 1
-            idle = []
-            try:
-                for _ in range(64):
-                    idle.append(socket.create_connection(("127.0.0.1", port), timeout=5))
-                time.sleep(0.2)
-                try:
-                    reply = _api_ask(port, "GetMCC")
-                except OSError:
-                    reply = ""
-                out["refused" if reply == "OK 77" else "accepted"] += 1
-            finally:
-                for s in idle:
-                    s.close()
-        if not _alive(proc):
-            out["crashed"] += 1
-    return out
+        return _through_idle_sockets(
+            _counts(), proc, 5, 64,
+            lambda: socket.create_connection(("127.0.0.1", port), timeout=5), answered)
 
 
 def server_api_connect_flood_vs_pendant() -> dict:
@@ -270,30 +274,16 @@ def server_api_connect_flood_vs_pendant() -> dict:
 def idle_sockets_mid_hello() -> dict:
     """The main protocol's slots: 64 connections each stopped in the middle of a
     hello frame (its length sent, not its body), then a client with the token."""
-    out = _counts()
     with controller() as proc:
         host, port = proc.address
-        for _ in range(3):
-            out["tried"] += 1
-            idle = []
-            try:
-                for _ in range(64):
-                    s = socket.create_connection((host, port), timeout=5)
-                    s.sendall(struct.pack(">I", 200) + b'{"type": "hel')
-                    idle.append(s)
-                time.sleep(0.2)
-                try:
-                    with proc.connect(timeout=5, connect_timeout=5) as c:
-                        c.state()
-                    out["refused"] += 1
-                except LinkError:
-                    out["accepted"] += 1
-            finally:
-                for s in idle:
-                    s.close()
-        if not _alive(proc):
-            out["crashed"] += 1
-    return out
+
+        def mid_hello() -> socket.socket:
+            s = socket.create_connection((host, port), timeout=5)
+            s.sendall(struct.pack(">I", 200) + b'{"type": "hel')
+            return s
+
+        return _through_idle_sockets(_counts(), proc, 3, 64, mid_hello,
+                                     lambda: _client_answered(proc))
 
 
 # ------------------------------------------------------------------ 17.3

@@ -57,3 +57,26 @@ def test_wheel_ships_the_manual_for_help(wheel):
         assert data + page.name in names
     for image in sorted((ROOT / "docs" / "images").glob("*")):
         assert data + "images/" + image.name in names
+
+
+def test_installed_wheel_parses_with_its_shipped_tables(wheel, tmp_path):
+    """Issue 26.1: the wheel carries the parse tables (lang/grammar_tables.py)
+    and the default machine's data: an installed package compiles and loads
+    the default machine with lark and tomllib unavailable, writing nothing."""
+    target = tmp_path / "site"
+    with zipfile.ZipFile(wheel) as z:
+        z.extractall(target)
+        assert "plcbuilder/lang/grammar_tables.py" in z.namelist()
+        assert "plcbuilder/controller/default_machine_data.py" in z.namelist()
+    before = sorted(p.relative_to(target) for p in target.rglob("*"))
+    code = ("import sys; sys.dont_write_bytecode = True; sys.path.insert(0, %r)\n"
+            "sys.modules['lark'] = None; sys.modules['tomllib'] = None\n"
+            "import plcbuilder.api as a\n"
+            "r = a.compile_source('#include pins.h\\nmain(){ x = (1 + ; exit(99); };')\n"
+            "assert [d.code for d in r.errors] == ['syntax'], r.diagnostics\n"
+            "from plcbuilder.controller.machine_config import default_machine\n"
+            "print(a.__file__, default_machine().name)" % str(target))
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert str(target) in r.stdout
+    assert sorted(p.relative_to(target) for p in target.rglob("*")) == before

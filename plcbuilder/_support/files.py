@@ -15,9 +15,13 @@ import errno
 import os
 import re
 import stat
-from pathlib import Path
+from collections.abc import Iterable as _Iterable
 from contextlib import contextmanager
-from typing import BinaryIO, Iterable, Iterator, Optional, Union
+from pathlib import Path
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import BinaryIO, Iterable, Iterator, Optional, Union
 
 #: What a file that is not a regular file is, for messages.
 _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
@@ -138,7 +142,7 @@ def atomic_write(path: Union[str, Path], data: Union[bytes, str, Iterable[bytes]
         data = data.encode("utf-8")
     if isinstance(data, (bytes, bytearray, memoryview)):
         chunks: Iterable = (data,)
-    elif isinstance(data, Iterable):
+    elif isinstance(data, _Iterable):
         chunks = data
     else:
         raise TypeError(f"atomic_write takes bytes, str or chunks of bytes, not {type(data).__name__}")

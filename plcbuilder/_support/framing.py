@@ -127,16 +127,31 @@ class FrameReader:
         return -1, 0
 
     def _header(self, header: bytes, out: list[Event]) -> None:
-        length = None
-        for line in header.split(b"\n"):
-            m = _LENGTH.match(line.strip(b"\r"))
+        values = [m.group(1) for m in (_LENGTH.match(line.strip(b"\r"))
+                                       for line in header.split(b"\n")) if m is not None]
+        if not values:
+            # Bytes before the header are what is left of a body whose
+            # Content-Length was too short (that frame was used and refused): the
+            # header after them is the next message's, not lost with them.
+            m = _RESYNC.search(header)
             if m is not None:
-                length = m.group(1)
-        if length is None:
+                line = header[m.start():].split(b"\n", 1)[0]
+                got = _LENGTH.match(line.strip(b"\r"))
+                values = [got.group(1)] if got is not None else []
+        if not values:
             shown = header[:60].decode("utf-8", "replace").replace("\r", "").replace("\n", " | ")
             self._error(out, f"a frame without a Content-Length header ({shown!r})")
             self._resync = True
             return
+        if len(set(values)) > 1:
+            # which one is the body's length cannot be known: the frame is refused
+            # and the next one is looked for (as HTTP treats differing lengths)
+            shown = " and ".join(v[:20].decode("utf-8", "replace") for v in dict.fromkeys(values))
+            self._error(out, f"a frame with different Content-Length headers ({shown}); it is "
+                             "skipped")
+            self._resync = True
+            return
+        length = values[0]
         if not length.isdigit() or len(length) > 12:
             self._error(out, f"Content-Length {length[:20].decode('utf-8', 'replace')!r} "
                              "is not a number of bytes")

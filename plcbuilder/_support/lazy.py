@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import importlib
 import sys
-from typing import Callable, Mapping
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Mapping
 
 
 def lazy_names(package: str, where: Mapping[str, str]) -> Callable[[str], object]:

@@ -9,7 +9,8 @@ def _reject_constant(name: str):
     raise ValueError(f"{name} is not allowed")
 
 
-def _no_duplicates(pairs):
+def no_duplicate_keys(pairs):
+    """``object_pairs_hook`` refusing a key that appears twice (ValueError)."""
     out = {}
     for k, v in pairs:
         if k in out:
@@ -21,4 +22,4 @@ def _no_duplicates(pairs):
 def strict_json_loads(text: str):
     """JSON that refuses repeated keys and NaN/Infinity (raises ValueError, or
     RecursionError when nested too deeply)."""
-    return json.loads(text, object_pairs_hook=_no_duplicates, parse_constant=_reject_constant)
+    return json.loads(text, object_pairs_hook=no_duplicate_keys, parse_constant=_reject_constant)

@@ -5,8 +5,13 @@ line numbers for messages: where a parse error is, and where a key is
 from __future__ import annotations
 
 import re
-import tomllib
-from typing import Optional
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
+
+if TYPE_CHECKING:
+    import tomllib
 
 _AT = re.compile(r"\s*\(at line (\d+), column \d+\)")
 _END = " (at end of document)"
@@ -17,6 +22,7 @@ def loads(text: str) -> dict:
     """``tomllib.loads``, with nesting too deep for the parser (it recurses:
     ``a = [[[[…`` 50,000 deep) raised as a ``TOMLDecodeError`` like any other
     syntax error, never a ``RecursionError``."""
+    import tomllib                      # (not loaded until a settings file is read)
     try:
         return tomllib.loads(text)
     except RecursionError:

@@ -12,9 +12,20 @@ name gives the first name listed.
 
 from __future__ import annotations
 
-from typing import Optional
-
 from plcbuilder.bytecode import softmc
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
+
+# ----------------------------------------------------------------- VM limits
+#: (one place: the interpreters fault past them, the checker warns of them)
+#: instructions one procedure may run in one tick
+TICK_BUDGET = 100_000
+#: how deep CALLs may nest
+MAX_CALL_DEPTH = 16
+#: values on the evaluation stack
+STACK_LIMIT = 1024
 
 # --------------------------------------------------------------- PLC defines
 PLCCMD: dict[str, int] = {

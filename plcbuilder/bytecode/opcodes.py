@@ -18,8 +18,12 @@ from __future__ import annotations
 
 import enum
 import struct
-from dataclasses import dataclass
-from typing import Iterator, Optional
+
+from plcbuilder._support.records import dataclass
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Iterator, Optional
 
 
 class Op(enum.IntEnum):

@@ -25,8 +25,8 @@ import bisect
 import functools
 import struct
 import zlib
-from dataclasses import dataclass, field
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.kind import Kind  # defined there, and known here as ever
 from plcbuilder.bytecode.opcodes import DecodeError, validate

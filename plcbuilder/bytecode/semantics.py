@@ -24,10 +24,13 @@ it generates, filling in its own operand expressions.
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass, field
-from typing import Callable, Optional
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode.opcodes import BINARY as BINARY_OPS, UNARY as UNARY_OPS, Op
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Optional
 
 INT_MIN = -0x80000000
 INT_MAX = 0x7FFFFFFF

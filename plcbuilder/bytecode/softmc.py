@@ -36,7 +36,10 @@ read-only), POSITION 100 + i - 1 (position i, 0.01 mm).
 from __future__ import annotations
 
 import re
-from typing import Optional
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 VIN_WORD = 30000
 VOUT_WORD = 30001

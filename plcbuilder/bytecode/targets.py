@@ -27,8 +27,12 @@ their meaning:
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
-from typing import Optional
+
+from plcbuilder._support.records import dataclass
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 MYCNC = "mycnc"
 HUAZHONG = "huazhong"

@@ -67,7 +67,8 @@ def _procedure_line(pb, out: term.Out) -> str:
     status = out.paint("ok", "ok") if pb.ok else out.paint("bad", "failed")
     used = "-" if pb.size is None else str(pb.size)
     note = " (unchanged)" if pb.cached else ""
-    return (f"{out.paint('location', str(pb.path) + ':')} {status}: {api.summary(pb.diagnostics)}; "
+    return (f"{out.paint('location', str(pb.path) + ':')} {status}: "
+            f"{api.summary_counts(pb.errors, pb.warnings)}; "
             f"{pb.kind.label} procedure {pb.name}, {used}/{pb.limit} bytes{note}")
 
 
@@ -128,7 +129,7 @@ def report(result, out: term.Out, quiet: bool = False) -> None:
     elif not result.image_written:
         out.print(result.image_message)
     n = len(result.procedures)
-    counts = api.summary(result.all_diagnostics)
+    counts = api.summary_counts(result.error_count, result.warning_count)
     status = out.paint("ok", "Build All ok") if result.ok else out.paint("bad", "Build All failed")
     out.print(f"{status}: {n} procedure{'s' * (n != 1)}, {counts} "
               f"({result.compiled} compiled, {result.reused} unchanged)")

@@ -24,20 +24,13 @@ MAX_LATENCY_MS = 60_000
 
 
 def parse_speed(text: str) -> tuple[str, float]:
-    """realtime | max | pause | N (a factor of real time, also ``Nx``)."""
-    t = text.strip().lower()
-    if t in ("realtime", "max", "pause"):
-        return t, 1.0
+    """``--speed``: link.protocol.parse_speed's, for argparse (its error as a usage error)."""
+    from plcbuilder.link.protocol import parse_speed as parse
     try:
-        f = float(t[:-1] if t.endswith("x") else t)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected realtime, max, pause or a factor such as 10, got {text!r}") from None
-    from plcbuilder.link.protocol import MAX_FACTOR, MIN_FACTOR
-    if not MIN_FACTOR <= f <= MAX_FACTOR:
-        raise argparse.ArgumentTypeError(f"a speed factor must be from {MIN_FACTOR:g} to "
-                                         f"{MAX_FACTOR:g}")
-    return ("realtime", 1.0) if f == 1.0 else ("factor", f)
+        mode, factor = parse(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return mode, 1.0 if factor is None else factor
 
 
 def _loopback(host: str) -> bool:

@@ -82,17 +82,20 @@ def run(args: argparse.Namespace) -> int:
             print("plcbuilder gui: no display (DISPLAY is not set); run it on a desktop, or "
                   "use --screenshot FILE, or set QT_QPA_PLATFORM=offscreen", file=sys.stderr)
             return 1
+    check = None
     if _uses_xcb():
         from plcbuilder.cli import qt_libs
-        missing = qt_libs.missing_libraries()
-        if missing:                     # Qt would stop with "could not load ... xcb"
-            print("plcbuilder gui: " + qt_libs.report(missing), file=sys.stderr)
-            return 1
+        check = qt_libs.start_check()   # (ldd runs while the IDE's modules load)
     try:
         from plcbuilder.ide.app import main
     except ImportError as exc:
         print(f"plcbuilder gui: the IDE cannot start: {exc}", file=sys.stderr)
         return 1
+    if check is not None:
+        missing = check.missing()
+        if missing:                     # Qt would stop with "could not load ... xcb"
+            print("plcbuilder gui: " + qt_libs.report(missing), file=sys.stderr)
+            return 1
     settings = getattr(args, "settings", None)
     return main(str(project) if project else None,
                 screenshot=str(args.screenshot) if getattr(args, "screenshot", None) else None,

@@ -11,7 +11,6 @@ included), 1 on compile errors, 2 on bad usage.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from plcbuilder.cli import term
@@ -82,9 +81,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="single: one capture; normal: re-arm after each (FILE-2, FILE-3, …); "
                         "auto: also capture when no trigger came for pre+post ms")
     g.add_argument("--capture", type=Path, metavar="FILE",
-                   help="write the capture: .plctrace (reopens in the IDE), .vcd or .csv")
+                   help="write the capture: .plctrace (reopens in the IDE), or by its suffix "
+                        "any format `plcbuilder trace export` writes (.vcd, .csv)")
     g.add_argument("--history", type=Path, metavar="FILE",
-                   help="write the whole session as a trace: .plctrace, .vcd or .csv")
+                   help="write the whole session as a trace: .plctrace, or by its suffix any "
+                        "format `plcbuilder trace export` writes")
     g.add_argument("--watch", action="append", default=[], metavar="PROC.var",
                    help="record a variable every tick into the history (repeatable)")
     p.add_argument("--break", dest="breaks", action="append", default=[],
@@ -157,6 +158,7 @@ def run(args: argparse.Namespace) -> int:
             out.print(f"plcbuilder run: not run: {', '.join(bad)} did not compile", err=True)
             return 1
         if args.json:
+            import json
             out.print(json.dumps(result.report))
         else:
             out.print(summary(result.report, out))

@@ -24,16 +24,18 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     i = sub.add_parser("info", help="the span, signals and changes of a trace file")
     i.add_argument("file", type=Path, metavar="FILE")
     i.add_argument("--json", action="store_true", help="print one JSON object")
-    e = sub.add_parser("export", help="export a trace file as CSV or VCD")
+    from plcbuilder import api
+    ways = api.trace_exporters()
+    formats = list(dict.fromkeys(w.fmt for w in ways))
+    e = sub.add_parser("export", help="export a trace file as "
+                                      + " or ".join(f.upper() for f in formats))
     e.add_argument("file", type=Path, metavar="FILE")
-    e.add_argument("out", type=Path, metavar="OUT", help="OUT.csv or OUT.vcd")
-    e.add_argument("--format", choices=("csv", "vcd"), help="default: from OUT's suffix")
-    e.add_argument("--per-tick", action="store_true",
-                   help="CSV: one row per tick and a column per signal (default: one row per "
-                        "change)")
-    e.add_argument("--split-bits", action="store_true",
-                   help="VCD: every number as one-bit lanes NAME[0], NAME[1]… (PulseView and "
-                        "sigrok-cli read only one-bit signals)")
+    e.add_argument("out", type=Path, metavar="OUT",
+                   help=" or ".join(f"OUT.{f}" for f in formats))
+    e.add_argument("--format", choices=formats, help="default: from OUT's suffix")
+    for w in ways:
+        if w.option is not None:
+            e.add_argument(w.flag, dest=w.option, action="store_true", help=w.help)
     c = sub.add_parser("compare", help="the first tick where two traces differ")
     c.add_argument("a", type=Path, metavar="A")
     c.add_argument("b", type=Path, metavar="B")
@@ -63,8 +65,9 @@ def run(args: argparse.Namespace) -> int:
                 return 0 if diff.same else 1
             trace = api.load_trace(args.file)
             if args.trace_command == "export":
-                fmt = api.export_trace(trace, args.out, args.format, per_tick=args.per_tick,
-                                       split_bits=args.split_bits)
+                fmt = api.export_trace(trace, args.out, args.format, **{
+                    w.option: getattr(args, w.option) for w in api.trace_exporters()
+                    if w.option is not None})
                 out.print(f"wrote {args.out} ({fmt})")
                 return 0
             changed = {n: len(ch) for n, (_k, ch) in trace.signals.items()}

@@ -8,9 +8,12 @@ import argparse
 import os
 import sys
 from pathlib import Path
-from typing import Callable, Optional
 
 from plcbuilder.cli import term
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Optional
 
 #: Set this environment variable to see the traceback of an internal error.
 DEBUG_ENV = "PLCBUILDER_DEBUG"

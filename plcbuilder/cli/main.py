@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 #: Subcommand modules, in the order ``--help`` lists them.
@@ -13,14 +14,49 @@ COMMANDS = ("gui", "check", "compile", "disasm", "run", "test", "new", "build",
             "desktop")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+def _columns() -> int:
+    """The terminal's width, as ``shutil.get_terminal_size`` finds it."""
+    try:
+        cols = int(os.environ.get("COLUMNS", "0"))
+    except ValueError:
+        cols = 0
+    if cols <= 0:
+        try:
+            cols = os.get_terminal_size(sys.__stdout__.fileno()).columns
+        except (AttributeError, ValueError, OSError):
+            cols = 0
+    return cols or 80
+
+
+class _Formatter(argparse.HelpFormatter):
+    """argparse's, told the width: argparse asks ``shutil`` for it, and
+    importing shutil (with its compression modules) is a tenth of a bare
+    Python start, paid by every command for a help text it rarely prints."""
+
+    def __init__(self, prog, indent_increment=2, max_help_position=24, width=None):
+        super().__init__(prog, indent_increment, max_help_position,
+                         _columns() - 2 if width is None else width)
+
+
+class _Parser(argparse.ArgumentParser):
+    """The parser of the command line and of each command (the subcommands'
+    parsers are of the parent's class): with :class:`_Formatter`."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
+
+
+def build_parser(only: tuple[str, ...] | None = None) -> argparse.ArgumentParser:
+    """The command line's parser: every command, or ``only`` those named (a
+    command starts without importing the others' modules)."""
+    parser = _Parser(
         prog="plcbuilder",
         description="PLC Builder: edit, compile and simulate myCNC PLC procedures.")
     from plcbuilder import __version__
     parser.add_argument("--version", action="version", version=f"plcbuilder {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in COMMANDS:
+    for name in COMMANDS if only is None else only:
         try:
             mod = importlib.import_module(f"plcbuilder.cli.cmd_{name}")
         except ModuleNotFoundError as exc:
@@ -37,10 +73,12 @@ TOP_LEVEL_OPTIONS = ("-h", "--help", "--version")
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0].startswith("-") and argv[0].split("=", 1)[0] not in TOP_LEVEL_OPTIONS:
         argv.insert(0, "gui")           # `plcbuilder --settings F`: the default command's options
+    first = argv[0] if argv else "gui"
+    # only the command asked for is loaded; --help and a mistyped command see them all
+    parser = build_parser((first,) if first in COMMANDS else () if first == "--version" else None)
     args = parser.parse_args(argv)
     if getattr(args, "_run", None) is None:
         try:

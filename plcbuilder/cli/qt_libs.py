@@ -80,19 +80,46 @@ def missing_in(ldd_output: str) -> list[str]:
     return seen
 
 
+class Check:
+    """``ldd`` on the xcb plugin, running: :meth:`missing` waits for its answer
+    (the IDE starts it first and imports Qt meanwhile)."""
+
+    def __init__(self, plugin: Optional[Path] = None):
+        plugin = plugin or xcb_plugin()
+        ldd = os.environ.get("PLCBUILDER_LDD") or shutil.which("ldd")
+        self.proc: Optional[subprocess.Popen] = None
+        if plugin is None or not ldd:
+            return
+        try:
+            self.proc = subprocess.Popen([ldd, str(plugin)], stdout=subprocess.PIPE,
+                                         stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                         text=True)
+        except OSError:
+            self.proc = None
+
+    def missing(self) -> list[str]:
+        """The libraries the xcb plugin needs that the system lacks. Empty when
+        nothing is missing or it cannot tell (no plugin, no ldd)."""
+        if self.proc is None:
+            return []
+        try:
+            out, _ = self.proc.communicate(timeout=20)
+        except (OSError, subprocess.SubprocessError):
+            self.proc.kill()
+            return []
+        return missing_in(out or "")
+
+
+def start_check(plugin: Optional[Path] = None) -> Check:
+    """Start looking for the xcb plugin's missing libraries (see :class:`Check`)."""
+    return Check(plugin)
+
+
 def missing_libraries(plugin: Optional[Path] = None) -> list[str]:
     """The libraries the xcb plugin needs that the system lacks (``ldd``;
     ``PLCBUILDER_LDD`` names another command, for tests). Empty when nothing
     is missing or it cannot tell (no plugin, no ldd)."""
-    plugin = plugin or xcb_plugin()
-    ldd = os.environ.get("PLCBUILDER_LDD") or shutil.which("ldd")
-    if plugin is None or not ldd:
-        return []
-    try:
-        out = subprocess.run([ldd, str(plugin)], capture_output=True, text=True, timeout=20)
-    except (OSError, subprocess.SubprocessError):
-        return []
-    return missing_in(out.stdout + out.stderr)
+    return Check(plugin).missing()
 
 
 def packages_for(libraries: list[str]) -> list[str]:

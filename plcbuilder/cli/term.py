@@ -16,7 +16,10 @@ import argparse
 import functools
 import os
 import sys
-from typing import Callable, Optional, TextIO
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Optional, TextIO
 
 COLOR_CHOICES = ("auto", "always", "never")
 

@@ -17,8 +17,6 @@ Typical use::
 
 from __future__ import annotations
 
-from typing import Iterable, Optional
-
 from plcbuilder._support.numbers import INT32, WORD32, to_int32
 from plcbuilder.bytecode import abi, softmc
 from plcbuilder.bytecode.opcodes import DecodeError, validate
@@ -31,6 +29,10 @@ from plcbuilder.controller.recorder import Recorder, image_id
 from plcbuilder.controller.scenario import Action
 from plcbuilder.controller.targets import TargetConfig, TargetConfigError, make_plc
 from plcbuilder.controller.watch import VariableWatch, check_name
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Iterable, Optional
 
 HANDLER_INIT = "__HANDLER_INIT"
 HANDLER_EXIT = "__HANDLER_EXIT"

@@ -23,14 +23,17 @@ Halting stops the whole controller: the PLC keeps the rest of the tick
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
-from typing import Optional
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import Op, size_of, validate
 from plcbuilder.bytecode.program import LoadError, Program
 from plcbuilder.controller import halted_state, vm
 from plcbuilder.controller.events import Halted, Log, Resumed
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 REASONS = ("breakpoint", "step", "pause", "fault")
 HIT_MODES = ("eq", "ge", "every")
@@ -108,28 +111,12 @@ class Watch:
         at = debugger._at_of(process.program.name)      # kept up to date in place
 
         def brk(pc: int, rets, _d=debugger, _p=process, _at=at) -> bool:
-            # (the common case written out: asked at every watched statement start)
+            # asked at every watched statement start: the common case (no
+            # step going on, no breakpoint at pc) answered here at once
             if _d._busy:                    # a step or a run-to goes on
                 return _d._reached(_p, pc, rets)
             bps = _at.get(pc)
-            if bps is None:
-                return False
-            for bp in bps:
-                if bp.code is not None and not _d._holds(bp, _p):
-                    continue
-                bp.hits += 1
-                hit = bp.hit
-                if hit is not None:
-                    mode, n = hit
-                    k = bp.hits
-                    if mode == "eq" and k != n or mode == "ge" and k < n \
-                            or mode == "every" and k % n:
-                        continue
-                if bp.log is not None:
-                    _d._log(_p, bp.log)
-                    continue
-                return _d._halt_at("breakpoint", _p, pc, rets, bp)
-            return False
+            return bps is not None and _d._breakpoints_at(_p, pc, rets, bps)
 
         self.brk = brk
 
@@ -474,11 +461,8 @@ class Debugger:
         cond = bp.bound.get(p.program.name)
         if cond is None:
             return False
-        h = p.host
-        host = vm.Host(portset=h.portset, portclr=h.portclr, portget=h.portget,
-                       gvarget=h.gvarget, gvarset=h.gvarset, g0move=h.g0move, plain=h.plain)
         try:
-            next(vm.run_reference(cond, p.slots, host))
+            next(vm.run_reference(cond, p.slots, p.host.for_expression()))
         except vm.ProcExit as done:
             return done.code != 0
         except vm.VMFault as exc:
@@ -540,6 +524,19 @@ class Debugger:
         if h is not None:
             events.append(Halted(self.plc.t, self.halted_state()))
         self._told = h
+
+    def unannounce(self) -> None:
+        """Take back the announcement of the last halt (while its event is
+        not taken yet) and forget it: the halt was a replay's own, to do an
+        action where it was done live (controller/scenario.py, ``Action.at``);
+        nobody halted there."""
+        if self._told is not None:
+            events = self.plc.events
+            for k in range(len(events) - 1, -1, -1):
+                if isinstance(events[k], Halted):
+                    del events[k]
+                    break
+        self._told = None
 
     # ------------------------------------------------------------ commands
     def pause(self) -> None:
@@ -638,12 +635,10 @@ class Debugger:
             p = self._procedure(procedure)
         p.sync()
         bound = bind(cond, p.program)
-        h = p.host
 
         def refused(*_a):
             raise DebugError("an expression to evaluate may not write")
-        host = vm.Host(portset=refused, portclr=refused, portget=h.portget, gvarget=h.gvarget,
-                       gvarset=refused, g0move=refused, plain=h.plain)
+        host = p.host.for_expression(write=refused)
         try:
             next(vm.run_reference(bound, list(p.slots), host))
         except vm.ProcExit as done:

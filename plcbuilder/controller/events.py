@@ -6,8 +6,11 @@ CSV trace), the TCP link (serialised with :func:`to_dict`) and the IDE panels.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
-from typing import Optional
+from plcbuilder._support.records import asdict, dataclass, field, fields_of
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 
 @dataclass(frozen=True)
@@ -212,7 +215,7 @@ class ControllerStatus:
     def to_dict(self) -> dict:
         # Shallow: every field holds plain values already (asdict deep-copied each
         # image entry, 30 ms for 1,000 procedures on every ``state``).
-        d = {k: getattr(self, k) for k in self.__dataclass_fields__}
+        d = {k: getattr(self, k) for k in fields_of(self)}
         for k in ("axes", "speed", "server", "job"):
             d[k] = dict(d[k])
         for k in ("software", "inputs", "outputs", "pwm", "dac", "adc", "image"):
@@ -221,7 +224,7 @@ class ControllerStatus:
 
     @classmethod
     def from_dict(cls, d: dict) -> "ControllerStatus":
-        known = {f for f in cls.__dataclass_fields__}
+        known = set(fields_of(cls))
         kw = {k: v for k, v in d.items() if k in known}
         for k in ("software", "inputs", "outputs", "pwm", "dac", "adc", "image"):
             if k in kw:

@@ -54,9 +54,9 @@ from __future__ import annotations
 
 import re
 import zlib
-from dataclasses import dataclass, field
-from typing import Callable, Iterator, Optional
+from collections import namedtuple
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi, semantics
 from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST,
                                          NO_FALLTHROUGH, STACK_EFFECT, UNARY, Instruction, Op,
@@ -67,6 +67,10 @@ from plcbuilder.controller import vm
 from plcbuilder.controller.vm import (FAULT_DEPTH, FAULT_DIV, FAULT_END, FAULT_MOD,
                                       MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET, Halted, Handoff,
                                       Host, Migrate, ProcExit, VMFault)
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Iterator, Optional
 
 __all__ = ["Unsupported", "translate", "make_runner", "factory", "io_shape"]
 
@@ -85,6 +89,9 @@ _YIELD = re.compile(r"\byield\b")
 #: Slots the controller reads at every tick end, never kept in locals.
 _UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT_VAR00,
                        abi.SLOT_VAR00 + 1})
+#: The Host attributes the translated code calls by name (make(s, host, debug) takes them)
+_HOST_NAMES = ("portset", "portclr", "portget", "gvarget", "gvarset", "raw_gvarset", "g0move",
+               "pr", "plain", "lat", "seteparam", "starthw", "softjog", "io")
 #: What the controller sends a suspended procedure to have its variables written back.
 SYNC = object()
 #: What the controller sends a procedure suspended at a tick end to have it raise
@@ -705,8 +712,10 @@ class _Gen:
         self.out = []
         #: some function keeps variables in locals: every tick end answers SYNC
         self.syncs = any(self._cacheable(f) for f in self.funcs.values())
-        self.emit(0, "def make(s, portset, portclr, portget, gvarget, gvarset, raw_gvarset, g0move,")
-        self.emit(0, "         pr, plain, lat, seteparam, starthw, softjog, io, B, brk):")
+        self.emit(0, "def make(s, host, debug):")
+        # the host's functions as the closures' free variables (Host's own names)
+        self.emit(1, f"{', '.join(_HOST_NAMES)}, = {', '.join('host.' + n for n in _HOST_NAMES)},")
+        self.emit(1, "B, brk = (debug.marks, debug.brk) if debug is not None else (None, None)")
         for start in sorted(self.funcs):
             self.function(self.funcs[start])
         entry = self.program.entry
@@ -1273,8 +1282,17 @@ class _Gen:
 _NAMESPACE = {"VMFault": VMFault, "ProcExit": ProcExit, "Handoff": Handoff, "Halted": Halted,
               "Migrate": Migrate, "HANDOVER": HANDOVER, "tuple": tuple,
               "__builtins__": {"len": len, "range": range}}
-#: (code, make or None, why not translated, whether its tick ends answer SYNC)
-_CACHE: dict[tuple, tuple[bytes, Optional[Callable], str, bool]] = {}
+
+
+#: A cache entry: one program translated for one host shape: ``code`` the
+#: program's code (the key has only its CRC), ``make`` the compiled
+#: make(s, host, debug) or None, ``why_not`` why it was not translated ("" when
+#: it was), ``answers_sync`` whether its tick ends answer SYNC. (collections'
+#: namedtuple: typing.NamedTuple would load typing at every command's start.)
+_Translated = namedtuple("_Translated", "code make why_not answers_sync")
+
+
+_CACHE: dict[tuple, _Translated] = {}
 
 
 def translate(program: Program, latency: bool = False,
@@ -1299,19 +1317,19 @@ def factory(program: Program, latency: bool = False,
     Translated once per program (by CRC of its code, entry and kind) and host shape."""
     key = _key(program, latency, pins, debug)
     hit = _CACHE.get(key)
-    if hit is not None and hit[0] == program.code:
-        return hit[1]
+    if hit is not None and hit.code == program.code:
+        return hit.make
     try:
         src = translate(program, latency, pins, debug)
     except Unsupported as exc:
-        _CACHE[key] = (program.code, None, str(exc), False)
+        _CACHE[key] = _Translated(program.code, None, str(exc), False)
         return None
     ns = dict(_NAMESPACE)
     filename = f"<plc {program.name} {key[0]:08x}>"
     exec(compile(src, filename, "exec"), ns)
     if len(_CACHE) > 256:
         _CACHE.clear()
-    _CACHE[key] = (program.code, ns["make"], "", _SYNC_WAIT in src)
+    _CACHE[key] = _Translated(program.code, ns["make"], "", _SYNC_WAIT in src)
     return ns["make"]
 
 
@@ -1319,7 +1337,7 @@ def unsupported_reason(program: Program, latency: bool = False) -> Optional[str]
     """Why ``program`` runs on the reference interpreter, or None if it is translated."""
     if factory(program, latency) is not None:
         return None
-    return _CACHE[_key(program, latency, None)][2]
+    return _CACHE[_key(program, latency, None)].why_not
 
 
 def io_shape(io) -> Optional[tuple[int, int, bool]]:
@@ -1341,7 +1359,7 @@ def answers_sync(program: Program, host: Host) -> bool:
     again), which is what must happen before anyone reads or writes its slots."""
     if factory(program, host.lat > 0, _pins(host)) is None:
         return False
-    return _CACHE[_key(program, host.lat > 0, _pins(host))][3]
+    return _CACHE[_key(program, host.lat > 0, _pins(host))].answers_sync
 
 
 def make_runner(program: Program, s: list[int], host: Host,
@@ -1354,8 +1372,4 @@ def make_runner(program: Program, s: list[int], host: Host,
     make = factory(program, host.lat > 0, _pins(host), debug is not None)
     if make is None:
         return vm.run_reference(program, s, host)
-    return make(s, host.portset, host.portclr, host.portget, host.gvarget, host.gvarset,
-                host.raw_gvarset, host.g0move, host.pr, host.plain, host.lat, host.seteparam,
-                host.starthw, host.softjog, host.io,
-                debug.marks if debug is not None else None,
-                debug.brk if debug is not None else None)
+    return make(s, host, debug)

@@ -34,15 +34,18 @@ controller turns into its own ControllerError.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
-from typing import Optional
 
+from plcbuilder._support.records import dataclass
 from plcbuilder._support.numbers import WORD32, to_int32
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.controller.events import Forces as ForcesEvent
 from plcbuilder.controller.events import Note
 from plcbuilder.controller.vm import HANDOVER, K_BREAK, Handoff, run_reference
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 __all__ = ["ForceError", "ForcedSlots", "Forces", "Target", "parse_target", "parse_value",
            "MODES"]

@@ -4,18 +4,20 @@ Built from the debugger's halt and each procedure's interpreter, on demand."""
 
 from __future__ import annotations
 
-import inspect
-from typing import Optional
-
 from plcbuilder.bytecode.opcodes import Op, size_of
 from plcbuilder.bytecode.program import Program
 from plcbuilder.controller import vm
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 _CALL_SIZE = size_of(Op.CALL)
 
 
 def position(dbg, p) -> tuple[Optional[int], tuple, bool]:
     """(offset, return addresses, at a loop's end) of a running procedure."""
+    import inspect                      # (a halt is rare: not loaded at start)
     h = dbg.halt
     if h is not None and h.process is p and h.pc is not None:
         return h.pc, h.rets, False

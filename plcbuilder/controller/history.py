@@ -24,11 +24,14 @@ from __future__ import annotations
 import bisect
 import zlib
 from array import array
-from dataclasses import dataclass, field
-from typing import Iterable, Iterator, Optional
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi
 from plcbuilder.controller.events import to_dict
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Iterable, Iterator, Optional
 
 #: changes per chunk before it is compressed
 CHUNK = 1024

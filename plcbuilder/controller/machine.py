@@ -31,7 +31,6 @@ Inputs that the machine file does not wire read the project's IO.DAT preset
 from __future__ import annotations
 
 import struct
-from typing import Callable, Optional
 
 from plcbuilder.bytecode import abi, softmc, targets
 from plcbuilder.bytecode.abi import AXES
@@ -43,6 +42,10 @@ from .motion import N_AXES, Motion, fmt_mm
 from .pls import PlsBank
 from .sensors import Sensors
 from .virtual_io import VirtualIO
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Optional
 
 STOP_MESSAGES = frozenset(abi.PLCCMD[n] for n in (
     "PLCCMD_LINE_STOP", "PLCCMD_LINE_SOFT_STOP", "PLCCMD_MOTION_SKIP",

@@ -13,12 +13,14 @@ and the state that ``Machine.reset`` sets up for it (``_fin_mask``,
 
 from __future__ import annotations
 
-from typing import Optional
-
 from plcbuilder.bytecode import abi, softmc
 from plcbuilder.bytecode.semantics import wrap
 
 from .machine_config import ADC_CHANNELS
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 
 class MachineForces:

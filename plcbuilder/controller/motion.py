@@ -27,11 +27,14 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from typing import Optional
 
 from plcbuilder.bytecode.abi import AXES, MOTION_CODE_IDLE
 
 from .machine_config import MachineConfig
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 N_AXES = len(AXES)
 JOG_AXES = 8              # 8635 and 100020.. reach X..V

@@ -23,9 +23,7 @@ Everything is deterministic: the same calls give the same events and samples.
 
 from __future__ import annotations
 
-import inspect
-from collections import deque
-from typing import Callable, Iterable, Optional
+from collections import deque, namedtuple
 
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind, Program
@@ -36,6 +34,10 @@ from plcbuilder.controller.events import (Ended, Fault, Message, Note, Print, Sa
 from plcbuilder.controller.forces import ForcedSlots
 from plcbuilder.controller.vm import HALT, Halted, Handoff, Host, Migrate, ProcExit, VMFault
 
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Iterable, Optional
+
 SOFTWARE_PERIOD_MS = 100
 #: Exit code reported for a procedure that ended with a runtime fault (not in the seed's table).
 FAULT_EXIT_CODE = -1
@@ -44,8 +46,18 @@ EVENT_BUFFER = 200_000
 SAMPLE_BUFFER = 120_000
 
 
+#: One tick's sample as the PLC records it (:meth:`PLC.take_samples` makes
+#: :class:`~plcbuilder.controller.events.Sample` of it): ``t``; ``running`` the
+#: hardware procedure running, or None; ``proc``; ``message`` the first message
+#: sent in the tick, or 0; ``fields`` the machine's sample_fields() (do not
+#: modify). (collections' namedtuple: typing's would load typing at start-up.)
+SampleRow = namedtuple("SampleRow", "t running proc message fields")
+
+
 #: "no sample recorded yet": differs from every real one
-_NO_ROW = (-1, object(), None, 0, None)
+_NO_ROW = SampleRow(-1, object(), None, 0, None)
+#: matches no fields
+_NEVER = object()
 
 class Process:
     """One run of a procedure."""
@@ -128,7 +140,7 @@ class PLC:
         #: record a sample only when it differs from the previous one (t aside):
         #: a sample then holds until the next (the link's telemetry sets this)
         self.sample_changes_only = False
-        self._last_row: tuple = _NO_ROW
+        self._last_row: SampleRow = _NO_ROW
         #: a CodeCoverage recording the instructions that run (reference backend only)
         self.coverage = None
         #: the Debugger (controller/debugger.py) when there is one
@@ -181,6 +193,8 @@ class PLC:
 
     # ------------------------------------------------------------- hosts
     def _host(self, name: str, kind: Kind) -> Host:
+        """The Host a procedure runs on (the one place a procedure's host is
+        made; an expression's is :meth:`Host.for_expression`)."""
         m = self.machine
         events = self.events
         raw = m.gvarset
@@ -190,9 +204,7 @@ class PLC:
             events.append(Print(self.t, addr, value, name))
             raw(addr, value)
 
-        common = dict(portset=m.portset, portclr=m.portclear, portget=m.portget,
-                      gvarget=m.gvarget, g0move=m.g0move, plain=m.is_plain_register, pr=pr,
-                      raw_gvarset=raw, io=m if hasattr(m, "in_bits") else None)
+        io = m if hasattr(m, "in_bits") else None
         if kind is Kind.HARDWARE:
             def gvarset(addr: int, value: int) -> None:
                 if lo <= addr <= hi:
@@ -200,31 +212,34 @@ class PLC:
                 else:
                     raw(addr, value)
 
-            return Host(**common, gvarset=gvarset, lat=self.latency)
+            own = dict(gvarset=gvarset, lat=self.latency)
+        else:
+            def starthw(n: int) -> None:
+                self._request_hardware(n, name)
 
-        def starthw(n: int) -> None:
-            self._request_hardware(n, name)
+            def seteparam(v: int) -> None:
+                self.soft_eparam = v
 
-        def seteparam(v: int) -> None:
-            self.soft_eparam = v
+            softjog = m.soft_jog
+            jog_lo, jog_hi = abi.SOFT_JOG_BASE, abi.SOFT_JOG_BASE + 7
 
-        softjog = m.soft_jog
-        jog_lo, jog_hi = abi.SOFT_JOG_BASE, abi.SOFT_JOG_BASE + 7
+            def sw_gvarset(addr: int, value: int) -> None:
+                if addr == abi.SOFT_START_HW:
+                    starthw(value)
+                elif addr == abi.SOFT_START_EPARAM:
+                    seteparam(value)
+                elif jog_lo <= addr <= jog_hi:
+                    softjog(addr - jog_lo, value)
+                elif lo <= addr <= hi:
+                    pr(addr, value)
+                else:
+                    raw(addr, value)
 
-        def sw_gvarset(addr: int, value: int) -> None:
-            if addr == abi.SOFT_START_HW:
-                starthw(value)
-            elif addr == abi.SOFT_START_EPARAM:
-                seteparam(value)
-            elif jog_lo <= addr <= jog_hi:
-                softjog(addr - jog_lo, value)
-            elif lo <= addr <= hi:
-                pr(addr, value)
-            else:
-                raw(addr, value)
-
-        return Host(**common, gvarset=sw_gvarset, lat=0, starthw=starthw, seteparam=seteparam,
-                    softjog=softjog, software=True)
+            own = dict(gvarset=sw_gvarset, lat=0, starthw=starthw, seteparam=seteparam,
+                       softjog=softjog, software=True)
+        return Host(portset=m.portset, portclr=m.portclear, portget=m.portget,
+                    gvarget=m.gvarget, g0move=m.g0move, plain=m.is_plain_register, pr=pr,
+                    raw_gvarset=raw, io=io, **own)
 
     def _spawn(self, program: Program, eparam: int) -> Process:
         eparam = wrap(int(eparam))
@@ -452,7 +467,7 @@ class PLC:
         it also goes on through the software ticks, which are :meth:`_tick`'s)
         and :meth:`_machine_alone` (no procedure at all) do the same work, and
         end their ticks as :meth:`_after_tick` does. Samples are kept as raw
-        rows ``(t, running, proc, message, machine fields)``;
+        rows (:class:`SampleRow`);
         :meth:`take_samples` turns them into :class:`Sample` objects."""
         dbg = self.debugger
         if dbg is not None and dbg.halt is not None:
@@ -506,26 +521,24 @@ class PLC:
         tick (``ran``: hardware first, then software). False when the debugger
         halted one: the rest of the tick waits in ``_rest``, the halted one first."""
         dbg = self.debugger
-        i = 0
-        while i < len(todo):
-            p = todo[i]
-            if p.ended_at is None:
-                if p.fault is not None:        # halted at its fault: now it ends
-                    pc, text, callers = p.fault
-                    p.fault = None
-                    self._fault(p, pc, text, callers, halt=False)
+        for i, p in enumerate(todo):
+            if p.ended_at is not None:
+                continue
+            if p.fault is None:
+                try:
+                    at = p.resume()
+                except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                    self._outcome(p, exc)
                 else:
-                    try:
-                        at = p.resume()
-                    except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
-                        self._outcome(p, exc)
-                    else:
-                        if at is not HALT:
-                            p.at = at
-                    if dbg is not None and dbg.halt is not None:
-                        self._rest = (t, todo[i:], ran)
-                        return False
-            i += 1
+                    if at is not HALT:
+                        p.at = at
+            else:                              # halted at its fault: now it ends
+                pc, text, callers = p.fault
+                p.fault = None
+                self._fault(p, pc, text, callers, halt=False)
+            if dbg is not None and dbg.halt is not None:
+                self._rest = (t, todo[i:], ran)
+                return False
         self._rest = None
         self._after_tick(t, ran)
         if self.watching and dbg is not None:
@@ -563,6 +576,7 @@ class PLC:
         (suspended at a tick end, or not started yet)."""
         if p.watched or p.ended_at is not None or p.gen is None:
             return
+        import inspect                  # (debugging only: not loaded at start)
         if self.backend == "fast" and inspect.getgeneratorstate(p.gen) == inspect.GEN_CREATED:
             p.set_gen(fastvm.make_runner(p.program, p.slots, p.host, watched=True))
             p.syncing, p.watched = None, True            # not started: watched code from the start
@@ -578,6 +592,7 @@ class PLC:
             p.watched = True
             return
         gen = p.gen
+        import inspect                  # (debugging only: not loaded at start)
         if inspect.getgeneratorstate(gen) == inspect.GEN_CREATED:     # not started yet
             new = vm.run_reference(p.program, p.slots, p.host)
         else:
@@ -609,80 +624,85 @@ class PLC:
                     msg = code
         if self.record_samples:
             hw = self.hw
-            row = (t, hw.name if hw is not None else None, self.proc, msg,
-                   self.machine.sample_fields())
-            last = self._last_row
-            if not self.sample_changes_only or msg or last[3] or row[4] is not last[4] \
-                    or row[2] != last[2] or row[1] != last[1]:
-                self.samples.append(row)
-                self._last_row = row
-        notes = self.machine.advance()
-        if notes:
-            self._emit_notes(t, notes)
+            self._record(t, hw.name if hw is not None else None, self.proc, msg)
+        self._advance(t)
+
+    def _record(self, t: int, running: Optional[str], proc: int, message: int) -> None:
+        """Tick t's sample; with ``sample_changes_only`` only when it differs
+        from the last one recorded (t aside)."""
+        fields = self.machine.sample_fields()
+        if self.sample_changes_only and not message and self._same_row(running, proc, fields):
+            return
+        row = self._last_row = SampleRow(t, running, proc, message, fields)
+        self.samples.append(row)
+
+    def _same_row(self, running, proc, fields) -> bool:
+        """Whether a sample of these values (no message) equals the last recorded one."""
+        _t, last_running, last_proc, last_message, last_fields = self._last_row
+        return not last_message and fields is last_fields and proc == last_proc \
+            and running == last_running
+
+    def _advance(self, t: int) -> None:
+        """The machine advances 1 ms at the end of tick t (while it is quiet
+        with no notes pending, advance() would only move its clock)."""
+        machine = self.machine
+        if self._notes_pending or not machine.quiet:
+            notes = machine.advance()
+            if notes:
+                self._emit_notes(t, notes)
+        else:
+            machine.t_ms += 1
 
     def _hardware_alone(self, t: int, end: int) -> int:
         """Ticks from t (not a software tick) on, while the hardware procedure
-        runs with no start due and no input bound: between software ticks,
-        :meth:`_tick` and :meth:`_after_tick` for one procedure, written out,
-        with advance() skipped while the machine is quiet; the software ticks
-        are :meth:`_tick`'s. Returns the next tick at ``end``, or after a tick
-        that ended the procedure, handed it over to the reference interpreter
-        or made a start due."""
+        runs with no start due and no input bound: :meth:`_tick` for one
+        procedure, its end of tick (:meth:`_after_tick`: the message, the
+        sample, the machine) through the same helpers; the software ticks are
+        :meth:`_tick`'s. Returns the next tick at ``end``, or after a tick that
+        ended the procedure, handed it over to the reference interpreter or
+        made a start due."""
         hw = self.hw
         resume, slots, name = hw.resume, hw.slots, hw.name
         message_slot, proc_slot = abi.SLOT_MESSAGE, abi.SLOT_PROC
         machine = self.machine
-        advance, fields = machine.advance, machine.sample_fields
         notes_pending = self._notes_pending
         grid = self.grid
-        send = self._send
-        add_sample = self.samples.append
+        send, record, advance = self._send, self._record, self._advance
         rec = self.record_samples
-        every = not self.sample_changes_only           # a sample every tick
-        last = self._last_row
-        last_f, last_p = self._row_state(last, name, every)
+        only = self.sample_changes_only
         while True:
             stop = min(end, t + (grid - t) % SOFTWARE_PERIOD_MS)
             at = hw.at
-            while t < stop:
+            # the fields and proc of a tick whose sample _record would not
+            # record again (machine._sample: the cached sample_fields() dict,
+            # None once something changed), so that it is not asked
+            seen, seen_proc = _NEVER, None
+            for t in range(t, stop):
                 self.t = t
                 try:
                     at = resume()
                 except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
-                    self._last_row = last
                     hw.at = at
                     return t + 1 if self._run_after(t, hw, exc) else t
                 code = slots[message_slot]
-                if code:
-                    send(hw, code)
-                    if rec:
-                        p = slots[proc_slot]
-                        last = (t, name, p, code, fields())
-                        add_sample(last)
-                        last_f, last_p = _NO_ROW, p       # the next tick's goes too
-                elif rec and (machine._sample is not last_f or slots[proc_slot] != last_p):
-                    # machine._sample is the cached sample_fields() dict (None once
-                    # something changed): no call on a tick where nothing did
-                    p = slots[proc_slot]
-                    f = fields()
-                    last = (t, name, p, 0, f)
-                    add_sample(last)
-                    last_f, last_p = (_NO_ROW if every else f), p
-                t += 1
+                if code or rec:
+                    if code:
+                        send(hw, code)
+                    if rec and (code or machine._sample is not seen
+                                or slots[proc_slot] != seen_proc):
+                        seen_proc = slots[proc_slot]
+                        record(t, name, seen_proc, code)
+                        seen = machine._sample if only and not code else _NEVER
                 if notes_pending or not machine.quiet:
-                    notes = advance()
-                    if notes:
-                        self._emit_notes(t - 1, notes)
+                    advance(t)
                 else:
                     machine.t_ms += 1              # advance() would do only this
-            self._last_row = last
+            t = stop
             hw.at = at
             if t == end:
                 return t
             if not self._tick(t, software=True):
                 return t
-            last = self._last_row
-            last_f, last_p = self._row_state(last, name, every)
             t += 1
             if self.hw is not hw or hw.resume is not resume or self._due_hw or self.bindings:
                 return t
@@ -703,50 +723,27 @@ class PLC:
         machine moves (:meth:`_after_tick` with nothing that ran)."""
         proc = self._proc
         machine = self.machine
-        advance, fields = machine.advance, machine.sample_fields
-        add_sample = self.samples.append
         rec = self.record_samples
-        notes_pending = self._notes_pending
         only = self.sample_changes_only
         while t < stop:
-            if not notes_pending and machine.quiet and (not rec or only and self._same_row(
-                    None, proc, fields())):
+            if not self._notes_pending and machine.quiet and (not rec or only and self._same_row(
+                    None, proc, machine.sample_fields())):
                 machine.t_ms += stop - t           # nothing to record, nothing moves
                 return stop
             if rec:
-                f = fields()
-                if not only or not self._same_row(None, proc, f):
-                    self._last_row = (t, None, proc, 0, f)
-                    add_sample(self._last_row)
-            notes = advance()
-            if notes:
-                self._emit_notes(t, notes)
+                self._record(t, None, proc, 0)
+            self._advance(t)
             t += 1
         return t
-
-    @staticmethod
-    def _row_state(last: tuple, name: str, every: bool) -> tuple:
-        """(fields, proc) of the last recorded row, as the hardware fast path
-        compares them: fields that match nothing when it was another
-        procedure's, when it sent a message (the next tick's row says the
-        message is 0 again) or when every tick is recorded."""
-        same = last[1] == name and not last[3] and not every
-        return (last[4] if same else _NO_ROW), last[2]
-
-    def _same_row(self, running, proc, fields) -> bool:
-        """Whether a sample of these values (no message) equals the last recorded one."""
-        last = self._last_row
-        return not last[3] and fields is last[4] and proc == last[2] and running == last[1]
 
     def record_next_sample(self) -> None:
         """With ``sample_changes_only``: record the next tick's sample even if
         nothing changed (a new subscriber's starting point)."""
         self._last_row = _NO_ROW
 
-    def take_sample_rows(self) -> list[tuple]:
-        """The samples recorded so far as raw rows ``(t_ms, running, proc,
-        message, fields)`` (fields: the machine's sample_fields dict; do not
-        modify it), and forget them."""
+    def take_sample_rows(self) -> list[SampleRow]:
+        """The samples recorded so far (fields: the machine's sample_fields
+        dict; do not modify it), and forget them."""
         rows = list(self.samples)
         self.samples.clear()
         return rows

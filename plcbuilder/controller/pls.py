@@ -47,7 +47,6 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_right
-from typing import Callable, Optional
 
 from plcbuilder.bytecode import softmc
 from plcbuilder.bytecode.abi import AXES
@@ -56,6 +55,10 @@ from plcbuilder.bytecode.softmc import (F_AXIS, F_AXISNAME, F_COUNT, F_DELETE, F
                                         F_STATE, F_STATUS)
 
 from .pls_config import PlsConfig
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Optional
 
 OK, REFUSED_ENABLED, BAD_VALUE, BAD_POSITIONS, NOT_READY, OUT_OF_BOUNDS = (
     softmc.PLS_STATUS[k] for k in ("PLS_OK", "PLS_REFUSED_ENABLED", "PLS_BAD_VALUE",

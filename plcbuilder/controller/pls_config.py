@@ -23,11 +23,13 @@ the line and the key.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any, Optional
-
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode import softmc
 from plcbuilder.bytecode.abi import AXES
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Any, Optional
 
 PLS_KEYS = {"name", "axis", "output", "vout", "positions", "polarity", "repeat", "hysteresis",
             "enabled"}

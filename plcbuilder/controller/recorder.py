@@ -17,10 +17,13 @@ instead of at 0, and says so when the project's image is not the one recorded.
 from __future__ import annotations
 
 import zlib
-from dataclasses import replace
-from typing import Callable, Iterable, Optional
 
+from plcbuilder._support.records import replace
 from plcbuilder.controller.scenario import Action
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Iterable, Optional
 
 #: Actions recorded at most (a week of clicking); the oldest go first, and the text says so.
 MAX_ACTIONS = 1_000_000

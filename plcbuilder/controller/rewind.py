@@ -31,7 +31,7 @@ import time
 from typing import Callable, Optional
 
 from plcbuilder.controller.debugger import Halt
-from plcbuilder.controller.scenario import apply
+from plcbuilder.controller.scenario import aim, apply, at_halt, due_before
 
 #: ticks run at most in one go while running the session again
 CHUNK_MS = 10_000
@@ -142,7 +142,7 @@ def _run(old, new, actions: list, i: int, end: int, on_halt=None, counter=None,
             if on_halt is not None and on_halt(new):
                 break
             dbg.halt = None
-            _aim(dbg, actions, i, t)
+            aim(dbg, actions, i, t)
             new.plc.resume_tick()
             continue
         if t >= count_from and dbg.counter is None:
@@ -152,11 +152,10 @@ def _run(old, new, actions: list, i: int, end: int, on_halt=None, counter=None,
             break
         # the actions of this tick done before it runs (one done mid-tick in a
         # tick already over, which cannot happen, is done now rather than never)
-        while i < n and actions[i].t_ms <= t and not (actions[i].at is not None
-                                                      and actions[i].t_ms == t):
+        while i < n and due_before(actions[i], t):
             _do(old, new, actions[i])
             i += 1
-        _aim(dbg, actions, i, t)
+        aim(dbg, actions, i, t)
         stop = end if i >= n else min(end, max(actions[i].t_ms, t + 1))
         if t < count_from < stop:
             stop = count_from
@@ -164,7 +163,7 @@ def _run(old, new, actions: list, i: int, end: int, on_halt=None, counter=None,
         new.drain_events()
         yield
     dbg.counter = None
-    _aim(dbg, actions, n, -1)
+    aim(dbg, actions, n, -1)
     dbg._remark()
 
 
@@ -174,38 +173,12 @@ def _do(old, new, action) -> None:
     apply(new, action)
 
 
-def _aim(dbg, actions: list, i: int, t: int) -> None:
-    """Halt tick ``t`` where the next action was done mid-tick (a one-time
-    "run to" at its statement), or nowhere."""
-    a = actions[i] if i < len(actions) else None
-    want = {a.at[0]: {a.at[1]}} if a is not None and a.at is not None and a.t_ms == t else {}
-    if dbg._run_to != want:
-        dbg._run_to = want
-        dbg._remark()
-
-
 def _at_halt(old, new, actions: list, i: int) -> int:
-    """``new`` halted: when it is where the next actions were done mid-tick,
-    do them (after the breakpoints there, which the "run to" halt came before:
-    their hits count as they did); returns the index of the next action."""
+    """``new`` halted: do the actions done live where it halted (see
+    :func:`~plcbuilder.controller.scenario.at_halt`)."""
     dbg = new.debugger
-    h = dbg.halt
-    if i >= len(actions) or h.process is None or not new.plc.mid_tick:
-        return i
-    point = (h.process.name, h.pc, tuple(h.rets))
-    a = actions[i]
-    if a.at != point or a.t_ms != new.t_ms:
-        return i
     counted = dbg.counter is not None and dbg.counter.done
-    if h.reason == "step" and h.breakpoint is None and not counted:
-        bps = dbg._at.get(h.process.program.name, {}).get(h.pc)
-        if bps:
-            dbg._breakpoints_at(h.process, h.pc, h.rets, bps)
-            dbg.halt = dbg.halt or h
-    while i < len(actions) and actions[i].at == point and actions[i].t_ms == new.t_ms:
-        _do(old, new, actions[i])
-        i += 1
-    return i
+    return at_halt(new, actions, i, lambda c, a: _do(old, c, a), counted)
 
 
 def _breakpoints_key(dbg) -> tuple:

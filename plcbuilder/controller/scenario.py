@@ -23,6 +23,9 @@ file (``--scenario FILE``), whose lines are the same::
     job pause @ 900            # the job: play, pause, stop or reset
     code M3 @ 50               # the CNC issues a code (Huazhong: M, S, B, T handlers)
     move X=0.1 @ 60            # a handwheel click: X 0.1 mm at rapid (Server API SetPendant)
+    write M03.x=5 @ 12 at M03:24        # done mid-tick: before the statement at
+    force in 2=1 @ 12 at M03:40 returns 27   # code offset 24 of M03 (inside the
+                                        # calls that return to 27) in tick 12
 
 A target is ``PROC.var``, ``in N``, ``out N``, ``adc N``, ``pwm N``, ``dac N`` or
 ``gvar N`` (controller/forces.py).
@@ -31,20 +34,26 @@ Numbers are decimal or hex (``0x…``); ``@ MS`` may be left out (0), and the
 command may also be written as its option (``--start M03@0``).
 
 An action at tick t is applied before tick t runs, in the order given, so a
-procedure started at t runs in tick t and sees an input set at t.
+procedure started at t runs in tick t and sees an input set at t. An action
+with ``at PROC:OFFSET [returns RET,…]`` was done while the debugger held tick t
+halted before a statement (``Action.at``): a replay does it there, when PROC
+reaches that code offset (the disassembler's) with that call stack in tick t.
 """
 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterable, Optional
 
+from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder._support.files import read_bounded
 from plcbuilder._support.numbers import INT32, WORD32, parse_int_in, to_int32
 from plcbuilder.bytecode import softmc
 from plcbuilder.controller.forces import MODES, ForceError, parse_target
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable, Iterable, Optional
 
 MAX_SCENARIO_BYTES = 4 << 20
 KINDS = ("start", "input", "adc", "stop", "event", "bind", "write", "force", "release",
@@ -74,8 +83,21 @@ class Action:
     at: Optional[tuple] = None
     source: str = "in"         # bind: what is bound ("in", "vin", "vout", "pls")
     text: str = ""             # gcode: the program's text (name: its file; a: 1 to play it)
+    #: where it was written: ``FILE:LINE`` of a scenario file ("" for an option or a
+    #: recording); an error about the action names it
+    src: str = field(default="", compare=False, repr=False)
 
     def describe(self) -> str:
+        """The scenario line of this action (what :meth:`Scenario.parse` reads back)."""
+        line = self._describe()
+        if self.at is not None:
+            name, pc, rets = self.at
+            line += f" at {name}:{pc}"
+            if rets:
+                line += " returns " + ",".join(str(r) for r in rets)
+        return line
+
+    def _describe(self) -> str:
         if self.kind == "start":
             return f"start {self.name}:{self.a} @ {self.t_ms}"
         if self.kind in ("input", "adc"):
@@ -333,6 +355,42 @@ def parse_move(text: str) -> Action:
     return Action(t, "move", m.group(1).upper(), round(float(m.group(2)) * 100))
 
 
+_AT = re.compile(r"\s+at\s+(\S+?)\s*:\s*(\S+)(?:\s+returns\s+(\S+(?:\s*,\s*\S+)*))?\s*$",
+                 re.IGNORECASE)
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+#: the most code offsets a position names (a procedure's code is at most 64 KiB;
+#: calls nest at most 16 deep)
+MAX_OFFSET = 0xFFFF
+MAX_RETURNS = 16
+
+
+def split_at(text: str) -> tuple[str, Optional[tuple]]:
+    """``… @ MS at PROC:OFFSET [returns RET,…]``: the text before ``at`` and
+    the position ``(PROC, OFFSET, (RET, …))`` (None without ``at``)."""
+    head, sep, tail = text.rpartition("@")
+    if not sep:
+        return text, None
+    m = _AT.search(tail)
+    if m is None:
+        if re.search(r"\bat\b", tail, re.IGNORECASE):
+            raise ScenarioError(f"a position within the tick is 'at PROC:OFFSET' or "
+                                f"'at PROC:OFFSET returns RET,…', not {tail.strip()!r}")
+        return text, None
+    name = m.group(1)
+    if not _NAME.fullmatch(name):
+        raise ScenarioError(f"at {name}:…: {name!r} is not a procedure name")
+    pc = parse_int(m.group(2), f"the code offset of at {name}", 0, MAX_OFFSET)
+    rets: tuple = ()
+    if m.group(3):
+        parts = [r.strip() for r in m.group(3).split(",")]
+        if len(parts) > MAX_RETURNS:
+            raise ScenarioError(f"at {name}:{pc}: calls nest at most {MAX_RETURNS} deep, "
+                                f"not {len(parts)}")
+        rets = tuple(parse_int(r, f"a return offset of at {name}:{pc}", 0, MAX_OFFSET)
+                     for r in parts)
+    return head + sep + tail[:m.start()], (name, pc, rets)
+
+
 _PARSERS: dict[str, Callable[[str], Action]] = {
     "start": parse_start, "input": parse_input, "adc": parse_adc,
     "stop": parse_stop, "event": parse_event, "bind": parse_bind,
@@ -357,7 +415,9 @@ class Scenario:
         return sorted(self.actions, key=lambda a: a.t_ms)   # stable: given order within a tick
 
     @classmethod
-    def parse(cls, text: str, file: str = "<scenario>") -> "Scenario":
+    def parse(cls, text: str, file: str = "<scenario>", first_line: int = 1) -> "Scenario":
+        """The actions of a scenario text; ``first_line`` is the file's line of its
+        first line (a scenario inside a test file), for the places actions keep."""
         out = cls()
         for n, raw in enumerate(text.splitlines(), 1):
             line = raw.split("#", 1)[0].strip()
@@ -378,9 +438,11 @@ class Scenario:
                 raise ScenarioError(f"unknown action {word!r} (one of {', '.join(KINDS)})",
                                     file, n)
             try:
-                out.add(parser(rest))
-            except ScenarioError as exc:
-                raise ScenarioError(exc.message, file, n) from None
+                rest, at = split_at(rest)
+                action = replace(parser(rest), src=f"{file}:{first_line + n - 1}")
+                out.add(action if at is None else replace(action, at=at))
+            except ScenarioError as exc:      # said as the line is written
+                raise ScenarioError(exc.message.replace(f"--{kind}", kind), file, n) from None
         return out
 
     @classmethod
@@ -441,22 +503,83 @@ STARTING = frozenset({"start", "stop", "event", "bind", "upload", "gcode", "job"
 _PIN_CHANGES = frozenset({"input", "write", "force", "release"})
 
 
+def aim(dbg, actions: list, i: int, t: int) -> None:
+    """Halt tick ``t`` where the next action was done mid-tick (a one-time
+    "run to" at its statement, ``Action.at``), or nowhere."""
+    a = actions[i] if i < len(actions) else None
+    want = {a.at[0]: {a.at[1]}} if a is not None and a.at is not None and a.t_ms == t else {}
+    if dbg._run_to != want:
+        dbg._run_to = want
+        dbg._remark()
+
+
+def due_before(action: Action, t: int) -> bool:
+    """Whether ``action`` is done before tick ``t`` runs: it is due by then and
+    not placed within tick ``t`` itself (one placed in a tick already over,
+    which a replay of the same image cannot meet, is done now rather than never)."""
+    return action.t_ms <= t and not (action.at is not None and action.t_ms == t)
+
+
+def at_halt(controller, actions: list, i: int, do: Callable = None,
+            counted: bool = False) -> int:
+    """``controller`` halted: when it is where the next actions were done
+    mid-tick, do them (``do(controller, action)``, by default :func:`apply`)
+    after the breakpoints there, which the "run to" halt came before (their hits
+    count as they did live; ``counted``: the halt was a counter's, which
+    already looked); returns the index of the next action."""
+    dbg = controller.debugger
+    h = dbg.halt
+    if i >= len(actions) or h.process is None or not controller.plc.mid_tick:
+        return i
+    point = (h.process.name, h.pc, tuple(h.rets))
+    t = controller.t_ms
+    a = actions[i]
+    if a.at != point or a.t_ms != t:
+        return i
+    if h.reason == "step" and h.breakpoint is None and not counted:
+        bps = dbg._at.get(h.process.program.name, {}).get(h.pc)
+        if bps:
+            dbg._breakpoints_at(h.process, h.pc, h.rets, bps)
+            dbg.halt = dbg.halt or h
+    do = do or apply
+    while i < len(actions) and actions[i].at == point and actions[i].t_ms == t:
+        do(controller, actions[i])
+        i += 1
+    return i
+
+
 def drive(controller, scenario: Scenario, limit_ms: int, *, until_idle: bool = True,
           chunk_ms: int = 1000, on_chunk: Optional[Callable[[], None]] = None) -> int:
     """Run ``controller`` with ``scenario`` until ``limit_ms`` ticks have run or,
     with ``until_idle``, until no procedure runs and none is due to start
     (scenario actions included). ``on_chunk`` is called after every step of at
     most ``chunk_ms`` ticks (to drain events and samples). Returns the time the
-    run ended: ``limit_ms``, or the tick in which it became idle."""
+    run ended: ``limit_ms``, or the tick in which it became idle.
+
+    An action placed within its tick (``Action.at``, done live while the
+    debugger held the tick halted there) is done when the tick reaches that
+    statement: the debugger halts the tick there for it and goes on. The run
+    ends at a halt of its own only (a breakpoint, or a fault while the debugger
+    was on before: ``--break``)."""
     actions = scenario.ordered()
     i = 0
     n = len(actions)
     c = controller
+    dbg = getattr(c, "debugger", None)
+    placed = dbg is not None and any(a.at is not None for a in actions)
+    halts = dbg is not None and dbg.on         # breakpoints set: their halts end the run
     while True:
         t = c.t_ms
-        while i < n and actions[i].t_ms <= t:
-            apply(c, actions[i])
+        while i < n and due_before(actions[i], t):
+            try:
+                apply(c, actions[i])
+            except Exception as exc:         # the controller's refusal, said where
+                if actions[i].src:
+                    exc.args = (f"{actions[i].src}: {exc}",)
+                raise
             i += 1
+        if placed:
+            aim(dbg, actions, i, t)
         if t >= limit_ms:
             return limit_ms
         bound = bool(c.bindings)           # then an input can start a procedure too
@@ -464,15 +587,29 @@ def drive(controller, scenario: Scenario, limit_ms: int, *, until_idle: bool = T
                           for a in actions[i:])
         if until_idle and not more_starts and c.idle():
             return max(t - 1, 0) if t else 0
-        stop = limit_ms if i >= n else min(limit_ms, actions[i].t_ms)
+        stop = limit_ms if i >= n else min(limit_ms, max(actions[i].t_ms, t + 1))
         count = min(stop - t, chunk_ms)
         ran = c.run_until_idle(count) if (until_idle and not more_starts) else None
         if ran is None:
             c.step(count)
+        went_on = False
+        while placed and dbg.halt is not None:
+            i = at_halt(c, actions, i)
+            h = dbg.halt
+            if h.reason == "breakpoint" or (h.reason == "fault" and halts):
+                if h is not dbg._told:     # a breakpoint where the action was done
+                    dbg.unannounce()
+                    dbg.settle()
+                break
+            dbg.unannounce()               # the replay's own halt: nobody halted
+            dbg.halt = None
+            aim(dbg, actions, i, c.t_ms)
+            c.plc.resume_tick()            # the rest of the tick (it may halt again)
+            dbg.settle()
+            went_on = True
         if on_chunk is not None:
             on_chunk()
-        dbg = getattr(c, "debugger", None)
         if dbg is not None and dbg.halted:  # the debugger halted it: the run ends there
             return c.t_ms
-        if ran is not None and ran < count:
+        if ran is not None and ran < count and not went_on:
             return c.t_ms - 1

@@ -16,11 +16,14 @@ The machine combines it with manual overrides (which win).
 from __future__ import annotations
 
 import random
-from typing import Optional
 
 from plcbuilder.bytecode.abi import AXES
 
 from .machine_config import ADC_CHANNELS, AdcConfig, MachineConfig
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 
 _I32_MIN, _I32_MAX = -(1 << 31), (1 << 31) - 1

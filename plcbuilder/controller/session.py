@@ -13,19 +13,24 @@ raises :class:`UsageError`. Nothing here prints.
 
 from __future__ import annotations
 
-import gzip
 import io
 from pathlib import Path
-from typing import Optional, Sequence
 
+from plcbuilder._support.records import replace
 from plcbuilder.bytecode import abi
 from plcbuilder.controller.controller import Controller, ControllerError
 from plcbuilder.controller.events import Ended, Fault, Log, Message, Note, Print, Started
-from plcbuilder.controller.history import History
-from plcbuilder.controller.trigger import Capturer
 from plcbuilder.controller.watch import check_name
 from plcbuilder.controller.scenario import (Scenario, ScenarioError, drive, parse_adc,
                                             parse_force, parse_input, parse_start, parse_write)
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional, Sequence
+
+if TYPE_CHECKING:                   # (a run without --trigger or --history does not load them)
+    from plcbuilder.controller.history import History
+    from plcbuilder.controller.trigger import Capturer
 
 __all__ = ["CHUNK_MS", "ReportCollector", "TraceWriter", "UsageError", "build_scenario",
            "check_scenario", "run_session"]
@@ -51,6 +56,7 @@ class TraceWriter:
         self.axis_idx = [abi.AXES.index(a) for a in axes]
         try:
             if self.path.suffix == ".gz":
+                import gzip
                 raw = gzip.open(self.path, "wb", compresslevel=3)
                 self.f = io.TextIOWrapper(raw, encoding="ascii", newline="")
             else:
@@ -99,11 +105,12 @@ def build_scenario(scenario: Optional[Path] = None, starts: Sequence[str] = (),
     try:
         if scenario is not None:
             sc.extend(Scenario.load(scenario).actions)
-        sc.extend(parse_start(s) for s in starts)
-        sc.extend(parse_input(s) for s in inputs)
-        sc.extend(parse_adc(s) for s in adcs)
-        sc.extend(parse_write(s) for s in writes)
-        sc.extend(parse_force(s) for s in forces)
+        for option, parse, texts in (("--start", parse_start, starts),
+                                     ("--input", parse_input, inputs),
+                                     ("--adc", parse_adc, adcs),
+                                     ("--write", parse_write, writes),
+                                     ("--force", parse_force, forces)):
+            sc.extend(replace(parse(s), src=f"{option} {s}") for s in texts)
     except ScenarioError as exc:
         raise UsageError(str(exc)) from None
     return sc
@@ -120,17 +127,32 @@ def check_scenario(sc: Scenario, controller) -> None:
     for a in sc.actions:
         if a.kind in ("start", "bind") and a.name not in programs:
             loaded = ", ".join(sorted(programs)) or "none"
-            raise UsageError(f"--start {a.name}: no procedure named {a.name} (loaded: {loaded})")
+            raise UsageError(f"{a.src or '--start ' + a.name}: no procedure named {a.name} "
+                             f"(loaded: {loaded})")
         if (a.kind == "input" or a.kind == "bind" and a.source == "in") and not 0 <= a.a < n_in:
-            raise UsageError(f"--input {a.a}: no such input (the machine has inputs "
-                             f"0..{n_in - 1})")
+            raise UsageError(f"{a.src or '--input ' + str(a.a)}: no such input (the machine "
+                             f"has inputs 0..{n_in - 1})")
         if a.kind == "adc" and not 0 <= a.a < 8:
-            raise UsageError(f"--adc {a.a}: no such ADC channel (0..7)")
+            raise UsageError(f"{a.src or '--adc ' + str(a.a)}: no such ADC channel (0..7)")
         if a.kind in ("write", "force", "release") and a.name != "all":
+            proc = a.name.partition(".")[0] if "." in a.name else None
+            if proc is not None and proc not in controller.programs and proc in programs:
+                _check_variable(a, programs[proc])      # of the image an upload line loads
+                continue
             try:
                 controller.forces.check(a.name)
             except ValueError as exc:
-                raise UsageError(f"--{a.kind}: {exc}") from None
+                raise UsageError(f"{a.src or '--' + a.kind}: {exc}") from None
+
+
+def _check_variable(a, program) -> None:
+    """A write, force or release of ``PROC.var`` where PROC is in the image a
+    recording's upload line loads (not loaded yet when the run starts)."""
+    var = a.name.partition(".")[2]
+    if var not in program.slot_names().values() and var not in ("command", "parameter"):
+        own = ", ".join(program.var_names) or "none of its own"
+        raise UsageError(f"--{a.kind}: {a.name}: {program.name} has no variable {var!r} "
+                         f"(its variables: {own})")
 
 
 def run_session(c: Controller, sc: Scenario, limit_ms: int, *, trace: Optional[Path] = None,
@@ -180,8 +202,11 @@ def run_session(c: Controller, sc: Scenario, limit_ms: int, *, trace: Optional[P
 
 def _watched(c: Controller, name: str) -> tuple[str, str]:
     """(procedure, variable) of a watched ``PROC.var``; UsageError naming what is wrong."""
+    programs = c.programs
+    if getattr(c, "replay_image", None) is not None:   # loaded later, by an upload line
+        programs = {**{p.name: p for p in c.replay_image}, **programs}
     try:
-        return check_name(c.programs, name)
+        return check_name(programs, name)
     except ValueError as exc:
         raise UsageError(f"--watch {exc}") from None
 

@@ -26,11 +26,14 @@ history reaches trigger + post (or the session ends).
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
-from typing import Optional
 
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode import abi
 from plcbuilder.controller.history import History, Trace
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 MODES = ("single", "normal", "auto")
 EDGES = ("rise", "fall", "edge")

@@ -10,14 +10,16 @@ the seed's ``System.VOut.1 = OFF`` and ``System.VOut = System.VIn``. Addresses:
 
 from __future__ import annotations
 
-from typing import Callable
 
 from plcbuilder.bytecode import softmc
 from plcbuilder.bytecode.semantics import wrap
 
 _M32 = 0xFFFFFFFF
-Getter = Callable[[int], int]
-Setter = Callable[[int, int], None]
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Callable
+    Getter = Callable[[int], int]
+    Setter = Callable[[int, int], None]
 
 
 class VirtualIO:

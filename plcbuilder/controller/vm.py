@@ -26,17 +26,16 @@ each operator computes is :mod:`plcbuilder.bytecode.semantics`):
 
 from __future__ import annotations
 
-from typing import Iterator, Optional
-
 from plcbuilder.bytecode import semantics
+from plcbuilder.bytecode.abi import MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET
 from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST, Op, UNARY,
                                          size_of, validate)
 from plcbuilder.bytecode.program import Program
 from plcbuilder.bytecode.semantics import c_div, c_mod, wrap
 
-TICK_BUDGET = 100_000
-MAX_CALL_DEPTH = 16
-STACK_LIMIT = 1024
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Iterator, Optional
 
 FAULT_DIV = "division by zero"
 FAULT_MOD = "modulo by zero"
@@ -142,6 +141,16 @@ class Host:
         #: ``marks`` (per code offset, watched or not), ``brk(pc, rets)`` (True: halt
         #: before pc), ``table(program, base)`` (the kinds with K_BREAK where marked)
         self.debug = None
+
+    def for_expression(self, write=None) -> "Host":
+        """The host an expression (a breakpoint condition, an evaluate) runs on
+        through the reference interpreter: this one's reads and its writes, or
+        ``write`` (a function refusing them) in place of each write; no
+        latency, no debugger."""
+        return Host(portset=write or self.portset, portclr=write or self.portclr,
+                    portget=self.portget, gvarget=self.gvarget,
+                    gvarset=write or self.gvarset, g0move=write or self.g0move,
+                    plain=self.plain)
 
 
 # ------------------------------------------------------------- pre-decoding

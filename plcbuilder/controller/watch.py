@@ -14,9 +14,11 @@ holds, as ``Controller.variables()`` reads it.
 
 from __future__ import annotations
 
-from typing import Iterable, Optional
-
 from plcbuilder.controller.events import Watched
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Iterable, Optional
 
 
 def split_name(name: str) -> tuple[str, str]:

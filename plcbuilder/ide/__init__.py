@@ -1,7 +1,9 @@
 """The IDE (PySide6, Scintilla, pyqtgraph): ``plcbuilder gui``.
 
 PySide6's import hook reads the source of every module imported after it;
-:mod:`.pyside_imports` makes that quicker before anything else is imported.
+:mod:`.pyside_imports` makes that quicker before anything else is imported;
+:mod:`.pyqtgraph_qt` spares pyqtgraph's import from making every Qt class's
+Python type.
 
 Start-up allocates tens of thousands of objects that live as long as the IDE
 (modules, classes, Qt's wrappers and enums); with the default thresholds the
@@ -15,9 +17,11 @@ import gc as _gc
 
 import PySide6 as _PySide6  # noqa: F401 - loads PySide's import hook, made quicker here
 
+from plcbuilder.ide.pyqtgraph_qt import install as _pyqtgraph_on_demand
 from plcbuilder.ide.pyside_imports import quick_source_check as _quick_source_check
 
 _quick_source_check()
+_pyqtgraph_on_demand()          # pyqtgraph's copy of Qt's names, made as it asks for them
 
 _THRESHOLDS = _gc.get_threshold()
 _STARTUP_THRESHOLDS = (max(_THRESHOLDS[0], 50_000),) + tuple(_THRESHOLDS[1:])

@@ -48,7 +48,7 @@ if TYPE_CHECKING:
 
 Signal = QtCore.Signal
 
-__all__ = ["ControllerConnection", "SPEED_CHOICES", "parse_speed"]
+__all__ = ["ControllerConnection", "SPEED_CHOICES"]
 
 #: What :meth:`ControllerConnection.set_speed` understands (any number is N× real time).
 SPEED_CHOICES = ("realtime", "2", "10", "100", "max", "pause")
@@ -85,29 +85,6 @@ def _telemetry_queue(speed: Optional[tuple[str, Optional[float]]] = None) -> int
     return TELEMETRY_QUEUE
 
 
-def parse_speed(mode) -> tuple[str, Optional[float]]:
-    """``"realtime"``, ``"max"``, ``"pause"``, or a factor (``"10"``, ``10``, ``"10x"``)
-    -> (protocol mode, factor). Raises ValueError."""
-    if isinstance(mode, (int, float)) and not isinstance(mode, bool):
-        factor = float(mode)
-    else:
-        text = str(mode).strip().lower()
-        if text in ("realtime", "real-time", "real time", "1", "1x", "1×"):
-            return "realtime", None
-        if text in ("max", "maximum", "fast", "pause", "paused"):
-            return ("pause" if text.startswith("paus") else "max"), None
-        try:
-            factor = float(text.rstrip("x×"))
-        except ValueError:
-            raise ValueError(f"unknown speed {mode!r}: use realtime, max, pause or a factor "
-                             "such as 10") from None
-    if factor == 1.0:
-        return "realtime", None
-    if not 0.001 <= factor <= 10000:
-        raise ValueError(f"speed factor {factor:g} is out of range (0.001 to 10000)")
-    return "factor", factor
-
-
 # ===================================================================== worker
 
 class _Worker(threading.Thread):
@@ -126,6 +103,7 @@ class _Worker(threading.Thread):
         self.stopping = threading.Event()
         self.client: Optional[Client] = None
         self.child: Optional[ControllerProcess] = None
+        self.child_told = False                 # the GUI knows the child's pid
         self.image: Optional[bytes] = None      # re-uploaded after a restart
         self.target: Optional[dict] = None      # the image's target profile (docs/targets.md)
         self.speed: Optional[tuple[str, Optional[float]]] = None
@@ -229,6 +207,9 @@ class _Worker(threading.Thread):
                     self.child.stop()
                 self.child = process.ControllerProcess(self.extra_args)
                 self.post("child", self.child.pid)
+            elif not self.child_told:                # started before (prestart)
+                self.post("child", self.child.pid)
+            self.child_told = True
             ep = self._wait_endpoint(self.child)
             host, port, token = ep.host, ep.port, ep.token
         else:
@@ -307,65 +288,16 @@ class _Worker(threading.Thread):
             next_state = min(next_state, time.monotonic() + STATE_INTERVAL)
 
     def _run_command(self, client: Client, verb: str, args: tuple) -> None:
+        """One command from the GUI: its ``_do_<verb>`` method, a debugger verb,
+        or a plain request; the result is posted (unless the method posted what
+        it had, returning POSTED), a refusal as an error."""
         link = _link()[0]
+        handler = getattr(self, "_do_" + verb, None)
         try:
-            if verb == "upload":
-                self.image, self.target = args[0], args[1]
-                result = client.upload(args[0], target=args[1])
-            elif verb == "start":
-                result = client.start(args[0], int(args[1]))
-            elif verb == "stop":
-                result = client.stop()
-            elif verb == "input":
-                result = client.set_input(int(args[0]), int(args[1]))
-            elif verb == "adc":
-                result = client.set_adc(int(args[0]), int(args[1]))
-            elif verb == "speed":
-                self.speed = (args[0], args[1])
-                result = client.speed(args[0], args[1])
-            elif verb == "reset":
-                result = client.reset()
-            elif verb == "watch":
-                result = client.request(verb, **args[0])
-                self.watched = list(result.get("variables", []))
-            elif verb == "event":
-                result = client.event(args[0])
-            elif verb == "job":
-                result = client.job(*args)
-            elif verb == "variables":
-                self.variables_pending = False
-                variables, target = client.variables_and_target()
-                self.post("variables", variables)
-                if target:
-                    self.post("target_report", target)
-                return
-            elif verb == "registers":
-                self.registers_pending = False
-                self.post("registers", client.registers(args[0]))
-                return
-            elif verb == "set_breakpoints":
-                fields = args[0]
-                if fields["breakpoints"]:
-                    self.breakpoints[fields["file"]] = fields["breakpoints"]
-                else:
-                    self.breakpoints.pop(fields["file"], None)
-                self.debugging = self.debugging or bool(self.breakpoints)
-                result = client.request(verb, **fields)
-                self.post("breakpoints", (fields["file"], result.get("breakpoints", [])))
+            if handler is not None:
+                result = handler(client, *args)
             elif verb in DEBUG_VERBS:
-                self.debugging = self.debugging or verb not in FORCE_VERBS
-                if verb == "debug_state":
-                    self._debug_state(client)
-                    return
-                if verb == "forces":
-                    self.post("forces", client.request("forces").get("forces", []))
-                    return
-                result = client.request(verb, **(args[0] if args else {}))
-                self.post("result", (verb, result))
-                self._debug_state(client)
-                if verb in FORCE_VERBS:
-                    self.post("forces", client.request("forces").get("forces", []))
-                return
+                result = self._debug_verb(client, verb, args)
             else:
                 result = client.request(verb, **(args[0] if args else {}))
         except link.ConnectionLost:
@@ -377,9 +309,86 @@ class _Worker(threading.Thread):
             self.post("error", f"{verb}: {exc.reason}")
             self.post("refused", (verb, exc.reason))
             return
+        if result is POSTED:
+            return
         self.post("result", (verb, result))
         if verb in ("upload", "reset", "start", "stop") and self.debugging:
             self._debug_state(client)
+
+    # One method a verb (the GUI's ``_send(verb, *args)``): its result, or POSTED.
+    def _do_upload(self, client: Client, image: bytes, target: Optional[dict]):
+        self.image, self.target = image, target
+        return client.upload(image, target=target)
+
+    def _do_start(self, client: Client, name: str, eparam: int):
+        return client.start(name, int(eparam))
+
+    def _do_stop(self, client: Client):
+        return client.stop()
+
+    def _do_input(self, client: Client, pin: int, value: int):
+        return client.set_input(int(pin), int(value))
+
+    def _do_adc(self, client: Client, channel: int, value: int):
+        return client.set_adc(int(channel), int(value))
+
+    def _do_speed(self, client: Client, mode: str, factor: Optional[float]):
+        self.speed = (mode, factor)
+        return client.speed(mode, factor)
+
+    def _do_reset(self, client: Client):
+        return client.reset()
+
+    def _do_watch(self, client: Client, fields: dict):
+        result = client.request("watch", **fields)
+        self.watched = list(result.get("variables", []))
+        return result
+
+    def _do_event(self, client: Client, handler: str):
+        return client.event(handler)
+
+    def _do_job(self, client: Client, *args):
+        return client.job(*args)
+
+    def _do_variables(self, client: Client):
+        self.variables_pending = False
+        variables, target = client.variables_and_target()
+        self.post("variables", variables)
+        if target:
+            self.post("target_report", target)
+        return POSTED
+
+    def _do_registers(self, client: Client, addresses: list):
+        self.registers_pending = False
+        self.post("registers", client.registers(addresses))
+        return POSTED
+
+    def _do_set_breakpoints(self, client: Client, fields: dict):
+        if fields["breakpoints"]:
+            self.breakpoints[fields["file"]] = fields["breakpoints"]
+        else:
+            self.breakpoints.pop(fields["file"], None)
+        self.debugging = self.debugging or bool(self.breakpoints)
+        result = client.request("set_breakpoints", **fields)
+        self.post("breakpoints", (fields["file"], result.get("breakpoints", [])))
+        return result
+
+    def _debug_verb(self, client: Client, verb: str, args: tuple):
+        """A debugger request (or write/force/release): the result, the halted
+        state after it, and after a force the list of forces, each posted."""
+        self.debugging = self.debugging or verb not in FORCE_VERBS
+        if verb == "debug_state":
+            self._debug_state(client)
+            return POSTED
+        if verb == "forces":
+            self.post("forces", client.request("forces").get("forces", []))
+            return POSTED
+        result = client.request(verb, **(args[0] if args else {}))
+        self.post("result", (verb, result))
+        self._debug_state(client)
+        if verb in FORCE_VERBS:
+            self.post("forces", client.request("forces").get("forces", []))
+        return POSTED
 
     def _debug_state(self, client: Client) -> None:
         try:
@@ -398,6 +407,10 @@ class _Worker(threading.Thread):
 
 class _Stop(Exception):
     pass
+
+
+#: what a worker's ``_do_<verb>`` returns when it has posted its results itself
+POSTED = object()
 
 
 # ================================================================= QObject
@@ -499,6 +512,8 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
         self.uploaded_crc: Optional[str] = None
         self._upload_done = False
         self.forces: list = []                  # the last list of forces
+        #: (arguments, ControllerProcess) started by prestart(), not connected yet
+        self._prestarted: Optional[tuple] = None
 
     # -------------------------------------------------------------- lifecycle
     @property
@@ -517,11 +532,31 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
     def embedded(self) -> bool:
         return self._worker is not None and self._worker.embedded
 
+    def prestart(self, extra_args: Sequence[str] = ()) -> None:
+        """Start the child process of :meth:`start_embedded` with these
+        arguments now (returns at once); the start that follows with the same
+        arguments connects to it rather than start another."""
+        self._drop_prestarted()
+        from plcbuilder.link.process import ControllerProcess
+        self._prestarted = (tuple(extra_args), ControllerProcess(extra_args))
+
     def start_embedded(self, extra_args: Sequence[str] = ()) -> None:
         """Run a controller as a child process and connect to it (restarting it
         with backoff whenever it dies). ``extra_args`` go to ``plcbuilder
         controller`` (say ``["--machine", path]``)."""
-        self._begin(_Worker(self._inbox, embedded=True, extra_args=extra_args))
+        worker = _Worker(self._inbox, embedded=True, extra_args=extra_args)
+        pre, self._prestarted = self._prestarted, None
+        if pre is not None:
+            if pre[0] == tuple(extra_args) and pre[1].alive():
+                worker.child = pre[1]           # started before the window painted
+            else:
+                pre[1].stop()
+        self._begin(worker)
+
+    def _drop_prestarted(self) -> None:
+        pre, self._prestarted = self._prestarted, None
+        if pre is not None:
+            pre[1].stop()
 
     def connect_to(self, host: str, port: int, token: str) -> None:
         """Talk to a controller that is already running (reconnecting with backoff
@@ -530,6 +565,7 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
 
     def shutdown(self, timeout: float = 5.0) -> None:
         """Disconnect and end the embedded controller (waits for it, at most ``timeout``)."""
+        self._drop_prestarted()
         w, self._worker = self._worker, None
         if w is not None:
             w.stopping.set()
@@ -585,6 +621,7 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
 
     def set_speed(self, mode) -> None:
         """``"realtime"``, ``"max"``, ``"pause"`` or a factor (``"10"``: 10× real time)."""
+        from plcbuilder.link.protocol import parse_speed
         try:
             m, factor = parse_speed(mode)
         except ValueError as exc:
@@ -686,56 +723,80 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
                 self.missed += payload.missed
                 continue
             flush()                     # keep the order of telemetry and the rest
-            if kind == "state":
-                self.last_state = payload
-                if self._upload_done:           # this state knows the uploaded image
-                    self.uploaded_crc, self._upload_done = None, False
-                self.sig_state.emit(payload, self.missed)
-            elif kind == "connected":
-                self.address, self.welcome = payload
-                self.connected = True
-                if self.halted is not None:     # a new controller runs
-                    self.halted = None
-                    self.sig_resumed.emit(0)
-                self.sig_connected.emit(self.address)
-            elif kind == "disconnected":
-                was = self.connected
-                self.connected = False
-                if was or payload:
-                    self.sig_disconnected.emit(str(payload))
-            elif kind == "child":
-                self.child_pid = payload
-            elif kind == "error":
-                self.sig_error.emit(str(payload))
-            elif kind == "variables":
-                self.sig_variables.emit(dict(payload))
-            elif kind == "registers":
-                self.sig_registers.emit(dict(payload))
-            elif kind == "target_report":
-                self.sig_target_report.emit(dict(payload))
-            elif kind == "result":
-                verb, result = payload
-                if verb == "upload":
-                    self._upload_done = True
-                self.sig_result.emit(verb, dict(result) if isinstance(result, dict) else {})
-            elif kind == "note":
-                self.sig_note.emit(str(payload))
-            elif kind in ("debug_state", "halted", "resumed"):
-                self._on_debug_state(kind, payload)
-            elif kind == "refused":
-                if payload[0] == "upload":
-                    self.uploaded_crc = None
-                self.sig_refused.emit(*payload)
-            elif kind == "breakpoints":
-                self.sig_breakpoints.emit(*payload)
-            elif kind == "breakpoints_refused":
-                self.sig_breakpoints_refused.emit(*payload)
-            elif kind == "forces":
-                self._on_forces(payload)
-            elif kind == "debugger":
-                self.debugger = bool(payload)
-            elif kind == "stopped":
-                pass
+            handler = getattr(self, "_mail_" + kind, None)
+            if handler is not None:
+                handler(payload)
         flush()
         if not self._inbox.empty():             # more than one drain's worth: the rest soon
             self._pump.start(PUMP_INTERVAL_MS)
+
+    # One method a kind of mail from the worker (its ``post(kind, payload)``).
+    def _mail_state(self, status) -> None:
+        self.last_state = status
+        if self._upload_done:                   # this state knows the uploaded image
+            self.uploaded_crc, self._upload_done = None, False
+        self.sig_state.emit(status, self.missed)
+
+    def _mail_connected(self, payload) -> None:
+        self.address, self.welcome = payload
+        self.connected = True
+        if self.halted is not None:             # a new controller runs
+            self.halted = None
+            self.sig_resumed.emit(0)
+        self.sig_connected.emit(self.address)
+
+    def _mail_disconnected(self, reason) -> None:
+        was = self.connected
+        self.connected = False
+        if was or reason:
+            self.sig_disconnected.emit(str(reason))
+
+    def _mail_child(self, pid) -> None:
+        self.child_pid = pid
+
+    def _mail_error(self, text) -> None:
+        self.sig_error.emit(str(text))
+
+    def _mail_note(self, text) -> None:
+        self.sig_note.emit(str(text))
+
+    def _mail_variables(self, variables) -> None:
+        self.sig_variables.emit(dict(variables))
+
+    def _mail_registers(self, registers) -> None:
+        self.sig_registers.emit(dict(registers))
+
+    def _mail_target_report(self, report) -> None:
+        self.sig_target_report.emit(dict(report))
+
+    def _mail_result(self, payload) -> None:
+        verb, result = payload
+        if verb == "upload":
+            self._upload_done = True
+        self.sig_result.emit(verb, dict(result) if isinstance(result, dict) else {})
+
+    def _mail_debug_state(self, halted) -> None:
+        self._on_debug_state("debug_state", halted)
+
+    def _mail_halted(self, payload) -> None:
+        self._on_debug_state("halted", payload)
+
+    def _mail_resumed(self, payload) -> None:
+        self._on_debug_state("resumed", payload)
+
+    def _mail_refused(self, payload) -> None:
+        if payload[0] == "upload":
+            self.uploaded_crc = None
+        self.sig_refused.emit(*payload)
+
+    def _mail_breakpoints(self, payload) -> None:
+        self.sig_breakpoints.emit(*payload)
+
+    def _mail_breakpoints_refused(self, payload) -> None:
+        self.sig_breakpoints_refused.emit(*payload)
+
+    def _mail_forces(self, forces) -> None:
+        self._on_forces(forces)
+
+    def _mail_debugger(self, available) -> None:
+        self.debugger = bool(available)

@@ -71,6 +71,7 @@ class DiagnosticsWorker(QObject):
         self._incremental: dict[str, Incremental] = {}   # per file, used by the worker thread
         self._cond = threading.Condition()
         self._stopped = False
+        self._held = False
         self._busy = False
         self._sig_done.connect(self._on_done)
         if sys.getswitchinterval() > GIL_SWITCH_S:
@@ -105,6 +106,15 @@ class DiagnosticsWorker(QObject):
         self._pending_text.pop(key, None)
         self._enqueue(Job(key, gen, path, text, options))
         return gen
+
+    def hold(self, held: bool) -> None:
+        """While held, requests wait in the queue and nothing is compiled (the
+        main window holds it until its first paint: a compile on this thread
+        takes the interpreter from the window, and its first one loads the
+        compiler)."""
+        with self._cond:
+            self._held = bool(held)
+            self._cond.notify_all()
 
     def cancel(self, key: str) -> None:
         """Forget a file (closed): drop its pending request and any result."""
@@ -158,18 +168,19 @@ class DiagnosticsWorker(QObject):
     def _run(self) -> None:
         while True:
             with self._cond:
-                while not self._queue and not self._stopped:
+                while (not self._queue or self._held) and not self._stopped:
                     self._cond.wait()
                 if self._stopped:
                     return
                 key = next(iter(self._queue))
                 job = self._queue.pop(key)
-                incremental = None
-                if job.text is not None:
-                    incremental = self._incremental.get(key)
-                    if incremental is None:
-                        from plcbuilder.lang.incremental import Incremental
-                        incremental = self._incremental[key] = Incremental()
+                incremental = self._incremental.get(key) if job.text is not None else None
+            if job.text is not None and incremental is None:
+                # (loaded outside the lock: the GUI thread queues requests under it)
+                from plcbuilder.lang.incremental import Incremental
+                incremental = Incremental()
+                with self._cond:
+                    incremental = self._incremental.setdefault(key, incremental)
             try:
                 if job.text is None:
                     result = api.compile_file(job.path, job.options)

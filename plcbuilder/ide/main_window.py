@@ -92,6 +92,7 @@ class MainWindow(QMainWindow):
         self._painted = False
         self._controller_due = False         # started after the first paint
         self._lint_due = False               # the project's check, after the first paint
+        self._editors_due = None             # the last session's other editors, after it too
         self.right_docks: list = []          # the docks the default sizes apply to
         self._shown_once = False
         self.layout_restored = False
@@ -211,7 +212,7 @@ class MainWindow(QMainWindow):
     def busy(self) -> bool:
         """Diagnostics or a build still on their way (tests and screenshots wait)."""
         return (self._lint_due or self.lint.busy() or self.run_actions.building()
-                or self.tree.describing())
+                or self.tree.describing() or self._editors_due is not None)
 
     def is_modified(self, editor: CodeEditor) -> bool:
         return self.editor_stack.is_modified(editor)
@@ -323,6 +324,7 @@ class MainWindow(QMainWindow):
         self.editor_stack.close_all(force=True)
         self.project = project
         self.run_actions.project_opened()        # its own last eparam and speed
+        self._start_controller()
         if self._build_panel is not None:
             self._build_panel.forget()           # not the previous project's build
         self.lint.clear()
@@ -333,22 +335,51 @@ class MainWindow(QMainWindow):
         self.settings.add_recent_project(project.root)
         actions.fill_recent_menu(self)
         self._lint_project()
-        for f in self.settings.open_files(project.root):
-            if Path(f).exists() or f.startswith(BUILTIN_PREFIX):
-                self.open_file(f, focus=False)
-        current = self.settings.current_file(project.root)
-        if current and self.editor_for(current) is not None:
-            self.tabs.setCurrentWidget(self.editor_for(current))
+        self._restore_editors(project)
         if offer_recovery:
             self.offer_recovery()
         self._update_title()
         self._update_actions()
         self._show_welcome()
         self.lint.refresh_problems()
-        self._start_controller()
         self.statusBar().showMessage(f"Opened {project.name} ({project.root})", 5000)
         self.sig_project_opened.emit(str(project.root))
         return True
+
+    def _restore_editors(self, project: Project) -> None:
+        """The project's editors of the last session, its current one in
+        front. Before the window's first paint only the current one is made
+        (the paint shows it); the others follow the paint, in their places."""
+        files = [f for f in self.settings.open_files(project.root)
+                 if f.startswith(BUILTIN_PREFIX) or Path(f).exists()]
+        current = self.settings.current_file(project.root)
+        if self.isVisible() and not self._painted and current in files and len(files) > 1:
+            self.open_file(current, focus=False)
+            self._editors_due = (project.root, files, current)
+            return
+        for f in files:
+            self.open_file(f, focus=False)
+        if current and self.editor_for(current) is not None:
+            self.tabs.setCurrentWidget(self.editor_for(current))
+
+    def _open_due_editors(self) -> None:
+        """The last session's other editors, after the first paint (see
+        :meth:`_restore_editors`), in the order they had."""
+        due, self._editors_due = self._editors_due, None
+        if due is None or self._project is None or self._project.root != due[0]:
+            return
+        _root, files, current = due
+        front = self.current_editor()
+        for f in files:
+            self.open_file(f, focus=False)
+        bar = self.tabs.tabBar()
+        for i, f in enumerate(files):
+            ed = self.editor_for(f)
+            at = self.tabs.indexOf(ed) if ed is not None else -1
+            if at > i:
+                bar.moveTab(at, i)
+        if front is not None and self.tabs.indexOf(front) >= 0:
+            self.tabs.setCurrentWidget(front)
 
     def close_project(self) -> bool:
         if not self.editor_stack.confirm_discard_all("Close Project"):
@@ -609,6 +640,10 @@ class MainWindow(QMainWindow):
         super().showEvent(event)
         if not self._shown_once:
             self._shown_once = True
+            # until the first paint: no compile in the background (the diagnostics
+            # thread would take the interpreter from the window), no outline
+            self.lint.worker.hold(True)
+            self.workbench.outline.held = True
             if not self.layout_restored:
                 QTimer.singleShot(0, lambda: docks.default_dock_sizes(self))
             # the controller and the run panels come after the first paint;
@@ -623,28 +658,44 @@ class MainWindow(QMainWindow):
 
     def _after_first_paint(self) -> None:
         """The window is up: start the embedded controller (a child process,
-        spawned by the connection's thread) and, while it starts, build the
-        run panels."""
+        spawned by the connection's thread), then build the run panels while
+        it starts; the checks in the background and the last session's other
+        editors come once the panels are made (each would hold them up)."""
         self._painted = True
         startup_done()
+        self.workbench.outline.release()         # (each of these once: then no-ops)
         self._guard_wheel()
         self.tree.release_descriptions()
-        if self._lint_due and not self._closing:
-            self._lint_due = False
-            self.lint.refresh_header_defines()
-            self.lint.lint_project()
         if self._controller_due and not self._closing:
             self._controller_due = False
             self.run_actions.start_controller_for_project()
         if self.run_docks and self.run_panels is None:
-            QTimer.singleShot(0, self.ensure_run_panels)
+            QTimer.singleShot(0, self._run_panels_then_the_rest)
+        else:
+            self._after_run_panels()
+
+    def _run_panels_then_the_rest(self) -> None:
+        self.ensure_run_panels()
+        self._after_run_panels()
+
+    def _after_run_panels(self) -> None:
+        """The rest of the start: the checks, the other editors."""
+        self.lint.worker.hold(False)
+        self._open_due_editors()
+        if self._lint_due and not self._closing:
+            self._lint_due = False
+            self.lint.refresh_header_defines()
+            self.lint.lint_project()
 
     def _start_controller(self) -> None:
         """Start (or restart) the project's controller; before the window's
-        first paint, only note that it is due (it would compete with the
-        window for the processor)."""
+        first paint only its process: the connection, which would compete with
+        the window for the interpreter, waits for the paint."""
         if self.isVisible() and not self._painted:
+            # its process starts now (its own Python start is the longest part,
+            # on the other core); the connection to it after the paint
             self._controller_due = True
+            self.run_actions.prestart_controller_for_project()
         else:
             self.run_actions.start_controller_for_project()
 

@@ -84,6 +84,25 @@ class RingBuffer:
             self._data[:, self.capacity:self.capacity + rest] = cols[:, first:]
         self._head += n
 
+    def repeat_last(self, n: int) -> None:
+        """Append the newest row ``n`` times more (a held value; rows must
+        have been written before)."""
+        if n <= 0 or not self._head:
+            return
+        row = self._data[:, (self._head - 1) % self.capacity].copy()[:, None]
+        if n > self.capacity:
+            self._head += n - self.capacity
+            n = self.capacity
+        start = self._head % self.capacity
+        first = min(n, self.capacity - start)
+        self._data[:, start:start + first] = row
+        self._data[:, start + self.capacity:start + self.capacity + first] = row
+        rest = n - first
+        if rest:
+            self._data[:, :rest] = row
+            self._data[:, self.capacity:self.capacity + rest] = row
+        self._head += n
+
     # ------------------------------------------------------------------ read
     def _span(self, last: int | None) -> tuple[int, int]:
         n = len(self) if last is None else max(0, min(int(last), len(self)))

@@ -405,6 +405,19 @@ class RunActions(QObject):
             return
         c.start_embedded(self.controller_args())
 
+    def prestart_controller_for_project(self) -> None:
+        """Start the project's embedded controller process now, before the
+        window's first paint (its own Python takes longer to start than the
+        window: it runs on the other core meanwhile); the connection to it
+        comes with :meth:`start_controller_for_project`."""
+        c = self.connection
+        if c is None or not self.start_controller or not hasattr(c, "prestart"):
+            return
+        p = self.project
+        if p is None or p.settings.controller_address:
+            return
+        c.prestart(self.controller_args())
+
     def controller_args(self) -> list[str]:
         p = self.project
         args: list[str] = []

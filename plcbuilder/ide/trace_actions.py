@@ -11,9 +11,6 @@ from PySide6.QtWidgets import QFileDialog, QMessageBox
 from plcbuilder import api
 
 TRACE_FILTER = "PLC Builder traces (*.plctrace);;All files (*)"
-EXPORT_FILTER = ("VCD for GTKWave (*.vcd);;"
-                 "VCD, one-bit lanes for PulseView and sigrok (*.vcd);;"
-                 "CSV, one row per change (*.csv);;CSV, one row per tick (*.csv)")
 IMAGE_FILTER = "PNG image (*.png);;SVG drawing (*.svg)"
 
 
@@ -125,16 +122,27 @@ def save_trace(win, path: Optional[str] = None) -> bool:
                        lambda tools, p, _c: tools.save(p), api.TraceFileError, "Saved")
 
 
-def export_trace(win, path: Optional[str] = None, per_tick: bool = False,
-                 split_bits: bool = False) -> bool:
-    """File › Export Trace…: VCD (whole numbers, for GTKWave; or one-bit lanes,
-    for PulseView and sigrok) or CSV (per change or per tick), by the filter chosen."""
-    return _write_file(win, "Export Trace", EXPORT_FILTER,
-                       lambda c: ".vcd" if "VCD" in c else ".csv", path,
-                       lambda tools, p, c: tools.export(
-                           p, per_tick=("per tick" in c) if c else per_tick,
-                           split_bits=("one-bit" in c) if c else split_bits),
-                       api.ExportError, "Exported")
+def export_filter() -> str:
+    """The Export Trace dialog's filters: one a way of exporting (api.trace_exporters)."""
+    return ";;".join(w.ide_filter for w in api.trace_exporters())
+
+
+def _way(chosen_filter: str):
+    return next(w for w in api.trace_exporters() if w.ide_filter == chosen_filter)
+
+
+def export_trace(win, path: Optional[str] = None, **chosen: bool) -> bool:
+    """File › Export Trace…: each way of api.trace_exporters a filter of the
+    dialog (VCD for GTKWave, one-bit lanes for PulseView and sigrok, CSV per
+    change or per tick); given a ``path``, no dialog, the way ``chosen`` picks."""
+    def write(tools, p, c):
+        if c:
+            way = _way(c)
+            return tools.export(p, **({way.option: True} if way.option else {}))
+        return tools.export(p, **chosen)
+
+    return _write_file(win, "Export Trace", export_filter(),
+                       lambda c: "." + _way(c).fmt, path, write, api.ExportError, "Exported")
 
 
 def export_plot(win, path: Optional[str] = None) -> bool:

@@ -3,8 +3,7 @@ project's settings and Build All check each procedure against."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.kind import Kind
 

@@ -1,11 +1,13 @@
-"""The abstract syntax tree: dataclasses with spans, built by parser.AstBuilder."""
+"""The abstract syntax tree: records (dataclasses) with spans, built by parser.AstBuilder."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Optional, Union
-
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.diagnostics import Span
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional, Union
 
 
 # ------------------------------------------------------------- expressions
@@ -62,7 +64,8 @@ class Index:
     span: Span
 
 
-Expr = Union[Num, Name, Call, Unary, Binary, Paren, Index]
+if TYPE_CHECKING:
+    Expr = Union[Num, Name, Call, Unary, Binary, Paren, Index]
 
 
 # -------------------------------------------------------------- statements
@@ -125,7 +128,8 @@ class Empty:
     span: Span
 
 
-Stmt = Union[Assign, IncDec, CallStmt, If, DoWhile, While, Block, Empty]
+if TYPE_CHECKING:
+    Stmt = Union[Assign, IncDec, CallStmt, If, DoWhile, While, Block, Empty]
 
 
 @dataclass(slots=True, eq=False)
@@ -150,15 +154,12 @@ def _parts(t: type) -> tuple:
     None, 'l' a list of nodes, '' anything else."""
     parts = _PARTS.get(t)
     if parts is None:
-        import dataclasses
-        import typing
-        hints = typing.get_type_hints(t)
         parts = []
-        for f in dataclasses.fields(t):
-            h = hints[f.name]
-            kind = ("" if h in (int, str, bool) else "s" if "Span" in str(h) else
-                    "l" if str(h).startswith("list") else "n")
-            parts.append((f.name, kind))
+        for name, h in t.__record_types__.items():     # the annotations, as written
+            h = h.strip()
+            kind = ("" if h in ("int", "str", "bool") else "s" if "Span" in h else
+                    "l" if h.startswith("list") else "n")
+            parts.append((name, kind))
         parts = _PARTS[t] = tuple(parts)
     return parts
 

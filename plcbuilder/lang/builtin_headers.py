@@ -4,11 +4,13 @@ that the IDE opens one without loading the preprocessor."""
 
 from __future__ import annotations
 
-from typing import Optional
-
 from plcbuilder._support.files import read_bounded
 from plcbuilder._support.package_data import data_folder
 from plcbuilder.lang.source import MAX_SOURCE_BYTES, normalise
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 BUILTIN_PREFIX = "<builtin>/"
 

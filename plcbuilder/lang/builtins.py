@@ -9,11 +9,13 @@ names that table here.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Optional
-
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import Op
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 #: Statement keywords -> the parser's terminal name.
 KEYWORDS: dict[str, str] = {"if": "IF", "else": "ELSE", "do": "DO", "while": "WHILE"}

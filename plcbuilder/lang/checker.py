@@ -8,17 +8,19 @@ the code generator never has to guess.
 
 from __future__ import annotations
 
-import difflib
-from dataclasses import dataclass, field
-from typing import Optional
-
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi, semantics
 from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.diagnostics import Diagnostic, Related, Span, error, warning
 from plcbuilder.lang import ast as A
 from plcbuilder.lang.builtins import FUNCTIONS, PREDEFINED, REGISTERS, VALUE_TWIN, slot_names
+from plcbuilder.lang.suggest import did_you_mean
 from plcbuilder.lang.targets import feature_hint, near_miss, profile
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 
 SHIFT_OPS = {"<<", ">>"}
@@ -58,8 +60,12 @@ class Symbols:
 
 class Checker:
     def __init__(self, module: A.Module, kind: Kind, strict: bool, main_file: str,
-                 source_line=None, syntax_errors: bool = False, target: str = T.MYCNC):
+                 source_line=None, syntax_errors: bool = False, target: str = T.MYCNC,
+                 defines=()):
         self.syntax_errors = syntax_errors
+        #: the #define names in scope (for "did you mean?": they are gone from the tree)
+        self.defines = tuple(defines)
+        self._suggested: dict = {}
         self.profile = profile(target)
         self.module = module
         self.kind = kind
@@ -355,8 +361,8 @@ class Checker:
                                                            "sizeof"):
             return
         if p is None:
-            close = difflib.get_close_matches(c.name, list(self.res.procs) + list(FUNCTIONS), n=1)
-            hints = [f"did you mean {close[0]}()?"] if close else []
+            close = self._did_you_mean(c.name, "call", lambda: [*self.res.procs, *FUNCTIONS])
+            hints = [f"did you mean {close}()?"] if close else []
             self.diags.append(error("undefined-procedure", f"no procedure or function named '{c.name}'",
                                     c.name_span, *hints))
             return
@@ -477,7 +483,8 @@ class Checker:
                         chain = " -> ".join(f"{c}()" for c in cycle)
                         self.diags.append(warning(
                             "recursion", f"recursion: {chain}", span,
-                            "calls nest at most 16 deep at run time; deeper is a runtime fault"))
+                            f"calls nest at most {abi.MAX_CALL_DEPTH} deep at run time; deeper is a "
+                            "runtime fault"))
                 elif color[nxt] == 0:
                     color[nxt] = 1
                     path.append(nxt)
@@ -503,13 +510,44 @@ class Checker:
             return
         for v in used:
             if v.read is not None and v.assigned is None:
+                # a misspelled define, predefined name or variable reads as a new variable
+                close = self._did_you_mean(v.name, "value", lambda: self._value_names(used))
+                hints = ([f"did you mean {close}?"] if close else
+                         ["variables start at 0; assign it first, or use a #define for a constant"])
                 self.diags.append(warning("never-assigned",
                                           f"'{v.name}' is read but never assigned (it is always 0)",
-                                          v.read, "variables start at 0; assign it first, "
-                                                  "or use a #define for a constant"))
+                                          v.read, *hints))
             elif v.assigned is not None and v.read is None and v.name not in self.profile.periods:
+                # a misspelled predefined variable (timr = 5;) is a new one, never read
+                close = self._did_you_mean(v.name, "store", self._store_names)
                 self.diags.append(warning("never-read", f"'{v.name}' is assigned but never read",
-                                          v.assigned))
+                                          v.assigned, *([f"did you mean {close}?"] if close else [])))
+
+    # ================================================================ did you mean?
+    def _did_you_mean(self, name: str, kind: str, names) -> Optional[str]:
+        """The name in scope nearest a misspelled one (``names()`` gives them),
+        for at most 100 misspellings of one kind (more are not reported)."""
+        key = (kind, name)
+        if key not in self._suggested:
+            n = self._suggested.get(kind, 0)
+            self._suggested[kind] = n + 1
+            self._suggested[key] = None if n >= 100 else did_you_mean(name, names())
+        return self._suggested[key]
+
+    def _value_names(self, used: list[VarInfo]) -> list[str]:
+        """What a name read as a value may have meant: the defines, the
+        predefined variables and registers, the built-in constants, and the
+        variables the program assigns."""
+        names = [*self.defines, *self.slot_names, *REGISTERS, *abi.BUILTIN_NAMES]
+        names += [v.name for v in used if v.assigned is not None]
+        if self.profile.banks:
+            names += list(T.BANKS)
+        return names
+
+    def _store_names(self) -> list[str]:
+        """What a name assigned may have meant: the predefined variables and
+        the registers that can be written."""
+        return [*self.slot_names, *(n for n in REGISTERS if not PREDEFINED[n].read_only)]
 
     # ================================================================ control flow
     def _flow(self) -> None:

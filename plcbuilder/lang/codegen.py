@@ -9,10 +9,9 @@ bytes.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from itertools import accumulate
-from typing import Optional
 
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.opcodes import LONG_FORM, Op, Operand, encode, fits, size_of
 from plcbuilder.bytecode.program import Kind, LineEntry, Program
@@ -21,6 +20,10 @@ from plcbuilder.diagnostics import Span
 from plcbuilder.lang import ast as A
 from plcbuilder.lang.builtins import FUNCTIONS
 from plcbuilder.lang.checker import Resolved, const_value
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 
 #: Code is addressed with 16 bits: a CALL's target (Operand.ABS16) is below this,

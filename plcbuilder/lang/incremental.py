@@ -23,8 +23,7 @@ diagnostic and byte for byte, as a compile from scratch.
 
 from __future__ import annotations
 
-import threading
-from typing import Optional
+from _thread import allocate_lock
 
 from plcbuilder.diagnostics import Diagnostic
 from plcbuilder.lang import ast as A
@@ -32,6 +31,10 @@ from plcbuilder.lang.codegen import CodeCache
 from plcbuilder.lang.parser import Parsed, parse_incremental
 from plcbuilder.lang.preprocess import TokenCache
 from plcbuilder.lang.tokens import Tok
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 
 class Incremental:
@@ -42,7 +45,7 @@ class Incremental:
         self.tokens = TokenCache()
         self.parsed: Optional[Parsed] = None
         self.code = CodeCache()
-        self.lock = threading.Lock()
+        self.lock = allocate_lock()
 
     def parse(self, toks: list[Tok], main_file: str) -> tuple[A.Module, list[Diagnostic]]:
         self.parsed = parse_incremental(toks, self.parsed, main_file)

@@ -9,12 +9,14 @@ of the define it came from (:attr:`Tok.macro`); nothing else is needed.
 
 from __future__ import annotations
 
-from dataclasses import replace
-from typing import Optional
-
+from plcbuilder._support.records import replace
 from plcbuilder.diagnostics import Diagnostic, Related, Severity
 from plcbuilder.lang.preprocess import Define, Preprocessed
 from plcbuilder.lang.tokens import Tok
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 #: codes of errors that describe the token before the one they point at
 #: ("expected an expression before ')'")

@@ -7,11 +7,14 @@ files are compiled) and the IDE's first paint do not load lark. The pipeline
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional
 
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode.kind import Kind
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 __all__ = ["CompileOptions"]
 

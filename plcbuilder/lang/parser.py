@@ -1,14 +1,20 @@
-"""The parser: lark LALR(1) over the preprocessor's tokens, building the AST inline.
+"""The parser: LALR(1) over the preprocessor's tokens, building the AST inline.
 
-- lark's own lexer is not used: a small Lexer class hands lark the tokens the
-  preprocessor made; each lark Token's ``start_pos`` is its index in that list,
-  which gives back the token's Span.
-- The AST is built during parsing (an inline Transformer), so no parse tree is
-  made and nothing recurses: nesting is limited to MAX_DEPTH by a diagnostic.
+- The tables are lark's, built once from ``grammar.lark`` and read from a file
+  (:mod:`plcbuilder.lang.lalr`); the loop that runs them is here, over the
+  preprocessor's token list: no lark at run time, no token objects made.
+- The AST is built during parsing (the tree builder's methods are called as
+  rules reduce), so no parse tree is made and nothing recurses: nesting is
+  limited to MAX_DEPTH levels by a diagnostic. Brackets nested deeper than
+  that are found by a scan of the tokens before parsing (one error, and no
+  parse); other nesting deeper than the parser's stack allows (a long run of
+  ``-`` or ``if (x)``) stops the parse with the same error.
 - Syntax errors resynchronise on ``;``, ``{`` and ``}`` (panic mode): the
   parser is brought to a state that accepts the synchronising token by feeding
   it made-up tokens, so one mistake gives one error, and the count is capped.
-  :mod:`plcbuilder.lang.syntax_errors` words each error.
+  The tokens are tried on a view of the state stack (:class:`lalr.Trial`),
+  never a copy of it, so recovery costs no more with a deep stack or a long
+  file. :mod:`plcbuilder.lang.syntax_errors` words each error.
 - A parse can start from the one before it (:func:`parse_incremental`): it
   keeps the parser's state at the start of every top-level item, so the next
   parse of an edited token list starts at the last item before the edit and
@@ -21,101 +27,84 @@
 
 from __future__ import annotations
 
-import threading
-from copy import copy
-from dataclasses import dataclass, field, replace
-from functools import lru_cache
-from importlib import resources
-from typing import Optional
+from _thread import allocate_lock
 
-from lark import Lark, Token, Transformer, Tree
-from lark.exceptions import UnexpectedInput, UnexpectedToken
-from lark.lexer import Lexer as _LarkLexer
-from lark.lexer import LexerThread
-from lark.parsers.lalr_parser_state import ParseConf, ParserState
-
+from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
-from plcbuilder.lang.syntax_errors import c_statement_header, syntax_error, token_span
+from plcbuilder.lang.lalr import Tables, Trial, accepts, tables
 from plcbuilder.lang.tokens import Tok
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 MAX_DEPTH = 256
 MAX_SYNTAX_ERRORS = 25
+#: the deepest the parser's state stack may grow: the grammar's deepest
+#: nesting costs 6 states a level (``if (c) s else if (c) s else …``), so a
+#: stack this deep holds more than MAX_DEPTH levels of nesting
+STACK_LIMIT = 6 * MAX_DEPTH + 64
 SYNC = ("SEMI", "RBRACE", "LBRACE")
 #: tokens fed to reach a state that accepts the synchronising token, in order of preference
 FIXUPS = ("NUMBER", "RPAR", "SEMI", "RBRACE")
+OPENING = frozenset(("LPAR", "LBRACK", "LBRACE"))
+CLOSING = frozenset(("RPAR", "RBRACK", "RBRACE"))
 
 
 def grammar_text() -> str:
-    return (resources.files("plcbuilder.lang") / "grammar.lark").read_text(encoding="utf-8")
+    from plcbuilder.lang.lark_adapter import grammar_text as text
+    return text()
 
 
-class _Stream:
-    """The token list, handed to lark one Token at a time; error recovery moves
-    ``pos``. After lark has taken a token that starts a top-level item (the
-    parser's stack is then the start state, the item list and that token), it
-    calls ``at_item(index)``."""
-
-    def __init__(self, toks: list[Tok], pos: int = 0, stack: Optional[list] = None, at_item=None):
-        self.toks = toks
-        self.pos = pos
-        self.stack = stack          # the parser's state stack (lark changes it in place)
-        self.at_item = at_item
-
-    def __iter__(self):
-        toks = self.toks
-        n = len(toks)
-        new = Token
-        stack = self.stack
-        at_item = self.at_item
-        while self.pos < n:
-            i = self.pos
-            self.pos = i + 1
-            t = toks[i]
-            kind = t.kind
-            if kind == "BAD":
-                continue
-            s = t.span
-            yield new(kind, t.value, i, s[1], s[2], s[3], s[4], i + 1)
-            if at_item is not None and (kind == "NAME" or kind == "SEMI") and len(stack) <= 3:
-                at_item(i)
+def bracket_too_deep(toks: list[Tok]) -> int:
+    """The index of the first bracket (``(``, ``[`` or ``{``) nested more than
+    MAX_DEPTH deep, or -1. A closing bracket closes whichever is open."""
+    depth = 0
+    i = -1
+    for t in toks:
+        i += 1
+        k = t.kind
+        if k in OPENING:
+            depth += 1
+            if depth > MAX_DEPTH:
+                return i
+        elif depth and k in CLOSING:
+            depth -= 1
+    return -1
 
 
-class _TokLexer(_LarkLexer):
-    def __init__(self, lexer_conf):  # noqa: D401 - lark's interface
-        pass
-
-    def lex(self, data: _Stream, parser_state=None):
-        return iter(data)
+def _too_deep(span: Span, what: str = "nested") -> Diagnostic:
+    return error("nesting-too-deep", f"{what} more than {MAX_DEPTH} levels deep", span,
+                 "split the expression or statement into simpler parts")
 
 
-class AstBuilder(Transformer):
-    """Builds AST nodes as lark reduces; tracks nesting depth without recursion."""
+class AstBuilder:
+    """Builds AST nodes as the parser reduces (a method per rule, named as in
+    the grammar, given the rule's children: AST nodes and the :class:`Tok` of
+    each terminal); tracks nesting depth without recursion."""
 
     def __init__(self):
-        super().__init__(visit_tokens=False)
         self.toks: list[Tok] = []
-        self.depth: dict[int, int] = {}
+        #: each node's nesting depth, keyed by the node itself: the key keeps it
+        #: alive for the parse, so a node made after one was dropped (a subtree
+        #: cut off too deep, values popped by error recovery) never takes over
+        #: its address and with it its depth (keyed by id(), a name after a cut
+        #: expression could inherit 250 levels and turn its statement Empty)
+        self.depth: dict = {}
         self.diags: list[Diagnostic] = []
         self.too_deep = False
         self.items: list = []     # the top-level items (procedures, None for a stray ';')
 
     # ---------------------------------------------------------- helpers
-    def _span(self, tok: Token) -> Span:
-        i = tok.start_pos
-        if i is not None and 0 <= i < len(self.toks):
-            return self.toks[i].span
-        last = self.toks[-1].span if self.toks else Span("<input>", 1, 1, 1, 2)
-        return Span(last.file, last.end_line, last.end_col, last.end_line, last.end_col + 1)
-
     def _d(self, node) -> int:
-        return self.depth.get(id(node), 0)
+        return self.depth.get(node, 0)
 
     def _nest(self, node, *kids):
         depth = self.depth
         d = 0
         for k in kids:
-            kd = depth.get(id(k), 0)
+            kd = depth.get(k, 0)
             if kd > d:
                 d = kd
         d += 1
@@ -131,7 +120,7 @@ class AstBuilder(Transformer):
             else:
                 node = A.Empty(node.span)
             d = 1
-        depth[id(node)] = d
+        depth[node] = d
         return node
 
     # ---------------------------------------------------------- module
@@ -144,137 +133,187 @@ class AstBuilder(Transformer):
 
     def proc_def(self, c):
         name, _lp, _rp, body = c
-        ns = self._span(name)
-        return A.ProcDef(str(name), ns, body, ns.cover(body.span))
+        ns = name.span
+        return A.ProcDef(name.value, ns, body, ns.cover(body.span))
 
     def block(self, c):
         lb, *stmts, rb = c
-        end = self._span(rb)
-        node = A.Block(stmts, self._span(lb).cover(end), end)
+        end = rb.span
+        node = A.Block(stmts, lb.span.cover(end), end)
         return self._nest(node, *stmts)
 
     # ---------------------------------------------------------- statements
     def assign(self, c):
         name, _eq, value, semi = c
-        target = A.Name(str(name), self._span(name))
-        return self._nest(A.Assign(target, value, target.span.cover(self._span(semi))), value)
+        target = A.Name(name.value, name.span)
+        return self._nest(A.Assign(target, value, target.span.cover(semi.span)), value)
 
     def compound(self, c):
         name, op, value, semi = c
-        target = A.Name(str(name), self._span(name))
-        return self._nest(A.Assign(target, value, target.span.cover(self._span(semi)), op[0],
+        target = A.Name(name.value, name.span)
+        return self._nest(A.Assign(target, value, target.span.cover(semi.span), op[0],
                                    op[1]), value)
 
     def index_assign(self, c):
         target, eq, value, semi = c
-        return self._nest(A.Assign(target, value, target.span.cover(self._span(semi)), "=",
-                                   self._span(eq)), target, value)
+        return self._nest(A.Assign(target, value, target.span.cover(semi.span), "=",
+                                   eq.span), target, value)
 
     def index_compound(self, c):
         target, op, value, semi = c
-        return self._nest(A.Assign(target, value, target.span.cover(self._span(semi)), op[0],
+        return self._nest(A.Assign(target, value, target.span.cover(semi.span), op[0],
                                    op[1]), target, value)
 
     def compound_op(self, c):
         tok = c[0]
-        return (str(tok), self._span(tok))
+        return (tok.value, tok.span)
 
     def index(self, c):
         name, _lb, expr, rb = c
-        ns = self._span(name)
-        return self._nest(A.Index(str(name), ns, expr, ns.cover(self._span(rb))), expr)
+        ns = name.span
+        return self._nest(A.Index(name.value, ns, expr, ns.cover(rb.span)), expr)
 
     def inc(self, c):
         name, _op, semi = c
-        target = A.Name(str(name), self._span(name))
-        return A.IncDec(target, "++", target.span.cover(self._span(semi)))
+        target = A.Name(name.value, name.span)
+        return A.IncDec(target, "++", target.span.cover(semi.span))
 
     def dec(self, c):
         name, _op, semi = c
-        target = A.Name(str(name), self._span(name))
-        return A.IncDec(target, "--", target.span.cover(self._span(semi)))
+        target = A.Name(name.value, name.span)
+        return A.IncDec(target, "--", target.span.cover(semi.span))
 
     def call_stmt(self, c):
         call, semi = c
-        return self._nest(A.CallStmt(call, call.span.cover(self._span(semi))), call)
+        return self._nest(A.CallStmt(call, call.span.cover(semi.span)), call)
 
     def if_stmt(self, c):
         kw, _lp, cond, _rp, then = c
-        return self._nest(A.If(cond, then, None, self._span(kw).cover(then.span)), cond, then)
+        return self._nest(A.If(cond, then, None, kw.span.cover(then.span)), cond, then)
 
     def if_else(self, c):
         kw, _lp, cond, _rp, then, el, orelse = c
-        return self._nest(A.If(cond, then, orelse, self._span(kw).cover(orelse.span), self._span(el)),
+        return self._nest(A.If(cond, then, orelse, kw.span.cover(orelse.span), el.span),
                           cond, then, orelse)
 
     def do_while(self, c):
         kw, body, wh, _lp, cond, _rp, semi = c
-        return self._nest(A.DoWhile(body, cond, self._span(kw).cover(self._span(semi)), self._span(wh)),
+        return self._nest(A.DoWhile(body, cond, kw.span.cover(semi.span), wh.span),
                           body, cond)
 
     def while_stmt(self, c):
         kw, _lp, cond, _rp, body = c
-        ws = self._span(kw)
+        ws = kw.span
         return self._nest(A.While(cond, body, ws.cover(body.span), ws), cond, body)
 
     def empty(self, c):
-        return A.Empty(self._span(c[0]))
+        return A.Empty(c[0].span)
 
     # ---------------------------------------------------------- expressions
     def call(self, c):
         name, lp, *rest = c
         args = rest[0] if len(rest) == 2 else []
-        ns = self._span(name)
-        node = A.Call(str(name), ns, args, ns.cover(self._span(rest[-1])))
+        ns = name.span
+        node = A.Call(name.value, ns, args, ns.cover(rest[-1].span))
         return self._nest(node, *args)
 
     def args(self, c):
-        return [x for x in c if not isinstance(x, Token)]
+        return [x for x in c if not isinstance(x, Tok)]
 
     def binary(self, c):
         left, op, right = c
-        node = A.Binary(str(op), left, right, left.span.cover(right.span), self._span(op))
-        return self._nest(node, left, right)
+        node = A.Binary(op.value, left, right, left.span.cover(right.span), op.span)
+        depth = self.depth                  # _nest, unrolled: the commonest node
+        d = depth.get(left, 0)
+        r = depth.get(right, 0)
+        if r > d:
+            d = r
+        if d >= MAX_DEPTH:
+            return self._nest(node, left, right)
+        depth[node] = d + 1
+        return node
 
     def unary(self, c):
         op, operand = c
-        node = A.Unary(str(op), operand, self._span(op).cover(operand.span))
+        node = A.Unary(op.value, operand, op.span.cover(operand.span))
         return self._nest(node, operand)
 
     def number(self, c):
         tok = c[0]
-        i = tok.start_pos
-        if tok.value == "" or i is None or not (0 <= i < len(self.toks)):
-            return A.Num(0, self._span(tok), "0", synthetic=True)
-        t = self.toks[i]
-        return A.Num(t.number, t.span, t.value)
+        if tok.synthetic:
+            return A.Num(0, tok.span, "0", synthetic=True)
+        return A.Num(tok.number, tok.span, tok.value)
 
     def name(self, c):
         tok = c[0]
-        return A.Name(str(tok), self._span(tok))
+        return A.Name(tok.value, tok.span)
 
     def paren(self, c):
         lp, expr, rp = c
-        return self._nest(A.Paren(expr, self._span(lp).cover(self._span(rp))), expr)
+        return self._nest(A.Paren(expr, lp.span.cover(rp.span)), expr)
 
 
-@lru_cache(maxsize=1)
-def _parser() -> tuple[Lark, AstBuilder]:
-    builder = AstBuilder()
-    lark = Lark(grammar_text(), parser="lalr", lexer=_TokLexer, transformer=builder,
-                maybe_placeholders=False)
-    return lark, builder
+def _callbacks(t: Tables, builder: "AstBuilder") -> list:
+    """Per rule: None when its value is its only child's (a ``?rule`` of one
+    symbol), else the function making its value from the popped children."""
+    out = []
+    for _origin, size, method, expand1, children in t.rules:
+        if method is None:
+            fn = None if children is None else _splicer(children, None)
+            out.append(fn if fn is not None else list)
+            continue
+        if children is None and expand1 and size == 1:
+            out.append(None)
+            continue
+        m = getattr(builder, method)
+        if children is None:
+            out.append((lambda kids, m=m: kids[0] if len(kids) == 1 else m(kids)) if expand1 else m)
+        else:
+            out.append(_splicer(children, m, expand1))
+    return out
 
 
-_lock = threading.Lock()
-_LIST = "__start_star_0"        # lark's rule for ``item*``: its value is the list of items
+def _splicer(children: tuple, make, expand1: bool = False):
+    """The children a rule keeps, helper lists spliced in (the first one
+    extended in place, as lark does for left recursion), then ``make`` on them
+    (None: the list itself)."""
+    def value(kids):
+        kept: list = []
+        for i, splice in children:
+            if splice:
+                if kept:
+                    kept += kids[i]
+                else:
+                    kept = kids[i]
+            else:
+                kept.append(kids[i])
+        if make is None:
+            return kept
+        if expand1 and len(kept) == 1:
+            return kept[0]
+        return make(kept)
+    return value
 
 
-@dataclass
+_lock = allocate_lock()
+_builder: Optional["AstBuilder"] = None
+_calls: list = []
+
+
+def _parser() -> tuple[Tables, "AstBuilder", list]:
+    global _builder, _calls
+    if _builder is None:
+        b = AstBuilder()
+        _calls = _callbacks(tables(), b)
+        _builder = b
+    return tables(), _builder, _calls
+
+
+@dataclass(slots=True, eq=False)
 class _Mark:
     """The parse just before top-level item ``idx``: everything needed to go on from there."""
     idx: int                   # the token the item starts with
-    stack: tuple               # lark's state stack (the start state, then the item list's)
+    stack: tuple               # the parser's state stack (the start state, then the item list's)
     nitems: int                # items before this one
     nrec: int                  # recovery's diagnostics so far
     nbuild: int                # the tree builder's diagnostics so far
@@ -315,10 +354,6 @@ class Parsed:
     moved: dict = field(default_factory=dict)
 
 
-class _Synced(Exception):
-    """Raised by the stream: the parse is back in a state the previous one was in."""
-
-
 def parse_tokens(toks: list[Tok]) -> tuple[A.Module, list[Diagnostic]]:
     """Parse preprocessed tokens into a Module; syntax errors become diagnostics."""
     p = parse_incremental(toks)
@@ -330,40 +365,48 @@ def parse_incremental(toks: list[Tok], previous: Optional[Parsed] = None,
     """Parse preprocessed tokens, reusing ``previous`` (the parse of an earlier
     version of the same file, whose lines moved only in ``main_file``) where
     the tokens did not change. The result is the one :func:`parse_tokens` gives."""
-    lark, builder = _parser()
+    deep = bracket_too_deep(toks)
+    if deep >= 0:
+        d = _too_deep(toks[deep].span, "brackets nested")
+        return Parsed(toks, A.Module([]), [d], rec_diags=[d], count=1, reparsed=(0, len(toks)))
+    t, builder, calls = _parser()
     with _lock:
         try:
-            return _Run(lark, builder, toks, previous, main_file).run()
+            return _Run(t, builder, calls, toks, previous, main_file).run()
         finally:
             builder.toks, builder.depth, builder.items = [], {}, []
+
+
+# what one run of the parsing loop ended with
+_DONE, _ERROR, _SYNCED, _DEEP = range(4)
 
 
 class _Run:
     """One parse (see :func:`parse_incremental`)."""
 
-    def __init__(self, lark: Lark, builder: AstBuilder, toks: list[Tok], previous: Optional[Parsed],
-                 main_file: Optional[str]):
-        self.lark, self.builder, self.toks = lark, builder, toks
+    def __init__(self, t: Tables, builder: AstBuilder, calls: list, toks: list[Tok],
+                 previous: Optional[Parsed], main_file: Optional[str]):
+        self.t, self.builder, self.calls, self.toks = t, builder, calls, toks
+        #: per rule: (the nonterminal it makes, how many values it pops, its callback)
+        self.reduce = [(r[0], r[1], fn) for r, fn in zip(t.rules, calls)]
         self.prev = previous if previous is not None and previous.marks else None
         self.main_file = main_file
-        front = lark.parser
-        self.lalr = front.parser.parser                  # lark's _Parser
-        self.conf = ParseConf(self.lalr.parse_table, self.lalr.callbacks, "start")
-        self.lexer = front.lexer
-        start = self.conf.start_state
-        self.list_state = self.conf.states[start][_LIST][1]
+        self.list_state = t.list_state
         self.marks: list[_Mark] = []
         self.sync_from = len(toks) + 1      # no syncing unless reusing
         self.prev_marks: dict[int, _Mark] = {}
+        self.ss: list[int] = [t.start]      # the state stack
+        self.vs: list = []                  # the value stack
+        self.pos = 0                        # the next token to read
+        self.last = 0                       # the last token read since the parse (re)started
+        self.synced: Optional[tuple] = None
 
     # ---------------------------------------------------------- driver
     def run(self) -> Parsed:
         toks, builder = self.toks, self.builder
         builder.toks, builder.depth, builder.items = toks, {}, []
         builder.diags, builder.too_deep = [], False
-        rec = self.rec = _Recovery(toks, self.list_state)
-        state_stack = [self.conf.start_state]
-        value_stack: list = []
+        rec = self.rec = _Recovery(toks, self)
         pos = 0
         prev = self.prev
         if prev is not None:
@@ -381,9 +424,9 @@ class _Run:
             self.prev_marks = {m.idx: m for m in prev.marks if m.idx >= self.f_old}
             if mark is not None:
                 pos = mark.idx
-                state_stack = list(mark.stack)
+                self.ss = list(mark.stack)
                 if len(mark.stack) > 1:
-                    value_stack = [Tree(_LIST, mark.items_ref[:mark.nitems])]
+                    self.vs = [mark.items_ref[:mark.nitems]]
                 self.marks = [m for m in prev.marks if m.idx < mark.idx]
                 rec.diags = prev.rec_diags[:mark.nrec]
                 rec.errors = [x for x in prev.errors if x.idx <= mark.idx]
@@ -392,46 +435,141 @@ class _Run:
                 rec.hi = mark.hi
                 builder.diags = prev.build_diags[:mark.nbuild]
                 builder.too_deep = mark.too_deep
-        self.start = pos
-        stream = _Stream(toks, pos, state_stack, self._at_item)
-        rec.stream = stream
-        state = ParserState(self.conf, LexerThread.from_custom_input(self.lexer, stream),
-                            state_stack, value_stack)
-        self.state = state
-        try:
-            module = self._parse(state, rec)
-        except _Synced as s:
-            return self._splice(s.args[0], s.args[1])
-        except UnexpectedInput as exc:
-            rec.give_up(exc)
-            return self._done(A.Module([]), usable=False)
-        except RecursionError:  # pragma: no cover - the grammar is iterative
-            rec.diags.append(error("nesting-too-deep", "program nests too deeply", None))
-            return self._done(A.Module([]), usable=False)
-        return self._done(module if module is not None else A.Module([]), usable=True)
+        self.start = self.pos = pos
+        end, result = self._parse(rec)
+        if end == _SYNCED:
+            return self._splice(*self.synced)
+        if end == _DONE:
+            return self._done(result if result is not None else A.Module([]), usable=True)
+        if end == _DEEP:
+            if not builder.too_deep:
+                builder.too_deep = True
+                from plcbuilder.lang.syntax_errors import token_span
+                builder.diags.append(_too_deep(token_span(toks, result)))
+        else:
+            rec.give_up(result)
+        return self._done(A.Module([]), usable=False)
 
-    def _parse(self, state: ParserState, rec: "_Recovery"):
-        """lark's LALR_Parser.parse with ``on_error``, from the given state."""
-        try:
-            return self.lalr.parse_from_state(state)
-        except UnexpectedInput as e:
-            while True:
-                if not rec.on_error(e):
-                    raise e
-                try:
-                    return self.lalr.parse_from_state(state)
-                except UnexpectedToken as e2:
-                    if (isinstance(e, UnexpectedToken) and e.token.type == e2.token.type == "$END"
-                            and e.interactive_parser == e2.interactive_parser):
-                        raise e2     # no progress at the end
-                    e = e2
+    def _parse(self, rec: "_Recovery") -> tuple[int, object]:
+        """Run the parser to the end, recovering from errors; (_DONE, the
+        module), (_SYNCED, None), (_DEEP, the token) or (_ERROR, the token
+        where it gave up)."""
+        end, at = self._drive()
+        ends = 0
+        while end == _ERROR:
+            kind = "$END" if at >= len(self.toks) else self.toks[at].kind
+            if kind == "$END":
+                ends += 1
+            if ends > 1 or not rec.on_error(kind, at):      # (no progress at the end)
+                return _ERROR, (self.last if kind == "$END" else at)
+            self.last = 0
+            end, at = self._drive()
+        return end, at
 
-    def _at_item(self, i: int) -> None:
-        ss = self.state.state_stack
+    def _drive(self) -> tuple[int, object]:
+        """Feed the tokens from ``self.pos`` (and then the end of the input) to
+        the parser: lark's ``parse_from_state``, with the loop unrolled."""
+        toks, n = self.toks, len(self.toks)
+        states, reduce = self.t.states, self.reduce
+        chains = _CHAINS
+        ss, vs = self.ss, self.vs
+        limit = STACK_LIMIT
+        pos = self.pos
+        prev = None
+        while pos < n:
+            t = toks[pos]
+            kind = t.kind
+            if kind == "BAD":
+                pos += 1
+                continue
+            act = states[ss[-1]].get(kind)
+            while act is not None and act < 0:     # reduce (as often as it takes)
+                origin, size, fn = reduce[~act]
+                if fn is None:
+                    # a ?rule's only child is its value: only the top state
+                    # changes, and a run of them (an operand climbing the
+                    # precedence levels, a dozen) is looked up at once
+                    key = (ss[-2], ss[-1], kind)
+                    hit = chains.get(key)
+                    if hit is None:
+                        hit = chains[key] = _chain(states, reduce, ss[-2], origin, kind)
+                    ss[-1], act = hit
+                else:
+                    if size:
+                        kids = vs[-size:]
+                        del vs[-size:]
+                        del ss[-size:]
+                    else:
+                        kids = []
+                    vs.append(fn(kids))
+                    ss.append(states[ss[-1]][origin])
+                act = states[ss[-1]].get(kind)
+            if act is None:
+                self.pos = pos + 1
+                return _ERROR, pos
+            ss.append(act)                          # shift
+            vs.append(t)
+            self.last = pos
+            pos += 1
+            if len(ss) > limit:
+                self.pos = pos
+                return _DEEP, pos - 1
+            # a mark where an item may start (not inside a run of ';': a
+            # parse restarts from the run's first, and marks cost time)
+            if (kind == "NAME" or kind == "SEMI" and prev != "SEMI") and len(ss) <= 3:
+                self.pos = pos
+                if self._at_item(pos - 1):
+                    return _SYNCED, None
+            prev = kind
+        self.pos = n
+        value = self.feed("$END", None)
+        if value is _FAILED:
+            return _ERROR, n
+        return _DONE, value
+
+    def feed(self, kind: str, tok: Optional[Tok]):
+        """Feed one token (its reductions, then its shift; for the end of the
+        input, the reductions up to the accepting state: then the module);
+        _FAILED, with the reductions done, when it is not accepted here."""
+        states, rules, calls = self.t.states, self.t.rules, self.calls
+        ss, vs = self.ss, self.vs
+        end = self.t.end
+        is_end = kind == "$END"
+        while True:
+            act = states[ss[-1]].get(kind)
+            if act is None:
+                return _FAILED
+            if act >= 0:
+                if is_end:
+                    return _FAILED
+                ss.append(act)
+                vs.append(tok)
+                return None
+            act = -1 - act
+            origin, size = rules[act][:2]
+            fn = calls[act]
+            if fn is None:
+                ss.pop()
+            else:
+                if size:
+                    kids = vs[-size:]
+                    del vs[-size:]
+                    del ss[-size:]
+                else:
+                    kids = []
+                vs.append(fn(kids))
+            ss.append(states[ss[-1]][origin])
+            if is_end and ss[-1] == end:
+                return vs[-1]
+
+    def _at_item(self, i: int) -> bool:
+        """Token ``i``, just taken, may start a top-level item: note the parse
+        here; True when the parse is back where the previous one was."""
+        ss = self.ss
         if len(ss) == 3 and ss[1] != self.list_state:
-            return
-        rec, vs = self.rec, self.state.value_stack
-        items = vs[0].children if len(vs) == 2 else None
+            return False
+        rec, vs = self.rec, self.vs
+        items = vs[0] if len(vs) == 2 else None
         mark = _Mark(i, tuple(ss[:-1]), len(items) if items is not None else 0, len(rec.diags),
                      len(self.builder.diags), rec.count, rec.quiet_until, rec.last_error_idx,
                      self.builder.too_deep, rec.hi, items)
@@ -439,7 +577,9 @@ class _Run:
         if i >= self.sync_from and i > self.start:
             old = self.prev_marks.get(i - self.f_new + self.f_old)
             if old is not None and self._can_sync(mark, old):
-                raise _Synced(mark, old)
+                self.synced = (mark, old)
+                return True
+        return False
 
     def _can_sync(self, new: _Mark, old: _Mark) -> bool:
         """Would the previous parse, from ``old`` on, do what this one does from ``new`` on?"""
@@ -463,7 +603,7 @@ class _Run:
     def _splice(self, new: _Mark, old: _Mark) -> Parsed:
         """This parse up to item ``new``, then the previous parse from ``old`` on."""
         prev, rec, builder = self.prev, self.rec, self.builder
-        vs = self.state.value_stack
+        vs = self.vs
         shift = new.idx - old.idx
         file, lines = self.main_file, self.lines
 
@@ -474,7 +614,7 @@ class _Run:
         if lines:
             olds, reused = reused, A.moved(reused, file, lines)
             moved = {id(n): (o, file, lines) for o, n in zip(olds, reused) if n is not None}
-        items = (list(vs[0].children) if len(vs) == 2 else []) + reused
+        items = (list(vs[0]) if len(vs) == 2 else []) + reused
         rec_diags = rec.diags + [move(d) for d in prev.rec_diags[old.nrec:]]
         build_diags = builder.diags + [move(d) for d in prev.build_diags[old.nbuild:]]
         errors = rec.errors + [_Error(x.idx + shift, x.lo + shift, x.hi + shift, x.min_stack)
@@ -493,6 +633,20 @@ class _Run:
         return Parsed(self.toks, module, rec_diags + build_diags, items, marks, errors, rec_diags,
                       build_diags, prev.count - old.count + new.count, (self.start, new.idx), moved)
 
+
+_FAILED = object()
+#: (the state below, the top state, the next token's kind) -> (the top state
+#: after the run of one-child reductions the token causes, the action then)
+_CHAINS: dict = {}
+
+
+def _chain(states: list, reduce: list, below: int, origin: str, kind: str) -> tuple:
+    top = states[below][origin]
+    act = states[top].get(kind)
+    while act is not None and act < 0 and reduce[~act][2] is None:
+        top = states[below][reduce[~act][0]]
+        act = states[top].get(kind)
+    return top, act
 
 def _moved_diag(d: Diagnostic, file: Optional[str], lines: int) -> Diagnostic:
     if not lines:
@@ -573,11 +727,12 @@ TOP_LEVEL_DEPTH = 5
 
 
 class _Recovery:
-    def __init__(self, toks: list[Tok], list_state: Optional[int] = None):
-        self.list_state = list_state
+    def __init__(self, toks: list[Tok], run: _Run):
+        self.run = run
+        self.t = run.t
+        self.list_state = run.list_state
         self.toks = _Reads(toks)
         self.diags: list[Diagnostic] = []
-        self.stream: Optional[_Stream] = None
         self.last_error_idx = -1
         self.quiet_until = -1     # errors at or before this index are cascades
         self.count = 0
@@ -586,28 +741,27 @@ class _Recovery:
         self.min_stack = 0
 
     # ---------------------------------------------------------- recovery
-    def on_error(self, e) -> bool:
-        if not isinstance(e, UnexpectedToken):
-            return False
-        tok = e.token
-        idx = len(self.toks) if tok.type == "$END" else tok.start_pos
+    def on_error(self, kind: str, idx: int) -> bool:
+        """The parser does not take token ``idx`` (of kind ``kind``; the end of
+        the input is index len(toks)): report it unless it is a cascade, and
+        bring the parser and the position to where the parse can go on; False
+        when it cannot."""
         reads = self.toks
         reads.lo = reads.hi = idx
-        self.min_stack = len(e.interactive_parser.parser_state.state_stack)
+        self.min_stack = len(self.run.ss)
         try:
-            return self._on_error(e)
+            return self._on_error(kind, idx)
         finally:
             self.errors.append(_Error(idx, reads.lo, reads.hi, self.min_stack))
             if reads.hi > self.hi:
                 self.hi = reads.hi
 
-    def _on_error(self, e) -> bool:
-        tok = e.token
-        idx = len(self.toks) if tok.type == "$END" else tok.start_pos
-        ip = e.interactive_parser
-        if idx <= self.last_error_idx and tok.type != "$END":
+    def _on_error(self, kind: str, idx: int) -> bool:
+        from plcbuilder.lang.syntax_errors import c_statement_header, syntax_error, token_span
+        run = self.run
+        if idx <= self.last_error_idx and kind != "$END":
             # no progress at this token: drop it
-            self.stream.pos = idx + 1
+            run.pos = idx + 1
             self.last_error_idx = idx
             return True
         after_bad = 0 < idx <= len(self.toks) and self.toks[idx - 1].kind == "BAD"
@@ -618,42 +772,46 @@ class _Recovery:
                                         f"too many syntax errors; stopped after {MAX_SYNTAX_ERRORS}",
                                         token_span(self.toks, idx)))
                 return False
-            self.diags.append(syntax_error(self.toks, idx, set(ip.accepts())))
+            self.diags.append(syntax_error(self.toks, idx, accepts(run.ss, self.t)))
         self.last_error_idx = idx
-        if tok.type not in ("LBRACE", "$END") and self._between_procedures(ip):
-            return self._skip_to_procedure(ip, idx)
+        if kind not in ("LBRACE", "$END") and self._between_procedures():
+            return self._skip_to_procedure(idx)
         header_end = c_statement_header(self.toks, idx)
-        # find a synchronising token at or after the error
+        # find a synchronising token at or after the error (a kind that could
+        # not be reached once the stack is unwound to its start cannot later)
         j = idx
         toks = self.toks
-        for _attempt in range(len(toks) - idx + 2):
-            while j < len(toks) and toks[j].kind not in SYNC:
+        n = len(toks)
+        hopeless: set = set()
+        while True:
+            while j < n and (toks[j].kind not in SYNC or toks[j].kind in hopeless):
                 j += 1
-            target = "$END" if j >= len(toks) else toks[j].kind
-            if self._fixup(ip, target, j):
-                self.stream.pos = j
+            target = "$END" if j >= n else toks[j].kind
+            if self._fixup(target, j):
+                run.pos = j
                 self.quiet_until = max(self.quiet_until, j, header_end)
                 return True
-            if j >= len(toks):
+            if j >= n:
                 return False
+            if len(run.ss) <= 1:
+                hopeless.add(target)
             j += 1
-        return False
 
-    def _between_procedures(self, ip) -> bool:
+    def _between_procedures(self) -> bool:
         """The error is outside every procedure's body (a stray token before a
         procedure, a statement outside one, a bad header)."""
-        return (len(ip.parser_state.state_stack) <= TOP_LEVEL_DEPTH
-                and set(ip.accepts()) <= TOP_LEVEL)
+        ss = self.run.ss
+        return len(ss) <= TOP_LEVEL_DEPTH and accepts(ss, self.t) <= TOP_LEVEL
 
-    def _skip_to_procedure(self, ip, idx: int) -> bool:
+    def _skip_to_procedure(self, idx: int) -> bool:
         """Recover outside procedures: drop the partial item and go on at the
         next ``NAME (`` outside braces (a procedure's start), or at the end;
         what lies between is not checked (one error, not one per line)."""
-        state = ip.parser_state
-        while len(state.state_stack) > 1 and state.state_stack[-1] != self.list_state:
-            state.state_stack.pop()
-            state.value_stack.pop()
-        self.min_stack = min(self.min_stack, len(state.state_stack))
+        ss, vs = self.run.ss, self.run.vs
+        while len(ss) > 1 and ss[-1] != self.list_state:
+            ss.pop()
+            vs.pop()
+        self.min_stack = min(self.min_stack, len(ss))
         toks = self.toks
         n = len(toks)
         depth = 0
@@ -667,53 +825,60 @@ class _Recovery:
             elif depth == 0 and kind == "NAME" and k + 1 < n and toks[k + 1].kind == "LPAR":
                 break
             k += 1
-        self.stream.pos = k
+        self.run.pos = k
         self.quiet_until = max(self.quiet_until, k - 1)
         return True
 
-    def _fixup(self, ip, target: str, at: int) -> bool:
+    def _fixup(self, target: str, at: int) -> bool:
         """Bring the parser to a state that accepts ``target``: feed made-up tokens
         (closing an expression, a parenthesis, a statement), and where that cannot
         work, discard the partial construct from the parser's stacks (yacc-style)."""
-        state = ip.parser_state
+        from plcbuilder.lang.syntax_errors import token_span
+        run = self.run
+        ss, vs = run.ss, run.vs
         while True:
-            plan = self._plan(ip, target)
+            plan = self._plan(target)
             if plan is not None:
                 s = token_span(self.toks, at)
                 for kind in plan:
-                    ip.feed_token(Token(kind, "", at, s.line, s.col, s.end_line, s.end_col, at))
+                    run.feed(kind, Tok(kind, "", s, synthetic=True))
                 return True
-            if len(state.state_stack) <= 1:
+            if len(ss) <= 1:
                 return False
-            state.state_stack.pop()
-            state.value_stack.pop()
-            self.min_stack = min(self.min_stack, len(state.state_stack))
+            ss.pop()
+            vs.pop()
+            self.min_stack = min(self.min_stack, len(ss))
 
-    @staticmethod
-    def _plan(ip, target: str) -> Optional[list[str]]:
-        # a trial on the states alone: no values copied, no tree built
-        trial = ip.copy(deepcopy_values=False)
-        conf = copy(trial.parser_state.parse_conf)
-        conf.callbacks = {}
-        trial.parser_state.parse_conf = conf
+    def _plan(self, target: str) -> Optional[list[str]]:
+        """The made-up tokens (at most 8) after which the parser takes
+        ``target``, tried on the states alone, or None."""
+        t = self.t
+        trial = Trial(self.run.ss, t)
         plan: list[str] = []
         order = ("RBRACE", "NUMBER", "RPAR", "SEMI") if target in ("RBRACE", "$END") else FIXUPS
         for _ in range(8):
-            acc = trial.accepts()
-            if target in acc:
+            if _takes(trial, target, t):
                 return plan
             for kind in order:
-                if kind in acc and not (kind in ("SEMI", "NUMBER") and plan and plan[-1] == kind):
-                    trial.feed_token(Token(kind, "", 0))
+                if not (kind in ("SEMI", "NUMBER") and plan and plan[-1] == kind) \
+                        and _takes(trial, kind, t):
+                    trial.feed(kind)
                     plan.append(kind)
                     break
             else:
                 return None
         return None
 
-    def give_up(self, exc) -> None:
-        if not any(d.code == "too-many-errors" for d in self.diags) and not self.diags:
-            idx = getattr(getattr(exc, "token", None), "start_pos", len(self.toks))
-            if not isinstance(idx, int):
-                idx = len(self.toks)
+    def give_up(self, idx: int) -> None:
+        from plcbuilder.lang.syntax_errors import token_span
+        if not self.diags:
             self.diags.append(error("syntax", "cannot parse this", token_span(self.toks, idx)))
+
+
+def _takes(trial: Trial, kind: str, t: Tables) -> bool:
+    """Would the parser, as the trial has it, take a token of this kind?"""
+    if kind not in t.states[trial.top()]:
+        return False
+    probe = Trial(trial.stack, t)
+    probe.base, probe.extra = trial.base, list(trial.extra)
+    return probe.feed(kind)

@@ -9,14 +9,14 @@ input becomes diagnostics, never an exception.
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
-import threading
+from _thread import allocate_lock
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Optional
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
@@ -30,40 +30,57 @@ from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocesso
 from plcbuilder.lang.source import SourceSet, decode_source, read_source
 from plcbuilder.lang.targets import lower as lower_target
 
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
+
 COMPILER_VERSION = "1"
+#: the most diagnostics of one code a compile reports (then one that says how many more)
+MAX_SAME = 100
 
 #: The recursion limit while compiling: the preprocessor expands a chain of
 #: #defines (each naming the next) one Python frame a link, and a chain may be
 #: longer than Python's default limit allows. (The checker and generator recurse
 #: over the tree too, but the parser caps its depth at 256 levels.)
 RECURSION_LIMIT = 4000
-_limit_lock = threading.Lock()
+_limit_lock = allocate_lock()
 _limit_users = 0                   # compiles running (in any thread)
 _limit_saved: Optional[int] = None  # the limit to restore when the last one ends
+_gc_was_on = False                 # the collector was on when the first compile started
 
 
 @contextmanager
-def _recursion_limit():
-    """Raise the recursion limit to RECURSION_LIMIT while the block runs. The
-    limit is global to the process: the first compile to start raises it and
-    the last to end restores it, so concurrent compiles do not undo each other."""
-    global _limit_users, _limit_saved
+def _compiling():
+    """While the block runs: the recursion limit at least RECURSION_LIMIT, and
+    Python's cyclic garbage collector paused. A compile makes a few objects a
+    token (tokens, spans, nodes) and keeps most of them to its end: the
+    collector went through them again and again, a third to two fifths of a
+    compile's time, for garbage a compile does not make (its objects refer
+    to their children, never back). Both are global to the process: the
+    first compile to start sets them and the last to end puts them back, so
+    concurrent compiles do not undo each other."""
+    global _limit_users, _limit_saved, _gc_was_on
     with _limit_lock:
         if _limit_users == 0:
             old = sys.getrecursionlimit()
             _limit_saved = old if old < RECURSION_LIMIT else None
             if _limit_saved is not None:
                 sys.setrecursionlimit(RECURSION_LIMIT)
+            _gc_was_on = gc.isenabled()
+            gc.disable()
         _limit_users += 1
     try:
         yield
     finally:
         with _limit_lock:
             _limit_users -= 1
-            if _limit_users == 0 and _limit_saved is not None:
-                if sys.getrecursionlimit() == RECURSION_LIMIT:   # unless changed meanwhile
-                    sys.setrecursionlimit(_limit_saved)
-                _limit_saved = None
+            if _limit_users == 0:
+                if _limit_saved is not None:
+                    if sys.getrecursionlimit() == RECURSION_LIMIT:   # unless changed meanwhile
+                        sys.setrecursionlimit(_limit_saved)
+                    _limit_saved = None
+                if _gc_was_on:
+                    gc.enable()
 
 
 # ====================================================================== options
@@ -127,8 +144,8 @@ def compile_source(text: str, path: str = "<input>", options: CompileOptions = C
                                      root=options.root), text, path, file_path, options)
     with incremental.lock:
         try:
-            return _compile(Preprocessor(options.include_dirs, root=options.root,
-                                         tokens=incremental.tokens),
+            return _compile(Preprocessor(options.include_dirs, read_file or read_source,
+                                         root=options.root, tokens=incremental.tokens),
                             text, path, file_path, options, incremental)
         except BaseException:
             incremental.reset()
@@ -168,7 +185,7 @@ def _failed(path: str, options: CompileOptions, diags: list[Diagnostic]) -> Comp
 
 def _compile(pp: Preprocessor, text: str, path: str, file_path: Optional[Path],
              options: CompileOptions, incremental: Optional[Incremental] = None) -> CompileResult:
-    with _recursion_limit():
+    with _compiling():
         return _compile_preprocessed(pp.run_text(text, path, file_path), path, file_path, options,
                                      incremental)
 
@@ -186,6 +203,15 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
             if word not in ("include", "define"):
                 diags.append(error("strict", f"#{word} is not accepted by the controller's "
                                              "compiler (--strict)", span))
+    if pre.too_large:
+        # only the start of the text was read: parsing it would report its
+        # cut-off end (an unclosed block, a missing main) as mistakes
+        diags = add_macro_notes(diags, pre)
+        diags.sort(key=lambda d: (d.sort_key(), d.severity))
+        symbols = Symbols()
+        symbols.defines = {n: (d.text, d.span) for n, d in pre.defines.items()}
+        return CompileResult(name, path, options.kind, None, diags, pre.sources, None,
+                             options.limit, symbols, A.Module([]), list(pre.includes))
     if incremental is None:
         module, parse_diags = parse_tokens(pre.tokens)
     else:
@@ -194,7 +220,8 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
     checked, lowered = lower_target(module, options.target)    # the target's macros
     diags += lowered
     checker = Checker(checked, options.kind, options.strict, path, pre.sources.line,
-                      syntax_errors=any(d.is_error for d in diags), target=options.target)
+                      syntax_errors=any(d.is_error for d in diags), target=options.target,
+                      defines=pre.defines)
     check_diags, resolved, symbols = checker.run()
     diags += check_diags
     symbols.defines = {n: (d.text, d.span) for n, d in pre.defines.items()}
@@ -222,8 +249,30 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
                                "split it into procedures started one after another"))
     diags = add_macro_notes(diags, pre)
     diags.sort(key=lambda d: (d.sort_key(), d.severity))
-    return CompileResult(name, path, options.kind, program, diags, pre.sources, size, options.limit,
-                         symbols, module, list(pre.includes))
+    return CompileResult(name, path, options.kind, program, cap_repeated(diags), pre.sources, size,
+                         options.limit, symbols, module, list(pre.includes))
+
+
+def cap_repeated(diags: list[Diagnostic], limit: int = MAX_SAME) -> list[Diagnostic]:
+    """At most ``limit`` diagnostics of one code (the first, in order), and
+    then one saying how many more there are: thousands of one mistake (a
+    character the language lacks, pasted all over) are not thousands of lines."""
+    counts: dict[str, int] = {}
+    for d in diags:
+        counts[d.code] = counts.get(d.code, 0) + 1
+    if all(n <= limit for n in counts.values()):
+        return diags
+    out, seen = [], {}
+    for d in diags:
+        k = seen[d.code] = seen.get(d.code, 0) + 1
+        if k <= limit:
+            out.append(d)
+        elif k == limit + 1:
+            more = counts[d.code] - limit
+            out.append(Diagnostic(d.severity, "too-many-diagnostics",
+                                  f"{more} more '{d.code}' {d.severity.label}"
+                                  f"{'s' if more != 1 else ''} from here on, not shown", d.span))
+    return out
 
 
 def _file_namer(path: str, file_path: Optional[Path]):

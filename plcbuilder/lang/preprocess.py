@@ -25,16 +25,19 @@ from __future__ import annotations
 import bisect
 import os
 import re
-from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Optional, Sequence
 
+from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder.diagnostics import Diagnostic, Related, Span, error, warning
 from plcbuilder.lang.builtin_headers import (BUILTIN_PREFIX, builtin_header,  # noqa: F401
                                              builtin_header_names)
 from plcbuilder.lang.builtins import KEYWORDS
 from plcbuilder.lang.source import SourceFile, SourceSet, normalise, read_source
 from plcbuilder.lang.tokens import Tok, Tokenizer
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional, Sequence
 
 MAX_INCLUDE_DEPTH = 32
 MAX_TOKENS = 200_000
@@ -66,6 +69,9 @@ class Preprocessed:
     includes: list[str]                        # display names of headers read, in order
     block_comments: list[Span] = field(default_factory=list)   # for --strict
     directives: list[tuple[str, Span]] = field(default_factory=list)   # for --strict
+    #: the input was refused as too large (a "too-large" error): ``tokens`` is
+    #: only its start, not to be parsed
+    too_large: bool = False
 
 
 class TokenCache:
@@ -251,7 +257,7 @@ class Preprocessor:
         self._file(f, [f.name], path.parent if path else None)
         self._substring_warnings()
         return Preprocessed(self.out, self.diags, self.sources, self.defines, self.includes,
-                            self.block_comments, self.directives)
+                            self.block_comments, self.directives, self.too_many)
 
     @staticmethod
     def _key(f: SourceFile) -> str:
@@ -261,12 +267,16 @@ class Preprocessor:
     def _file(self, f: SourceFile, stack: list[str], folder: Optional[Path]) -> None:
         cond: list[list] = []   # [active, seen_else, parent_active, span]
         for is_dir, toks, hash_span, raw in self._lines(f):
+            if self.too_many:
+                return          # the rest is not read: one error, not a cascade
             active = all(c[0] for c in cond)
             if is_dir:
                 self._directive(toks, hash_span, raw, f, stack, folder, cond, active)
                 continue
             if active and toks:
                 self._emit(toks)
+        if self.too_many:
+            return
         for c in cond:
             self.diags.append(error("unterminated-conditional", "#if without #endif", c[3]))
 
@@ -274,7 +284,15 @@ class Preprocessor:
         """The tokenizer's lines of f; its diagnostics and block comments are
         added as each line comes, from the token cache when there is one."""
         if self.tokens is None:
-            yield from Tokenizer(f.text, f.name, self.diags, self.block_comments).lines()
+            tk = Tokenizer(f.text, f.name, self.diags, self.block_comments, MAX_TOKENS + 1)
+            last = None
+            for last in tk.lines():
+                yield last
+            if tk.truncated and not self.too_many:
+                self.too_many = True
+                at = last[1][-1].span if last is not None and last[1] else Span.point(f.name, 1, 1)
+                self.diags.append(error("too-large", f"{f.name} has more than {MAX_TOKENS} tokens",
+                                        at))
             return
         lines, diags, comments, counts = self.tokens.lines(f)
         if counts is None:

@@ -8,12 +8,15 @@ dropped, so columns are the same for every stage.
 from __future__ import annotations
 
 import errno
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Optional
 
+from plcbuilder._support.records import dataclass, field
 from plcbuilder._support.files import FileRefused, read_bounded
 from plcbuilder.diagnostics import Diagnostic, Span, error, warning
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 MAX_SOURCE_BYTES = 1 << 20  # 1 MiB: a procedure is at most 16 KiB of code
 

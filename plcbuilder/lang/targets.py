@@ -29,15 +29,22 @@ function pointers); each becomes what the language already has:
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass
-from typing import Optional
+from plcbuilder._support.records import dataclass, replace
 
 from plcbuilder.bytecode import targets as T
 from plcbuilder.diagnostics import Diagnostic, error
 from plcbuilder.lang import ast as A
 
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
+
 COMPOUND_OPS = ("|=", "&=", "^=", "+=", "-=")
+
+
+def _is_node(x) -> bool:
+    """Is ``x`` a syntax-tree node (a record of lang.ast)?"""
+    return hasattr(type(x), "__record_fields__")
 
 
 @dataclass(frozen=True)
@@ -146,7 +153,7 @@ def registered_handlers(procs) -> list[str]:
             for x in node:
                 walk(x)
             return
-        if node is None or isinstance(node, (int, str, bool)) or not dataclasses.is_dataclass(node):
+        if node is None or isinstance(node, (int, str, bool)) or not _is_node(node):
             return
         if isinstance(node, A.Call) and node.name == "gvarset" and len(node.args) == 2:
             a, b = node.args
@@ -169,14 +176,14 @@ class _Lowering:
 
     def proc(self, p: A.ProcDef) -> A.ProcDef:
         body = self.node(p.body)
-        return p if body is p.body else dataclasses.replace(p, body=body)
+        return p if body is p.body else replace(p, body=body)
 
     def node(self, node):
         """The node with its macro calls rewritten (the same object when it has none)."""
         if isinstance(node, list):
             new = [self.node(x) for x in node]
             return node if all(a is b for a, b in zip(new, node)) else new
-        if node is None or not dataclasses.is_dataclass(node):
+        if node is None or not _is_node(node):
             return node
         if isinstance(node, A.CallStmt) and node.call.name in self.macros:
             return self.statement(node)
@@ -189,7 +196,7 @@ class _Lowering:
                 new = self.node(old)
                 if new is not old:
                     changes[name] = new
-        return dataclasses.replace(node, **changes) if changes else node
+        return replace(node, **changes) if changes else node
 
     def _arity(self, c: A.Call) -> bool:
         n, _value = self.macros[c.name]
@@ -216,7 +223,7 @@ class _Lowering:
     def statement(self, s: A.CallStmt):
         c = s.call
         if self.macros[c.name][1]:                 # axis_stat(x); computes and drops a value
-            return dataclasses.replace(s, call=dataclasses.replace(
+            return replace(s, call=replace(
                 c, args=[self.node(a) for a in c.args]))
         if not self._arity(c):
             return A.Empty(s.span)

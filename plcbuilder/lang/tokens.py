@@ -10,11 +10,14 @@ runs it over the editor's text (its tokens survive syntax errors).
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
-from typing import Optional
 
+from plcbuilder._support.records import dataclass
 from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang.builtins import KEYWORDS
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 PUNCT = {
     "<<": "SHL", ">>": "SHR", "<=": "LE", ">=": "GE", "==": "EQ", "!=": "NE",
@@ -42,6 +45,7 @@ _TOKEN_RE = re.compile(r"""
   | (?P<bad>.)
   | (?P<eof>\Z) )
 """, re.VERBOSE)
+_BAD_RUN_RE = re.compile(r"[^\sA-Za-z0-9_(){};,=+\-*/%<>&|^!~\[\]]+")
 _HEX_RE = re.compile(r"0[xX][0-9A-Fa-f]+")
 _DEC_RE = re.compile(r"[0-9]+")
 
@@ -72,10 +76,15 @@ def parse_number(text: str) -> Optional[int]:
 class Tokenizer:
     """Tokens of one file, with directives split out line by line."""
 
-    def __init__(self, text: str, name: str, diags: list[Diagnostic], block_comments: list[Span]):
+    def __init__(self, text: str, name: str, diags: list[Diagnostic], block_comments: list[Span],
+                 max_tokens: Optional[int] = None):
         self.text, self.name, self.diags = text, name, diags
         self.block_comments = block_comments
         self.next_line: Optional[tuple[int, int]] = None
+        #: stop after this many tokens (the preprocessor refuses more anyway):
+        #: a huge file costs no more than its first max_tokens tokens
+        self.max_tokens = max_tokens
+        self.truncated = False   # it stopped at max_tokens
 
     def lines(self, start: int = 0, first_line: int = 1):
         """Yield (is_directive, tokens, hash_span, raw_rest) per logical line,
@@ -91,6 +100,8 @@ class Tokenizer:
         first_on_line = True
         n = len(text)
         bad_run_end = -1
+        budget = self.max_tokens
+        done = 0                 # tokens of the lines yielded before this one
         while pos < n:
             m = _TOKEN_RE.match(text, pos)
             kind = m.lastgroup
@@ -102,6 +113,11 @@ class Tokenizer:
             if kind == "eof":
                 break
             if kind == "nl":
+                if budget is not None:
+                    done += len(current)
+                    if done > budget:
+                        self.truncated = True
+                        break
                 self.next_line = (e, line + 1)
                 yield directive, current, hash_span, text[raw_start:s] if directive else ""
                 current, directive, hash_span = [], False, None
@@ -149,7 +165,7 @@ class Tokenizer:
             else:  # bad character or a stray '#'
                 if not directive:
                     if s > bad_run_end:
-                        run = re.match(r"[^\sA-Za-z0-9_(){};,=+\-*/%<>&|^!~\[\]]+", text[s:])
+                        run = _BAD_RUN_RE.match(text, s)
                         length = len(run.group()) if run else 1
                         bad_run_end = s + length
                         ch = text[s]
@@ -160,5 +176,8 @@ class Tokenizer:
                 else:
                     current.append(Tok("BAD", m.group(kind), span))
             pos = e
+            if budget is not None and done + len(current) > budget:
+                self.truncated = True
+                break
         self.next_line = None
         yield directive, current, hash_span, text[raw_start:] if directive else ""

@@ -30,10 +30,19 @@ import threading
 import time
 import weakref
 from pathlib import Path
-from typing import Optional, Sequence
+from typing import TYPE_CHECKING, Optional, Sequence
 
 from plcbuilder.link import runtime
-from plcbuilder.link.client import Client, LinkError
+
+if TYPE_CHECKING:
+    from plcbuilder.link.client import Client
+
+
+def _link_error(text: str) -> Exception:
+    """The client's LinkError (the client loads when it is needed: starting a
+    child, as the IDE does before its window paints, does not wait for it)."""
+    from plcbuilder.link.client import LinkError
+    return LinkError(text)
 
 __all__ = ["ControllerProcess"]
 
@@ -76,6 +85,7 @@ class ControllerProcess:
         for opt, value in (("--machine", machine), ("--variables", variables), ("--image", image)):
             if value is not None:
                 args += [opt, str(value)]
+        from plcbuilder.link.client import LinkError
         proc = cls([*args, *extra_args], python=python)
         try:
             proc.wait_endpoint(timeout)
@@ -114,12 +124,12 @@ class ControllerProcess:
             if ep is not None:
                 return ep
             if not self.running:
-                raise LinkError(f"the controller did not start: {self.why_dead()}")
+                raise _link_error(f"the controller did not start: {self.why_dead()}")
             if time.monotonic() > deadline:
                 tail = self.stderr_tail()
                 self.stop()                     # hung: the next try starts a fresh one
-                raise LinkError(f"the controller did not start within {timeout:g} s"
-                                + (f": {tail}" if tail else ""))
+                raise _link_error(f"the controller did not start within {timeout:g} s"
+                                  + (f": {tail}" if tail else ""))
             if cancel is not None:
                 if cancel.wait(0.02):
                     return None
@@ -130,13 +140,14 @@ class ControllerProcess:
     def address(self) -> tuple[str, int]:
         ep = self.endpoint()
         if ep is None:
-            raise LinkError("the controller is not listening")
+            raise _link_error("the controller is not listening")
         return ep.host, ep.port
 
     def connect(self, **kwargs) -> Client:
+        from plcbuilder.link.client import Client
         ep = self.endpoint()
         if ep is None:
-            raise LinkError("the controller is not listening")
+            raise _link_error("the controller is not listening")
         return Client.connect(ep.host, ep.port, ep.token, **kwargs)
 
     def why_dead(self) -> str:

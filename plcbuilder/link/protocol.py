@@ -132,6 +132,32 @@ MAX_FACTOR = 10000.0
 MIN_FACTOR = 0.001
 
 
+def parse_speed(speed) -> tuple[str, Optional[float]]:
+    """A speed as a user gives it (``controller --speed``, the IDE's Speed box):
+    ``realtime`` (also ``1``, ``1x``), ``max``, ``pause``, or a factor of real
+    time (``10``, ``10x``, ``2.5×``, or a number) -> (a ``SPEED_MODES`` mode,
+    the factor or None). Raises ValueError with a sentence saying what to give."""
+    if isinstance(speed, (int, float)) and not isinstance(speed, bool):
+        factor = float(speed)
+    else:
+        text = str(speed).strip().lower()
+        if text in ("realtime", "real-time", "real time"):
+            return "realtime", None
+        if text in ("max", "maximum", "fast"):
+            return "max", None
+        if text in ("pause", "paused"):
+            return "pause", None
+        try:
+            factor = float(text.rstrip("x×"))
+        except ValueError:
+            raise ValueError(f"unknown speed {speed!r}: use realtime, max, pause or a factor "
+                             f"such as 10") from None
+    if not MIN_FACTOR <= factor <= MAX_FACTOR:          # NaN too
+        raise ValueError(f"speed factor {factor:g} is out of range ({MIN_FACTOR:g} to "
+                         f"{MAX_FACTOR:g})")
+    return ("realtime", None) if factor == 1.0 else ("factor", factor)
+
+
 class ErrorCode(str, enum.Enum):
     """The ``code`` of an error message."""
 

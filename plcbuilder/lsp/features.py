@@ -9,8 +9,9 @@ document's uri and returns lsprotocol types (or None).
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
-from typing import Optional
+from typing import Any, Callable, Optional
 
 from lsprotocol import types as T
 from pygls.uris import from_fs_path
@@ -24,6 +25,7 @@ from plcbuilder.lang.highlight import PlcLexer
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX
 from plcbuilder.lsp.analysis import Analysis, builtin_path, uri_path
 from plcbuilder.lsp.positions import Lines, span_range
+from plcbuilder.lsp.protocol import RequestFailed
 
 _IDENT_FIRST = set("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")
 _IDENT = _IDENT_FIRST | set("0123456789")
@@ -44,6 +46,24 @@ _T = {n: i for i, n in enumerate(TOKEN_TYPES)}
 _DECL, _LIB, _RO = 1, 2, 4
 
 
+class NotPlc(Exception):
+    """The document is not one the server answers about (not PLC, over the size
+    limit, or a file it may not read)."""
+
+
+def _answer(empty: Callable[[], Any]):
+    """A feature's answer for a document it does not serve: ``empty()``."""
+    def wrap(fn):
+        @functools.wraps(fn)
+        def feature(*args, **kwargs):
+            try:
+                return fn(*args, **kwargs)
+            except NotPlc:
+                return empty()
+        return feature
+    return wrap
+
+
 class Snapshot:
     """One document's text, lines and symbol index, made once per question."""
 
@@ -51,9 +71,12 @@ class Snapshot:
         self.analysis = analysis
         self.uri = uri
         self.path = uri_path(uri)
-        self.text = analysis.text(uri) or ""
+        text = analysis.usable(uri)
+        if text is None:
+            raise NotPlc(uri)
+        self.text = text
         self.ctx = analysis.context(uri)
-        self.lines = Lines(self.text, analysis.encoding)
+        self.lines = analysis.lines(uri, text)
         name = str(self.path) if self.path is not None else "<" + uri.rsplit("/", 1)[-1] + ">"
         self.name = name
         self.index = analysis.index(uri, self.text, name, self.path, self.ctx)
@@ -87,6 +110,7 @@ class Snapshot:
 
 
 # ---------------------------------------------------------------- hover
+@_answer(lambda: None)
 def hover(an: Analysis, uri: str, pos: T.Position) -> Optional[T.Hover]:
     snap = Snapshot(an, uri)
     w = snap.word(pos)
@@ -114,6 +138,7 @@ def _header_defines(an: Analysis, snap: Snapshot) -> dict:
 
 
 # ---------------------------------------------------------------- completion
+@_answer(lambda: T.CompletionList(is_incomplete=False, items=[]))
 def completion(an: Analysis, uri: str, pos: T.Position) -> T.CompletionList:
     snap = Snapshot(an, uri)
     off = snap.offset(pos)
@@ -149,11 +174,21 @@ def completion(an: Analysis, uri: str, pos: T.Position) -> T.CompletionList:
         out.append(T.CompletionItem(
             label=name, kind=_COMPLETION_KIND.get(kind), detail=detail,
             documentation=T.MarkupContent(T.MarkupKind.PlainText, doc) if doc else None,
-            insert_text=f"{name}($1)" if kind == S.FUNCTION else None,
+            insert_text=call_snippet(name, S.FUNCTIONS[name].params) if kind == S.FUNCTION else None,
             insert_text_format=T.InsertTextFormat.Snippet if kind == S.FUNCTION else None))
     return T.CompletionList(is_incomplete=not prefix, items=out)
 
 
+def call_snippet(name: str, params) -> str:
+    """A call with one named placeholder per argument: ``gvarset(${1:addr}, ${2:value})``
+    (``name()`` for a function without arguments)."""
+    def esc(text: str) -> str:
+        return text.replace("\\", "\\\\").replace("$", "\\$").replace("}", "\\}")
+    args = ", ".join(f"${{{i}:{esc(p)}}}" for i, p in enumerate(params, 1))
+    return f"{name}({args})"
+
+
+@_answer(lambda: None)
 def signature_help(an: Analysis, uri: str, pos: T.Position) -> Optional[T.SignatureHelp]:
     """The built-in function whose call the caret is in, and which argument."""
     snap = Snapshot(an, uri)
@@ -184,6 +219,7 @@ def signature_help(an: Analysis, uri: str, pos: T.Position) -> Optional[T.Signat
 
 
 # ---------------------------------------------------------------- navigation
+@_answer(lambda: None)
 def definition(an: Analysis, uri: str, pos: T.Position) -> Optional[T.Location]:
     snap = Snapshot(an, uri)
     w = snap.word(pos)
@@ -199,6 +235,7 @@ def definition(an: Analysis, uri: str, pos: T.Position) -> Optional[T.Location]:
     return snap.location(span) if span is not None else None
 
 
+@_answer(list)
 def references(an: Analysis, uri: str, pos: T.Position,
                include_declaration: bool = True) -> list[T.Location]:
     snap = Snapshot(an, uri)
@@ -243,6 +280,7 @@ def _project_files(ctx) -> list[Path]:
     return files
 
 
+@_answer(lambda: None)
 def prepare_rename(an: Analysis, uri: str, pos: T.Position):
     snap = Snapshot(an, uri)
     w = snap.word(pos)
@@ -251,6 +289,7 @@ def prepare_rename(an: Analysis, uri: str, pos: T.Position):
     return snap.range_of(w[0], w[1])
 
 
+@_answer(lambda: None)
 def rename(an: Analysis, uri: str, pos: T.Position, new_name: str) -> Optional[T.WorkspaceEdit]:
     snap = Snapshot(an, uri)
     w = snap.word(pos)
@@ -258,13 +297,13 @@ def rename(an: Analysis, uri: str, pos: T.Position, new_name: str) -> Optional[T
         return None
     old = w[2]
     if not _renamable(snap, old):
-        raise ValueError(f"{old} is built in (a keyword, function, predefined variable or "
-                         "table name) and cannot be renamed")
+        raise RequestFailed(f"{old} is built in (a keyword, function, predefined variable or "
+                            "table name) and cannot be renamed")
     if not new_name or new_name[0] not in _IDENT_FIRST or any(c not in _IDENT for c in new_name):
-        raise ValueError(f"{new_name!r} is not a name (letters, digits and _, not starting "
-                         "with a digit)")
+        raise RequestFailed(f"{new_name!r} is not a name (letters, digits and _, not starting "
+                            "with a digit)")
     if is_reserved(new_name):
-        raise ValueError(f"{new_name} is a built-in name")
+        raise RequestFailed(f"{new_name} is a built-in name")
     changes: dict[str, list[T.TextEdit]] = {}
     for loc in _occurrences(an, snap, old):
         changes.setdefault(loc.uri, []).append(T.TextEdit(loc.range, new_name))
@@ -279,6 +318,7 @@ def _renamable(snap: Snapshot, name: str) -> bool:
 
 
 # ---------------------------------------------------------------- symbols
+@_answer(list)
 def document_symbols(an: Analysis, uri: str) -> list[T.DocumentSymbol]:
     snap = Snapshot(an, uri)
     out = []
@@ -298,6 +338,7 @@ def document_symbols(an: Analysis, uri: str) -> list[T.DocumentSymbol]:
 
 
 # ---------------------------------------------------------------- colours
+@_answer(lambda: T.SemanticTokens(data=[]))
 def semantic_tokens(an: Analysis, uri: str) -> T.SemanticTokens:
     """The highlighter's tokens (:class:`~plcbuilder.lang.highlight.PlcLexer`,
     the IDE's colours) with what the index knows of each name, encoded as LSP
@@ -357,6 +398,7 @@ def _token_kind(tok, value: str, idx) -> Optional[tuple[int, int]]:
     return None
 
 
+@_answer(list)
 def inlay_hints(an: Analysis, uri: str, rng: T.Range) -> list[T.InlayHint]:
     """The name of every register given by number: ``gvarget(6060)`` shows
     ``GVAR_CURRENT_MOTION_CODE`` after the number."""

@@ -63,9 +63,11 @@ class Projects:
         except ProjectError as exc:
             return None, exc
 
-    def context(self, path: Optional[Path]) -> Context:
+    def context(self, path: Optional[Path], find_project: bool = True) -> Context:
+        """How ``path`` compiles (``find_project`` False: with the defaults, its
+        project's settings not read)."""
         header = path is not None and path.suffix.lower() in HEADER_SUFFIXES
-        project, problem = self.project_for(path)
+        project, problem = self.project_for(path) if find_project else (None, None)
         software = path is not None and kind_of(path).label == "software"
         if project is not None and path is not None:
             options = project.compile_options(path)

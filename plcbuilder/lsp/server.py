@@ -1,106 +1,138 @@
 """``plcbuilder lsp``: the PLC language over the Language Server Protocol.
 
-A pygls server whose features are :mod:`plcbuilder.lsp.features` and whose
-diagnostics come from :mod:`plcbuilder.lsp.analysis`; it reads its messages
-through :mod:`plcbuilder.lsp.transport` (bounded frames, JSON-RPC errors for
-what cannot be served). Diagnostics are sent when a document is opened and
-saved, and a moment after the last change while typing.
+A pygls server whose protocol is :class:`~plcbuilder.lsp.protocol.PlcProtocol`
+(JSON-RPC's and LSP's rules for what it is sent), whose features are
+:mod:`plcbuilder.lsp.features` and whose diagnostics come from
+:mod:`plcbuilder.lsp.analysis`, compiled off the message loop by
+:mod:`plcbuilder.lsp.checks`; it reads its messages through
+:mod:`plcbuilder.lsp.transport`. Documents are synchronised incrementally.
+Diagnostics are sent when a document is opened and saved, and a moment after
+the last change while typing. Files are read only inside the workspace
+(:mod:`plcbuilder.lsp.access`).
 """
 
 from __future__ import annotations
 
-import asyncio
 import logging
-from typing import Optional
+from pathlib import Path
+from typing import Iterable, Optional
 
 from lsprotocol import types as T
 from pygls.lsp.server import LanguageServer
 
 from plcbuilder import __version__
 from plcbuilder.lsp import features as F
-from plcbuilder.lsp.analysis import Analysis
+from plcbuilder.lsp.access import Access
+from plcbuilder.lsp.analysis import Analysis, uri_path
+from plcbuilder.lsp.checks import CHANGE_DELAY, Checks
 from plcbuilder.lsp.positions import UTF16
-from plcbuilder.lsp.transport import Transport
+from plcbuilder.lsp.protocol import PlcProtocol
+from plcbuilder.project.model import SETTINGS_FILE
 
 log = logging.getLogger(__name__)
 
-#: Seconds after the last change before a document is checked again.
-CHANGE_DELAY = 0.15
+__all__ = ["CHANGE_DELAY", "PlcLanguageServer", "make_server"]
 
 
 class PlcLanguageServer(LanguageServer):
-    def __init__(self):
-        super().__init__("plcbuilder", __version__, text_document_sync_kind=T.TextDocumentSyncKind.Incremental)
-        self.analysis = Analysis()
-        self._pending: dict[str, asyncio.TimerHandle] = {}
+    def __init__(self, confine: Optional[Iterable[Path]] = None):
+        super().__init__("plcbuilder", __version__, protocol_cls=PlcProtocol,
+                         text_document_sync_kind=T.TextDocumentSyncKind.Incremental)
+        self.analysis = Analysis(access=Access(confine))
+        self.checks = Checks(self.analysis, self._publish)
 
-    # ------------------------------------------------------------ diagnostics
-    def check_now(self, uri: str) -> None:
-        self._pending.pop(uri, None)
-        try:
-            published = self.analysis.check(uri)
-        except Exception:  # noqa: BLE001 - a checker bug must not end the session
-            log.exception("checking %s failed", uri)
-            return
+    def _publish(self, versions: dict, published: dict) -> None:
         for target, diags in published.items():
+            version = versions.get(target)
+            if version is None:
+                doc = self.analysis.docs.get(target)
+                version = doc.version if doc is not None else None
             self.text_document_publish_diagnostics(
-                T.PublishDiagnosticsParams(uri=target, diagnostics=diags,
-                                           version=self._version(target)))
+                T.PublishDiagnosticsParams(uri=target, diagnostics=diags, version=version))
 
-    def check_later(self, uri: str) -> None:
-        old = self._pending.pop(uri, None)
-        if old is not None:
-            old.cancel()
-        try:
-            loop = asyncio.get_running_loop()
-        except RuntimeError:
-            self.check_now(uri)
-            return
-        self._pending[uri] = loop.call_later(CHANGE_DELAY, self.check_now, uri)
+    def report_server_error(self, error: Exception, source) -> None:
+        """A failure outside a request (a notification's handler): logged, not
+        shown to the user as a pop-up for every keystroke."""
+        log.error("%s", error)
 
-    def _version(self, uri: str) -> Optional[int]:
-        doc = self.analysis.docs.get(uri)
-        return doc.version if doc is not None else None
+    def set_folders(self, uris: Iterable[str]) -> None:
+        paths = [p for p in (uri_path(u) for u in uris) if p is not None]
+        refused = self.analysis.access.set_folders(paths)
+        self._tell_refused(refused)
 
-    def sync(self, uri: str) -> None:
-        """The analysis takes the workspace's text of ``uri`` (after an edit)."""
-        doc = self.workspace.get_text_document(uri)
-        self.analysis.open(uri, doc.source, doc.version or 0)
+    def _tell_refused(self, refused) -> None:
+        if refused:
+            self.window_show_message(T.ShowMessageParams(
+                type=T.MessageType.Warning,
+                message="plcbuilder lsp does not serve " + ", ".join(map(str, refused))
+                        + ": outside the folders it was started for"))
+
+    def stop(self) -> None:
+        self.checks.stop()
 
 
-def make_server() -> PlcLanguageServer:
-    ls = PlcLanguageServer()
+def make_server(confine: Optional[Iterable[Path]] = None) -> PlcLanguageServer:
+    """A server for one session. ``confine``: the folders a workspace must be
+    inside (a TCP server's ``--root``); None: any the client names."""
+    ls = PlcLanguageServer(confine)
+
+    @ls.feature(T.INITIALIZE)
+    def initialize(ls: PlcLanguageServer, params: T.InitializeParams):
+        uris = [f.uri for f in params.workspace_folders or ()]
+        if not uris and params.root_uri:
+            uris = [params.root_uri]
+        elif not uris and params.root_path:
+            uris = [Path(params.root_path).absolute().as_uri()]
+        if uris:
+            ls.set_folders(uris)
 
     @ls.feature(T.INITIALIZED)
     def initialized(ls: PlcLanguageServer, params):
         enc = ls.workspace.position_encoding or UTF16
         ls.analysis.encoding = str(getattr(enc, "value", enc))
 
+    @ls.feature(T.WORKSPACE_DID_CHANGE_WORKSPACE_FOLDERS)
+    def folders_changed(ls: PlcLanguageServer, params: T.DidChangeWorkspaceFoldersParams):
+        added = [p for p in (uri_path(f.uri) for f in params.event.added or ()) if p]
+        removed = [p for p in (uri_path(f.uri) for f in params.event.removed or ()) if p]
+        ls._tell_refused(ls.analysis.access.change_folders(added, removed))
+
     @ls.feature(T.TEXT_DOCUMENT_DID_OPEN)
     def did_open(ls: PlcLanguageServer, params: T.DidOpenTextDocumentParams):
-        ls.analysis.open(params.text_document.uri, params.text_document.text,
-                         params.text_document.version)
-        ls.check_now(params.text_document.uri)
+        doc = params.text_document
+        ls.analysis.open(doc.uri, doc.text, doc.version, doc.language_id or "")
+        if ls.analysis.is_plc(doc.uri):
+            ls.checks.now(doc.uri)
 
     @ls.feature(T.TEXT_DOCUMENT_DID_CHANGE)
     def did_change(ls: PlcLanguageServer, params: T.DidChangeTextDocumentParams):
-        ls.sync(params.text_document.uri)
-        ls.check_later(params.text_document.uri)
+        uri = params.text_document.uri
+        if not ls.analysis.change(uri, params.text_document.version, params.content_changes):
+            log.info("a change to %s, which is not open: ignored", uri)
+            return
+        if ls.analysis.is_plc(uri):
+            ls.checks.later(uri)
 
     @ls.feature(T.TEXT_DOCUMENT_DID_SAVE, T.SaveOptions(include_text=True))
     def did_save(ls: PlcLanguageServer, params: T.DidSaveTextDocumentParams):
-        if params.text is not None:
-            doc = ls.analysis.docs.get(params.text_document.uri)
-            ls.analysis.open(params.text_document.uri, params.text,
-                             doc.version if doc is not None else 0)
-        ls.check_now(params.text_document.uri)
+        uri = params.text_document.uri
+        doc = ls.analysis.docs.get(uri)
+        if params.text is not None and doc is not None:
+            ls.analysis.open(uri, params.text, doc.version)
+        if ls.analysis.is_plc(uri):
+            ls.checks.now(uri)
+        path = uri_path(uri)
+        if path is not None and path.name == SETTINGS_FILE:
+            # the project's settings changed: its open procedures compile differently
+            for other in list(ls.analysis.docs):
+                if other != uri and ls.analysis.is_plc(other):
+                    ls.checks.now(other)
 
     @ls.feature(T.TEXT_DOCUMENT_DID_CLOSE)
     def did_close(ls: PlcLanguageServer, params: T.DidCloseTextDocumentParams):
-        pending = ls._pending.pop(params.text_document.uri, None)
-        if pending is not None:
-            pending.cancel()
-        for target, diags in ls.analysis.close(params.text_document.uri).items():
+        uri = params.text_document.uri
+        ls.checks.cancel(uri)
+        for target, diags in ls.analysis.close(uri).items():
             ls.text_document_publish_diagnostics(
                 T.PublishDiagnosticsParams(uri=target, diagnostics=diags))
 
@@ -147,13 +179,3 @@ def make_server() -> PlcLanguageServer:
         return F.inlay_hints(ls.analysis, params.text_document.uri, params.range)
 
     return ls
-
-
-def serve_stdio() -> None:
-    ls = make_server()
-    Transport(ls).serve_stdio()
-
-
-def serve_tcp(host: str, port: int, ready=None) -> None:
-    ls = make_server()
-    Transport(ls).serve_tcp(host, port, ready)

@@ -7,10 +7,10 @@ does not load the compiler.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from plcbuilder._support.lazy import lazy_names
 from plcbuilder.project.model import Procedure, Project, ProjectError, Settings, parse_settings
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
 
 if TYPE_CHECKING:
     from plcbuilder.project.build import BuildResult, ProcedureBuild, build_project

@@ -49,11 +49,9 @@ the line and the key.
 from __future__ import annotations
 
 import re
-import tomllib
-from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Optional, Union
 
+from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder._support.toml_errors import TomlLocator, decode_error
 from plcbuilder._support.toml_errors import loads as toml_loads
@@ -61,6 +59,10 @@ from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.kind import Kind
 from plcbuilder.image.limits import MAX_LIMIT, Limits
 from plcbuilder.lang.options import CompileOptions
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional, Union
 
 SETTINGS_FILE = "plcbuilder.toml"
 HARDWARE_DIR = "hardware"
@@ -209,7 +211,7 @@ def parse_settings(text: str, file: Union[str, Path] = SETTINGS_FILE,
     """Settings from the text of a plcbuilder.toml; raises ProjectError."""
     try:
         doc = toml_loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except ValueError as exc:                # tomllib.TOMLDecodeError
         msg, line = decode_error(exc, text)
         raise ProjectError(f"not valid TOML: {msg}", file, line) from None
     values: dict[str, object] = {}

@@ -260,7 +260,7 @@ def _scenario(f: _File, tc: TestCase, text: str, at: tuple) -> None:
         if m:
             first = key_line + 1
     try:
-        sc = Scenario.parse(text, str(f.path))
+        sc = Scenario.parse(text, str(f.path), first)
     except ScenarioError as exc:
         line = first + exc.line - 1 if exc.line else key_line
         raise TestFileError(f"scenario: {exc.message}", f.path, line) from None

@@ -15,6 +15,14 @@ CSV cells that a spreadsheet would read as a formula (a name starting with
 a single quote before them, the cell in double quotes.
 
 Exports are written atomically: a failed export leaves what was there.
+
+Every way of exporting is one row of :data:`EXPORTERS`: its format (the file's
+suffix), the option that picks it among its format's ways (``per_tick``,
+``split_bits``; none for the format's plain way), the option's command-line
+help, the IDE's file-dialog label, and the function that writes it. The
+command line (``trace export``, ``run --capture``/``--history``) and the IDE's
+File › Export Trace… are made from that table, so a new way of exporting is
+one row here (and its test and manual lines).
 """
 
 from __future__ import annotations
@@ -22,12 +30,15 @@ from __future__ import annotations
 import io
 import re
 from pathlib import Path
-from typing import Optional, Union
-
-from vcd import VCDWriter
+from typing import TYPE_CHECKING, Callable, Optional, Union
 
 from plcbuilder._support.files import atomic_write
-from plcbuilder.controller.history import BIT, TEXT, Trace
+
+if TYPE_CHECKING:                      # the writers import it when they run (start-up)
+    from plcbuilder.controller.history import Trace
+
+#: a signal's kinds, as controller.history names them (a test holds them equal)
+BIT, TEXT = "bit", "text"
 
 #: rows of a per-tick CSV at most (an hour is 3.6 million)
 MAX_TICK_ROWS = 10_000_000
@@ -155,6 +166,8 @@ def vcd_text(trace: Trace, split_bits: bool = False) -> str:
     ``integer`` of the width its values need (:func:`width`). ``split_bits``:
     each number as that many 1-bit wires ``NAME[0]`` (the lowest bit) … instead,
     for readers of one-bit signals only (libsigrok 0.5: PulseView, sigrok-cli)."""
+    from vcd import VCDWriter
+
     out = io.StringIO()
     strings = ", ".join(f"{i}={s or '(none)'}" for i, s in enumerate(trace.strings))
     with VCDWriter(out, timescale="1 ms", date="", version="PLC Builder",
@@ -195,20 +208,91 @@ def vcd_text(trace: Trace, split_bits: bool = False) -> str:
     return out.getvalue()
 
 
-def export(trace: Trace, path: Union[str, Path], fmt: Optional[str] = None, *,
-           per_tick: bool = False, split_bits: bool = False) -> str:
-    """Write ``trace`` as ``fmt`` ('csv' or 'vcd'; default from the file's suffix).
-    ``split_bits``: a VCD's numbers as one-bit lanes (:func:`vcd_text`).
-    Returns the format written; raises ExportError."""
+class Exporter:
+    """One way to export a trace (a row of :data:`EXPORTERS`): ``fmt`` the
+    format (the file's suffix without the dot), ``option`` the option that
+    picks this way (None: the format's plain way), ``label`` the IDE's
+    file-dialog label, ``help`` the option's command-line help, ``write`` the
+    function that makes the file's text. (A plain class: the command line
+    builds its options from these, and a dataclass costs its start-up.)"""
+
+    __slots__ = ("fmt", "option", "label", "help", "write")
+
+    def __init__(self, fmt: str, option: Optional[str], label: str, help: str,
+                 write: Callable[["Trace"], str]) -> None:
+        self.fmt, self.option, self.label, self.help, self.write = fmt, option, label, help, write
+
+    def __repr__(self) -> str:
+        return f"Exporter({self.fmt!r}, {self.option!r})"
+
+    @property
+    def flag(self) -> Optional[str]:
+        """The command-line flag: ``--per-tick`` for ``per_tick``."""
+        return None if self.option is None else "--" + self.option.replace("_", "-")
+
+    @property
+    def ide_filter(self) -> str:
+        return f"{self.label} (*.{self.fmt})"
+
+
+#: every way to export, in the order the IDE's file dialog offers them
+EXPORTERS: tuple[Exporter, ...] = (
+    Exporter("vcd", None, "VCD for GTKWave", "", vcd_text),
+    Exporter("vcd", "split_bits", "VCD, one-bit lanes for PulseView and sigrok",
+             "VCD: every number as one-bit lanes NAME[0], NAME[1]… (PulseView and "
+             "sigrok-cli read only one-bit signals)", lambda t: vcd_text(t, split_bits=True)),
+    Exporter("csv", None, "CSV, one row per change", "", csv_changes),
+    Exporter("csv", "per_tick", "CSV, one row per tick",
+             "CSV: one row per tick and a column per signal (default: one row per change)",
+             csv_ticks),
+)
+
+
+def formats() -> list[str]:
+    """The formats, in table order: ['vcd', 'csv']."""
+    return list(dict.fromkeys(e.fmt for e in EXPORTERS))
+
+
+def options() -> list[Exporter]:
+    """The ways picked by an option (one command-line flag each)."""
+    return [e for e in EXPORTERS if e.option is not None]
+
+
+def can_export(path: Union[str, Path]) -> bool:
+    """Whether ``path``'s suffix is an export format."""
+    return Path(path).suffix.lower().lstrip(".") in formats()
+
+
+def exporter(fmt: str, path: Union[str, Path] = "", **chosen: bool) -> Exporter:
+    """The way to export ``fmt`` with the options ``chosen`` (those set true);
+    raises ExportError naming ``path`` when the format or an option does not fit."""
+    picked = [name for name, on in chosen.items() if on]
+    known = {e.option for e in options()}
+    for name in picked:
+        if name not in known:
+            raise ExportError(f"{path}: no export option {name!r}")
+    if fmt not in formats():
+        raise ExportError(f"{path}: export as {' or '.join(sorted(formats()))} (from the "
+                          f"file's suffix, or say which)")
+    ways = [e for e in EXPORTERS if e.fmt == fmt]
+    for name in picked:
+        if not any(e.option == name for e in ways):
+            other = next(e for e in options() if e.option == name)
+            raise ExportError(f"{path}: {other.flag} is for {other.fmt.upper()}, not "
+                              f"{fmt.upper()}")
+    if len(picked) > 1:
+        raise ExportError(f"{path}: choose one of " + ", ".join(
+            e.flag for e in ways if e.option in picked))
+    return next(e for e in ways if e.option == (picked[0] if picked else None))
+
+
+def export(trace: "Trace", path: Union[str, Path], fmt: Optional[str] = None,
+           **chosen: bool) -> str:
+    """Write ``trace`` as ``fmt`` (default from the file's suffix), the way the
+    options ``chosen`` pick (``per_tick=True``, ``split_bits=True``: see
+    :data:`EXPORTERS`). Returns the format written; raises ExportError."""
     path = Path(path)
     fmt = (fmt or path.suffix.lstrip(".")).lower()
-    if split_bits and fmt != "vcd":
-        raise ExportError(f"{path}: one-bit lanes (--split-bits) are for VCD, not "
-                          f"{fmt or 'a file without a suffix'}")
-    if fmt == "vcd":
-        _write(path, vcd_text(trace, split_bits))
-    elif fmt == "csv":
-        _write(path, csv_ticks(trace) if per_tick else csv_changes(trace))
-    else:
-        raise ExportError(f"{path}: export as csv or vcd (from the file's suffix, or say which)")
+    way = exporter(fmt, path, **chosen)
+    _write(path, way.write(trace))
     return fmt

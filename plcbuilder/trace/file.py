@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Union
 
 from plcbuilder._support.files import atomic_write, read_bounded
+from plcbuilder._support.strictjson import no_duplicate_keys
 from plcbuilder.controller.history import BIT, INT, TEXT, Trace
 
 FORMAT = "plcbuilder-trace"
@@ -185,7 +186,7 @@ def _json(z: zipfile.ZipFile, name: str, path: Path):
     every number finite (NaN, Infinity and 1e400 are refused, naming the field)."""
     raw = _member(z, name, path)
     try:
-        value = json.loads(raw.decode("utf-8"), object_pairs_hook=_no_duplicates,
+        value = json.loads(raw.decode("utf-8"), object_pairs_hook=no_duplicate_keys,
                            parse_constant=_NonFinite)
     except RecursionError:
         raise TraceFileError(f"{path}: {name}: nested too deeply (at most {MAX_DEPTH} "
@@ -204,15 +205,6 @@ def _json(z: zipfile.ZipFile, name: str, path: Path):
 
 class _NonFinite(str):
     """NaN, Infinity or -Infinity as the JSON said it (refused once its field is known)."""
-
-
-def _no_duplicates(pairs):
-    out = {}
-    for k, v in pairs:
-        if k in out:
-            raise ValueError(f"key {k!r} appears twice")
-        out[k] = v
-    return out
 
 
 def _odd(v) -> bool:

@@ -39,3 +39,22 @@ def test_bad_headers_are_reported_and_reading_resynchronises():
     assert r.pending < 64
     assert r.feed(b"z" * 100000) == [] and r.pending < 64
     assert r.feed(encode_frame(b"[3]")) == [Frame(b"[3]")]
+
+
+def test_two_different_content_lengths_refuse_that_frame_only():
+    r = FrameReader()
+    got = r.feed(b"Content-Length: 2\r\nContent-Length: 40\r\n\r\n{}" + encode_frame(b"[4]"))
+    assert isinstance(got[0], FrameError) and "different Content-Length" in got[0].reason
+    assert got[1:] == [Frame(b"[4]")]
+    got = r.feed(b"Content-Length: 2\r\ncontent-length: 2\r\n\r\n{}" + encode_frame(b"[5]"))
+    assert got == [Frame(b"{}"), Frame(b"[5]")]
+
+
+def test_a_short_content_length_loses_no_next_frame():
+    """The rest of a body whose length was given too short is skipped, and the
+    header that follows it is the next frame's."""
+    for tail in (b'"}', b'1}\n  ', b'\n}'):
+        r = FrameReader()
+        body = b'{"a": "b' + tail
+        got = r.feed(b"Content-Length: 6\r\n\r\n" + body + encode_frame(b"[6]") + encode_frame(b"[7]"))
+        assert got == [Frame(body[:6]), Frame(b"[6]"), Frame(b"[7]")], (tail, got)

@@ -126,3 +126,35 @@ def test_settings_is_an_option_of_plcbuilder_itself(tmp_path, monkeypatch):
     with pytest.raises(SystemExit) as exc:
         main(["--version"])
     assert exc.value.code == 0
+
+
+def test_the_check_runs_while_the_ide_loads(tmp_path):
+    """Issue 26.5: ``ldd`` (a process of its own, a hundredth of a second and
+    more) starts before the IDE's modules load and is asked for its answer
+    after, not before them, on the way to the window."""
+    if qt_libs.xcb_plugin() is None:
+        pytest.skip("no xcb plugin")
+    marks = tmp_path / "marks"
+    ldd = tmp_path / "ldd"
+    ldd.write_text(f"#!/bin/sh\necho ldd-started >> '{marks}'\nsleep 0.3\n"
+                   f"echo ldd-done >> '{marks}'\ncat '{tmp_path / 'ldd.out'}'\n")
+    ldd.chmod(0o755)
+    (tmp_path / "ldd.out").write_text(LDD_MISSING)
+    code = f"""
+import sys
+class Hook:
+    def find_spec(self, name, path, target=None):
+        if name == "plcbuilder.ide.app":
+            open({str(marks)!r}, "a").write("ide-import\\n")
+        return None
+sys.meta_path.insert(0, Hook())
+from plcbuilder.cli.main import main
+raise SystemExit(main(["gui", "--no-controller"]))
+"""
+    env = dict(os.environ, QT_QPA_PLATFORM="xcb", DISPLAY=":99", PLCBUILDER_LDD=str(ldd),
+               PYTHONPATH=str(ROOT))
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         timeout=60)
+    assert out.returncode == 1 and "apt-get install -y libxcb-cursor0" in out.stderr
+    order = marks.read_text().split()
+    assert order.index("ldd-started") < order.index("ide-import") < order.index("ldd-done"), order

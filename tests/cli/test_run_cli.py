@@ -294,3 +294,31 @@ def test_scenario_file_lines_write_force_and_release(tmp_path, capsys):
     bad = write(tmp_path / "bad.txt", "release in 2 later @ 3\n")
     code, out, err = run_cli(capsys, "run", f, "--scenario", bad)
     assert code == 2 and "bad.txt:1:" in err and "is not a target" in err
+
+
+@pytest.mark.parametrize("lines,where,msg", [
+    ("start M05 @ 0\nbind 9=M88:0 @ 0\n", "2", "no procedure named M88"),
+    ("# a comment\n\nstart M05 @ 0\nwrite M06.timer=500 @ 2\n", "4",
+     "M06 is not running: a write sets a running procedure's variable"),
+    ("start M05 @ 0\nforce M05.nope=1 @ 1\n", "2", "M05 has no variable 'nope'"),
+    ("start M05 @ 0\nadc 9=1 @ 1\n", "2", "the channel of adc must be from 0 to 7"),
+])
+def test_a_scenario_file_error_names_its_file_and_line(tmp_path, capsys, lines, where, msg):
+    """Issue 25: an error about a scenario file's action is 'FILE:LINE: what is wrong',
+    not blamed on an option the user did not give."""
+    write(tmp_path / "p" / "hardware" / "M05.plc", DELAY)
+    write(tmp_path / "p" / "hardware" / "M06.plc", DELAY)
+    sc = write(tmp_path / "s.txt", lines)
+    code, out, err = run_cli(capsys, "run", tmp_path / "p", "--scenario", sc)
+    assert code == 2, err
+    assert msg in err and "--" not in err
+    assert f"{sc}:{where}: " in err
+
+
+def test_an_option_error_names_the_option_as_given(tmp_path, capsys):
+    write(tmp_path / "p" / "hardware" / "M05.plc", DELAY)
+    write(tmp_path / "p" / "hardware" / "M06.plc", DELAY)
+    code, out, err = run_cli(capsys, "run", tmp_path / "p", "--start", "M05@0",
+                             "--write", "M06.timer=3@2")
+    assert code == 2, err
+    assert "--write M06.timer=3@2: M06 is not running" in err

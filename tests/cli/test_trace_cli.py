@@ -44,6 +44,19 @@ def test_trigger_that_never_fires_reports_null(tmp_path, capsys, pulse):
     assert code == 0 and json.loads(out)["capture"] is None and not cap.exists()
 
 
+def test_history_without_a_trigger_says_nothing_of_a_capture(tmp_path, capsys, pulse):
+    """Issue 25: --history alone printed 'capture: the trigger never fired; nothing
+    written' though no trigger was asked for."""
+    hist = tmp_path / "all.plctrace"
+    code, out, err = run_cli(capsys, "run", pulse, "--history", hist)
+    assert code == 0, err
+    assert "capture:" not in out and "never fired" not in out
+    assert f"history: {hist}" in out and hist.exists()
+    code, out, err = run_cli(capsys, "run", pulse, "--history", hist, "--json")
+    rep = json.loads(out)
+    assert "capture" not in rep and rep["history"]["file"] == str(hist)
+
+
 def test_capture_straight_to_vcd_and_history_of_the_session(tmp_path, capsys, pulse):
     code, out, err = run_cli(capsys, "run", pulse, "--trigger", "out 3 fall", "--pre", "2",
                              "--capture", tmp_path / "c.vcd", "--history", tmp_path / "all.plctrace",

@@ -5,7 +5,6 @@ small project to debug."""
 
 from __future__ import annotations
 
-import json
 import threading
 from pathlib import Path
 
@@ -79,23 +78,10 @@ class DapClient(Client):
         self._log_lock = threading.Lock()
         super().__init__(proc)
 
-    def _read(self) -> None:
-        out = self.proc.stdout
-        while True:
-            length = None
-            while True:
-                line = out.readline()
-                if not line:
-                    return
-                if line in (b"\r\n", b"\n"):
-                    break
-                name, _, value = line.decode("ascii").partition(":")
-                if name.strip().lower() == "content-length":
-                    length = int(value.strip())
-            msg = json.loads(out.read(length))
-            with self._log_lock:
-                self.log.append(msg)
-            self.messages.put(msg)
+    def _got(self, msg: dict) -> None:
+        with self._log_lock:
+            self.log.append(msg)
+        super()._got(msg)
 
     def send(self, obj) -> None:
         if isinstance(obj, dict):

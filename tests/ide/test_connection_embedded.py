@@ -11,7 +11,7 @@ import pytest
 pytest.importorskip("PySide6")
 
 from plcbuilder.controller import events as ev  # noqa: E402
-from plcbuilder.ide.connection import ControllerConnection, parse_speed  # noqa: E402
+from plcbuilder.ide.connection import ControllerConnection  # noqa: E402
 from plcbuilder.api import image_of as build_image  # noqa: E402
 
 WAIT = 15_000      # ms: generous bounds for a loaded CI machine; passing runs take far less
@@ -68,19 +68,6 @@ class Recorder:
 
     def ended(self, name: str):
         return [e for e in self.events if isinstance(e, ev.Ended) and e.name == name]
-
-
-def test_parse_speed():
-    assert parse_speed("realtime") == ("realtime", None)
-    assert parse_speed("10") == ("factor", 10.0)
-    assert parse_speed("2.5x") == ("factor", 2.5)
-    assert parse_speed(1) == ("realtime", None)
-    assert parse_speed("max") == ("max", None)
-    assert parse_speed("pause") == ("pause", None)
-    with pytest.raises(ValueError):
-        parse_speed("warp")
-    with pytest.raises(ValueError):
-        parse_speed("1e9")
 
 
 def test_embedded_upload_start_and_telemetry(qtbot, conn):
@@ -290,3 +277,27 @@ def test_step_samples_hold_each_change_until_the_next():
         [(24, 8, 0), (25, 9, 0), (29, 9, 0)]
     assert steps.feed([], 30) == []            # nothing new, no time: nothing
     assert [s.t_ms for s in steps.feed([], 40)] == [39]
+
+
+def test_every_verb_and_every_mail_has_its_method():
+    """Issue 28.5: the connection dispatches by method (``_do_<verb>`` on the
+    worker, ``_mail_<kind>`` on the GUI side), not by if/elif chains: each
+    verb the GUI sends is a method, a debugger verb or a plain request the
+    server knows, and each kind the worker posts has its method."""
+    import inspect
+    import re
+
+    from plcbuilder.ide import connection as C
+    from plcbuilder.ide.debug import requests as R
+    from plcbuilder.link.protocol import REQUESTS
+
+    text = inspect.getsource(C) + inspect.getsource(R)
+    sent = set(re.findall(r'_send\("(\w+)"', text))
+    assert sent, "no verb found"
+    for verb in sent:
+        assert (hasattr(C._Worker, "_do_" + verb) or verb in C.DEBUG_VERBS
+                or verb in REQUESTS), verb
+    posted = set(re.findall(r'self\.post\("(\w+)"', inspect.getsource(C._Worker)))
+    assert posted
+    for kind in posted - {"telemetry", "stopped"}:
+        assert hasattr(C.ControllerConnection, "_mail_" + kind), kind

@@ -397,6 +397,8 @@ def test_layout_recent_session_and_preferences_are_remembered(settings, project,
     assert w2.problems_dock.isHidden()
     assert str(project.resolve()) in [a.text() for a in w2.recent_menu.actions()]
     w2.open_project(project)
+    # (before the window's first paint only the current editor is made, then the others)
+    qtbot.waitUntil(lambda: len(w2.editors()) == 2)
     assert [Path(e.path).name for e in w2.editors()] == ["M05.plc", "LOOP.plc"]
     assert Path(w2.current_editor().path).name == "LOOP.plc"
     assert w2.current_editor().tabWidth() == 2

@@ -125,6 +125,54 @@ def test_model_ingests_samples():
     assert m.epoch == epoch + 1 and len(m) == 2 and m.active_outputs == set()
 
 
+def test_held_samples_are_kept_as_any_other(monkeypatch):
+    """Issue 26.4: a batch that only holds the newest value (the telemetry's
+    steps while nothing changes) takes a short way in; the buffers and what
+    the model found are exactly those of the long way, also across the ring's
+    wrap and after a message or a change."""
+    from plcbuilder.ide.panels import model as model_mod
+    rng = np.random.default_rng(7)
+    fast, slow = RunModel(capacity=53), RunModel(capacity=53)
+    monkeypatch.setattr(slow, "_holds", lambda samples: False)
+    held = 0
+    t = 0
+    last = sample(0)
+    for _ in range(120):
+        batch = []
+        for _ in range(int(rng.integers(1, 9))):
+            t += int(rng.integers(1, 30))
+            if rng.random() < 0.25:          # a change (sometimes with a message)
+                last = sample(t, proc=int(rng.integers(0, 3)), outputs=int(rng.integers(0, 4)),
+                              inputs=int(rng.integers(0, 2)) << 9, pwm=(int(rng.integers(0, 9)),),
+                              message=int(rng.random() < 0.3) * 100)
+                batch.append(last)
+            else:                            # a hold, as StepSamples makes it
+                batch.append(model_mod.ev.Sample(**{**last.__dict__, "t_ms": t, "message": 0}))
+        held += fast._holds(batch)
+        fast.add_samples(batch)
+        slow.add_samples(batch)
+        for a, b in zip((fast.time, *fast._value_buffers()), (slow.time, *slow._value_buffers())):
+            assert a.total == b.total and np.array_equal(a.views(), b.views())
+        assert (fast.active_outputs, fast.active_inputs, fast.proc_values, fast.running,
+                fast.last_sample, fast.version) == (slow.active_outputs, slow.active_inputs,
+                                                     slow.proc_values, slow.running,
+                                                     slow.last_sample, slow.version)
+    assert held > 10                         # the short way was taken
+
+
+def test_ring_buffer_repeats_its_last_row_across_the_wrap():
+    rb = RingBuffer(5, 2)
+    rb.repeat_last(3)                        # nothing written yet: nothing to repeat
+    assert rb.total == 0
+    rb.extend(np.array([[1, 10], [2, 20], [3, 30]]))
+    rb.repeat_last(4)
+    assert rb.total == 7 and rb.view(0).tolist() == [3, 3, 3, 3, 3]
+    assert rb.views(last=6).shape == (2, 5)
+    rb.append((4, 40))
+    rb.repeat_last(12)                       # more than the capacity
+    assert rb.total == 20 and rb.view(1).tolist() == [40] * 5 and rb.latest().tolist() == [4, 40]
+
+
 def test_model_keeps_messages_bounded():
     m = RunModel(capacity=10, messages=50)
     rows = m.add_events([ev.Message(t, 131, None, 1, 2, "M03") for t in range(120)]
@@ -351,6 +399,48 @@ def test_inputs_panel_sends_and_shows(qtbot, panels, fake):
     fake.sig_disconnected.emit("the controller process was killed (SIGKILL)")
     assert not inputs.grid_host.isEnabled()
     assert "Disconnected" in panels.proc.status.text()
+
+
+@pytest.mark.parametrize("target", ["huazhong", "mycnc"])
+@pytest.mark.parametrize("width", [420, 300])
+def test_the_inputs_grid_fits_its_dock_with_long_pin_names(qtbot, panels, target, width):
+    """Wave 2 of issue 26: on a Huazhong project the bank-bit labels
+    (``10  X1.2 INPUT_LIMIT_MIN_X``) made the Inputs dock's grid wider than the
+    dock, with a horizontal scroll bar. The labels fit: the bank bit is the
+    head (not the pin number too), and a name too long for its toggle goes
+    without its INPUT_ and is shortened in its middle; the tooltip and the
+    filter have it whole."""
+    panels.set_target(target)
+    panels.set_pin_names(default_pin_names()[0], {})
+    dock = panels.dock("inputs")
+    dock.setFloating(True)
+    dock.resize(width, 500)
+    dock.show()
+    qtbot.waitExposed(dock)
+    QtWidgets.QApplication.processEvents()
+    inputs = panels.inputs
+    scroll = inputs.findChild(QtWidgets.QScrollArea)
+    assert not scroll.horizontalScrollBar().isVisible()
+    assert inputs.grid_host.width() <= scroll.viewport().width()
+    shown = inputs.shown_pins()
+    assert 10 in shown
+    b = inputs.button(10)
+    head = "X1.2" if target == "huazhong" else "10"
+    assert b.text() == f"{head}  INPUT_LIMIT_MIN_X"          # the whole label
+    assert "INPUT_LIMIT_MIN_X" in b.toolTip() and "Input 10" in b.toolTip()
+    for pin in shown:
+        t = inputs.button(pin)
+        assert t.isVisible() and t.geometry().right() <= inputs.grid_host.width()
+        drawn = t.shown_text()
+        assert drawn.startswith(t.head)
+        assert t.fontMetrics().horizontalAdvance(drawn) <= t.width() - t._chrome()
+    if width == 300:                     # too narrow for the whole name: shortened
+        assert b.shown_text() != b.text() and b.shown_text().endswith("_X")
+    inputs.filter.setText("limit_min_x")
+    assert inputs.shown_pins() == [10]
+    if target == "huazhong":
+        inputs.filter.setText("x1.2")
+        assert inputs.shown_pins() == [10]
 
 
 def test_watch_panel_orders_and_follows(qtbot, panels, fake):

@@ -14,6 +14,7 @@ causes of CPU use found by profiling, each pinned down without timing.
 from __future__ import annotations
 
 import math
+import time
 
 import pytest
 
@@ -141,6 +142,41 @@ def test_a_put_off_move_comes_back_when_due(qtbot, tabbed):
     qtbot.waitUntil(lambda: lanes.moves == moves + 1, timeout=2000)
     assert lanes.offset == pytest.approx(2.1)
     qtbot.waitUntil(lambda: not p.timer.isActive(), timeout=2000)
+
+
+def test_time_only_telemetry_costs_one_redraw_tick_a_batch(qtbot, tabbed):
+    """Issue 26.4 (measured on a real X server: a fifth of the IDE's processor
+    time went to redraw ticks that did nothing): LUBE at 1x sends about ten
+    batches a second that only advance time, each to cost one tick of the
+    redraw timer, the move. A move leaves no follow-up frame; a batch does
+    not wake the timer while a move is due anyway (but one that changes a
+    value does); a move that comes a moment early is done, not put off."""
+    p, fake = tabbed
+    _idle_history(p, fake, 2.0, 5000, 10)
+    lanes = p.lanes
+    fake.sig_samples.emit([sample(5000, outputs=0, running=None)])     # only time advances
+    lanes._last_move = 0.0
+    p.tick()
+    moves = lanes.moves
+    assert moves >= 1 and not p.timer.isActive()          # no frame after the move
+    # a move put off: the timer waits for it; time-only telemetry leaves it be
+    fake.sig_samples.emit([sample(5050, outputs=0, running=None)])
+    p.tick()
+    assert lanes.move_due() is not None and p.timer.isActive()
+    waiting = p.timer.interval()
+    assert waiting > p.frame_ms
+    fake.sig_samples.emit([sample(5060, outputs=0, running=None)])
+    assert p.timer.interval() == waiting
+    # a value that changed is drawn at the next frame, not at the move
+    fake.sig_samples.emit([sample(5070, outputs=1, running=None)])
+    assert p.timer.interval() == p.frame_ms
+    p.tick()
+    # a move due within a quarter of the scroll period is done at once
+    fake.sig_samples.emit([sample(5200, outputs=1, running=None)])
+    lanes._last_move = time.monotonic() - 0.9 / lanes.SCROLL_FPS
+    moves = lanes.moves
+    p.tick()
+    assert lanes.moves == moves + 1 and not p.timer.isActive()
 
 
 def test_less_than_a_pixel_does_not_move(qtbot, tabbed):

@@ -92,12 +92,22 @@ def test_the_trees_descriptions_come_after_the_first_paint_a_batch_at_a_time(
         return [it.text(0) for it in tree._all_items() if it.data(0, ROLE_DESCRIPTION)]
 
     assert described() == [] and tree.describing() and w.busy()
+    # counted after each turn that reads some (polling would see several turns
+    # at once on a busy machine)
+    counts, painted_then = [], []
+    describe_some = tree._describe_some
+
+    def counted(batch):
+        painted_then.append(w._painted)
+        describe_some(batch)
+        counts.append(len(described()))
+    tree._describe_some = counted
     qtbot.waitUntil(lambda: w._painted)
-    qtbot.waitUntil(lambda: 0 < len(described()))
-    first = len(described())
-    assert first <= DESCRIBE_BATCH                      # the rest on later turns
     _workbench.settle(qtbot, w)
-    assert not tree.describing() and len(described()) > first
+    assert not tree.describing() and len(counts) >= 2 and all(painted_then)
+    assert counts[0] <= DESCRIBE_BATCH                   # the rest on later turns
+    assert all(b - a <= DESCRIBE_BATCH for a, b in zip(counts, counts[1:]))
+    assert counts[-1] > counts[0]
     assert tree.find_item("S007").data(0, ROLE_DESCRIPTION) == "job number 7"
     assert tree.find_item("M03").data(0, ROLE_DESCRIPTION) == "spindle on, clockwise"
     # once painted, a refresh reads them on the next turns, not before returning
@@ -195,3 +205,54 @@ def test_pysides_source_check_answers_as_its_own_without_inspect(monkeypatch):
         raise AssertionError(f"inspect.getsource({obj!r})")
     monkeypatch.setattr(inspect, "getsource", no_getsource)
     assert [quick(m) for m in mods] == theirs
+
+
+def test_the_last_session_shows_its_current_editor_first_and_compiles_after_the_paint(
+        qtbot, make_window, tmp_path):
+    """Issue 26.5: until the window's first paint only the current editor of
+    the last session is made, nothing is compiled in the background (the
+    diagnostics thread held the interpreter, and the main thread waited for
+    its lock while it loaded the compiler) and the outline waits; then the
+    other editors come in their places, with every check."""
+    from plcbuilder.ide.settings import Settings
+    project = create_project(tmp_path / "example").root
+    files = [str(project / "hardware" / n) for n in ("M03.plc", "M05.plc")] + \
+        [str(project / "software" / "LUBE.plc")]
+    st = Settings(str(tmp_path / "config" / "settings.ini"))
+    st.save_session(project, files, files[1])
+    st.sync()
+    w = make_window()
+    compiled = []
+    w.lint.worker.sig_result.connect(lambda key, result: compiled.append(key))
+    assert not w._painted and w.isVisible()
+    w.open_project(project)
+    assert [e.path for e in w.editors()] == [files[1]] and w.busy()
+    worker = w.lint.worker
+    assert worker._held and list(worker._queue) and compiled == []   # queued, not compiled
+    assert w.workbench.outline.items == []
+    qtbot.waitUntil(lambda: w._painted and not w.busy(), timeout=20000)
+    assert not worker._held and len(set(compiled)) >= 3
+    assert [e.path for e in w.editors()] == files            # in their places
+    assert w.current_editor().path == files[1]
+    assert w.workbench.outline.items                         # outlined once painted
+
+
+def test_the_embedded_controller_process_starts_before_the_first_paint(
+        qtbot, make_window, tmp_path):
+    """Issue 26.5: the controller's own Python start is the longest part of
+    the run panels coming live: its process starts when the project opens
+    (before the paint, on the other core); the connection made after the
+    paint uses that process, not another."""
+    project = create_project(tmp_path / "example").root
+    w = make_window(start_controller=True)
+    assert not w._painted
+    w.open_project(project)
+    conn = w.connection
+    pre = conn._prestarted
+    assert pre is not None and pre[1].alive() and conn._worker is None   # not connected yet
+    pid = pre[1].pid
+    qtbot.waitUntil(lambda: w.connected(), timeout=30000)
+    assert conn.child_pid == pid and conn._prestarted is None
+    # another project before the paint would have dropped it; after: a new one
+    w.shutdown()
+    qtbot.waitUntil(lambda: not pre[1].alive(), timeout=10000)

@@ -177,7 +177,7 @@ def test_export_trace_one_bit_lanes_for_pulseview(runwin, qtbot, captures, tmp_p
     a, _b, _plain = captures
     trace_actions.open_trace(w, str(a))
     out = tmp_path / "lanes"
-    chosen = [f for f in trace_actions.EXPORT_FILTER.split(";;") if "one-bit" in f][0]
+    chosen = [f for f in trace_actions.export_filter().split(";;") if "one-bit" in f][0]
     monkeypatch.setattr(QFileDialog, "getSaveFileName", lambda *a, **k: (str(out), chosen))
     w.action(Act.EXPORT_TRACE).trigger()
     vcd = tmp_path / "lanes.vcd"
@@ -188,7 +188,7 @@ def test_export_trace_one_bit_lanes_for_pulseview(runwin, qtbot, captures, tmp_p
                            capture_output=True, text=True, timeout=120, check=True)
         rows = [ln for ln in r.stdout.splitlines() if ln[:1] in ("0", "1")]
         assert len(rows) == PRE + POST
-    plain_filter = [f for f in trace_actions.EXPORT_FILTER.split(";;") if "GTKWave" in f][0]
+    plain_filter = [f for f in trace_actions.export_filter().split(";;") if "GTKWave" in f][0]
     monkeypatch.setattr(QFileDialog, "getSaveFileName",
                         lambda *a, **k: (str(tmp_path / "whole"), plain_filter))
     w.action(Act.EXPORT_TRACE).trigger()

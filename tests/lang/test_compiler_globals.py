@@ -65,3 +65,39 @@ def test_concurrent_compiles_restore_the_limit_once_all_have_ended(default_limit
         t.join()
     assert results == [True] * 12
     assert sys.getrecursionlimit() == default_limit
+
+
+def test_the_collector_is_paused_while_compiling_and_back_after():
+    """Issue 24.1/26: a compile pauses Python's cyclic garbage collector (it
+    took a third of a compile's time going through the tokens and nodes a
+    compile keeps) and puts it back as it was, concurrent compiles included."""
+    import gc
+    seen = []
+
+    class Spy(pipeline.Checker):
+        def run(self):
+            seen.append(gc.isenabled())
+            return super().run()
+
+    old = pipeline.Checker
+    pipeline.Checker = Spy
+    try:
+        assert gc.isenabled()
+        assert compile_source("main(){ exit(99); };", "M1.plc").ok
+        assert seen == [False] and gc.isenabled()
+        gc.disable()                                  # a caller that had it off keeps it off
+        compile_source("main(){ exit(99); };", "M1.plc")
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+        pipeline.Checker = old
+
+    def work():
+        for _ in range(5):
+            compile_source(define_chain(50), "M1.plc")
+    threads = [threading.Thread(target=work) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert gc.isenabled()

@@ -4,6 +4,7 @@ programs never give anything but diagnostics. (scripts/fuzz.py runs longer.)"""
 import random
 
 import lark
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.lark import from_lark
@@ -24,6 +25,7 @@ PROGRAMS = from_lark(GRAMMAR, explicit={"NAME": NAMES, "NUMBER": NUMBERS,
                                         "COMMENT": st.sampled_from(["//c\n", "/* c */"])})
 
 
+@pytest.mark.slow
 @settings(max_examples=2000, deadline=None, database=None,
           suppress_health_check=list(HealthCheck))
 @given(PROGRAMS)
@@ -31,6 +33,7 @@ def test_grammar_generated_programs(text):
     check_one(text.encode("utf-8", "surrogatepass"))
 
 
+@pytest.mark.slow
 def test_mutated_programs():
     rng = random.Random(20261121)
     corpus = seeds()
@@ -39,6 +42,7 @@ def test_mutated_programs():
         check_one(data, software=i % 5 == 0, strict=i % 7 == 0)
 
 
+@pytest.mark.slow
 def test_large_programs():
     """Programs around and beyond what 16-bit code addresses reach (64 KiB of
     code, 32 KiB jumps), under the default and raised limits: a diagnostic,

@@ -1,13 +1,15 @@
 """Compiling an edited file incrementally (diagnostics while typing) gives
 exactly what a compile from scratch gives: many random edits — tokens and
 lines inserted and deleted, syntax broken and fixed again, headers edited —
-applied to the golden programs, each compared with compile_source."""
+applied to the golden programs, each compared with compile_source.
+
+The edits are a fixed number from fixed seeds, never "as many as fit in
+a few seconds": a failure is the same on every machine and can be replayed."""
 
 from __future__ import annotations
 
 import dataclasses
 import random
-import time
 from pathlib import Path
 
 import pytest
@@ -75,15 +77,12 @@ def _programs() -> list[Path]:
     return sorted(GOLDEN.rglob("*.plc"))
 
 
-def _run_edits(rng, text: str, path: str, options: CompileOptions, edits: int, seconds: float,
+def _run_edits(rng, text: str, path: str, options: CompileOptions, edits: int,
                on_edit=None) -> int:
     inc = Incremental()
     history = [text]
-    end = time.monotonic() + seconds
     done = 0
     for step in range(edits):
-        if time.monotonic() > end:
-            break
         if len(history) > 2 and rng.random() < 0.25:
             text = history[-2]             # undo: syntax broken, then fixed again
         else:
@@ -104,15 +103,47 @@ def test_random_edits_of_the_golden_programs(seed):
     programs = _programs()
     rng.shuffle(programs)
     total = 0
-    end = time.monotonic() + 4.0
     for p in programs:
-        if time.monotonic() > end:
-            break
         text = p.read_text(encoding="utf-8")
         options = CompileOptions(kind=Kind.SOFTWARE if "--software" in text else Kind.HARDWARE,
                                  strict="--strict" in text)
-        total += _run_edits(rng, text, p.name, options, 15, 1.5)
-    assert total >= 10
+        total += _run_edits(rng, text, p.name, options, 15)
+    assert total == 15 * len(programs) >= 15 * 70
+
+
+#: nesting near and past the limit: a bracket more or less, a run of '!' or
+#: '-' on top of brackets, blocks in blocks (the parser cuts what is too deep)
+DEEP_PIECES = ["(((", ")))", "((((((((", "))))))))", "!!!!!!!!", "- - - - ", "{{{{", "}}}}",
+               "if (x) { ", "} ", "if (x) ", "else ", "exit(a);", ";"]
+
+
+def _deep_programs() -> list[tuple[str, str]]:
+    golden = [(p.name, p.read_text(encoding="utf-8")) for p in sorted((GOLDEN / "limits").glob("deep_*.plc"))]
+    nested = "    if (x) { if (x) { if (x) { if (x) { b = c + d; exit(a); }}}}\n"
+    return golden + [
+        ("unary_on_brackets.plc", "main()\n{\n    a = " + "!" * 8 + "(" * 248 + "1" + ")" * 248 + ";\n"
+         + nested * 20 + "    exit(a);\n};\n"),
+        ("deep_then_more.plc", "main()\n{\n    a = " + "-" * 300 + "1;\n" + nested * 20 + "};\n"
+         "second()\n{\n    a = " + "(" * 200 + "b" + ")" * 200 + ";\n};\n")]
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_random_edits_of_deeply_nested_programs(seed):
+    """Edits that take nesting past the limit and back (where the parser cuts
+    subtrees off and a stale depth once turned a later statement Empty)."""
+    for name, text in _deep_programs():
+        rng = random.Random(f"{seed}/{name}")
+        inc = Incremental()
+        for step in range(20):
+            if rng.random() < 0.5:
+                piece = rng.choice(DEEP_PIECES)
+                pos = rng.randrange(len(text) + 1)
+                text = text[:pos] + piece + text[pos:]
+            else:
+                text = _edit(rng, text)
+            full = compile_source(text, name, CompileOptions())
+            got = compile_source(text, name, CompileOptions(), incremental=inc)
+            _assert_same(got, full, f"{name}, seed {seed}, edit {step}:\n{text}")
 
 
 def _long_program(procs: int) -> str:
@@ -126,7 +157,7 @@ def _long_program(procs: int) -> str:
 
 def test_random_edits_of_a_long_program():
     rng = random.Random(7)
-    assert _run_edits(rng, _long_program(40), "P.plc", CompileOptions(), 40, 4.0) >= 5
+    assert _run_edits(rng, _long_program(40), "P.plc", CompileOptions(), 40) == 40
 
 
 def test_random_edits_of_a_header_and_the_file(tmp_path):
@@ -144,7 +175,7 @@ def test_random_edits_of_a_header_and_the_file(tmp_path):
             header.write_text(_edit(rng, h) if rng.random() < 0.7 else
                               h + rng.choice(["#define EXTRA 1\n", "#define LIMIT 11\n", "x()\n{\n};\n",
                                               "/* open\n", "#ifdef BIT\n"]))
-    assert _run_edits(rng, text, str(main), CompileOptions(), 40, 4.0, edit_header) >= 5
+    assert _run_edits(rng, text, str(main), CompileOptions(), 40, edit_header) == 40
 
 
 def test_parse_reuses_the_items_the_edit_did_not_reach():

@@ -167,6 +167,7 @@ def _cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
+@pytest.mark.slow
 def test_after_max_speed_real_time_costs_what_it_did_before():
     """Issue 23 point 3: a busy procedure at Max for a while, then 1x: within
     2 s the simulated clock follows the wall clock and the process costs what

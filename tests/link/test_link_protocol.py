@@ -138,3 +138,27 @@ def test_random_json_values_never_escape_as_other_errors():
             decode_payload(json.dumps(obj).encode(), protocol.REQUESTS)
         except ProtocolError:
             pass
+
+
+def test_one_reading_of_a_speed_for_the_command_line_and_the_ide():
+    """`controller --speed` and the IDE's Speed box read a speed the same way
+    (issue 28: speed parsing lived in two places that disagreed: the IDE took
+    "1x" and "fast", the command line did not)."""
+    import argparse
+
+    from plcbuilder.cli.cmd_controller import parse_speed as cli_speed
+    from plcbuilder.link.protocol import parse_speed
+
+    assert parse_speed("realtime") == ("realtime", None)
+    assert parse_speed("1x") == parse_speed(1) == parse_speed("1") == ("realtime", None)
+    assert parse_speed("10") == parse_speed(10) == ("factor", 10.0)
+    assert parse_speed("2.5x") == parse_speed("2.5×") == ("factor", 2.5)
+    assert parse_speed("max") == parse_speed("fast") == ("max", None)
+    assert parse_speed("pause") == parse_speed("Paused") == ("pause", None)
+    for bad in ("warp", "1e9", "nan", "0", "-3", True):
+        with pytest.raises(ValueError, match="speed"):
+            parse_speed(bad)
+    assert cli_speed("1x") == ("realtime", 1.0) and cli_speed("fast") == ("max", 1.0)
+    assert cli_speed("10") == ("factor", 10.0)
+    with pytest.raises(argparse.ArgumentTypeError, match="out of range"):
+        cli_speed("1e9")

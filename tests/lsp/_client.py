@@ -29,12 +29,16 @@ def frame(obj) -> bytes:
 
 
 class Client:
-    """Frames out, frames in; ``messages`` queues what the server sent."""
+    """Frames out, frames in; ``messages`` queues what the server sent.
+    ``check(message)`` (when given) is called on every message received."""
+
+    check = None
 
     def __init__(self, proc: subprocess.Popen):
         self.proc = proc
         self.messages: "queue.Queue[dict]" = queue.Queue()
         self.seen: list[dict] = []
+        self.arrived: list[dict] = []
         self._next = 0
         threading.Thread(target=self._read, daemon=True).start()
 
@@ -51,8 +55,11 @@ class Client:
                 name, _, value = line.decode("ascii").partition(":")
                 if name.strip().lower() == "content-length":
                     length = int(value.strip())
-            body = out.read(length)
-            self.messages.put(json.loads(body))
+            self._got(json.loads(out.read(length)))
+
+    def _got(self, msg: dict) -> None:
+        """One message read (on the reader thread): queued for :meth:`wait`."""
+        self.messages.put(msg)
 
     # ------------------------------------------------------------ sending
     def send_raw(self, data: bytes) -> None:
@@ -82,6 +89,9 @@ class Client:
                 m = self.messages.get(timeout=left)
             except queue.Empty:
                 continue
+            self.arrived.append(m)
+            if self.check is not None:
+                self.check(m)
             if pred(m):
                 return m
             self.seen.append(m)
@@ -99,8 +109,19 @@ class Client:
 
 
 class LspClient(Client):
+    """Every message the server sends is checked against lsprotocol's
+    structures (:func:`conform`)."""
+
+    def __init__(self, proc: subprocess.Popen):
+        self.methods: dict = {}            # request id -> method, to check the responses
+        super().__init__(proc)
+
+    def check(self, m: dict) -> None:
+        conform(m, self.methods)
+
     def request(self, method: str, params=None, timeout: float = 60.0) -> dict:
         mid = self.next_id()
+        self.methods[mid] = method
         self.send({"jsonrpc": "2.0", "id": mid, "method": method, "params": params})
         return self.wait(lambda m: m.get("id") == mid and "method" not in m, timeout)
 
@@ -116,3 +137,94 @@ class LspClient(Client):
         m = self.wait(lambda m: m.get("method") == "textDocument/publishDiagnostics"
                       and m["params"]["uri"] == uri and pred(m["params"]["diagnostics"]), timeout)
         return m["params"]["diagnostics"]
+
+
+_CONVERTER = None
+
+
+def conform(m: dict, methods: dict = None):
+    """Structure one message the server sent with lsprotocol's own cattrs
+    converter, as a typed client reads it: a notification or request by its
+    method, a response by the method of the request (when known), an error
+    response as ResponseErrorMessage. Raises when it does not fit."""
+    global _CONVERTER
+    from lsprotocol import converters
+    from lsprotocol import types as T
+    if _CONVERTER is None:
+        _CONVERTER = converters.get_converter()
+    assert m.get("jsonrpc") == "2.0", m
+    if "method" in m:
+        types = T.METHOD_TO_TYPES.get(m["method"])
+        assert types is not None, f"a method LSP does not have: {m['method']}"
+        return _CONVERTER.structure(m, types[0])
+    assert "id" in m, m
+    if "error" in m:
+        assert "result" not in m, m
+        err = _CONVERTER.structure(m, T.ResponseErrorMessage)
+        assert isinstance(err.error.code, int) and err.error.message, m
+        return err
+    method = (methods or {}).get(m["id"])
+    types = T.METHOD_TO_TYPES.get(method) if method else None
+    if types is None or types[1] is None:
+        return m
+    return _CONVERTER.structure(m, types[1])
+
+
+# ---------------------------------------------------------------- a project and a session
+HEADER = "#define MY_PIN 7\n#define MY_REG 7500\n"
+M03 = ("#include my.h\n"
+       "main()\n"
+       "{\n"
+       "  code = gvarset(6060);\n"
+       "  portset(MY_PIN);\n"
+       "  speed = gvarget(0x17ac);\n"
+       "  gvarset(MY_REG, speed + code);\n"
+       "  exit(99);\n"
+       "};\n")
+M04 = "#include my.h\nmain() { portclr(MY_PIN); exit(99); };\n"
+
+
+def make_project(root: Path, settings: str = 'name = "t"\n') -> Path:
+    """A project: include/my.h, hardware/M03.plc and M04.plc that include it."""
+    (root / "hardware").mkdir(parents=True)
+    (root / "software").mkdir()
+    (root / "include").mkdir()
+    (root / "plcbuilder.toml").write_text(settings)
+    (root / "include" / "my.h").write_text(HEADER)
+    (root / "hardware" / "M03.plc").write_text(M03)
+    (root / "hardware" / "M04.plc").write_text(M04)
+    return root
+
+
+def start_server(root: Path, *args: str, root_uri="same") -> LspClient:
+    """``plcbuilder lsp ARGS`` started in ``root`` and initialized with it as the
+    workspace (or ``root_uri``)."""
+    c = LspClient(spawn("lsp", *args, cwd=root))
+    caps = c.result("initialize", {"processId": None,
+                                   "rootUri": root.as_uri() if root_uri == "same" else root_uri,
+                                   "capabilities": {}})["capabilities"]
+    c.notify("initialized", {})
+    c.caps = caps
+    return c
+
+
+def open_doc(c: LspClient, path: Path, text: str = None, version: int = 1,
+             language: str = "plc") -> str:
+    text = path.read_text() if text is None else text
+    c.notify("textDocument/didOpen", {"textDocument": {
+        "uri": path.as_uri(), "languageId": language, "version": version, "text": text}})
+    return path.as_uri()
+
+
+def stop_server(c: LspClient) -> int:
+    """shutdown, exit; the server's exit status."""
+    try:
+        c.result("shutdown")
+        c.notify("exit")
+    finally:
+        c.close()
+    return c.proc.returncode
+
+
+def at(uri: str, line: int, character: int) -> dict:
+    return {"textDocument": {"uri": uri}, "position": {"line": line, "character": character}}

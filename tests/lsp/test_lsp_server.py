@@ -12,60 +12,17 @@ import pytest
 from plcbuilder import api
 from plcbuilder.lang import hover as lang_hover
 
-from tests.lsp._client import LspClient, frame, spawn
-
-HEADER = "#define MY_PIN 7\n#define MY_REG 7500\n"
-M03 = ("#include my.h\n"
-       "main()\n"
-       "{\n"
-       "  code = gvarset(6060);\n"
-       "  portset(MY_PIN);\n"
-       "  speed = gvarget(0x17ac);\n"
-       "  gvarset(MY_REG, speed + code);\n"
-       "  exit(99);\n"
-       "};\n")
-M04 = "#include my.h\nmain() { portclr(MY_PIN); exit(99); };\n"
-
-
-def _project(root: Path, settings: str = 'name = "t"\n') -> Path:
-    (root / "hardware").mkdir(parents=True)
-    (root / "software").mkdir()
-    (root / "include").mkdir()
-    (root / "plcbuilder.toml").write_text(settings)
-    (root / "include" / "my.h").write_text(HEADER)
-    (root / "hardware" / "M03.plc").write_text(M03)
-    (root / "hardware" / "M04.plc").write_text(M04)
-    return root
-
-
-def _start(root: Path) -> LspClient:
-    c = LspClient(spawn("lsp", cwd=root))
-    caps = c.result("initialize", {"processId": None, "rootUri": root.as_uri(),
-                                   "capabilities": {}})["capabilities"]
-    c.notify("initialized", {})
-    c.caps = caps
-    return c
-
-
-def _open(c: LspClient, path: Path, text: str = None, version: int = 1) -> str:
-    text = path.read_text() if text is None else text
-    c.notify("textDocument/didOpen", {"textDocument": {
-        "uri": path.as_uri(), "languageId": "plc", "version": version, "text": text}})
-    return path.as_uri()
-
-
-def _at(uri: str, line: int, character: int) -> dict:
-    return {"textDocument": {"uri": uri}, "position": {"line": line, "character": character}}
+from tests.lsp._client import HEADER, M03, at, frame, make_project, open_doc, spawn, start_server
 
 
 @pytest.fixture
 def project(tmp_path):
-    return _project(tmp_path / "proj")
+    return make_project(tmp_path / "proj")
 
 
 @pytest.fixture
 def client(project):
-    c = _start(project)
+    c = start_server(project)
     yield c
     try:
         c.result("shutdown")
@@ -90,7 +47,7 @@ def test_diagnostics_are_the_checkers_own(client, project):
     """Diagnostics on open, on change and on save, with the compiler's codes,
     messages and hints, at the compiler's spans."""
     path = project / "hardware" / "M03.plc"
-    uri = _open(client, path)
+    uri = open_doc(client, path)
     got = client.diagnostics(uri)
     want = api.compile_file(path, api.Project.open(project).compile_options(path)).diagnostics
     assert [(d["code"], d["message"].split("\nhint: ")[0]) for d in got] == \
@@ -122,13 +79,13 @@ def test_header_diagnostics_and_unsaved_headers(client, project):
     header = project / "include" / "my.h"
     huri = header.as_uri()
     bad = HEADER + "#define MY_PIN_B 8\nhelper() { q = 1 / 0 + ; }\n"
-    _open(client, header, bad)
+    open_doc(client, header, bad)
     got = client.diagnostics(huri, pred=lambda ds: len(ds) > 0)
     codes = {d["code"] for d in got}
     assert "define-substring" in codes or any("MY_PIN_B" in d["message"] for d in got)
     assert any(d["severity"] == 1 and d["range"]["start"]["line"] == 3 for d in got)
     # the procedure sees the header's unsaved text too: MY_PIN removed -> a variable
-    uri = _open(client, project / "hardware" / "M04.plc")
+    uri = open_doc(client, project / "hardware" / "M04.plc")
     assert client.diagnostics(uri) == []
     client.notify("textDocument/didChange", {
         "textDocument": {"uri": huri, "version": 2},
@@ -143,12 +100,12 @@ def test_header_diagnostics_and_unsaved_headers(client, project):
 def test_project_settings_are_read(tmp_path):
     """strict = true in the nearest plcbuilder.toml checks as the controller
     does; an unreadable settings file is reported on that file."""
-    root = _project(tmp_path / "p", 'name = "t"\n[build]\nstrict = true\n')
+    root = make_project(tmp_path / "p", 'name = "t"\n[build]\nstrict = true\n')
     path = root / "hardware" / "M05.plc"
     path.write_text("main() { if (eparam) a = 1; else a = 2; exit(a); }\n")
-    c = _start(root)
+    c = start_server(root)
     try:
-        uri = _open(c, path)
+        uri = open_doc(c, path)
         got = c.diagnostics(uri)
         assert any(d["code"] == "strict" and "'else'" in d["message"] for d in got)
         (root / "plcbuilder.toml").write_text('name = "t"\nbogus = 1\n')
@@ -161,60 +118,60 @@ def test_project_settings_are_read(tmp_path):
 
 
 def test_hover_gives_the_ides_text(client, project):
-    uri = _open(client, project / "hardware" / "M03.plc")
-    h = client.result("textDocument/hover", _at(uri, 3, 18))        # 6060
+    uri = open_doc(client, project / "hardware" / "M03.plc")
+    h = client.result("textDocument/hover", at(uri, 3, 18))        # 6060
     assert h["contents"]["value"] == lang_hover.hover_text("6060", "  code = gvarset(")
     assert "GVAR_CURRENT_MOTION_CODE" in h["contents"]["value"]
-    h = client.result("textDocument/hover", _at(uri, 4, 12))        # MY_PIN
+    h = client.result("textDocument/hover", at(uri, 4, 12))        # MY_PIN
     assert h["contents"]["value"].startswith("#define MY_PIN 7")
     assert "my.h:1" in h["contents"]["value"]
-    h = client.result("textDocument/hover", _at(uri, 4, 4))         # portset
+    h = client.result("textDocument/hover", at(uri, 4, 4))         # portset
     assert h["contents"]["value"].startswith("portset(pin) — built-in function")
-    assert client.result("textDocument/hover", _at(uri, 2, 0)) is None   # "{"
+    assert client.result("textDocument/hover", at(uri, 2, 0)) is None   # "{"
 
 
 def test_completion_and_signatures(client, project):
-    uri = _open(client, project / "hardware" / "M03.plc", M03.replace("  exit(99);", "  gv\n  exit(99);"))
-    items = client.result("textDocument/completion", _at(uri, 7, 4))["items"]
+    uri = open_doc(client, project / "hardware" / "M03.plc", M03.replace("  exit(99);", "  gv\n  exit(99);"))
+    items = client.result("textDocument/completion", at(uri, 7, 4))["items"]
     by = {i["label"]: i for i in items}
     assert {"gvarget", "gvarset"} <= set(by)
     assert by["gvarset"]["detail"] == "gvarset(addr, value)"
     assert "returns nothing" in by["gvarset"]["documentation"]["value"]
-    items = client.result("textDocument/completion", _at(uri, 4, 13))["items"]
+    items = client.result("textDocument/completion", at(uri, 4, 13))["items"]
     assert "MY_PIN" in {i["label"] for i in items}
-    sig = client.result("textDocument/signatureHelp", _at(uri, 6, 18))   # gvarset(MY_REG, |
+    sig = client.result("textDocument/signatureHelp", at(uri, 6, 18))   # gvarset(MY_REG, |
     assert sig["signatures"][0]["label"] == "gvarset(addr, value)"
     assert sig["activeParameter"] == 1
 
 
 def test_definition_references_and_rename(client, project):
-    uri = _open(client, project / "hardware" / "M03.plc")
-    loc = client.result("textDocument/definition", _at(uri, 4, 12))
+    uri = open_doc(client, project / "hardware" / "M03.plc")
+    loc = client.result("textDocument/definition", at(uri, 4, 12))
     assert loc["uri"] == (project / "include" / "my.h").as_uri()
     assert loc["range"]["start"] == {"line": 0, "character": 8}
-    loc = client.result("textDocument/definition", _at(uri, 6, 22))    # speed
+    loc = client.result("textDocument/definition", at(uri, 6, 22))    # speed
     assert loc["uri"] == uri and loc["range"]["start"]["line"] == 5
     refs = client.result("textDocument/references",
-                         dict(_at(uri, 4, 12), context={"includeDeclaration": True}))
+                         dict(at(uri, 4, 12), context={"includeDeclaration": True}))
     files = sorted({Path(r["uri"][7:]).name for r in refs})
     assert files == ["M03.plc", "M04.plc", "my.h"]
-    edit = client.result("textDocument/rename", dict(_at(uri, 4, 12), newName="LAMP"))
+    edit = client.result("textDocument/rename", dict(at(uri, 4, 12), newName="LAMP"))
     changes = edit["changes"]
     assert len(changes[(project / "include" / "my.h").as_uri()]) == 1
     assert len(changes[(project / "hardware" / "M04.plc").as_uri()]) == 1
     # a variable is the file's own
-    edit = client.result("textDocument/rename", dict(_at(uri, 5, 3), newName="feed"))
+    edit = client.result("textDocument/rename", dict(at(uri, 5, 3), newName="feed"))
     assert list(edit["changes"]) == [uri] and len(edit["changes"][uri]) == 2
     # built-in names cannot be renamed, and a new name must be a name
-    assert client.result("textDocument/prepareRename", _at(uri, 4, 4)) is None
-    err = client.request("textDocument/rename", dict(_at(uri, 4, 4), newName="x"))
+    assert client.result("textDocument/prepareRename", at(uri, 4, 4)) is None
+    err = client.request("textDocument/rename", dict(at(uri, 4, 4), newName="x"))
     assert "built in" in err["error"]["message"]
-    err = client.request("textDocument/rename", dict(_at(uri, 5, 3), newName="2x"))
+    err = client.request("textDocument/rename", dict(at(uri, 5, 3), newName="2x"))
     assert "not a name" in err["error"]["message"]
 
 
 def test_symbols_tokens_and_inlay_hints(client, project):
-    uri = _open(client, project / "hardware" / "M03.plc")
+    uri = open_doc(client, project / "hardware" / "M03.plc")
     syms = client.result("textDocument/documentSymbol", {"textDocument": {"uri": uri}})
     assert [(s["name"], s["kind"]) for s in syms] == [("main", 12), ("code", 13), ("speed", 13)]
     legend = client.caps["semanticTokensProvider"]["legend"]["tokenTypes"]
@@ -241,16 +198,16 @@ def test_utf16_columns(client, project):
     """A character outside the BMP counts two UTF-16 units, as the client counts."""
     path = project / "hardware" / "M06.plc"
     text = "main() { /* 😀 */ x = 1; exit(99); }\n"
-    uri = _open(client, path, text)
+    uri = open_doc(client, path, text)
     got = client.diagnostics(uri)
     never = next(d for d in got if d["code"] == "never-read")
     assert never["range"]["start"]["character"] == text.index("x") + 1
-    h = client.result("textDocument/hover", _at(uri, 0, text.index("x") + 1))
+    h = client.result("textDocument/hover", at(uri, 0, text.index("x") + 1))
     assert "variable of this file" in h["contents"]["value"]
 
 
 def test_bad_input_gets_errors_and_the_server_keeps_serving(client, project):
-    uri = _open(client, project / "hardware" / "M03.plc")
+    uri = open_doc(client, project / "hardware" / "M03.plc")
     client.diagnostics(uri)
     client.send_raw(frame(b"{not json"))
     assert client.wait(lambda m: m.get("error", {}).get("code") == -32700)["id"] is None
@@ -274,7 +231,7 @@ def test_bad_input_gets_errors_and_the_server_keeps_serving(client, project):
     client.send({"jsonrpc": "1.0", "id": 99, "method": "x"})
     assert client.wait(lambda m: m.get("id") == 99)["error"]["code"] == -32600
     # and it still answers
-    h = client.result("textDocument/hover", _at(uri, 3, 18))
+    h = client.result("textDocument/hover", at(uri, 3, 18))
     assert "GVAR_CURRENT_MOTION_CODE" in h["contents"]["value"]
     assert client.proc.poll() is None
 

@@ -1,6 +1,7 @@
 """``plcbuilder lsp`` in a real editor: Neovim, headless, configured with the
 manual's snippet for Neovim 0.7-0.10 (docs/editors.md), opens a procedure with
-a mistake and asks for hover and go to definition. Skipped where Neovim is not
+a mistake and asks for hover, go to definition, completion (read by Neovim's
+own snippet parser) and a rename it must refuse. Skipped where Neovim is not
 installed (``apt-get install neovim``)."""
 
 from __future__ import annotations
@@ -33,6 +34,25 @@ params.position = { line = 12, character = 12 }
 for _, r in pairs(vim.lsp.buf_request_sync(0, "textDocument/definition", params, 10000) or {}) do
   local loc = r.result[1] or r.result
   table.insert(out, string.format("definition %s:%d", loc.uri, loc.range.start.line + 1))
+end
+params.position = { line = 6, character = 2 }
+local got = vim.lsp.buf_request_sync(0, "textDocument/completion", params, 10000) or {}
+for _, r in pairs(got) do
+  -- Neovim's own reading of the items: a snippet becomes the text it inserts
+  for _, item in ipairs(vim.lsp.util.text_document_completion_list_to_complete_items(r.result, "")) do
+    if item.abbr == "gvarset" or item.abbr == "gvarget" then
+      table.insert(out, "complete " .. item.abbr .. " -> " .. item.word)
+    end
+  end
+end
+params.position = { line = 12, character = 4 }
+params.newName = "x"
+for _, r in pairs(vim.lsp.buf_request_sync(0, "textDocument/rename", params, 10000) or {}) do
+  local err = r.err or r.error                -- (0.7 calls it error, later versions err)
+  if err then
+    table.insert(out, string.format("rename error %d %s data=%s", err.code, err.message,
+                                    tostring(err.data)))
+  end
 end
 local f = io.open(vim.env.PROBE_OUT, "w"); f:write(table.concat(out, "\n")); f:close()
 vim.cmd("qa!")
@@ -74,3 +94,9 @@ def test_neovim_with_the_manuals_snippet_gets_diagnostics_hover_and_definition(t
     assert any(x.startswith("hover pwm01: predefined variable, PWM0 (register 7278)")
                for x in lines), lines
     assert f"definition {(project / 'include' / 'pins.h').as_uri()}:28" in lines, lines
+    # issue 25.13: a placeholder per argument, as Neovim's snippet parser reads it
+    assert "complete gvarset -> gvarset(addr, value)" in lines, lines
+    assert "complete gvarget -> gvarget(addr)" in lines, lines
+    # issue 25.10: renaming a built-in is RequestFailed with the plain sentence
+    assert ("rename error -32803 portset is built in (a keyword, function, predefined variable "
+            "or table name) and cannot be renamed data=nil") in lines, lines

@@ -212,3 +212,54 @@ def test_csv_cells_that_would_be_formulas_are_quoted(tmp_path, name):
                    for c in cells)
         assert "'" + name in cells
         assert "-5" in cells                              # a negative number stays a number
+
+
+def test_the_signal_kinds_are_the_historys():
+    from plcbuilder.controller import history
+    assert (export.BIT, export.TEXT) == (history.BIT, history.TEXT)
+
+
+def test_each_way_of_exporting_is_one_row_and_every_front_end_offers_it(tmp_path, monkeypatch,
+                                                                      capsys):
+    """Issue 28: adding an export format is one row of EXPORTERS. A row added
+    here (JSON lines, picked by --pretty) is offered by `trace export`
+    (--format, its flag and help), written by `run --history`/`--capture`
+    (by the suffix) and offered by the IDE's Export Trace dialog, with
+    nothing else changed."""
+    import json
+
+    from tests.cli._run import run_cli
+
+    def json_lines(trace):
+        return "".join(json.dumps([t, n, v]) + "\n" for n, (_k, ch) in trace.signals.items()
+                       for t, v in ch)
+
+    rows = export.EXPORTERS + (
+        export.Exporter("jsonl", None, "JSON lines", "", json_lines),
+        export.Exporter("jsonl", "pretty", "JSON lines, pretty", "JSONL: indented",
+                        lambda t: json_lines(t).replace(",", ", ")))
+    monkeypatch.setattr(export, "EXPORTERS", rows)
+    tr = _wide()
+    src = tmp_path / "a.plctrace"
+    from plcbuilder.trace import file as trace_file
+    trace_file.save(tr, src)
+
+    code, out, _err = run_cli(capsys, "trace", "export", "--help")
+    assert "--pretty" in out and "JSONL: indented" in out and "jsonl" in out
+    code, out, err = run_cli(capsys, "trace", "export", src, tmp_path / "o.jsonl")
+    assert code == 0, err
+    assert (tmp_path / "o.jsonl").read_text() == json_lines(tr)
+    code, out, err = run_cli(capsys, "trace", "export", src, tmp_path / "p.jsonl", "--pretty")
+    assert code == 0, err
+    assert ", " in (tmp_path / "p.jsonl").read_text()
+    code, out, err = run_cli(capsys, "trace", "export", src, tmp_path / "p.csv", "--pretty")
+    assert code == 2 and "--pretty is for JSONL, not CSV" in err
+    prog = tmp_path / "M90.plc"
+    prog.write_text("main(){ portset(3); timer=5; do{timer--;}while(timer>0); exit(99); };\n")
+    code, out, err = run_cli(capsys, "run", prog, "--history", tmp_path / "h.jsonl")
+    assert code == 0, err
+    assert '"out 3", 1]' in (tmp_path / "h.jsonl").read_text()
+
+    from plcbuilder.ide import trace_actions     # no Qt object is made: the dialog's filters
+    assert trace_actions.export_filter().split(";;")[-2:] == [
+        "JSON lines (*.jsonl)", "JSON lines, pretty (*.jsonl)"]

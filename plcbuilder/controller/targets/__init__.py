@@ -13,10 +13,12 @@ software PLC. The controller picks one with :func:`make_plc`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Optional
-
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode import targets as T
+
+TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
+if TYPE_CHECKING:
+    from typing import Optional
 
 
 class TargetConfigError(ValueError):

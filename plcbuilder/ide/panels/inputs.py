@@ -35,6 +35,63 @@ QToolButton[forced="true"] { border: 2px solid #c75a00; }
 FORCED_STYLE = "color: #c75a00; font-weight: bold;"
 
 
+class PinToggle(QtWidgets.QToolButton):
+    """An input pin's toggle. Its label is a head (the pin's number, or on the
+    Huazhong target its bank bit, ``X0.4``) and the pin's name; where the dock
+    is too narrow for the whole label the name goes without its ``INPUT_``
+    and then, if still too long, is shortened in its middle (``LIMI…MIN_X``:
+    names of a family differ at their ends); the tooltip has it whole.
+    ``text()`` is always the whole label."""
+
+    #: characters of the name a toggle keeps at its narrowest (besides "…")
+    MIN_NAME_CHARS = 3
+    #: what a shortened name goes without first (every pin here is an input)
+    PREFIX = "INPUT_"
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.head = ""
+        self.name = ""
+
+    def set_label(self, head: str, name: str) -> None:
+        self.head, self.name = head, name
+        self.setText(f"{head}  {name}" if name else head)
+
+    def shown_text(self) -> str:
+        """The label as drawn at the toggle's width now."""
+        fm = self.fontMetrics()
+        text = self.text()
+        room = self.width() - self._chrome()
+        if not self.name or fm.horizontalAdvance(text) <= room:
+            return text
+        head = f"{self.head}  "
+        room -= fm.horizontalAdvance(head)
+        name = self.name
+        if name[:len(self.PREFIX)].upper() == self.PREFIX and len(name) > len(self.PREFIX):
+            name = name[len(self.PREFIX):]          # INPUT_HOME_X: HOME_X says it here
+        return head + fm.elidedText(name, Qt.TextElideMode.ElideMiddle, max(0, room))
+
+    def minimumSizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt override
+        hint = super().minimumSizeHint()
+        if not self.name:
+            return hint
+        fm = self.fontMetrics()
+        least = self._chrome() + fm.horizontalAdvance(
+            f"{self.head}  {self.name[:self.MIN_NAME_CHARS]}…")
+        return QtCore.QSize(min(hint.width(), least), hint.height())
+
+    def paintEvent(self, event) -> None:  # noqa: N802 - Qt override
+        opt = QtWidgets.QStyleOptionToolButton()
+        self.initStyleOption(opt)
+        opt.text = self.shown_text()
+        painter = QtWidgets.QStylePainter(self)
+        painter.drawComplexControl(QtWidgets.QStyle.ComplexControl.CC_ToolButton, opt)
+
+    def _chrome(self) -> int:
+        """The width the toggle takes besides its text (frame, padding, icon)."""
+        return super().sizeHint().width() - self.fontMetrics().horizontalAdvance(self.text())
+
+
 class InputsPanel(QtWidgets.QWidget):
     """Toggles for the input pins and sliders for the ADC channels."""
 
@@ -57,7 +114,9 @@ class InputsPanel(QtWidgets.QWidget):
         self.model = model
         self.pins = pins
         self.names: dict[int, str] = {}
-        self.buttons: dict[int, QtWidgets.QToolButton] = {}
+        #: the bank whose bits the pins are (Huazhong: "X", pin 8n+b is X<n>.<b>), or None
+        self.bank: str | None = None
+        self.buttons: dict[int, PinToggle] = {}
         self._pending: dict[int, tuple[int, float]] = {}
         self._adc_pending: dict[int, tuple[int, float]] = {}   # ADC values asked, not yet read
         self._drawn = -1
@@ -83,7 +142,7 @@ class InputsPanel(QtWidgets.QWidget):
         self.grid.setSpacing(3)
         self.grid_host.setStyleSheet(_TOGGLE_STYLE)
         for pin in range(pins):
-            b = QtWidgets.QToolButton()
+            b = PinToggle()
             b.setCheckable(True)
             b.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding,
                             QtWidgets.QSizePolicy.Policy.Fixed)
@@ -113,6 +172,10 @@ class InputsPanel(QtWidgets.QWidget):
             s.setRange(0, ADC_MAX)
             s.setToolTip(f"Set ADC{ch} by hand (sent when you let go)")
             spin = QtWidgets.QSpinBox()
+            spin.setRange(-99999, 99999)
+            # as wide as a 5-digit value needs (a 32-bit one scrolls in the box):
+            # ten digits nobody types neither widen the dock nor squeeze the slider
+            spin.setFixedWidth(spin.sizeHint().width())
             spin.setRange(-(1 << 31), (1 << 31) - 1)
             spin.setKeyboardTracking(False)
             spin.setToolTip(f"ADC{ch} value to set (Enter sends it)")
@@ -157,19 +220,24 @@ class InputsPanel(QtWidgets.QWidget):
         self._relayout()
 
     # ------------------------------------------------------------------ API
-    def set_pin_names(self, inputs: dict[int, str]) -> None:
+    def set_pin_names(self, inputs: dict[int, str], bank: str | None = None) -> None:
+        """The pins' names (pins.h); with ``bank`` (the Huazhong target's "X")
+        each pin is labelled by its bank bit (X0.4) rather than its number,
+        and every pin is shown (each has a name there: its bit)."""
         self.names = dict(inputs)
+        self.bank = bank
+        self.show_all.setVisible(bank is None)
         self._relayout()
 
     def shown_pins(self) -> list[int]:
         text = self.filter.text().strip().lower()
-        pins = [p for p in range(self.pins)
-                if p in self.names or self.show_all.isChecked() or not self.names]
+        pins = [p for p in range(self.pins) if p in self.names or self.bank is not None
+                or self.show_all.isChecked() or not self.names]
         if text:
-            pins = [p for p in pins if text in self._label(p).lower()]
+            pins = [p for p in pins if text in self._tooltip(p).lower()]
         return pins
 
-    def button(self, pin: int) -> QtWidgets.QToolButton:
+    def button(self, pin: int) -> PinToggle:
         return self.buttons[pin]
 
     def set_forces(self, forces: list) -> None:
@@ -284,9 +352,19 @@ class InputsPanel(QtWidgets.QWidget):
             slider.setValue(clamped)
             slider.blockSignals(False)
 
-    def _label(self, pin: int) -> str:
-        name = self.names.get(pin)
-        return f"{pin:>2}  {name}" if name else f"{pin:>2}  input {pin}"
+    def _label(self, pin: int) -> tuple[str, str]:
+        """(head, name) of a pin's toggle."""
+        name = self.names.get(pin, "")
+        if self.bank is not None:
+            return f"{self.bank}{pin // 8}.{pin % 8}", name
+        return f"{pin:>2}", name or f"input {pin}"
+
+    def _tooltip(self, pin: int) -> str:
+        """The pin, whole: its number, bank bit and name."""
+        head, name = self._label(pin)
+        if self.bank is not None:
+            return f"Input {pin} ({head}{', ' + name if name else ''})"
+        return f"Input {pin}" + (f" ({name})" if pin in self.names else "")
 
     def _relayout(self, *args) -> None:
         while self.grid.count():
@@ -296,8 +374,8 @@ class InputsPanel(QtWidgets.QWidget):
                 w.hide()
         for i, pin in enumerate(self.shown_pins()):
             b = self.buttons[pin]
-            b.setText(self._label(pin))
-            b.setToolTip(f"Input {pin}" + (f" ({self.names[pin]})" if pin in self.names else "")
+            b.set_label(*self._label(pin))
+            b.setToolTip(self._tooltip(pin)
                          + (": click to force it (right-click to release it)"
                             if self.force_by_hand else
                             ": click to set it by hand (overrides the machine's wiring)"))

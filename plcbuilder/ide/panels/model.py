@@ -245,6 +245,16 @@ class RunModel:
             cut = int(np.nonzero(np.diff(t_ms) < 0)[0][-1]) + 1
             self.clear()
             samples, t_ms, n = samples[cut:], t_ms[cut:], n - cut
+        if self._holds(samples):
+            # only time advanced (the held value again, as the telemetry's steps
+            # are while nothing changes): the newest row again, nothing new to find
+            self.time.extend(t_ms * 1e-3)
+            for rb in self._value_buffers():
+                rb.repeat_last(n)
+            self.last_sample = samples[-1]
+            self.samples_seen += n
+            self.version += 1
+            return
         self.time.extend(t_ms * 1e-3)
         table = _table(samples)                      # one int64 row per sample
         self.scalars.extend(table[:, 0:2])
@@ -290,6 +300,21 @@ class RunModel:
         self.running = samples[-1].running
         self.samples_seen += n
         self.version += 1
+
+    def _holds(self, samples: list) -> bool:
+        """Whether every sample of a batch holds the newest one kept: the same
+        values (no message), only a later time."""
+        last = self.last_sample
+        if last is None or not len(self.time) or last.message:
+            return False
+        key = (last.running, last.proc, last.inputs, last.outputs, last.pwm, last.dac,
+               last.adc, last.axes, last.velocities, last.vio)
+        return all(not s.message and (s.running, s.proc, s.inputs, s.outputs, s.pwm, s.dac,
+                                      s.adc, s.axes, s.velocities, s.vio) == key
+                   for s in samples)
+
+    def _value_buffers(self) -> tuple:
+        return (self.scalars, self.inputs, self.outputs, self.vouts, self.analog, self.axes)
 
     def add_events(self, events: Iterable) -> list[MessageRow]:
         """Keep the message events and the watched variables' values (the log

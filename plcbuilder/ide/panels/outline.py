@@ -65,6 +65,9 @@ class OutlinePanel(QWidget):
         self._timer.setInterval(delay_ms)
         self._timer.timeout.connect(self.refresh)
         self._following = False
+        #: while held (the window's start), a new editor is outlined on release()
+        self.held = False
+        self._stale = False
 
     # ------------------------------------------------------------ public
     def set_editor(self, ed) -> None:
@@ -82,7 +85,17 @@ class OutlinePanel(QWidget):
         if ed is not None:
             ed.sig_text_changed.connect(self._timer.start)
             ed.sig_cursor_moved.connect(self.follow)
+        if self.held:
+            self._stale = True
+            return
         self.refresh()
+
+    def release(self) -> None:
+        """No more held: outline the editor set meanwhile."""
+        self.held = False
+        if self._stale:
+            self._stale = False
+            self.refresh()
 
     def refresh(self) -> None:
         """Read the editor's text again and rebuild the outline."""

@@ -123,6 +123,8 @@ class RunPanels(QtCore.QObject):
             dock.setAllowedAreas(Qt.DockWidgetArea.AllDockWidgetAreas)
             dock.visibilityChanged.connect(self._on_visibility)
             self._docks[key] = dock
+        #: each panel's dock (a panel stays in its dock: on_screen need not look for it)
+        self._dock_of = {id(widgets[key]): dock for key, dock in self._docks.items()}
         self.forces: list = []
         self._stopped = True          # until the timers exist
         self._state = ControllerStatus()
@@ -219,11 +221,13 @@ class RunPanels(QtCore.QObject):
         Huazhong target each is first the bank bit it is (X0.0, Y0.7)."""
         inputs, outputs = dict(inputs), dict(outputs)
         self._pin_names = (inputs, outputs)
+        own_inputs = inputs
         if self.target == "huazhong":
             inputs = bit_names(max(64, max(inputs, default=0) + 1), "X", inputs)
             outputs = bit_names(max(64, max(outputs, default=0) + 1), "Y", outputs)
         self.lanes.set_pin_names(inputs, outputs)
-        self.inputs.set_pin_names(inputs)
+        # the toggles say the bank bit where the pin number would be (not both)
+        self.inputs.set_pin_names(own_inputs, "X" if self.target == "huazhong" else None)
 
     def set_forces(self, forces: list) -> None:
         """What is forced: the watch, the inputs and the lanes mark it."""
@@ -421,10 +425,14 @@ class RunPanels(QtCore.QObject):
             if key != self._inputs_shown or pending:
                 self._inputs_shown = key
                 self.inputs.refresh()
-            work |= pending
+        else:
+            pending = False
         if self._stopped:
             return
-        if work:
+        # what arrives next (samples, events, a view change) wakes the timer
+        # again; after a redraw or a move nothing else needs a frame, except a
+        # clicked input whose new state is on its way
+        if pending:
             if self.timer.interval() != self.frame_ms or not self.timer.isActive():
                 self.timer.start(self.frame_ms)
         elif due is not None:
@@ -439,9 +447,18 @@ class RunPanels(QtCore.QObject):
         self.var_timer.stop()
 
     # --------------------------------------------------------------- private
-    @staticmethod
-    def _shown(w: QtWidgets.QWidget) -> bool:
-        return on_screen(w)           # a dock tabbed away is "visible" to Qt
+    def _shown(self, w: QtWidgets.QWidget) -> bool:
+        """``w`` can be seen (docks.on_screen: a dock tabbed away is "visible"
+        to Qt), for a panel of these docks without looking for its dock."""
+        dock = self._dock_of.get(id(w))
+        if dock is None or dock.widget() is not w:
+            return on_screen(w)
+        if not w.isVisible():
+            return False
+        if dock.isFloating():
+            return True
+        g = dock.geometry()
+        return g.right() >= 0 and g.bottom() >= 0
 
     def _place_markers(self) -> None:
         for panel, _plot, line in self._markers:
@@ -476,7 +493,24 @@ class RunPanels(QtCore.QObject):
         self.model.add_samples(samples)
         if self.model.epoch != epoch:
             self._cleared()
+        elif self.timer.isActive() and not self._news():
+            return          # only time advanced: the move the timer waits for shows it
         self.wake()
+
+    def _news(self) -> bool:
+        """Whether the samples just added change what a panel on screen shows
+        (a value, not only the time), so the redraw timer must come sooner
+        than the move it waits for."""
+        if self.cursors.enabled:
+            return True
+        for panel in self.time_panels:
+            if self._shown(panel) and (panel._view_dirty or panel.data_changed()):
+                return True
+        if self._shown(self.inputs):
+            s = self.model.last_sample
+            if s is not None and (s.inputs, s.adc) != self._inputs_shown:
+                return True
+        return False
 
     def _on_events(self, events: list) -> None:
         self.traces.feed([], events)

@@ -377,8 +377,12 @@ def new_curve(plot: pg.PlotItem, c: str, name: str | None = None, width: float =
     return item
 
 
-def plot_widget(axisItems: dict | None = None) -> pg.PlotWidget:  # noqa: N803
-    w = ThemedPlotWidget(background=plot_colours().background, axisItems=axisItems)
+def plot_widget(axisItems: dict | None = None, menu: bool = True) -> pg.PlotWidget:  # noqa: N803
+    """A plot in the theme's colours; ``menu``: pyqtgraph's own right-click
+    menu (a time plot has none: pyqtgraph then does not build its menus, a
+    fifth of making the run panels)."""
+    w = ThemedPlotWidget(background=plot_colours().background, axisItems=axisItems,
+                         enableMenu=menu)
     w.setMinimumSize(160, 120)
     return w
 

@@ -351,10 +351,11 @@ class TraceTools(QtCore.QObject):
         api.save_trace(self.current(), path)
         self.sig_note.emit(f"saved {path}")
 
-    def export(self, path, per_tick: bool = False, split_bits: bool = False) -> str:
-        """Export as CSV or VCD (by suffix; ``split_bits``: a VCD's numbers as
-        one-bit lanes, for PulseView); raises api.ExportError."""
-        fmt = api.export_trace(self.current(), path, per_tick=per_tick, split_bits=split_bits)
+    def export(self, path, **chosen: bool) -> str:
+        """Export as CSV or VCD (by suffix), the way ``chosen`` picks
+        (``split_bits=True``: a VCD's numbers as one-bit lanes, for PulseView;
+        ``per_tick=True``); raises api.ExportError."""
+        fmt = api.export_trace(self.current(), path, **chosen)
         self.sig_note.emit(f"exported {path} ({fmt})")
         return fmt
 

@@ -21,12 +21,14 @@ class AxesPanel(TimePanel):
     def __init__(self, model: RunModel, timebase: TimeBase, on_clear=None, parent=None):
         super().__init__(model, timebase, on_clear, parent)
         self.widget = style.layout_widget()
-        self.pos_plot = self.widget.addPlot(row=0, col=0, axisItems=style.time_axis())
+        self.pos_plot = self.widget.addPlot(row=0, col=0, axisItems=style.time_axis(),
+                                            enableMenu=False)
         # (the titles say what: the axis labels only the unit, which fits the
         # height of a short plot; "position (mm)" ran into "velocity (mm/s)")
         style.style_plot(self.pos_plot, title="Machine position", left="mm",
                          left_units=None, bottom=None, bottom_units=None)
-        self.vel_plot = self.widget.addPlot(row=1, col=0, axisItems=style.time_axis())
+        self.vel_plot = self.widget.addPlot(row=1, col=0, axisItems=style.time_axis(),
+                                            enableMenu=False)
         style.style_plot(self.vel_plot, title="Velocity", left="mm/s",
                          bottom="time (s)", bottom_units=None)
         for p in (self.pos_plot, self.vel_plot):

@@ -26,13 +26,16 @@ class AnalogPanel(TimePanel):
     def __init__(self, model: RunModel, timebase: TimeBase, on_clear=None, parent=None):
         super().__init__(model, timebase, on_clear, parent)
         self.widget = style.layout_widget()
-        self.out_plot = self.widget.addPlot(row=0, col=0, axisItems=style.time_axis())
+        self.out_plot = self.widget.addPlot(row=0, col=0, axisItems=style.time_axis(),
+                                            enableMenu=False)
         style.style_plot(self.out_plot, title="PWM and DAC outputs", left="value",
                          bottom=None, bottom_units=None)
-        self.in_plot = self.widget.addPlot(row=1, col=0, axisItems=style.time_axis())
+        self.in_plot = self.widget.addPlot(row=1, col=0, axisItems=style.time_axis(),
+                                           enableMenu=False)
         style.style_plot(self.in_plot, title="ADC inputs", left="counts", bottom="time (s)",
                          bottom_units=None)
-        self.var_plot = self.widget.addPlot(row=2, col=0, axisItems=style.time_axis())
+        self.var_plot = self.widget.addPlot(row=2, col=0, axisItems=style.time_axis(),
+                                            enableMenu=False)
         style.style_plot(self.var_plot, title="Watched variables", left="value",
                          bottom="time (s)", bottom_units=None)
         for p in (self.out_plot, self.in_plot, self.var_plot):

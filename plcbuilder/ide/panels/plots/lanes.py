@@ -37,7 +37,7 @@ class LanesPanel(TimePanel):
         self.show_inputs.toggled.connect(self._mark_dirty)
         self.toolbar.extra.addWidget(self.show_inputs)
 
-        self.widget = style.plot_widget(style.time_axis())
+        self.widget = style.plot_widget(style.time_axis(), menu=False)
         self.plot = self.widget.getPlotItem()
         style.style_plot(self.plot, bottom="time (s)", bottom_units=None, grid=(True, False))
         self.add_time_plot(self.plot)
@@ -179,10 +179,11 @@ class LanesPanel(TimePanel):
             self.plot.removeItem(self._bands)
             self._bands = None
         if n:
-            self._bands = pg.BarGraphItem(
+            self._bands = _Bars(
                 x0=-1e9, width=2e9, y0=ys - 0.2, height=1.4, pen=pg.mkPen(None),
                 brushes=[pg.mkBrush(style.plot_colours().lane_bands[i % 2]) for i in range(n)])
             self._bands.setZValue(-50)
+            # (not cached in a pixmap: 2e9 s wide, they overflow its pixels)
             self.plot.addItem(self._bands, ignoreBounds=True)
         self._lane_y = {key: float(y) for key, y in zip(lanes, ys)}
         ticks = [(y + 0.5, self.lane_label(*key)) for key, y in zip(lanes, ys)]
@@ -323,7 +324,7 @@ class LanesPanel(TimePanel):
         if item is None:
             c = pg.mkColor(overlay.overlay_colour())
             c.setAlpha(110)
-            item = pg.BarGraphItem(x0=x0, x1=x1, y0=y0 + self.OTHER_LOW, height=h,
+            item = _Bars(x0=x0, x1=x1, y0=y0 + self.OTHER_LOW, height=h,
                                    pen=pg.mkPen(None), brush=pg.mkBrush(c))
             item.setZValue(4)
             self.plot.addItem(item)
@@ -349,7 +350,7 @@ class LanesPanel(TimePanel):
         if item is None:
             colour = {"inputs": style.INPUT_COLOUR,
                       "vars": style.plot_colours().variable}.get(kind, style.OUTPUT_COLOUR)
-            item = pg.BarGraphItem(x0=x0, x1=x1, y0=y0, height=1.0, pen=pg.mkPen(None),
+            item = _Bars(x0=x0, x1=x1, y0=y0, height=1.0, pen=pg.mkPen(None),
                                    brush=pg.mkBrush(colour))
             self.plot.addItem(item)
             self._blocks[kind] = item
@@ -428,6 +429,28 @@ class LanesPanel(TimePanel):
                                                 0, 0, PINS - 1)
         if ok:
             self.pin_lane(kind, pin)
+
+
+class _Bars(pg.BarGraphItem):
+    """pyqtgraph's bars, with the bounding rectangle worked out once per data
+    and view: Qt asks for it several times a paint, and pyqtgraph works it out
+    in Python each time (the lane bands are painted at every move of the
+    time axis)."""
+
+    _rect = None
+
+    def setOpts(self, **opts):
+        self._rect = None
+        super().setOpts(**opts)
+
+    def viewTransformChanged(self):
+        self._rect = None
+        super().viewTransformChanged()
+
+    def boundingRect(self):
+        if self._rect is None:
+            self._rect = super().boundingRect()
+        return QtCore.QRectF(self._rect)
 
 
 def _merged_curve(plot: pg.PlotItem, colour: str) -> pg.PlotDataItem:

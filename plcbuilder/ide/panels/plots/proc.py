@@ -34,7 +34,7 @@ class ProcPanel(TimePanel):
         self.toolbar.extra.addSpacing(12)
         self.toolbar.extra.addWidget(self.status, 1)
 
-        self.widget = style.plot_widget(style.time_axis())
+        self.widget = style.plot_widget(style.time_axis(), menu=False)
         self.plot = self.widget.getPlotItem()
         style.style_plot(self.plot, left="proc state", bottom="time (s)", bottom_units=None)
         self.add_time_plot(self.plot)

@@ -186,7 +186,8 @@ class TimePanel(QtWidgets.QWidget):
     sig_dirty = Signal()
     """The view changed (window, follow, lanes, pins): a redraw is due."""
 
-    SCROLL_FPS = 10         # time-only moves a second (at most)
+    SCROLL_FPS = 10         # time-only moves a second (at most, give or take SCROLL_SLACK)
+    SCROLL_SLACK = 0.25     # a move this part of its period early is done at once
     HORIZON = 0.25          # curves hold their last value this part of the window ahead
 
     def __init__(self, model: RunModel, timebase: TimeBase,
@@ -227,6 +228,9 @@ class TimePanel(QtWidgets.QWidget):
         if self._time_plots:
             plot.setXLink(self._time_plots[0])
         self._time_plots.append(plot)
+        # the value axis stays while time moves: drawn into a pixmap once (again
+        # when its ticks change), not by its Python paint at every move
+        plot.getAxis("left").setCacheMode(_CACHED)
         ax = plot.getAxis("bottom")
         if isinstance(ax, style.TimeAxis):
             self._time_axes.append(ax)
@@ -325,7 +329,10 @@ class TimePanel(QtWidgets.QWidget):
             return False
         now = time.monotonic()
         wait = self._last_move + 1.0 / self.SCROLL_FPS - now
-        if wait > 0:
+        # a move due a moment from now is done now: new samples arrive about
+        # as often as moves may be done, and a timer for the little left was a
+        # second redraw tick for each move
+        if wait > self.SCROLL_SLACK / self.SCROLL_FPS:
             self._move_due = wait
             return False
         t0, t1 = self.visible_span()
@@ -427,8 +434,21 @@ def shift_item(item: pg.GraphicsObject, dx: float, y: float = 0.0) -> None:
     already cover the view until the next redraw, so a time-only move keeps
     them and only forgets the item's cached view rectangle (a redraw, or a
     view change, clips to the view as it is then)."""
+    if item.cacheMode() != _CACHED:
+        # painted once into a pixmap of the view; a move blits it (and paints
+        # only what comes into view) instead of calling the item's Python paint
+        item.setCacheMode(_CACHED)
+        # and moved without geometry change notices: Qt called the item's
+        # Python itemChange twice a move, which told the view its bounds
+        # changed (they do not: the x range is the time window's; a new
+        # curve's data tells it anyway)
+        item.setFlag(_GEOMETRY_CHANGES, False)
     pg.GraphicsObject.setPos(item, dx, y)
     item.viewTransformChanged()
+
+
+_CACHED = QtWidgets.QGraphicsItem.CacheMode.DeviceCoordinateCache
+_GEOMETRY_CHANGES = QtWidgets.QGraphicsItem.GraphicsItemFlag.ItemSendsGeometryChanges
 
 
 def empty_text(plot: pg.PlotItem, text: str) -> pg.TextItem:

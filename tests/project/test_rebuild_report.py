@@ -1,0 +1,56 @@
+"""Issue 26.2: an unchanged rebuild through ``plcbuilder build`` prints what
+the cold build printed without reading each source file once per diagnostic
+(7,300 reads of a thousand files in the benchmark project) or decoding every
+procedure's diagnostics three times."""
+
+import io
+
+from plcbuilder.cli import cmd_build, term
+from plcbuilder.project import Project, build, build_project
+
+SOURCE = "main()\n{\n" + "".join(f"  v{i} = w{i};\n" for i in range(12)) + "  exit(99);\n};\n"
+
+
+def _project(root):
+    (root / "hardware").mkdir(parents=True)
+    (root / "software").mkdir()
+    for i in range(3):
+        (root / "hardware" / f"M{10 + i}.plc").write_text(SOURCE)
+    (root / "plcbuilder.toml").write_text('name = "p"\n')
+    return Project.open(root)
+
+
+def _report(result) -> str:
+    out = term.Out("never")
+    buf = io.StringIO()
+    out.stdout = buf
+    cmd_build.report(result, out)
+    return buf.getvalue()
+
+
+def test_an_unchanged_rebuild_reads_each_file_once_for_its_report(tmp_path, monkeypatch):
+    project = _project(tmp_path / "p")
+    cold = build_project(project)
+    cold_text = _report(cold)
+    again = build_project(project)
+    assert again.reused == 3
+    reads = []
+    real = build.source_text
+
+    def counting(name, *a, **k):
+        reads.append(name)
+        return real(name, *a, **k)
+    monkeypatch.setattr(build, "source_text", counting)
+    decodes = []
+    real_decode = build._diag_from_json
+    monkeypatch.setattr(build, "_diag_from_json", lambda v: decodes.append(1) or real_decode(v))
+    text = _report(again)
+    def diagnostics(report: str) -> list[str]:          # up to the totals, "(unchanged)" aside
+        lines = report.replace(" (unchanged)", "").splitlines()
+        return lines[:next(i for i, ln in enumerate(lines) if ln.startswith("hardware total"))]
+    assert diagnostics(text) == diagnostics(cold_text)
+    assert text.splitlines()[-1].endswith("(0 compiled, 3 unchanged)")
+    n_diags = sum(len(pb.diagnostics) for pb in again.procedures)
+    assert n_diags == 3 * 24 and "hint:" in text
+    assert len(reads) <= 3, reads                 # one read a file, not one a diagnostic
+    assert len(decodes) <= n_diags + 3 * 24       # decoded to print, not three times over
