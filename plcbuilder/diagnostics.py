@@ -1,7 +1,9 @@
 """Diagnostics: the data every stage of the pipeline adds to.
 
 A :class:`Diagnostic` is shaped like an LSP diagnostic (a span, a severity, a
-code, a message) plus hints. The core never prints: the CLI and the IDE render
+code, a message) plus hints. :meth:`Diagnostic.to_dict` and
+:meth:`Diagnostic.from_dict` are its one serialisation (Build All's workers and
+its cache use it). The core never prints: the CLI and the IDE render
 diagnostics with the helpers at the bottom of this module.
 
 Lines and columns are 1-based; ``end_col`` is exclusive. Columns count
@@ -80,6 +82,59 @@ class Diagnostic:
     def sort_key(self):
         s = self.span
         return (s.file, s.line, s.col) if s else ("", 0, 0)
+
+    # The one serialisation of a diagnostic (Build All's workers send it, the
+    # build cache stores it): a dict of JSON values,
+    #     {"severity": 1, "code": "...", "message": "...",
+    #      "span": [file, line, col, end_line, end_col] or null,
+    #      "hints": ["..."], "related": [[span, "message"], ...]}
+
+    def to_dict(self) -> dict:
+        """This diagnostic as a dict of JSON values (read back by :meth:`from_dict`)."""
+        return {"severity": int(self.severity), "code": self.code, "message": self.message,
+                "span": _span_to_list(self.span), "hints": list(self.hints),
+                "related": [[_span_to_list(r.span), r.message] for r in self.related]}
+
+    @classmethod
+    def from_dict(cls, v) -> "Diagnostic":
+        """The diagnostic :meth:`to_dict` made ``v`` from; ValueError when ``v``
+        is not such a dict."""
+        Diagnostic.check_dict(v)
+        return cls(Severity(v["severity"]), v["code"], v["message"], _span_from_list(v["span"]),
+                   tuple(v["hints"]),
+                   tuple(Related(_span_from_list(s), m) for s, m in v["related"]))
+
+    @staticmethod
+    def check_dict(v) -> None:
+        """Raise ValueError unless ``v`` is a dict as :meth:`to_dict` makes it,
+        without making the objects (a cache checks what it read this way)."""
+        if type(v) is not dict or v.get("severity") not in _SEVERITIES \
+                or type(v.get("code")) is not str or type(v.get("message")) is not str \
+                or type(v.get("hints")) is not list or type(v.get("related")) is not list \
+                or not all(type(h) is str for h in v["hints"]):
+            raise ValueError("bad diagnostic")
+        _check_span(v.get("span"))
+        for rel in v["related"]:
+            if type(rel) is not list or len(rel) != 2 or type(rel[1]) is not str:
+                raise ValueError("bad diagnostic")
+            _check_span(rel[0])
+
+
+_SEVERITIES = frozenset(int(s) for s in Severity)
+
+
+def _span_to_list(s: Optional[Span]) -> Optional[list]:
+    return None if s is None else [s.file, s.line, s.col, s.end_line, s.end_col]
+
+
+def _span_from_list(v) -> Optional[Span]:
+    return None if v is None else Span(*v)
+
+
+def _check_span(v) -> None:
+    if v is not None and (type(v) is not list or len(v) != 5 or type(v[0]) is not str
+                          or not all(type(x) is int for x in v[1:])):
+        raise ValueError("bad span")
 
 
 def error(code: str, message: str, span: Optional[Span], *hints: str,

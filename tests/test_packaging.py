@@ -29,6 +29,17 @@ def test_wheel_ships_resources_and_grammar(wheel):
     assert "plcbuilder/resources/machine/default.toml" in names
 
 
+def test_wheel_ships_every_module(wheel):
+    """Every module of the package is in the wheel, even one in a folder named
+    like an output folder (plcbuilder/project/build/, which .gitignore's
+    ``build/`` would hide)."""
+    names = set(zipfile.ZipFile(wheel).namelist())
+    package = ROOT / "plcbuilder"
+    modules = {p.relative_to(ROOT).as_posix() for p in package.rglob("*.py")}
+    assert "plcbuilder/project/build/cache.py" in modules
+    assert sorted(modules - names) == []
+
+
 def test_wheel_declares_the_console_script_and_lexer(wheel):
     z = zipfile.ZipFile(wheel)
     (ep,) = [n for n in z.namelist() if n.endswith("entry_points.txt")]

@@ -329,13 +329,14 @@ def test_unchanged_rebuild_reads_no_source(example, monkeypatch):
         assert self.suffix not in (".plc", ".h", ".bin"), f"read {self}"
         return real(self)
     monkeypatch.setattr(pathlib.Path, "read_bytes", guarded)
-    from plcbuilder.project import build as build_module
-    real_bounded = build_module.read_bounded
+    from plcbuilder.project.build import cache, pool, results
+    real_bounded = cache.read_bounded
 
     def guarded_bounded(path, *args, **kw):
         assert pathlib.Path(path).suffix not in (".plc", ".h", ".bin"), f"read {path}"
         return real_bounded(path, *args, **kw)
-    monkeypatch.setattr(build_module, "read_bounded", guarded_bounded)
+    for module in (cache, pool, results):             # every reader of build's files
+        monkeypatch.setattr(module, "read_bounded", guarded_bounded)
     r = build_project(example)
     assert (r.compiled, r.reused) == (0, 13) and r.ok and "up to date" in r.image_message
 
@@ -406,14 +407,14 @@ def test_the_image_of_binaries_compiled_now_is_made_without_decoding_them_again(
 
 def test_a_binary_changed_after_compiling_does_not_go_into_the_image(example, monkeypatch):
     """The image is made from build/'s binaries as compiled, or not at all."""
-    from plcbuilder.project import build as build_mod
-    real = build_mod.iter_image
+    from plcbuilder.project.build import steps
+    real = steps.iter_image
 
     def tampered(programs, *args):
         (example.build_dir / "M03.bin").write_bytes(b"changed")
         return real(programs, *args)
 
-    monkeypatch.setattr(build_mod, "iter_image", tampered)
+    monkeypatch.setattr(steps, "iter_image", tampered)
     r = build_project(example)
     assert not r.image_written
     assert any("build/M03.bin changed during the build" in d.message for d in r.diagnostics)
@@ -424,11 +425,11 @@ def test_a_source_changed_while_it_is_built_is_not_cached_under_its_old_key(exam
     """The compiler reads each source itself (Build All holds no project's
     sources): when it reads other bytes than the cache key hashed, the result
     is reported but not cached, so going back to the old text compiles again."""
-    from plcbuilder.project import build as build_module
+    from plcbuilder.project.build import cache, pool
     m05 = example.hardware_dir / "M05.plc"
     original = m05.read_text()
     edited = original.replace("pwm01=0;", "pwm01=0; unused=3;")
-    real = build_module.read_bounded
+    real = cache.read_bounded
     reads = []
 
     def edit_first(path, *args, **kw):
@@ -437,10 +438,12 @@ def test_a_source_changed_while_it_is_built_is_not_cached_under_its_old_key(exam
             if len(reads) == 2:             # the compiler's read: after its key was made
                 m05.write_text(edited)
         return real(path, *args, **kw)
-    monkeypatch.setattr(build_module, "read_bounded", edit_first)
+    for module in (cache, pool):                # the key's read, then the compiler's
+        monkeypatch.setattr(module, "read_bounded", edit_first)
     r = build_project(example, jobs=1)
     assert any(d.code == "unused-variable" or "unused" in d.message for d in r.get("M05").diagnostics)
-    monkeypatch.setattr(build_module, "read_bounded", real)
+    for module in (cache, pool):
+        monkeypatch.setattr(module, "read_bounded", real)
     m05.write_text(original)
     again = build_project(example, jobs=1)
     assert not again.get("M05").cached and again.get("M05").warnings == 0

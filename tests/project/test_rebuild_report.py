@@ -6,7 +6,9 @@ procedure's diagnostics three times."""
 import io
 
 from plcbuilder.cli import cmd_build, term
-from plcbuilder.project import Project, build, build_project
+from plcbuilder.lang import Diagnostic
+from plcbuilder.project import Project, build_project
+from plcbuilder.project.build import results
 
 SOURCE = "main()\n{\n" + "".join(f"  v{i} = w{i};\n" for i in range(12)) + "  exit(99);\n};\n"
 
@@ -35,15 +37,15 @@ def test_an_unchanged_rebuild_reads_each_file_once_for_its_report(tmp_path, monk
     again = build_project(project)
     assert again.reused == 3
     reads = []
-    real = build.source_text
+    real = results.source_text
 
     def counting(name, *a, **k):
         reads.append(name)
         return real(name, *a, **k)
-    monkeypatch.setattr(build, "source_text", counting)
+    monkeypatch.setattr(results, "source_text", counting)
     decodes = []
-    real_decode = build._diag_from_json
-    monkeypatch.setattr(build, "_diag_from_json", lambda v: decodes.append(1) or real_decode(v))
+    real_decode = Diagnostic.from_dict
+    monkeypatch.setattr(Diagnostic, "from_dict", lambda v: decodes.append(1) or real_decode(v))
     text = _report(again)
     def diagnostics(report: str) -> list[str]:          # up to the totals, "(unchanged)" aside
         lines = report.replace(" (unchanged)", "").splitlines()
