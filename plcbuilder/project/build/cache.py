@@ -281,7 +281,7 @@ class Cache:
         binary = pb.binary if pb.ok else None
         if binary is not None:
             _write_if_changed(path, binary, sync=False)
-            pb._binary, pb._bin_path = None, path
+            pb.written_to(path)
         if key is None:
             return
         # kept as its JSON text (written out as it is), the diagnostics as the

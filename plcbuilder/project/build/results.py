@@ -108,6 +108,11 @@ class ProcedureBuild:
             return None
         return data if zlib.crc32(data) == self.crc32 else None
 
+    def written_to(self, path: Path) -> None:
+        """Its binary is now at ``path`` (in build/): the bytes are let go and
+        read back from there when asked for."""
+        self._binary, self._bin_path = None, path
+
     def program(self) -> Optional[Program]:
         """The compiled procedure, as the controller loads it (None if it did not compile)."""
         data = self.binary if self.ok else None
