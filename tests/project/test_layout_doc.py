@@ -15,5 +15,5 @@ def test_the_layout_names_every_module_of_project():
     folder = Path(plcbuilder.project.__file__).parent
     for p in sorted(folder.rglob("*.py")):
         if p.name != "__init__.py":
-            assert p.name in entry, f"docs/development.md's layout does not name {p.name}"
+            assert p.name in entry, f"the layout in docs/development.md does not name {p.name}"
     assert "build/" in entry and "build.py" not in entry
