@@ -248,7 +248,7 @@ class RunOptions:
     pre_ms: int = 0
     post_ms: int = 0
     trigger_mode: str = "single"
-    capture: Optional[Path] = None       # where the capture goes (.plctrace, .vcd or .csv)
+    capture: Optional[Path] = None       # where the capture goes (.plctrace, or an export's suffix)
     history: Optional[Path] = None       # the whole session as a trace file
     watch: Sequence[str] = ()            # PROC.var recorded each tick into the history
     breaks: Sequence[str] = ()           # "FILE:LINE[:CONDITION]": the run ends where one halts
@@ -586,9 +586,9 @@ def save_trace(trace: Trace, path) -> None:
 
 
 def export_trace(trace: Trace, path, fmt: Optional[str] = None, **chosen: bool) -> str:
-    """Export as CSV (per change, or ``per_tick=True``) or VCD (``split_bits=True``:
-    its numbers as one-bit lanes, for PulseView): the ways of
-    ``plcbuilder.trace.export.EXPORTERS``. Returns the format; raises ExportError."""
+    """Export in one of the ways of ``plcbuilder.trace.export.EXPORTERS`` (``fmt``,
+    or the one the suffix of ``path`` names), ``chosen`` its options switched on.
+    Returns the format; raises ExportError."""
     _load("trace_export")
     return trace_export.export(trace, path, fmt, **chosen)
 

@@ -82,7 +82,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "auto: also capture when no trigger came for pre+post ms")
     g.add_argument("--capture", type=Path, metavar="FILE",
                    help="write the capture: .plctrace (reopens in the IDE), or by its suffix "
-                        "any format `plcbuilder trace export` writes (.vcd, .csv)")
+                        "any format `plcbuilder trace export` writes")
     g.add_argument("--history", type=Path, metavar="FILE",
                    help="write the whole session as a trace: .plctrace, or by its suffix any "
                         "format `plcbuilder trace export` writes")

@@ -1,7 +1,8 @@
 """``plcbuilder trace info|export|compare``: trace files from the command line.
 
     trace info FILE                  the span, the signals and how often each changed
-    trace export FILE OUT [--per-tick] [--split-bits] [--format csv|vcd]
+    trace export FILE OUT [--format F] [the format's options]
+                                     (the formats: trace.export.EXPORTERS)
     trace compare A B [--align none|start|trigger] [--offset MS] [--json]
                                      the first tick where they differ (exit 1), or 0
 """
