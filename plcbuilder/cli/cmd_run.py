@@ -196,6 +196,12 @@ def summary(rep: dict, out: term.Out) -> str:
         lines.append("prints:")
         for p in rep["prints"]:
             lines.append(f"  {p['t_ms']:>7} ms  {p['from']}: [{p['register']}] {p['value']}")
+    if rep.get("logs"):                 # logpoints, and TG Motion's RtWprintf_* prints
+        lines.append("log:")
+        for entry in rep["logs"][:50]:
+            lines.append(f"  {entry['t_ms']:>7} ms  {entry['from']}: {entry['text']}")
+        if len(rep["logs"]) > 50:
+            lines.append(f"  ... {len(rep['logs']) - 50} more (all of them in --json's logs)")
     notes = [n for n in rep["notes"] if n["level"] != "info"]
     for n in notes[:50]:
         lines.append(f"{n['level']} at {n['t_ms']} ms: {n['text']}")

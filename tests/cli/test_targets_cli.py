@@ -47,3 +47,15 @@ def test_unknown_target_refused_naming_the_line(tmp_path, capsys):
     assert main(["build", str(dest)]) != 0
     err = capsys.readouterr().err
     assert "plcbuilder.toml:4:" in err and "unknown target 's7'" in err
+
+
+def test_tgmotion_prints_show_in_the_run_summary(tmp_path, capsys):
+    """docs/targets.md "Diagnostic prints": the seed's functions "are used to output
+    texts to RTX Server console"; here they print in the run log, and the summary of
+    ``plcbuilder run`` (no --json) shows it, as the IDE's Run log does."""
+    dest = tmp_path / "tg"
+    assert main(["new", "--target", "tgmotion", str(dest)]) == 0
+    capsys.readouterr()
+    assert main(["run", str(dest), "--ms", "3"]) == 0
+    out = capsys.readouterr().out
+    assert "log:\n        0 ms  Program_Ini: RtWprintf_Long(524288) (Program.plc:11)\n" in out
