@@ -29,8 +29,11 @@ EXAMPLE = ("resources", "example_project")
 #: the example project of each target (docs/targets.md)
 EXAMPLES = {"mycnc": EXAMPLE, "huazhong": ("resources", "example_huazhong"),
             "tgmotion": ("resources", "example_tgmotion")}
-#: settings an example sets beyond the defaults: what TG Motion's oscilloscope samples
-EXAMPLE_SETTINGS = {"tgmotion": {"oscilloscope": ("in 9", "out 7", "Program.target_x")}}
+#: settings an example sets beyond the defaults: what TG Motion's oscilloscope samples,
+#: and a housekeeping Program_01 slower than the seed's "10 000 μs (the upper value is
+#: not limited)"
+EXAMPLE_SETTINGS = {"tgmotion": {"oscilloscope": ("in 9", "out 7", "Program.target_x"),
+                                 "program_periods_us": (20000, 1000, 1000)}}
 PINS = ("resources", "include", "pins.h")
 MACHINE = ("resources", "machine", "default.toml")
 

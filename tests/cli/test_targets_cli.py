@@ -30,9 +30,12 @@ def test_new_tgmotion_run_reports_calls_and_budget(tmp_path, capsys):
     capsys.readouterr()
     assert main(["run", str(dest), "--ms", "10", "--json"]) == 0
     rep = json.loads(capsys.readouterr().out)
-    assert rep["calls"]["Program_05"] == 10 * 2 * 5 and rep["calls"]["Program_04"] == 20
+    # Program_Ini clears 16384 words of TGM_Data (3.3 ms at 20 ns an instruction):
+    # the cycles (2 a ms, 5 slots each) begin in tick 4
+    assert rep["cycles"] == 6 * 2
+    assert rep["calls"]["Program_05"] == 6 * 2 * 5 and rep["calls"]["Program_04"] == 6 * 2
     assert rep["budget"] == [] and rep["registers"]["TGM_Data"]["0"] == 250
-    assert main(["run", str(dest), "--ms", "3"]) == 0
+    assert main(["run", str(dest), "--ms", "6"]) == 0
     assert "calls: Program_01" in capsys.readouterr().out
     assert main(["test", str(dest)]) == 0
 
@@ -58,4 +61,4 @@ def test_tgmotion_prints_show_in_the_run_summary(tmp_path, capsys):
     capsys.readouterr()
     assert main(["run", str(dest), "--ms", "3"]) == 0
     out = capsys.readouterr().out
-    assert "log:\n        0 ms  Program_Ini: RtWprintf_Long(524288) (Program.plc:11)\n" in out
+    assert "log:\n        0 ms  Program_Ini: RtWprintf_Long(524288) (Program.plc:13)\n" in out

@@ -123,3 +123,22 @@ def test_a_program_period_has_no_upper_bound():
     s = parse_settings('[tgmotion]\ncycle_time_program_01_us = 20000\n'
                        'cycle_time_program_03_us = 1000000\n', "plcbuilder.toml")
     assert s.program_periods_us == (20000, 1000, 1000000)
+
+
+def test_the_tgmotion_example_initialises_in_program_ini_and_has_a_slow_program(tmp_path):
+    """Issue 27 items 1 and 2 in the example a user starts from: TG Motion's seed,
+    "The execution length of this function is not limited" (Program_Ini clears the
+    TGM_Data words it uses, more than the 100 000 instructions a cyclic call may
+    run), and "100 μs to 10 000 μs (the upper value is not limited)" (Program_01,
+    the housekeeping program, runs every 20 000 µs)."""
+    project = api.create_project(tmp_path / "tg", target="tgmotion")
+    assert project.settings.program_periods_us == (20000, 1000, 1000)
+    src = (project.root / "hardware" / "Program.plc").read_text()
+    assert "Program_Ini" in src and "TGM_CLEARED" in src
+    rep = api.run(project.root, api.RunOptions(ms=100)).report
+    assert rep["faults"] == [] and rep["calls"]["Program_Ini"] == 1
+    ini = next(p for p in rep["procedures"] if p["name"] == "Program")
+    assert ini["exit_code"] is None                   # the program runs on after Program_Ini
+    assert rep["vars"]["Program"]["i"] == 16384       # it cleared 16384 words in one call
+    assert rep["calls"]["Program_01"] in (4, 5)       # every 20 ms in 100 ms
+    assert rep["calls"]["Program_02"] > 90            # the others every 1 ms
