@@ -142,3 +142,15 @@ def test_the_tgmotion_example_initialises_in_program_ini_and_has_a_slow_program(
     assert rep["vars"]["Program"]["i"] == 16384       # it cleared 16384 words in one call
     assert rep["calls"]["Program_01"] in (4, 5)       # every 20 ms in 100 ms
     assert rep["calls"]["Program_02"] > 90            # the others every 1 ms
+
+
+def test_the_huazhong_example_uses_a_typed_view(tmp_path):
+    """Issue 27 item 5 in the example: the seed's views "都指向同一块内存" (all point
+    to the same memory): plc2() sends the first 16 inputs to the CNC as one word
+    through X_ui[0], inputs 0..7 being X[0] and 8..15 X[1]."""
+    project = api.create_project(tmp_path / "hz", target="huazhong")
+    assert "X_ui[0]" in (project.root / "hardware" / "plc.plc").read_text()
+    rep = api.run(project.root, api.RunOptions(ms=100, inputs=("9=1@0", "0=1@0"))).report
+    x = rep["registers"]["X"]
+    word = int(x.get("0", 0)) | int(x.get("1", 0)) << 8
+    assert word & 0x0201 == 0x0201 and int(rep["registers"]["G"]["2"]) == word
