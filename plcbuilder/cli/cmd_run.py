@@ -208,6 +208,12 @@ def summary(rep: dict, out: term.Out) -> str:
     if len(notes) > 50:
         lines.append(f"... {len(notes) - 50} more warnings")
     lines.append("outputs on: " + (", ".join(map(str, rep["outputs"])) or "none"))
+    for key, what in (("vins", "virtual inputs"), ("vouts", "virtual outputs")):
+        if rep.get(key):
+            lines.append(f"{what} on: " + ", ".join(map(str, rep[key])))
+    for p in rep.get("pls") or ():                     # softMC's PLSs (docs/targets.md)
+        lines.append(f"PLS{p['pls']} {p['name']}: {p['axis'] or '-'} -> {p['output'] or '-'}, "
+                     f"{'enabled' if p['enabled'] else 'disabled'}, output {p['state']}")
     for key in ("pwm", "dac"):
         if any(rep[key]):
             lines.append(f"{key}: " + " ".join(map(str, rep[key])))
@@ -240,6 +246,14 @@ def summary(rep: dict, out: term.Out) -> str:
             if vals:
                 lines.append(f"{bank}: " + " ".join(f"[{i}]={v}" for i, v in vals.items()))
         lines.append("calls: " + ", ".join(f"{n} {k}" for n, k in rep["calls"].items()))
+    osc = rep.get("oscilloscope")
+    if osc:                                            # TG Motion's (docs/targets.md)
+        head = f"oscilloscope: {osc['samples']} samples of {', '.join(osc['signals'])}"
+        if osc["last"]:
+            t_us, cycle, *values = osc["last"][-1]
+            head += (f"; the last at {t_us} us (cycle {cycle}): "
+                     + " ".join(map(str, values)))
+        lines.append(head)
     if "capture" in rep:
         cap = rep["capture"]
         lines.append("capture: " + (f"triggered at {cap['t_ms']} ms, {cap['from_ms']}.."

@@ -62,3 +62,33 @@ def test_tgmotion_prints_show_in_the_run_summary(tmp_path, capsys):
     assert main(["run", str(dest), "--ms", "3"]) == 0
     out = capsys.readouterr().out
     assert "log:\n        0 ms  Program_Ini: RtWprintf_Long(524288) (Program.plc:13)\n" in out
+
+
+def test_the_summary_shows_the_oscilloscope_and_the_softmc_parts(tmp_path, capsys):
+    """Without --json the summary shows what issue 27 added to the run: the
+    oscilloscope's signals and last sample (docs/targets.md, "capture the values
+    of desired registers"), and softMC's virtual outputs and PLSs ("There is no
+    limit of the number of positions or PLSs that can be defined")."""
+    dest = tmp_path / "tg"
+    assert main(["new", "--target", "tgmotion", str(dest)]) == 0
+    capsys.readouterr()
+    assert main(["run", str(dest), "--ms", "20", "--scope", "gvar 2000000",
+                 "--scope", "Program.target_x"]) == 0
+    out = capsys.readouterr().out
+    assert "oscilloscope: 32 samples of gvar 2000000, Program.target_x; the last at " in out
+    # cycles count from Program_Ini's end (tick 4 here): the sample's time is from
+    # the first cycle, 31 cycles of 500 us and 300.36 us into the 32nd
+    assert "the last at 15800.36 us (cycle 31): 250 " in out
+    proj = tmp_path / "my"
+    assert main(["new", str(proj)]) == 0
+    with (proj / "machine.toml").open("a", encoding="utf-8") as f:
+        f.write('\n[[pls]]\nname = "cam"\naxis = "X"\nvout = 3\npositions = [50.0]\n'
+                'polarity = 1\nenabled = true\n')
+        for k in range(2, 11):
+            f.write(f'\n[[pls]]\naxis = "Y"\nvout = {k + 10}\npositions = [1.0]\n')
+    capsys.readouterr()
+    assert main(["run", str(proj), "--ms", "10"]) == 0
+    out = capsys.readouterr().out
+    assert "virtual outputs on: 3\n" in out
+    assert "PLS1 cam: X -> VOUT.3, enabled, output 1\n" in out
+    assert "PLS10 PLS10: Y -> VOUT.20, disabled, output 0\n" in out
