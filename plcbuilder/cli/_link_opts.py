@@ -37,6 +37,35 @@ def add_link_options(p: argparse.ArgumentParser) -> None:
     term.add_color_argument(p)
 
 
+def add_project_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--project", type=Path, metavar="DIR",
+                   help="the project the image is of: the controller runs it on the "
+                        "project's target (docs/targets.md). Default: the project whose "
+                        "build/eeprom.rom the image is; none (myCNC) for an image elsewhere")
+
+
+def image_target(image: Path, project: "Path | None") -> "tuple[dict | None, str]":
+    """The target profile to load ``image`` with, as the IDE sends it, and the
+    target's name: that of the project DIR (``--project``), else of the project
+    whose ``build/eeprom.rom`` the image is; (None, "mycnc") for a myCNC project or
+    an image outside a project. Raises ProjectError for a project that cannot be
+    read (a bad plcbuilder.toml or parameters file names the line)."""
+    from plcbuilder.api import Project
+    if project is None:
+        root = Path(image).resolve().parent.parent
+        if not (root / "plcbuilder.toml").is_file():
+            return None, "mycnc"
+        found = Project.open(root)
+        if found.image_path.resolve() != Path(image).resolve():
+            return None, "mycnc"
+    else:
+        found = Project.open(project)
+    target = found.target_settings()
+    if target.get("name") == "mycnc":
+        return None, "mycnc"
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in target.items()}, target["name"]
+
+
 def connect(args: argparse.Namespace):
     """A connected Client from the options (link errors propagate)."""
     from plcbuilder.link.client import Client, parse_address

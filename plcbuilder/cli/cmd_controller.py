@@ -17,7 +17,7 @@ import sys
 import threading
 from pathlib import Path
 
-from plcbuilder.cli._link_opts import EXIT_FAIL, EXIT_USAGE
+from plcbuilder.cli._link_opts import EXIT_FAIL, EXIT_USAGE, add_project_option, image_target
 from plcbuilder.cli.common import int_in
 
 MAX_LATENCY_MS = 60_000
@@ -77,6 +77,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="IO.DAT: softMC presets of the inputs (INP=0x.., DIP=0x..)")
     p.add_argument("--image", type=Path, metavar="FILE",
                    help="an eeprom.rom image to load at start")
+    add_project_option(p)
     p.add_argument("--speed", type=parse_speed, default=("realtime", 1.0),
                    metavar="realtime|N|max|pause",
                    help="pace: real time (default), N times real time, as fast as possible, "
@@ -134,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:
         say(f"plcbuilder controller: {exc}", True)
         return EXIT_FAIL
-    image = None
+    image = image_profile = None
     if args.image is not None:
         from plcbuilder._support.files import read_bounded
         from plcbuilder.link.protocol import MAX_IMAGE
@@ -143,13 +144,19 @@ def run(args: argparse.Namespace) -> int:
         except OSError as exc:
             say(f"plcbuilder controller: cannot read {args.image}: {exc.strerror or exc}", True)
             return EXIT_FAIL
+        from plcbuilder.api import ProjectError
+        try:                       # a Huazhong or TG Motion project's image runs as that
+            image_profile, _ = image_target(args.image, args.project)
+        except ProjectError as exc:
+            say(f"plcbuilder controller: {exc}", True)
+            return EXIT_FAIL
     path = args.runtime_file or runtime.default_path()
     mode, factor = args.speed
     try:
         api = (args.server_api_host, args.server_api) if args.server_api is not None else None
         srv = ControllerServer(controller_factory=factory, host=args.host, port=args.port,
                                speed=mode, factor=factor, limits=args.limits, image=image,
-                               runtime_file=path, server_api=api)
+                               runtime_file=path, server_api=api, image_target=image_profile)
     except Refused as exc:
         say(f"plcbuilder controller: {args.image}: {exc.reason}", True)
         return EXIT_FAIL
@@ -217,7 +224,8 @@ def run(args: argparse.Namespace) -> int:
                     "procedures, set outputs and jog the machine", True)
         if image is not None:
             n = len(srv.service.image.procedures) if srv.service.image else 0
-            say(f"plcbuilder controller: loaded {args.image} ({n} procedures)")
+            on = f", target {image_profile['name']}" if image_profile else ""
+            say(f"plcbuilder controller: loaded {args.image} ({n} procedures{on})")
         say("plcbuilder controller: Ctrl+C or SIGTERM stops it")
         while not stop.wait(0.5):
             if args.parent is not None and (not runtime.pid_alive(args.parent) or

@@ -10,7 +10,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from plcbuilder.cli._link_opts import EXIT_FAIL, add_link_options, run_client
+from plcbuilder.cli._link_opts import (EXIT_FAIL, add_link_options, add_project_option,
+                                       image_target, run_client)
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -20,6 +21,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                     "prints the controller's reason and exits 1; the previous image keeps "
                     "running.")
     p.add_argument("image", type=Path, metavar="IMAGE", help="the image (build/eeprom.rom)")
+    add_project_option(p)
     add_link_options(p)
     return p
 
@@ -36,13 +38,21 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return EXIT_FAIL
 
+    from plcbuilder.api import ProjectError
+    try:
+        target, target_name = image_target(args.image, args.project)
+    except ProjectError as exc:
+        print(f"plcbuilder upload: {exc}", file=sys.stderr)
+        return EXIT_FAIL
+
     def body(client, out) -> int:
-        r = client.upload(data)
+        r = client.upload(data, target=target)
         procs = r.get("procedures", [])
         hw = [p for p in procs if p.get("kind") == "hardware"]
+        on = f", target {target_name}" if target is not None else ""
         out.print(f"uploaded {args.image}: {len(procs)} procedures ({len(hw)} hardware, "
                   f"{len(procs) - len(hw)} software), hardware code {r.get('hw_total', 0)} bytes, "
-                  f"image CRC-32 {r.get('image_crc32')}")
+                  f"image CRC-32 {r.get('image_crc32')}{on}")
         return 0
 
     return run_client(args, body, "upload")

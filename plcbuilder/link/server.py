@@ -762,14 +762,15 @@ class ControllerServer:
                  controller_factory: Optional[Callable[[], Controller]] = None,
                  speed: str = "realtime", factor: float = 1.0, limits: Optional[Limits] = None,
                  image: Optional[bytes] = None, runtime_file: Optional[Path] = None,
-                 server_api: Optional[tuple[str, int]] = None, **server_options):
+                 server_api: Optional[tuple[str, int]] = None,
+                 image_target: Optional[dict] = None, **server_options):
         if controller is None:
             controller_factory = controller_factory or (lambda: Controller())
             controller = controller_factory()
         self.sim = Simulation(controller, speed, factor)
         self.service = Service(self.sim, limits=limits, controller_factory=controller_factory)
         if image is not None:
-            self.service.load_image(image)          # Refused: the caller says why
+            self.service.load_image(image, image_target)   # Refused: the caller says why
         self.server = Server(self.service, host, port, token, **server_options)
         #: myCNC's text Server API on (host, port), when asked for (no token: loopback by default)
         self.server_api = None

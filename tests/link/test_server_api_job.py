@@ -181,3 +181,67 @@ def test_the_manuals_job_example_gives_the_replies_it_shows(tmp_path):
     finally:
         proc.terminate()
         proc.wait(20)
+
+
+def _cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "plcbuilder", *map(str, args)],
+                          capture_output=True, text=True, timeout=120, cwd=cwd)
+
+
+def _served_controller(tmp_path, cwd, *extra):
+    """``plcbuilder controller --server-api 0 ...`` as a user starts it; the
+    process, its Server API port and its runtime file."""
+    rt = tmp_path / "rt.json"
+    proc = subprocess.Popen([sys.executable, "-m", "plcbuilder", "controller", "--port", "0",
+                             "--server-api", "0", "--runtime-file", str(rt), *map(str, extra)],
+                            cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    for _ in range(10):
+        out = proc.stdout.readline()
+        if "Server API on" in out:
+            return proc, int(out.split(":")[-1].split()[0]), rt
+    proc.terminate()
+    raise AssertionError(f"no Server API: {proc.stderr.read()}")
+
+
+def _ask(port: int, command: str) -> str:
+    c = Line(("127.0.0.1", port))
+    try:
+        return c.ask(command)
+    finally:
+        c.close()
+
+
+@pytest.mark.parametrize("how", ["controller --image", "upload"])
+def test_a_huazhong_project_served_from_the_command_line_runs_as_huazhong(tmp_path, how):
+    """Issue 27 "Done when": item 11 "works from the command line" on every target:
+    `plcbuilder controller --image build/eeprom.rom` (or `plcbuilder upload`) of a
+    Huazhong project runs its program as Huazhong (the seed's init() "该函数一般设置系统
+    MSBT功能的响应函数", the M/S handlers), so ProgramFileOpen + ProgramPlay of the
+    example's job.nc homes X (lamp Y0.5) and its M03 reaches on_m. Before, the
+    image ran as myCNC procedures: no handler, no lamp."""
+    proj = tmp_path / "mill"
+    assert _cli("new", "--target", "huazhong", proj, cwd=tmp_path).returncode == 0
+    assert _cli("build", proj, cwd=tmp_path).returncode == 0
+    image = proj / "build" / "eeprom.rom"
+    if how == "upload":
+        proc, port, rt = _served_controller(tmp_path, tmp_path)
+    else:
+        proc, port, rt = _served_controller(tmp_path, proj, "--image", "build/eeprom.rom")
+    try:
+        if how == "upload":
+            up = _cli("upload", image, "--runtime-file", rt, cwd=tmp_path)
+            assert up.returncode == 0, up.stderr
+            assert "target huazhong" in up.stdout
+        g = proj / "job.nc"
+        g.write_text("G28 X0\nS1500 M03\nM30\n", encoding="utf-8")
+        assert _ask(port, f"ProgramFileOpen {g}") == f"OK {g}"
+        assert _ask(port, "ProgramPlay") == "OK"
+        end = time.monotonic() + WAIT_S
+        while _ask(port, "GetWorkState") != "OK idle" and time.monotonic() < end:
+            time.sleep(0.1)
+        assert _ask(port, "GetHWOutputBit 5") == "OK 1"      # X homed: AX_HOME_FIN's lamp
+        assert _ask(port, "GetHWOutputBit 0") == "OK 1"      # M03 went to on_m: spindle on
+        assert _ask(port, "GetIVariable 1013001") == "OK 1500"   # S went to on_s: G[1]
+    finally:
+        proc.terminate()
+        proc.wait(20)
