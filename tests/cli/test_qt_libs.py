@@ -136,7 +136,11 @@ def test_the_check_runs_while_the_ide_loads(tmp_path):
         pytest.skip("no xcb plugin")
     marks = tmp_path / "marks"
     ldd = tmp_path / "ldd"
-    ldd.write_text(f"#!/bin/sh\necho ldd-started >> '{marks}'\nsleep 0.3\n"
+    # the fake ldd answers once the IDE's modules began to load (or after 10 s,
+    # when the command waited for it first): the order, not the machine's load, decides
+    ldd.write_text(f"#!/bin/sh\necho ldd-started >> '{marks}'\n"
+                   f"for i in $(seq 100); do grep -q ide-import '{marks}' && break; "
+                   f"sleep 0.1; done\n"
                    f"echo ldd-done >> '{marks}'\ncat '{tmp_path / 'ldd.out'}'\n")
     ldd.chmod(0o755)
     (tmp_path / "ldd.out").write_text(LDD_MISSING)
