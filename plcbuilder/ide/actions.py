@@ -239,6 +239,7 @@ def build_actions(win) -> dict[str, QAction]:
     context = [actions[a] for a in (Act.TOGGLE_COMMENT, Act.GOTO_DEFINITION)] + \
         [None] + [actions[a] for a in (Act.FIND, Act.GOTO_LINE)]
     win.editor_stack.context_actions = context
+    win.run_actions.sig_job_state.connect(lambda _state: update_actions(win))
     return actions
 
 
@@ -368,9 +369,11 @@ def update_actions(win) -> None:
         win.action(Act.TOGGLE_COMMENT).setEnabled(False)
     run = win.connection is not None and has_project
     for name in (Act.UPLOAD, Act.START, Act.START_CURRENT, Act.STOP, Act.RESET_CONTROLLER,
-                 Act.BUILD_UPLOAD_START, Act.RUN_GCODE, Act.PAUSE_GCODE, Act.PLAY_GCODE,
-                 Act.STOP_GCODE):
+                 Act.BUILD_UPLOAD_START, Act.RUN_GCODE):
         win.action(name).setEnabled(run)
+    for name, verb in ((Act.PAUSE_GCODE, "pause"), (Act.PLAY_GCODE, "play"),
+                       (Act.STOP_GCODE, "stop")):         # as the job's state allows
+        win.action(name).setEnabled(run and win.run_actions.job_allows(verb))
     if Act.BUILD_UPLOAD_START in win._actions:          # the workbench's actions
         win.action(Act.BUILD_UPLOAD_START).setEnabled(run)
         for name in (Act.FIND_REFERENCES, Act.RENAME_SYMBOL, Act.WHAT_IS_THIS):

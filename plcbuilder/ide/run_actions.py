@@ -73,6 +73,8 @@ class RunActions(QObject):
     """Build All gave a BuildResult (not an exception): the problems follow it."""
 
     sig_build_finished = Signal(object)
+    #: the controller's G-code job changed state (its state, "" when none is open)
+    sig_job_state = Signal(str)
     """Build All finished (the BuildResult, or the exception it raised)."""
 
     def __init__(self, parent, editors, build_panel, prefs, *, connection=None,
@@ -88,6 +90,7 @@ class RunActions(QObject):
         self.start_controller = start_controller
         self.step = Step.IDLE
         self.last_eparam = 0
+        self.job_state = ""                     # the G-code job's state ("" when none is open)
         self.last_start = ""
         self.pending_start: Optional[tuple[str, int]] = None   # after BUILD_UPLOAD_START
         self.pending_gcode: Optional[tuple[str, str]] = None   # (text, path), likewise
@@ -475,6 +478,24 @@ class RunActions(QObject):
             return
         c.sig_connected.connect(self._on_connected)
         c.sig_state.connect(self._on_state)
+        c.sig_state.connect(self._follow_job)
+
+    #: which of Pause / Continue / Stop G-code Program each state of the job allows
+    #: (controller/job.py's STATES; no job open: none of them)
+    JOB_VERBS = {"starting": ("pause", "stop"), "running": ("pause", "stop"),
+                 "paused": ("play", "stop"), "ended": ("play",), "stopped": ("play",),
+                 "error": ("play",), "ready": ("play",)}
+
+    def job_allows(self, verb: str) -> bool:
+        """Does the job's state allow ``verb`` (pause, play, stop)?"""
+        return verb in self.JOB_VERBS.get(self.job_state, ())
+
+    def _follow_job(self, st, _missed: int = 0) -> None:
+        job = getattr(st, "job", None) or {}
+        state = str(job.get("state", "")) if isinstance(job, dict) else ""
+        if state != self.job_state:
+            self.job_state = state
+            self.sig_job_state.emit(state)
 
     def _on_connected(self, _address: str) -> None:
         self._image_check_due = True

@@ -30,6 +30,8 @@ def test_run_gcode_program_from_the_run_menu(live_uploaded, qtbot, monkeypatch, 
     monkeypatch.setattr(QFileDialog, "getOpenFileName",
                         staticmethod(lambda *a, **k: (str(job), "")))
     win.run_actions.set_speed("max")
+    gcode_verbs = (Act.PAUSE_GCODE, Act.PLAY_GCODE, Act.STOP_GCODE)
+    assert not any(win.action(a).isEnabled() for a in gcode_verbs)     # no job open yet
     win.action(Act.RUN_GCODE).trigger()
     qtbot.waitUntil(lambda: any("starts M03" in t for t in _log_texts(panels)), timeout=WAIT)
     qtbot.waitUntil(lambda: any(t.startswith("ended at line 13") for t in _log_texts(panels)),
@@ -42,6 +44,33 @@ def test_run_gcode_program_from_the_run_menu(live_uploaded, qtbot, monkeypatch, 
     assert "line 12: M05 exit 99 plc_exit_normal" in texts
     qtbot.waitUntil(lambda: "G-code job.nc line 13/13 ended, line 12 M05 → M05 exit 99"
                     in panels.proc.status.plain_text(), timeout=WAIT)
+    # an ended job can only be run again
+    qtbot.waitUntil(lambda: win.action(Act.PLAY_GCODE).isEnabled(), timeout=WAIT)
+    assert not win.action(Act.PAUSE_GCODE).isEnabled()
+    assert not win.action(Act.STOP_GCODE).isEnabled()
+
+
+def test_pause_continue_and_stop_are_offered_as_the_job_allows(live_uploaded, qtbot,
+                                                                tmp_path):
+    """Pause and Stop while the job runs, Continue and Stop while it is paused,
+    only Continue (run it again) once it stopped: the menu follows the job's
+    state on the controller."""
+    win, _panels = live_uploaded
+    dwell = tmp_path / "dwell.nc"
+    dwell.write_text("G4 P60\nM30\n")            # a minute's dwell at 1x
+    win.run_actions.set_speed("realtime")
+    pause, play, stop = (win.action(a) for a in (Act.PAUSE_GCODE, Act.PLAY_GCODE,
+                                                  Act.STOP_GCODE))
+
+    def offered():
+        return (pause.isEnabled(), play.isEnabled(), stop.isEnabled())
+
+    assert win.run_actions.run_gcode(str(dwell))
+    qtbot.waitUntil(lambda: offered() == (True, False, True), timeout=WAIT)
+    pause.trigger()
+    qtbot.waitUntil(lambda: offered() == (False, True, True), timeout=WAIT)
+    stop.trigger()
+    qtbot.waitUntil(lambda: offered() == (False, True, False), timeout=WAIT)
 
 
 def test_a_bad_program_is_refused_naming_its_line(live_uploaded, qtbot, tmp_path):
