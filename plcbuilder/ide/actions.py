@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from PySide6.QtCore import QSize, Qt
 from PySide6.QtGui import QAction, QKeySequence
-from PySide6.QtWidgets import QDockWidget, QLabel, QToolBar
+from PySide6.QtWidgets import QLabel, QToolBar
 
 from plcbuilder.api import Kind
 from plcbuilder.ide.icons import icon
@@ -287,9 +287,10 @@ def build_menus(win) -> None:
 def fill_view_menu(win) -> None:
     m = win.view_menu
     m.clear()
-    # the window's own docks (a recursive search walks every widget: slow)
-    for dock in win.findChildren(QDockWidget, options=Qt.FindChildOption.FindDirectChildrenOnly):
-        m.addAction(dock.toggleViewAction())
+    # the window's docks, as its dock table lists them
+    from plcbuilder.ide.docks import view_actions
+    for act in view_actions(win):
+        m.addAction(act) if act is not None else m.addSeparator()
     m.addSeparator()
     m.addAction(win.toolbar.toggleViewAction())
     if getattr(win, "debug_toolbar", None) is not None:

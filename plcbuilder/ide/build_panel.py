@@ -182,3 +182,11 @@ class BuildPanel(QWidget):
 def _relative(line: str, root: Path) -> str:
     prefix = str(root).rstrip("/\\") + "/"
     return line[len(prefix):] if line.startswith(prefix) else line
+
+
+def dock_panel(win, key: str) -> "BuildPanel":
+    """The Build Output dock's panel (docks.DOCKS), made when it first shows
+    or a build needs it."""
+    panel = BuildPanel(win)
+    panel.sig_open_location.connect(win.open_location)
+    return panel

@@ -1,88 +1,248 @@
-"""The main window's docks: where they go, their default sizes, the saved layout.
+"""The main window's docks, one table: :data:`DOCKS`, a :class:`DockSpec` a dock.
 
-Left: the project; bottom: Problems, Build Output and the run log (tabbed);
-right: the plots (tabbed) over inputs and watch (tabbed).
+A row says the dock's object name (saved layouts find the dock by it: never
+rename one), its title, where the default layout puts it, whether it shows
+there, and the function of its part that makes its panel. The window builds
+every dock from the table (:func:`build`): its View menu entry, Reset Layout
+(the table's layout again) and the saved layout all follow from it. Adding a
+dock is one row here and a panel factory in its part's module.
+
+Default layout. Left: the project over Outline, Call Stack and Breakpoints
+(tabbed); bottom: Problems, Build Output, Tests, the run log, Find in Files,
+References and Registers (tabbed); right: the plots (tabbed) over Inputs,
+Watch, Cursors, Forces and Disassembly (tabbed).
+
+A panel that is not in the first frame is made when its dock first shows (or
+the panel is asked for), never before the window's first paint: its module is
+not even imported until then (:class:`DockTable`).
 """
 
 from __future__ import annotations
 
-from typing import Callable, Mapping, Optional
+import importlib
+from dataclasses import dataclass
+from typing import Callable, Iterable, Optional
 
 from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import QDockWidget, QWidget
 
+LEFT, RIGHT, BOTTOM = "left", "right", "bottom"
+_AREAS = {LEFT: Qt.DockWidgetArea.LeftDockWidgetArea,
+          RIGHT: Qt.DockWidgetArea.RightDockWidgetArea,
+          BOTTOM: Qt.DockWidgetArea.BottomDockWidgetArea}
 
-class LazyPanels:
-    """The panels of docks that are hidden or tabbed away at start: each is made
-    by ``make(key)`` (which wires it and brings it up to date) the first time its
-    dock shows or :meth:`get` asks for it, and put in its dock; ``then(key)``
-    runs once it is there. Until then neither the panel nor its module is loaded
-    (the window's first paint does not wait for them)."""
 
-    def __init__(self, docks: Mapping[str, QDockWidget], make: Callable[[str], QWidget],
-                 then: Optional[Callable[[str], None]] = None):
-        self.docks = dict(docks)
-        self._make, self._then = make, then
+@dataclass(frozen=True)
+class DockSpec:
+    """One dock of the main window."""
+
+    key: str            #: the part's name for it ("registers": ``win.dock_table.panel(key)``)
+    name: str           #: objectName: saved layouts restore by it (keep it stable)
+    title: str
+    area: str           #: LEFT, RIGHT or BOTTOM: where the default layout puts it
+    make: str           #: "module:function": ``function(win, key) -> QWidget`` makes its panel
+    place: str = ""     #: "" (added to the area), "below:NAME" (split under), "tab:NAME" (tabbed with)
+    shown: bool = True  #: shown in the default layout
+    front: bool = False  #: its tab is the current one of its group in the default layout
+    eager: bool = False  #: its panel is in the first frame (made with the window)
+    run: bool = False   #: a run dock: exists only with a controller connection
+    then: str = ""      #: "module:function": ``function(win, key)`` once the panel is in its dock
+    shortcut: str = ""  #: the View menu entry's shortcut
+    shown_alone: bool = True  #: shown without a controller too (when ``shown``)
+
+    @property
+    def attr(self) -> str:
+        """The window's attribute for the dock (``win.registers_dock``)."""
+        return f"{self.key}_dock"
+
+
+_RUN = "plcbuilder.ide.run_actions:run_panel"
+_WB = "plcbuilder.ide.workbench:dock_panel"
+_DBG = "plcbuilder.ide.debug:dock_panel"
+
+#: Every dock of the window, in View menu order (within a tab group, the
+#: default layout's tab order).
+DOCKS: tuple[DockSpec, ...] = (
+    DockSpec("project", "projectDock", "Project", LEFT, "plcbuilder.ide.project_tree:dock_panel",
+             eager=True, shortcut="Alt+1"),
+    DockSpec("outline", "outlineDock", "Outline", LEFT, _WB, place="below:projectDock",
+             eager=True, front=True, shortcut="Alt+7"),
+    DockSpec("callstack", "callStackDock", "Call Stack", LEFT, _DBG, place="tab:outlineDock"),
+    DockSpec("breakpoints", "breakpointsDock", "Breakpoints", LEFT, _DBG, place="tab:outlineDock"),
+    DockSpec("problems", "problemsDock", "Problems", BOTTOM, "plcbuilder.ide.problems:dock_panel",
+             eager=True, front=True, shortcut="Alt+6"),
+    DockSpec("build", "buildDock", "Build Output", BOTTOM, "plcbuilder.ide.build_panel:dock_panel",
+             place="tab:problemsDock"),
+    DockSpec("tests", "testsDock", "Tests", BOTTOM, "plcbuilder.ide.main_window:tests_dock_panel",
+             place="tab:problemsDock", then="plcbuilder.ide.main_window:tests_dock_wire"),
+    DockSpec("log", "runLogDock", "Run log", BOTTOM, _RUN, place="tab:problemsDock", run=True),
+    DockSpec("find", "findInFilesDock", "Find in Files", BOTTOM, _WB, place="tab:problemsDock",
+             shown=False),
+    DockSpec("references", "referencesDock", "References", BOTTOM, _WB, place="tab:problemsDock",
+             shown=False),
+    DockSpec("registers", "registersDock", "Registers", BOTTOM, _WB, place="tab:problemsDock",
+             shown=False),
+    DockSpec("outputs", "runOutputsDock", "Outputs", RIGHT, _RUN, run=True, front=True),
+    DockSpec("proc", "runProcDock", "Proc / messages", RIGHT, _RUN, place="tab:runOutputsDock",
+             run=True),
+    DockSpec("analog", "runAnalogDock", "PWM / DAC / ADC", RIGHT, _RUN, place="tab:runOutputsDock",
+             run=True),
+    DockSpec("axes", "runAxesDock", "Axes", RIGHT, _RUN, place="tab:runOutputsDock", run=True),
+    DockSpec("inputs", "runInputsDock", "Inputs", RIGHT, _RUN, place="below:runOutputsDock",
+             run=True, front=True),
+    DockSpec("watch", "runWatchDock", "Watch", RIGHT, _RUN, place="tab:runInputsDock", run=True),
+    DockSpec("cursors", "runCursorsDock", "Cursors", RIGHT, _RUN, place="tab:runInputsDock",
+             run=True),
+    # nothing can be forced without a controller: then the editor gets the room
+    # (View › Forces still shows it)
+    DockSpec("forces", "forcesDock", "Forces", RIGHT, _DBG, place="tab:runInputsDock",
+             shown_alone=False),
+    DockSpec("disasm", "disasmDock", "Disassembly", RIGHT, _WB, place="tab:runInputsDock",
+             shown=False, then="plcbuilder.ide.workbench:dock_panel_made"),
+)
+
+#: The run docks (key, title, objectName), as the run panels know them.
+RUN_DOCKS = tuple((s.key, s.title, s.name) for s in DOCKS if s.run)
+
+
+def _resolve(path: str) -> Callable:
+    module, _, name = path.partition(":")
+    return getattr(importlib.import_module(module), name)
+
+
+class DockTable:
+    """The window's docks, built from :data:`DOCKS` (those it has: no run
+    docks without a controller). A dock's panel is made by its row's
+    ``make`` the first time the dock shows or :meth:`panel` asks for it, and
+    put in the dock; until the window's first paint (:meth:`release`) a dock
+    that shows waits for it."""
+
+    def __init__(self, win, specs: Iterable[DockSpec]):
+        self.win = win
+        self.specs: dict[str, DockSpec] = {s.key: s for s in specs}
+        self.docks: dict[str, QDockWidget] = {}
         self.made: dict[str, QWidget] = {}
-        for key, dock in self.docks.items():
-            dock.visibilityChanged.connect(lambda on, k=key: on and self.get(k))
+        self.held = True                     # until the first paint
+        self.run = False                     # the run docks are there
+        self._due: list[str] = []            # docks shown while held
 
-    def get(self, key: str) -> QWidget:
+    def dock(self, key: str) -> QDockWidget:
+        return self.docks[key]
+
+    def by_name(self, name: str) -> Optional[QDockWidget]:
+        """The dock of an object name (None: the window has none)."""
+        return next((self.docks[s.key] for s in self.specs.values()
+                     if s.name == name and s.key in self.docks), None)
+
+    def panel(self, key: str) -> QWidget:
         """The dock's panel, made now if it was not."""
         panel = self.made.get(key)
         if panel is None:
-            panel = self.made[key] = self._make(key)
-            self.docks[key].setWidget(panel)
-            if self._then is not None:
-                self._then(key)
+            spec = self.specs[key]
+            panel = _resolve(spec.make)(self.win, key)
+            self.made[key] = panel
+            dock = self.docks[key]
+            if dock.widget() is not panel:
+                dock.setWidget(panel)
+            if spec.then:
+                _resolve(spec.then)(self.win, key)
+            self.adopt()
         return panel
 
+    def adopt(self) -> None:
+        """Panels a part put in their docks itself (the run panels fill all
+        theirs at once) count as made."""
+        for key, dock in self.docks.items():
+            if key not in self.made and dock.widget() is not None:
+                self.made[key] = dock.widget()
 
-def build_docks(win) -> None:
-    """The project (left), Problems, Build Output and Tests (bottom, tabbed)."""
-    win.project_dock = make_dock(win, "Project", "projectDock", win.tree,
-                                 Qt.DockWidgetArea.LeftDockWidgetArea)
-    win.problems_dock = make_dock(win, "Problems", "problemsDock", win.problems,
-                                  Qt.DockWidgetArea.BottomDockWidgetArea)
-    win.build_dock = make_dock(win, "Build Output", "buildDock", None,
-                               Qt.DockWidgetArea.BottomDockWidgetArea)
-    win.build_dock.visibilityChanged.connect(lambda on: on and win.build_panel)
-    win.tabifyDockWidget(win.problems_dock, win.build_dock)
-    win.tests_dock = make_dock(win, "Tests", "testsDock", None,
-                               Qt.DockWidgetArea.BottomDockWidgetArea)
-    win.tabifyDockWidget(win.build_dock, win.tests_dock)
-    # the panel is made (and the tests read) when their tab first shows, or
-    # when they are asked for
-    win.tests_dock.visibilityChanged.connect(lambda on: on and win.tests_panel.ensure_loaded())
-    win.problems_dock.raise_()
-    win.resizeDocks([win.project_dock], [250], Qt.Orientation.Horizontal)
-    win.resizeDocks([win.problems_dock], [200], Qt.Orientation.Vertical)
+    def view(self, keys: Iterable[str]) -> "PanelsView":
+        return PanelsView(self, tuple(keys))
 
+    def release(self) -> None:
+        """The window painted: the docks that showed meanwhile get their panel."""
+        if not self.held:
+            return
+        self.held = False
+        due, self._due = self._due, []
+        for key in due:
+            if key not in self.made and on_screen(self.docks[key]):
+                self.panel(key)
 
-def make_dock(win, title, name, widget, area) -> QDockWidget:
-    """A dock of the window (``widget`` None: its panel comes later)."""
-    dock = QDockWidget(title, win)
-    dock.setObjectName(name)
-    if widget is not None:
-        dock.setWidget(widget)
-    dock.setFeatures(QDockWidget.DockWidgetFeature.DockWidgetClosable |
-                     QDockWidget.DockWidgetFeature.DockWidgetMovable |
-                     QDockWidget.DockWidgetFeature.DockWidgetFloatable)
-    win.addDockWidget(area, dock)
-    return dock
+    def _shown(self, key: str) -> None:
+        if key in self.made:
+            return
+        if self.held and not getattr(self.win, "_painted", True):
+            if key not in self._due:
+                self._due.append(key)
+        else:
+            self.panel(key)
 
 
-#: The run docks (key, title, objectName): made empty before the window shows,
-#: filled with the run panels after its first paint (pyqtgraph is not loaded
-#: until then).
-RUN_DOCKS = (("proc", "Proc / messages", "runProcDock"),
-             ("outputs", "Outputs", "runOutputsDock"),
-             ("analog", "PWM / DAC / ADC", "runAnalogDock"),
-             ("axes", "Axes", "runAxesDock"),
-             ("inputs", "Inputs", "runInputsDock"),
-             ("watch", "Watch", "runWatchDock"),
-             ("log", "Run log", "runLogDock"),
-             ("cursors", "Cursors", "runCursorsDock"))
+class PanelsView:
+    """A part's docks of the table: ``get(key)`` their panel (made if need
+    be), ``made`` those made so far."""
+
+    def __init__(self, table: DockTable, keys: tuple):
+        self.table, self.keys = table, keys
+
+    def get(self, key: str) -> QWidget:
+        return self.table.panel(key)
+
+    @property
+    def made(self) -> dict:
+        return {k: v for k, v in self.table.made.items() if k in self.keys}
+
+
+def build(win, *, run: bool) -> DockTable:
+    """Make the window's docks from :data:`DOCKS` (the run docks only when
+    ``run``: a controller connection), each as ``win.<key>_dock``; the panels
+    of the first frame now, the others when their dock first shows. Places
+    them as the default layout says and fills the View menu."""
+    table = DockTable(win, (s for s in DOCKS if run or not s.run))
+    for spec in table.specs.values():
+        dock = QDockWidget(spec.title, win)
+        dock.setObjectName(spec.name)
+        dock.setFeatures(QDockWidget.DockWidgetFeature.DockWidgetClosable |
+                         QDockWidget.DockWidgetFeature.DockWidgetMovable |
+                         QDockWidget.DockWidgetFeature.DockWidgetFloatable)
+        dock.setAllowedAreas(Qt.DockWidgetArea.AllDockWidgetAreas)
+        table.docks[spec.key] = dock
+        setattr(win, spec.attr, dock)
+        if spec.eager:
+            table.panel(spec.key)
+        else:
+            dock.visibilityChanged.connect(lambda on, k=spec.key: on and table._shown(k))
+    win.dock_table = table
+    table.run = run
+    place(win, table)
+    return table
+
+
+def place(win, table: DockTable) -> None:
+    """The default layout of the table's docks: each added to its area, split
+    under or tabbed with the dock its row names (added to its area when the
+    window has no such dock); those not shown hidden; the front tabs raised."""
+    # the splits first: Qt tabs a dock split from one already in a tab group
+    # into that group instead
+    specs = sorted(table.specs.values(), key=lambda s: s.place.startswith("tab:"))
+    for spec in specs:
+        dock = table.docks[spec.key]
+        how, _, other_name = spec.place.partition(":")
+        other = table.by_name(other_name) if other_name else None
+        win.addDockWidget(_AREAS[spec.area], dock)
+        if other is not None and how == "below":
+            win.splitDockWidget(other, dock, Qt.Orientation.Vertical)
+        elif other is not None:
+            win.tabifyDockWidget(other, dock)
+    for spec in table.specs.values():
+        if not (spec.shown and (table.run or spec.shown_alone)):
+            table.docks[spec.key].hide()
+    for spec in table.specs.values():
+        if spec.front:
+            table.docks[spec.key].raise_()
+    win.right_docks = [table.docks[s.key] for s in table.specs.values()
+                       if s.front and s.area == RIGHT]
 
 
 def whole_tab_titles(bar) -> None:
@@ -136,50 +296,6 @@ def dock_of(widget):
     return None
 
 
-def empty_run_docks(win) -> dict:
-    """The run docks, empty, by key (the run panels fill them later)."""
-    out = {}
-    for key, title, name in RUN_DOCKS:
-        dock = QDockWidget(title, win)
-        dock.setObjectName(name)
-        dock.setAllowedAreas(Qt.DockWidgetArea.AllDockWidgetAreas)
-        out[key] = dock
-    return out
-
-
-def place_run_docks(win, docks: list) -> None:
-    """Right: the plots (tabbed) over inputs and watch (tabbed); the run log
-    beside Problems and Build Output at the bottom."""
-    by_name = {d.objectName(): d for d in docks}
-    right = [by_name[n] for n in ("runOutputsDock", "runProcDock", "runAnalogDock",
-                                  "runAxesDock") if n in by_name]
-    lower = [by_name[n] for n in ("runInputsDock", "runWatchDock", "runCursorsDock")
-             if n in by_name]
-    log = by_name.get("runLogDock")
-    placed = set(right) | set(lower) | ({log} if log else set())
-    area = Qt.DockWidgetArea.RightDockWidgetArea
-    if right:
-        win.addDockWidget(area, right[0])
-    if lower:
-        if right:
-            win.splitDockWidget(right[0], lower[0], Qt.Orientation.Vertical)
-        else:
-            win.addDockWidget(area, lower[0])
-    for d in right[1:]:
-        win.tabifyDockWidget(right[0], d)
-    for d in lower[1:]:
-        win.tabifyDockWidget(lower[0], d)
-    if log is not None:
-        win.tabifyDockWidget(win.build_dock, log)
-    for d in docks:
-        if d not in placed:
-            win.addDockWidget(area, d)
-    for d in (right[:1] + lower[:1]):
-        d.raise_()
-    win.problems_dock.raise_()
-    win.right_docks = right[:1] + lower[:1]
-
-
 def restore_layout(win) -> None:
     geom, state = win.settings.window_state()
     if geom is not None:
@@ -203,23 +319,50 @@ def default_dock_sizes(win) -> None:
     # about ten rows of Problems, Build Output or the run log
     win.resizeDocks([win.problems_dock], [max(230, int(win.height() * 0.3))],
                      Qt.Orientation.Vertical)
-    if getattr(win, "callstack_dock", None) is not None:     # the tree keeps most of the left
-        h = max(win.height() - 260, 400)
-        win.resizeDocks([win.project_dock, win.callstack_dock], [int(h * 0.6), int(h * 0.4)],
-                         Qt.Orientation.Vertical)
+    # the tree keeps most of the left, over the Outline's tab group
+    h = max(win.height() - 260, 400)
+    win.resizeDocks([win.project_dock, win.outline_dock], [int(h * 0.6), int(h * 0.4)],
+                    Qt.Orientation.Vertical)
 
 
 def reset_layout(win) -> None:
+    """View › Reset Layout: the table's default layout (places, which docks
+    show, the front tabs) and its sizes."""
     win.restoreState(win.default_state)
     apply = getattr(win, "tab_bars_apply", None)
     if apply is not None:
         QTimer.singleShot(0, apply)
-    for dock in win.findChildren(QDockWidget):
-        if dock.parent() is win:
-            dock.show()
-    win.problems_dock.raise_()
+    table = win.dock_table
+    for spec in table.specs.values():
+        dock = table.docks[spec.key]
+        if dock.isFloating():
+            dock.setFloating(False)
+        want = spec.shown and (table.run or spec.shown_alone)
+        if want == dock.isHidden():
+            dock.setVisible(want)
+    for spec in table.specs.values():
+        if spec.front:
+            table.docks[spec.key].raise_()
     default_dock_sizes(win)
     QTimer.singleShot(0, lambda: scroll_editors_home(win))
+
+
+def view_actions(win) -> list:
+    """The View menu's entries for the docks, in the table's order: each
+    dock's own show/hide action, with its row's shortcut; None between the
+    areas (a separator)."""
+    out: list = []
+    table = win.dock_table
+    area = None
+    for spec in table.specs.values():
+        if area is not None and spec.area != area:
+            out.append(None)
+        area = spec.area
+        act = table.docks[spec.key].toggleViewAction()
+        if spec.shortcut:
+            act.setShortcut(spec.shortcut)
+        out.append(act)
+    return out
 
 
 def scroll_editors_home(win) -> None:

@@ -110,8 +110,6 @@ class MainWindow(QMainWindow):
         self.setCentralWidget(self.editor_stack)
         self.tree = ProjectTree(self)
         self.problems = ProblemsPanel(self)
-        self._build_panel = None             # Build Output: made when first shown or used
-        self._tests_panel = None             # Tests: made when first shown or used
         self.lint = Lint(self, self.editor_stack, self.problems, debounce_ms)
         self.run_actions = RunActions(self, self.editor_stack, lambda: self.build_panel, self.prefs,
                                       connection=connection, start_controller=start_controller)
@@ -125,8 +123,16 @@ class MainWindow(QMainWindow):
         self.welcome, self.welcome_recent = es.welcome, es.welcome.welcome_recent
         self.recovery, self.store = es.recovery, self.lint.store
 
-        docks.build_docks(self)
-        debug.build_docks(self)
+        self.workbench = workbench.Workbench(self)   # navigation, outline, disassembly...
+        run = self.run_actions
+        if run.connection is None and run.start_controller:
+            from plcbuilder.ide.connection import ControllerConnection
+            run.connection = ControllerConnection(self)
+        # every dock, from the one table (docks.DOCKS): the run docks with a controller
+        table = docks.build(self, run=self.connection is not None)
+        self.run_docks = {k: table.docks[k] for k, s in table.specs.items() if s.run}
+        self.workbench.panels = table.view(("references", "find", "disasm", "registers"))
+        self.debug.panels = table.view(debug.DOCKS)
         self._actions = actions.build_actions(self)
         debug_actions.build_debug_actions(self, self._actions)
         actions.build_menus(self)
@@ -135,6 +141,7 @@ class MainWindow(QMainWindow):
         debug_actions.build_debug_toolbar(self)
         self._wire()
         self._setup_run_side()
+        actions.fill_view_menu(self)        # the docks (the table), toolbars, zoom...
         workbench.install(self)             # navigation, disassembly, registers, help
         self.default_state = self.saveState()
         docks.restore_layout(self)
@@ -172,25 +179,23 @@ class MainWindow(QMainWindow):
     def tests_panel(self):
         """The Tests panel, made the first time its dock shows or the tests
         are run (the window's first paint does not wait for it)."""
-        if self._tests_panel is None:
-            from plcbuilder.ide.panels.tests import TestsPanel, wire
-            self._tests_panel = TestsPanel(self)
-            self.tests_dock.setWidget(self._tests_panel)
-            wire(self)
-            self._tests_panel.set_project(self._project.root if self._project is not None
-                                          else None)
-        return self._tests_panel
+        return self.dock_table.panel("tests")
+
+    @property
+    def _tests_panel(self):
+        """The Tests panel if it was made (None: not yet)."""
+        return self.dock_table.made.get("tests")
 
     @property
     def build_panel(self):
         """The Build Output panel, made the first time its dock shows or a
         build needs it (the window's first paint does not wait for it)."""
-        if self._build_panel is None:
-            from plcbuilder.ide.build_panel import BuildPanel
-            self._build_panel = BuildPanel(self)
-            self._build_panel.sig_open_location.connect(self.open_location)
-            self.build_dock.setWidget(self._build_panel)
-        return self._build_panel
+        return self.dock_table.panel("build")
+
+    @property
+    def _build_panel(self):
+        """The Build Output panel if it was made (None: not yet)."""
+        return self.dock_table.made.get("build")
 
     @property
     def connection(self):
@@ -566,13 +571,11 @@ class MainWindow(QMainWindow):
         self.sig_project_opened.connect(self.debug.project_opened)
 
     def _setup_run_side(self) -> None:
-        """The controller connection and the run docks, empty: the run panels
-        (pyqtgraph) fill them after the window's first paint, so that the
-        window shows as fast as it does without a controller."""
+        """The controller connection's signals. The run docks are there, empty
+        (docks.DOCKS): the run panels (pyqtgraph) fill them after the window's
+        first paint, so that the window shows as fast as it does without a
+        controller."""
         run = self.run_actions
-        if run.connection is None and run.start_controller:
-            from plcbuilder.ide.connection import ControllerConnection
-            run.connection = ControllerConnection(self)
         if self.connection is not None:
             c = self.connection
             c.sig_connected.connect(self._on_connected)
@@ -581,19 +584,8 @@ class MainWindow(QMainWindow):
             c.sig_error.connect(lambda t: self.statusBar().showMessage(t, 6000))
             if hasattr(c, "sig_result"):
                 c.sig_result.connect(self._on_request_done)
-            self.run_docks = docks.empty_run_docks(self)
-            docks.place_run_docks(self, list(self.run_docks.values()))
-            lower = self.run_docks.get("watch")
-            if lower is not None:
-                self.tabifyDockWidget(lower, self.forces_dock)
-                self.run_docks["inputs"].raise_()
-        else:
-            # nothing can be forced without a controller: the editor gets the room
-            # (View › Forces still shows the dock)
-            self.forces_dock.hide()
         self.debug.wire_connection()
         run.wire_connection()
-        actions.fill_view_menu(self)
 
     def ensure_run_panels(self):
         """Make the run panels now, if they are due and not made yet (the
@@ -603,6 +595,7 @@ class MainWindow(QMainWindow):
         try:
             from plcbuilder.ide.panels import RunPanels
             self.run_panels = RunPanels(self, self.connection, docks=self.run_docks)
+            self.dock_table.adopt()          # it filled every run dock
         except Exception as exc:  # noqa: BLE001 - the editor side works without them
             import traceback
             traceback.print_exc()
@@ -647,8 +640,10 @@ class MainWindow(QMainWindow):
             if not self.layout_restored:
                 QTimer.singleShot(0, lambda: docks.default_dock_sizes(self))
             # the controller and the run panels come after the first paint;
-            # this is in case no paint comes (a minimised window)
-            QTimer.singleShot(500, self._after_first_paint)
+            # this is in case no paint comes (a minimised window): 500 ms
+            # from the event loop's first turn (opening the last project
+            # between show() and that turn must not let it come before the paint)
+            QTimer.singleShot(0, lambda: QTimer.singleShot(500, self._after_first_paint))
 
     def paintEvent(self, event) -> None:  # noqa: N802 - Qt override
         super().paintEvent(event)
@@ -679,7 +674,9 @@ class MainWindow(QMainWindow):
         self._after_run_panels()
 
     def _after_run_panels(self) -> None:
-        """The rest of the start: the checks, the other editors."""
+        """The rest of the start: the docks shown meanwhile get their panels,
+        the checks, the other editors."""
+        self.dock_table.release()
         self.lint.worker.hold(False)
         self._open_due_editors()
         if self._lint_due and not self._closing:
@@ -872,6 +869,25 @@ class MainWindow(QMainWindow):
                 self.connection.shutdown()
             except Exception:  # noqa: BLE001
                 pass
+
+
+def tests_dock_panel(win: MainWindow, key: str):
+    """The Tests dock's panel (docks.DOCKS)."""
+    from plcbuilder.ide.panels.tests import TestsPanel
+    return TestsPanel(win)
+
+
+def tests_dock_wire(win: MainWindow, key: str) -> None:
+    """The Tests panel, in its dock: wired, for the open project, its tests
+    read now if the dock shows (else when it does)."""
+    from plcbuilder.ide.panels.tests import wire
+    panel = win.tests_panel
+    wire(win)
+    panel.set_project(win.project.root if win.project is not None else None)
+    dock = win.tests_dock
+    dock.visibilityChanged.connect(lambda on: on and panel.ensure_loaded())
+    if dock.isVisible():
+        panel.ensure_loaded()
 
 
 def _unique_folder(parent: Path, base: str) -> Path:

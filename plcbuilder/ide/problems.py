@@ -258,3 +258,8 @@ class ProblemsPanel(QWidget):
             self.sig_open_location.emit(str(file), int(line), int(col))
         elif isinstance(loc, str) and loc != PROJECT_GROUP:
             self.sig_open_location.emit(loc, 1, 1)
+
+
+def dock_panel(win, key: str):
+    """The Problems dock's panel (docks.DOCKS): the window's problems list."""
+    return win.problems

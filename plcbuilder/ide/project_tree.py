@@ -692,3 +692,8 @@ def _suggest_name(kind: Kind, names: set[str]) -> str:
         if cand not in names:
             return cand
     return "M999"
+
+
+def dock_panel(win, key: str):
+    """The Project dock's panel (docks.DOCKS): the window's tree."""
+    return win.tree

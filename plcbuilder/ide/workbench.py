@@ -21,13 +21,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Optional
 
-from PySide6.QtCore import QObject, Qt
+from PySide6.QtCore import QObject
 from PySide6.QtWidgets import QMenu, QMessageBox
 
 from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.ide import actions as acts, code_bytes
 from plcbuilder.ide.actions import Act
-from plcbuilder.ide.docks import LazyPanels, make_dock
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.navigation import NavigationHistory
 from plcbuilder.ide.panels.outline import OutlinePanel
@@ -54,45 +53,12 @@ class Workbench(QObject):
         self.nav = NavigationHistory(win.editor_stack, self)
         self.help_window: Optional[HelpWindow] = None
         self.show_bytes = False
-        # the docks: the Outline now; the others (hidden until asked for) get
-        # their panel when first shown or used (LazyPanels, below)
+        # its docks (docks.DOCKS): the Outline is in the first frame; the
+        # others get their panel when first shown or used (``panels``, set by
+        # the window from its dock table)
         self.outline = OutlinePanel(win)
         self._root: Optional[Path] = None
-        area = Qt.DockWidgetArea
-        win.outline_dock = make_dock(win, "Outline", "outlineDock", self.outline,
-                                     area.LeftDockWidgetArea)
-        if getattr(win, "callstack_dock", None) is not None:
-            # one tab group under the tree (Outline, Call Stack, Breakpoints), so
-            # the tree keeps its height
-            win.tabifyDockWidget(win.callstack_dock, win.outline_dock)
-            win.outline_dock.raise_()
-        else:
-            win.splitDockWidget(win.project_dock, win.outline_dock, Qt.Orientation.Vertical)
-        win.find_dock = make_dock(win, "Find in Files", "findInFilesDock", None,
-                                  area.BottomDockWidgetArea)
-        win.references_dock = make_dock(win, "References", "referencesDock", None,
-                                        area.BottomDockWidgetArea)
-        for d in (win.find_dock, win.references_dock):
-            win.tabifyDockWidget(win.problems_dock, d)
-        win.disasm_dock = make_dock(win, "Disassembly", "disasmDock", None,
-                                    area.RightDockWidgetArea)
-        win.registers_dock = make_dock(win, "Registers", "registersDock", None,
-                                       area.RightDockWidgetArea)
-        # the Disassembly on the right, with Inputs and Watch (beside the four
-        # plots the tabs did not fit: "Ou…", "Disasse…"); the Registers, a wide
-        # table, at the bottom with Problems
-        right = win.right_docks[-1] if win.right_docks else None
-        if right is not None:
-            win.tabifyDockWidget(right, win.disasm_dock)
-        win.tabifyDockWidget(win.problems_dock, win.registers_dock)
-        for d in (win.find_dock, win.references_dock, win.disasm_dock, win.registers_dock):
-            d.hide()
-        win.problems_dock.raise_()
-        for d in win.right_docks:
-            d.raise_()
-        self.panels = LazyPanels({"references": win.references_dock, "find": win.find_dock,
-                                  "disasm": win.disasm_dock, "registers": win.registers_dock},
-                                 self._make_panel, self._panel_made)
+        self.panels = None
 
     # ============================================================ the docks
     @property
@@ -116,7 +82,7 @@ class Workbench(QObject):
         return self.panels.get("registers")
 
     def _make_panel(self, key: str):
-        """A dock's panel, wired and brought up to date (LazyPanels makes it the
+        """A dock's panel, wired and brought up to date (the window's dock table makes it the
         first time it shows or is used)."""
         win = self.win
         if key == "references":
@@ -149,6 +115,10 @@ class Workbench(QObject):
             self.win.disasm_dock.visibilityChanged.connect(
                 lambda on: on and self.refresh_build_views())
             self.refresh_build_views()
+
+    def dock_panel(self, key: str):
+        """The panel of one of its docks (docks.DOCKS)."""
+        return self.outline if key == "outline" else self._make_panel(key)
 
     # ============================================================ files
     def project_files(self) -> list[Path]:
@@ -498,10 +468,21 @@ def _rename_in_editor(ed, refs, new: str) -> None:
 
 
 # ===================================================================== install
+def dock_panel(win, key: str):
+    """The panel of a workbench dock (Outline, Find in Files, References,
+    Disassembly, Registers: docks.DOCKS)."""
+    return win.workbench.dock_panel(key)
+
+
+def dock_panel_made(win, key: str) -> None:
+    """A workbench dock's panel is in its dock (docks.DOCKS)."""
+    win.workbench._panel_made(key)
+
+
 def install(win) -> Workbench:
-    """Make the features for ``win``: docks, actions, menus, signals."""
-    wb = Workbench(win)
-    win.workbench = wb
+    """The features' actions, menus and signals for ``win`` (its
+    :class:`Workbench` made, and its docks by the window's table)."""
+    wb = win.workbench
     _actions(win, wb)
     _menus(win)
     es = win.editor_stack

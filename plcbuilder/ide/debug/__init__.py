@@ -12,26 +12,12 @@
 
 from __future__ import annotations
 
-from PySide6.QtCore import Qt
-
 from plcbuilder.ide.debug.session import DOCKS, DebugSession
 
-__all__ = ["DebugSession", "build_docks"]
+__all__ = ["DOCKS", "DebugSession", "dock_panel"]
 
 
-def build_docks(win) -> None:
-    """Call Stack and Breakpoints (left, tabbed under the project) and Forces
-    (right, beside the inputs and watch once the run docks are placed)."""
-    from plcbuilder.ide.docks import LazyPanels, make_dock
-    dbg = win.debug
-    left = Qt.DockWidgetArea.LeftDockWidgetArea
-    # empty: each gets its panel when it first shows (or the session uses it)
-    win.callstack_dock = make_dock(win, "Call Stack", "callStackDock", None, left)
-    win.splitDockWidget(win.project_dock, win.callstack_dock, Qt.Orientation.Vertical)
-    win.breakpoints_dock = make_dock(win, "Breakpoints", "breakpointsDock", None, left)
-    win.tabifyDockWidget(win.callstack_dock, win.breakpoints_dock)
-    win.forces_dock = make_dock(win, "Forces", "forcesDock", None,
-                                Qt.DockWidgetArea.RightDockWidgetArea)
-    win.callstack_dock.raise_()
-    dbg.panels = LazyPanels({key: getattr(win, name) for key, name in DOCKS.items()},
-                            dbg.make_panel)
+def dock_panel(win, key: str):
+    """The panel of a debug dock (Call Stack, Breakpoints, Forces: docks.DOCKS),
+    made when it first shows or the session uses it."""
+    return win.debug.make_panel(key)

@@ -23,12 +23,11 @@ from plcbuilder.ide.debug.breakpoints import Breakpoint, BreakpointStore
 from plcbuilder.ide.editor import file_key
 
 if TYPE_CHECKING:
-    from plcbuilder.ide.docks import LazyPanels
+    from plcbuilder.ide.docks import PanelsView
 
 SOURCE_SUFFIXES = (".plc", ".h")
-#: The debug docks (the window's attribute) of the panels, by key.
-DOCKS = {"callstack": "callstack_dock", "breakpoints": "breakpoints_dock",
-         "forces": "forces_dock"}
+#: The debug docks' keys (docks.DOCKS).
+DOCKS = ("callstack", "breakpoints", "forces")
 SAVE_DELAY_MS = 300
 
 
@@ -53,8 +52,8 @@ class DebugSession(QObject):
         self._send_due: set[str] = set()
         self._send_timer = _single_shot(self, 0, self._send_pending)
         self._save_timer = _single_shot(self, SAVE_DELAY_MS, self.save)
-        #: the docks' panels, made when first shown or used (debug.build_docks)
-        self.panels: Optional["LazyPanels"] = None
+        #: the docks' panels, made when first shown or used (docks.DOCKS)
+        self.panels: Optional["PanelsView"] = None
         self.store.sig_changed.connect(self._on_store_changed)
         win.tree.sig_file_renamed.connect(self.store.rename)
         win.tree.sig_file_deleted.connect(lambda p: self.store.clear(p))
@@ -91,7 +90,7 @@ class DebugSession(QObject):
         return self.panels.get("forces")
 
     def make_panel(self, key: str):
-        """A dock's panel, wired and brought up to date (LazyPanels makes it the
+        """A dock's panel, wired and brought up to date (the window's dock table makes it the
         first time it shows or is used)."""
         if key == "callstack":
             from plcbuilder.ide.debug.callstack import CallStackPanel
