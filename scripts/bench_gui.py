@@ -24,6 +24,7 @@
   one plain pyqtgraph curve per panel.
 
     python scripts/bench_gui.py cpu|startup|lanes   # one figure only
+    PLCB_BENCH_BEFORE=DIR python scripts/bench_gui.py startup   # and DIR's package beside
 """
 
 from __future__ import annotations
@@ -556,7 +557,8 @@ def _gone(pid: int, timeout: float = 10.0) -> None:
         time.sleep(0.01)
 
 
-def startup_figures(runs: int = 7, x: "XServer | None" = None) -> list[str]:
+def startup_figures(runs: int = 7, x: "XServer | None" = None,
+                    before: "str | None" = None) -> list[str]:
     """Start-up as the user sees it, on a real X server (``x``; default:
     :class:`XServer`'s choice): from launching the process to the first paint
     of the window with the last project's tree and editor ("painted"), and to
@@ -564,14 +566,17 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None) -> list[str]:
     being the last one (LUBE runs once its image loads). Floor: a bare Qt main
     window, from launching it to its first paint. Interleaved (bare, IDE,
     IDE without the controller, each round), median of ``runs`` rounds; the
-    ratio is the median of each round's own."""
+    ratio is the median of each round's own. ``before``: the folder of
+    another copy of the package (``git archive REV plcbuilder | tar -x -C
+    DIR``), started in each round too, for its figures side by side."""
     from plcbuilder.project.build import build_project
     from plcbuilder.project.model import Project
     from plcbuilder.project.new import create_project
     if x is None:
         with XServer() as x:
-            return startup_figures(runs, x)
-    got: dict[str, list[float]] = {"bare": [], "painted": [], "live": [], "without": []}
+            return startup_figures(runs, x, before)
+    got: dict[str, list[float]] = {"bare": [], "painted": [], "live": [], "without": [],
+                                   "b_painted": [], "b_live": []}
     errors: list[str] = []
     with tempfile.TemporaryDirectory() as d:
         project = create_project(Path(d) / "example").root
@@ -591,6 +596,8 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None) -> list[str]:
             bare = _launch(_BARE_PROBE, [], env)
             ide = _launch(_IDE_PROBE, ["live", "--settings", ini], env)
             without = _launch(_IDE_PROBE, ["painted", "--settings", ini, "--no-controller"], env)
+            old = _launch(_IDE_PROBE, ["live", "--settings", ini],
+                          dict(env, PYTHONPATH=before)) if before else {}
             bare2 = _launch(_BARE_PROBE, [], env)
             if "painted" in bare and "painted" in bare2:   # the floor on each side of the IDE
                 bare["painted"] = (bare["painted"] + bare2["painted"]) / 2
@@ -604,6 +611,11 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None) -> list[str]:
                 errors.append(str(bare.get("error") or ide.get("error") or ide))
             if "painted" in without:
                 got["without"].append(without["painted"])
+            if "painted" in old and "live" in old and "painted" in bare:
+                got["b_painted"].append(old["painted"])
+                got["b_live"].append(old["live"])
+            elif before:
+                errors.append(str(old.get("error") or old))
     if not got["bare"]:
         return [f"start-up on {x.where}: the probes failed: {errors[:1]}"]
     n = len(got["bare"])
@@ -621,6 +633,15 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None) -> list[str]:
     if "without" in med:
         out.append(f"  IDE without the controller (--no-controller), launch to painted: "
                    f"{med['without'] * 1000:.0f} ms")
+    m = len(got["b_painted"])
+    if m:
+        b_ratio = statistics.median(got["b_painted"][i] / got["bare"][i] for i in range(m))
+        b_after = statistics.median(got["b_live"][i] - got["b_painted"][i] for i in range(m))
+        out.append(f"  before ({before}), same rounds: painted {med['b_painted'] * 1000:.0f} ms = "
+                   f"{b_ratio:.2f}x the floor (each round's: "
+                   + ", ".join(f"{a / b:.2f}" for a, b in zip(got["b_painted"], got["bare"]))
+                   + f"), live {med['b_live'] * 1000:.0f} ms, {b_after * 1000:.0f} ms after "
+                   "the paint")
     if errors:
         out.append(f"  ({len(errors)} rounds failed: {errors[0]!r})")
     return out
@@ -887,7 +908,7 @@ if __name__ == "__main__":
         if w == "cpu":
             lines += cpu_figures()
         elif w == "startup":
-            lines += startup_figures()
+            lines += startup_figures(before=os.environ.get("PLCB_BENCH_BEFORE") or None)
         elif w == "lanes":
             lines += lane_figures()
         elif w == "diagnostics":
