@@ -594,10 +594,13 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None,
         env.pop("PYTHONDONTWRITEBYTECODE", None)
         for i in range(-1, runs):                   # round -1 warms the caches, not counted
             bare = _launch(_BARE_PROBE, [], env)
+            old = {}
+            if before and i % 2:                    # each first in every other round
+                old = _launch(_IDE_PROBE, ["live", "--settings", ini], dict(env, PYTHONPATH=before))
             ide = _launch(_IDE_PROBE, ["live", "--settings", ini], env)
+            if before and not i % 2:
+                old = _launch(_IDE_PROBE, ["live", "--settings", ini], dict(env, PYTHONPATH=before))
             without = _launch(_IDE_PROBE, ["painted", "--settings", ini, "--no-controller"], env)
-            old = _launch(_IDE_PROBE, ["live", "--settings", ini],
-                          dict(env, PYTHONPATH=before)) if before else {}
             bare2 = _launch(_BARE_PROBE, [], env)
             if "painted" in bare and "painted" in bare2:   # the floor on each side of the IDE
                 bare["painted"] = (bare["painted"] + bare2["painted"]) / 2
