@@ -7,8 +7,8 @@ every dock from the table (:func:`build`): its View menu entry, Reset Layout
 (the table's layout again) and the saved layout all follow from it. Adding a
 dock is one row here and a panel factory in its part's module.
 
-Default layout. Left: the project over Outline, Call Stack and Breakpoints
-(tabbed); bottom: Problems, Build Output, Tests, the run log, Find in Files,
+Default layout. Left: the project over Call Stack, Breakpoints and Outline
+(tabbed, the Outline in front); bottom: Problems, Build Output, Tests, the run log, Find in Files,
 References and Registers (tabbed); right: the plots (tabbed) over Inputs,
 Watch, Cursors, Forces and Disassembly (tabbed).
 
@@ -65,10 +65,11 @@ _DBG = "plcbuilder.ide.debug:dock_panel"
 DOCKS: tuple[DockSpec, ...] = (
     DockSpec("project", "projectDock", "Project", LEFT, "plcbuilder.ide.project_tree:dock_panel",
              eager=True, shortcut="Alt+1"),
-    DockSpec("outline", "outlineDock", "Outline", LEFT, _WB, place="below:projectDock",
+    DockSpec("callstack", "callStackDock", "Call Stack", LEFT, _DBG, place="below:projectDock"),
+    DockSpec("breakpoints", "breakpointsDock", "Breakpoints", LEFT, _DBG,
+             place="tab:callStackDock"),
+    DockSpec("outline", "outlineDock", "Outline", LEFT, _WB, place="tab:callStackDock",
              eager=True, front=True, shortcut="Alt+7"),
-    DockSpec("callstack", "callStackDock", "Call Stack", LEFT, _DBG, place="tab:outlineDock"),
-    DockSpec("breakpoints", "breakpointsDock", "Breakpoints", LEFT, _DBG, place="tab:outlineDock"),
     DockSpec("problems", "problemsDock", "Problems", BOTTOM, "plcbuilder.ide.problems:dock_panel",
              eager=True, front=True, shortcut="Alt+6"),
     DockSpec("build", "buildDock", "Build Output", BOTTOM, "plcbuilder.ide.build_panel:dock_panel",
@@ -243,6 +244,9 @@ def place(win, table: DockTable) -> None:
             table.docks[spec.key].raise_()
     win.right_docks = [table.docks[s.key] for s in table.specs.values()
                        if s.front and s.area == RIGHT]
+    # sizes until the window shows (default_dock_sizes then): the tree is
+    # filled before, and keeps the scroll position it gets at this size
+    default_dock_sizes(win)
 
 
 def whole_tab_titles(bar) -> None:
@@ -319,9 +323,9 @@ def default_dock_sizes(win) -> None:
     # about ten rows of Problems, Build Output or the run log
     win.resizeDocks([win.problems_dock], [max(230, int(win.height() * 0.3))],
                      Qt.Orientation.Vertical)
-    # the tree keeps most of the left, over the Outline's tab group
+    # the tree keeps most of the left, over the tab group of the Outline
     h = max(win.height() - 260, 400)
-    win.resizeDocks([win.project_dock, win.outline_dock], [int(h * 0.6), int(h * 0.4)],
+    win.resizeDocks([win.project_dock, win.callstack_dock], [int(h * 0.6), int(h * 0.4)],
                     Qt.Orientation.Vertical)
 
 
