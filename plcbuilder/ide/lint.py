@@ -57,6 +57,8 @@ class Lint(QObject):
         self.sizes: dict[str, tuple] = {}             # file key -> (size, limit)
         self.header_defines: dict = {}
         self._header_scan = None                       # completion.HeaderDefines, when asked
+        self._held = False                             # until the window's first paint
+        self._defines_due: list = []                   # editors made meanwhile
         self.worker = DiagnosticsWorker(self, **({"debounce_ms": debounce_ms}
                                                  if debounce_ms is not None else {}))
         self.worker.sig_result.connect(self._on_compile_result)
@@ -86,16 +88,31 @@ class Lint(QObject):
 
     def attach(self, ed: CodeEditor) -> None:
         """A new editor: completion, hover and diagnostics for it."""
-        from plcbuilder.ide import completion  # (loaded when first used)
         ed.completion_provider = self.complete
         ed.hover_provider = self.hover
-        ed.signature_provider = completion.signature
+        ed.signature_provider = _signature
         ed.sig_text_changed.connect(lambda e=ed: self._on_text_changed(e))
-        self.apply_defines(ed)
+        if self._held:
+            # the defines it colours come after the window's first paint (with
+            # the headers'): finding them loads the compiler's symbols
+            self._defines_due.append(ed)
+        else:
+            self.apply_defines(ed)
         ed.set_diagnostics(self.store.for_file(ed.path))
         if ed.kind is not None and not ed.builtin:
             # a large file is checked once it is open and typing has paused
             self.schedule_compile(ed, immediate=ed.length() < LARGE_TEXT)
+
+    def hold(self, held: bool) -> None:
+        """Until the window's first paint: nothing compiles in the background
+        and the editors made meanwhile get their defines coloured after it."""
+        self._held = bool(held)
+        self.worker.hold(held)
+        if not held:
+            due, self._defines_due = self._defines_due, []
+            for ed in due:
+                if ed in self.editors.editors():
+                    self.apply_defines(ed)
 
     def options_for(self, path: str) -> api.CompileOptions:
         if self.project is None:
@@ -323,3 +340,11 @@ def _near_caret(ed: CodeEditor, pos: Optional[int] = None) -> str:
     before = ed.byte_range_text(ed.positionFromLine(first), ed.positionFromLine(line))
     after = ed.byte_range_text(ed.lineEndPosition(line), ed.lineEndPosition(last))
     return before + after
+
+
+def _signature(name: str):
+    """The call tip of a built-in function (completion.py, and the compiler's
+    symbols it reads, load when a tip is first asked for: not with the first
+    editor, which the window's first paint shows)."""
+    from plcbuilder.ide import completion
+    return completion.signature(name)

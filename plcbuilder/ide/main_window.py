@@ -635,7 +635,7 @@ class MainWindow(QMainWindow):
             self._shown_once = True
             # until the first paint: no compile in the background (the diagnostics
             # thread would take the interpreter from the window), no outline
-            self.lint.worker.hold(True)
+            self.lint.hold(True)
             self.workbench.outline.held = True
             if not self.layout_restored:
                 QTimer.singleShot(0, lambda: docks.default_dock_sizes(self))
@@ -677,7 +677,7 @@ class MainWindow(QMainWindow):
         """The rest of the start: the docks shown meanwhile get their panels,
         the checks, the other editors."""
         self.dock_table.release()
-        self.lint.worker.hold(False)
+        self.lint.hold(False)
         self._open_due_editors()
         if self._lint_due and not self._closing:
             self._lint_due = False

@@ -256,3 +256,51 @@ def test_the_embedded_controller_process_starts_before_the_first_paint(
     # another project before the paint would have dropped it; after: a new one
     w.shutdown()
     qtbot.waitUntil(lambda: not pre[1].alive(), timeout=10000)
+
+
+_EDITOR_PROBE = r"""
+import sys
+from PySide6.QtCore import QEvent, QObject, QTimer
+from plcbuilder.ide.app import create_application
+from plcbuilder.ide.main_window import MainWindow
+from plcbuilder.ide.settings import Settings
+app = create_application()
+st = Settings(sys.argv[2])
+f = sys.argv[1] + "/hardware/M71.plc"
+st.save_session(sys.argv[1], [f], f)
+st.sync()
+win = MainWindow(st, start_controller=False)
+class FirstPaint(QObject):
+    def eventFilter(self, obj, ev):
+        if ev.type() == QEvent.Type.Paint and not hasattr(self, "seen"):
+            self.seen = sorted(m for m in %r if m in sys.modules)
+            self.editor = win.current_editor() is not None
+            QTimer.singleShot(0, app.quit)
+        return False
+f = FirstPaint()
+win.installEventFilter(f)
+win.show()
+win.open_project(sys.argv[1])
+app.exec()
+print(f.seen, f.editor)
+win.shutdown()
+""" % (("plcbuilder.ide.completion", "plcbuilder.lang.symbols", "plcbuilder.lang.preprocess"),)
+
+
+def test_the_first_editor_paints_without_the_compilers_symbols(qtbot, make_window, tmp_path):
+    """Issue 26.5: the last session's editor is in the first frame, but the
+    defines it colours (found with the compiler's symbols, 60 ms to load) come
+    after the paint, with the headers' defines."""
+    project = create_project(tmp_path / "example").root
+    r = subprocess.run([sys.executable, "-c", _EDITOR_PROBE, str(project),
+                        str(tmp_path / "s.ini")], capture_output=True, text=True, timeout=120,
+                       env={**__import__("os").environ, "QT_QPA_PLATFORM": "offscreen"})
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split("\n")[0] == "[] True", r.stdout
+    # in a window: the editor made before the paint gets its defines after it
+    w = make_window()
+    w.open_project(project)
+    ed = w.open_file(project / "hardware" / "M71.plc")
+    assert not w._painted and "ARC_TIMEOUT" not in ed.highlighter.defines
+    qtbot.waitUntil(lambda: "ARC_TIMEOUT" in ed.highlighter.defines, timeout=20000)
+    assert w._painted
