@@ -39,6 +39,8 @@ TYPE_CHECKING = False               # (typing is not imported at run time: start
 if TYPE_CHECKING:
     from typing import Optional
 
+_new_span = tuple.__new__
+
 MAX_DEPTH = 256
 MAX_SYNTAX_ERRORS = 25
 #: the deepest the parser's state stack may grow: the grammar's deepest
@@ -222,7 +224,12 @@ class AstBuilder:
 
     def binary(self, c):
         left, op, right = c
-        node = A.Binary(op.value, left, right, left.span.cover(right.span), op.span)
+        ls, rs = left.span, right.span
+        if ls[0] == rs[0] and (ls[1], ls[2]) <= (rs[1], rs[2]) and (ls[3], ls[4]) <= (rs[3], rs[4]):
+            span = _new_span(Span, (ls[0], ls[1], ls[2], rs[3], rs[4]))   # ls.cover(rs), inlined
+        else:
+            span = ls.cover(rs)
+        node = A.Binary(op.value, left, right, span, op.span)
         depth = self.depth                  # _nest, unrolled: the commonest node
         d = depth.get(left, 0)
         r = depth.get(right, 0)
