@@ -39,6 +39,8 @@ TYPE_CHECKING = False               # (typing is not imported at run time: start
 if TYPE_CHECKING:
     from typing import Optional
 
+_new_span = tuple.__new__
+
 MAX_DEPTH = 256
 MAX_SYNTAX_ERRORS = 25
 #: the deepest the parser's state stack may grow: the grammar's deepest
@@ -222,7 +224,12 @@ class AstBuilder:
 
     def binary(self, c):
         left, op, right = c
-        node = A.Binary(op.value, left, right, left.span.cover(right.span), op.span)
+        ls, rs = left.span, right.span
+        if ls[0] == rs[0] and (ls[1], ls[2]) <= (rs[1], rs[2]) and (ls[3], ls[4]) <= (rs[3], rs[4]):
+            span = _new_span(Span, (ls[0], ls[1], ls[2], rs[3], rs[4]))   # ls.cover(rs), inlined
+        else:
+            span = ls.cover(rs)
+        node = A.Binary(op.value, left, right, span, op.span)
         depth = self.depth                  # _nest, unrolled: the commonest node
         d = depth.get(left, 0)
         r = depth.get(right, 0)
@@ -267,7 +274,9 @@ def _callbacks(t: Tables, builder: "AstBuilder") -> list:
             continue
         m = getattr(builder, method)
         if children is None:
-            out.append((lambda kids, m=m: kids[0] if len(kids) == 1 else m(kids)) if expand1 else m)
+            # (a ?rule of one symbol is None above: its children, all kept,
+            # are never one, so its method is called as is)
+            out.append(m)
         else:
             out.append(_splicer(children, m, expand1))
     return out
@@ -657,20 +666,6 @@ def _moved_diag(d: Diagnostic, file: Optional[str], lines: int) -> Diagnostic:
     return replace(d, span=mv(d.span), related=tuple(replace(r, span=mv(r.span)) for r in d.related))
 
 
-def _same_moved(a: Tok, b: Tok, file: Optional[str], lines: int) -> bool:
-    """Is new token ``b`` old token ``a``, moved ``lines`` lines if it is in ``file``?"""
-    if a is b:
-        return True
-    if a.kind != b.kind or a.value != b.value or a.number != b.number or a.macro != b.macro \
-            or a.synthetic != b.synthetic:
-        return False
-    sa, sb = a.span, b.span
-    if lines and sa[0] == file:
-        return sb[0] == file and sa[1] + lines == sb[1] and sa[3] + lines == sb[3] \
-            and sa[2] == sb[2] and sa[4] == sb[4]
-    return sa == sb
-
-
 def _diff(old: list[Tok], new: list[Tok], file: Optional[str]):
     """Where two token lists differ: (the first token that differs, where the
     common end starts in old and in new, how many lines it moved in ``file``),
@@ -690,8 +685,25 @@ def _diff(old: list[Tok], new: list[Tok], file: Optional[str]):
             break
         if a.span[0] != b.span[0]:
             break
+    # the common end: new token b is old token a, moved ``lines`` lines if it
+    # is in ``file`` (a loop, no call a token: after an Enter it is every
+    # token below it, each a copy of the old one moved a line)
     k = 0
-    while k < n - e and _same_moved(old[n_old - 1 - k], new[n_new - 1 - k], file, lines):
+    limit = n - e
+    i, j = n_old - 1, n_new - 1
+    while k < limit:
+        a, b = old[i - k], new[j - k]
+        if a is not b:
+            if a.kind != b.kind or a.value != b.value or a.number != b.number \
+                    or a.macro != b.macro or a.synthetic != b.synthetic:
+                break
+            sa, sb = a.span, b.span
+            if lines and sa[0] == file:
+                if sb[1] != sa[1] + lines or sb[3] != sa[3] + lines or sb[2] != sa[2] \
+                        or sb[4] != sa[4] or sb[0] != file:
+                    break
+            elif sa != sb:
+                break
         k += 1
     return e, n_old - k, n_new - k, lines
 

@@ -222,9 +222,10 @@ def _moved_diag(d: Diagnostic, lines: int) -> Diagnostic:
 
 def _moved_line(line: tuple, lines: int) -> tuple:
     is_dir, toks, hash_span, raw = line
-    return (is_dir, [Tok(t.kind, t.value, Span(t.span[0], t.span[1] + lines, t.span[2],
-                                              t.span[3] + lines, t.span[4]), t.number)
-                     for t in toks], _moved_span(hash_span, lines), raw)
+    new = tuple.__new__          # (a Span without the named tuple's Python __new__)
+    return (is_dir, [Tok(t.kind, t.value, new(Span, (s[0], s[1] + lines, s[2], s[3] + lines, s[4])),
+                         t.number) for t in toks for s in (t.span,)],
+            _moved_span(hash_span, lines), raw)
 
 
 class Preprocessor:
@@ -456,11 +457,14 @@ class Preprocessor:
             return
         out = self.out
         defines = self.defines
-        for t in toks:
-            if t.kind == "NAME" and t.value in defines:
-                self._expand(t, t.span, frozenset())
-            else:
-                out.append(t)
+        if not defines:
+            out += toks         # (nothing to expand: a run of tokens costs no loop here)
+        else:
+            for t in toks:
+                if t.kind == "NAME" and t.value in defines:
+                    self._expand(t, t.span, frozenset())
+                else:
+                    out.append(t)
         if len(out) > MAX_TOKENS:
             self.too_many = True
             self.diags.append(error("too-large", f"more than {MAX_TOKENS} tokens after preprocessing",

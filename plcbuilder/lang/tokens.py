@@ -46,6 +46,7 @@ _TOKEN_RE = re.compile(r"""
   | (?P<eof>\Z) )
 """, re.VERBOSE)
 _BAD_RUN_RE = re.compile(r"[^\sA-Za-z0-9_(){};,=+\-*/%<>&|^!~\[\]]+")
+_new = tuple.__new__      # Span(...) without the named tuple's Python __new__
 _HEX_RE = re.compile(r"0[xX][0-9A-Fa-f]+")
 _DEC_RE = re.compile(r"[0-9]+")
 
@@ -90,10 +91,15 @@ class Tokenizer:
         """Yield (is_directive, tokens, hash_span, raw_rest) per logical line,
         from offset ``start`` (the start of a logical line, numbered
         ``first_line``). While a line is yielded, ``next_line`` is (offset,
-        number) of the line after it (None after the last)."""
+        number) of the line after it (None after the last).
+
+        One token costs a regex match, its Span and its Tok: the kinds are
+        tested commonest first and nothing else is called per token (a long
+        run of one token, 1 byte each, is the most tokens a file can hold)."""
         text, name = self.text, self.name
-        pos, line, line_start = start, first_line, start
+        line, line_start = first_line, start
         current: list[Tok] = []
+        append = current.append
         directive = False
         hash_span = None
         raw_start = start
@@ -102,69 +108,86 @@ class Tokenizer:
         bad_run_end = -1
         budget = self.max_tokens
         done = 0                 # tokens of the lines yielded before this one
+        #: tokens the current line may take before the budget is spent
+        room = budget if budget is not None else n + 1
+        punct, keywords = PUNCT, KEYWORDS
+        new = _new
+        pos = start
         while pos < n:
-            m = _TOKEN_RE.match(text, pos)
-            kind = m.lastgroup
-            s, e = m.start(kind), m.end()
-            col = s - line_start + 1
-            if kind == "lc":
-                pos = e
-                continue
-            if kind == "eof":
-                break
-            if kind == "nl":
-                if budget is not None:
-                    done += len(current)
-                    if done > budget:
-                        self.truncated = True
-                        break
-                self.next_line = (e, line + 1)
-                yield directive, current, hash_span, text[raw_start:s] if directive else ""
-                current, directive, hash_span = [], False, None
-                pos, line, line_start, first_on_line = e, line + 1, e, True
-                continue
-            if kind == "bc":
-                end = text.find("*/", e)
-                span_end = n if end < 0 else end + 2
-                start_line, start_col = line, col
-                nls = text.count("\n", s, span_end)
-                if nls:
-                    line += nls
-                    line_start = text.rfind("\n", s, span_end) + 1
-                sp = Span(name, start_line, start_col, line, span_end - line_start + 1)
-                self.block_comments.append(sp)
-                if end < 0:
-                    self.diags.append(error("unterminated-comment", "unterminated /* comment",
-                                            Span.point(name, start_line, start_col, 2),
-                                            "close it with */"))
-                pos = span_end
-                continue
-            span = Span(name, line, col, line, col + (e - s))
-            if kind == "hash" and first_on_line:
-                directive, hash_span, raw_start = True, span, e
-                first_on_line = False
-                pos = e
-                continue
-            first_on_line = False
-            if kind == "name":
-                v = m.group(kind)
-                current.append(Tok(KEYWORDS.get(v, "NAME"), v, span))
-            elif kind == "num":
-                v = m.group(kind)
-                num = int(v) if v.isdigit() and len(v) < 10 else parse_number(v)
-                if num is None:
-                    if not directive:
-                        self.diags.append(error("bad-number", f"malformed number '{v}'", span,
-                                                "numbers are decimal (123) or hex (0x7b), "
-                                                "at most 0xffffffff"))
-                    num = 0
-                current.append(Tok("NUMBER", v, span, num))
-            elif kind == "punct":
-                v = m.group(kind)
-                current.append(Tok(PUNCT[v], v, span))
-            else:  # bad character or a stray '#'
-                if not directive:
-                    if s > bad_run_end:
+            for m in _TOKEN_RE.finditer(text, pos):
+                kind = m.lastgroup
+                if kind == "punct":
+                    v = m.group(kind)
+                    s = m.start(kind)
+                    col = s - line_start + 1
+                    append(Tok(punct[v], v, new(Span, (name, line, col, line, col + len(v)))))
+                elif kind == "name":
+                    v = m.group(kind)
+                    s = m.start(kind)
+                    col = s - line_start + 1
+                    append(Tok(keywords.get(v, "NAME"), v,
+                               new(Span, (name, line, col, line, col + len(v)))))
+                elif kind == "nl":
+                    e = m.end()
+                    if budget is not None:
+                        done += len(current)
+                        if done > budget:
+                            self.truncated = True
+                            pos = n + 1
+                            break
+                        room = budget - done
+                    self.next_line = (e, line + 1)
+                    s = m.start(kind)
+                    yield directive, current, hash_span, text[raw_start:s] if directive else ""
+                    current, directive, hash_span = [], False, None
+                    append = current.append
+                    line, line_start, first_on_line = line + 1, e, True
+                    continue
+                elif kind == "num":
+                    v = m.group(kind)
+                    s = m.start(kind)
+                    col = s - line_start + 1
+                    span = new(Span, (name, line, col, line, col + len(v)))
+                    num = int(v) if v.isdigit() and len(v) < 10 else parse_number(v)
+                    if num is None:
+                        if not directive:
+                            self.diags.append(error("bad-number", f"malformed number '{v}'", span,
+                                                    "numbers are decimal (123) or hex (0x7b), "
+                                                    "at most 0xffffffff"))
+                        num = 0
+                    append(Tok("NUMBER", v, span, num))
+                elif kind == "lc":
+                    continue
+                elif kind == "eof":
+                    pos = n + 1
+                    break
+                elif kind == "bc":
+                    s, e = m.start(kind), m.end()
+                    col = s - line_start + 1
+                    end = text.find("*/", e)
+                    span_end = n if end < 0 else end + 2
+                    start_line, start_col = line, col
+                    nls = text.count("\n", s, span_end)
+                    if nls:
+                        line += nls
+                        line_start = text.rfind("\n", s, span_end) + 1
+                    sp = Span(name, start_line, start_col, line, span_end - line_start + 1)
+                    self.block_comments.append(sp)
+                    if end < 0:
+                        self.diags.append(error("unterminated-comment", "unterminated /* comment",
+                                                Span.point(name, start_line, start_col, 2),
+                                                "close it with */"))
+                    pos = span_end       # the tokens go on after the comment
+                    break
+                else:   # a '#', or a character the language does not have
+                    s, e = m.start(kind), m.end()
+                    col = s - line_start + 1
+                    span = new(Span, (name, line, col, line, col + (e - s)))
+                    if kind == "hash" and first_on_line:
+                        directive, hash_span, raw_start = True, span, e
+                        first_on_line = False
+                        continue
+                    if not directive and s > bad_run_end:
                         run = _BAD_RUN_RE.match(text, s)
                         length = len(run.group()) if run else 1
                         bad_run_end = s + length
@@ -172,12 +195,13 @@ class Tokenizer:
                         what = "'#' (directives start a line)" if ch == "#" else repr(ch)
                         self.diags.append(error("bad-char", f"unexpected character {what}",
                                                 Span(name, line, col, line, col + length)))
-                    current.append(Tok("BAD", m.group(kind), span))
-                else:
-                    current.append(Tok("BAD", m.group(kind), span))
-            pos = e
-            if budget is not None and done + len(current) > budget:
-                self.truncated = True
-                break
+                    append(Tok("BAD", m.group(kind), span))
+                first_on_line = False
+                if len(current) > room:
+                    self.truncated = True
+                    pos = n + 1
+                    break
+            else:
+                pos = n + 1
         self.next_line = None
         yield directive, current, hash_span, text[raw_start:] if directive else ""

@@ -152,6 +152,86 @@ def test_hostile_sources_compile_about_as_fast_as_an_ordinary_one():
     assert not slow, f"ordinary: {base:.3f} s; slower hostile sources (x ordinary): {slow}"
 
 
+# ----------------------------------------------- a token's cost, in calls
+# A run of one-byte tokens (';' x N, '+1' x N) is the most tokens a file of
+# a given size can hold, so what one token costs decides how such a file
+# compares with an ordinary one (issue 24.1: those two were 2.1-2.2x). The
+# Python calls made per token are counted (a machine's load does not move
+# them): the tokenizer makes one (the token), the parser four for each
+# operator and its operand (their nodes and the methods making them).
+
+def python_calls(fn, *args) -> int:
+    """The Python functions ``fn(*args)`` calls (the collector paused, so no
+    finalizer or collector callback of another test's garbage is counted)."""
+    import gc
+    import sys
+    n = 0
+
+    def count(frame, event, arg):
+        nonlocal n
+        if event == "call":
+            n += 1
+    gc.collect()
+    was_on = gc.isenabled()
+    gc.disable()
+    sys.setprofile(count)
+    try:
+        fn(*args)
+    finally:
+        sys.setprofile(None)
+        if was_on:
+            gc.enable()
+    return n
+
+
+@pytest.mark.parametrize("unit", [";", "+1", "}", "x ", "("])
+def test_the_tokenizer_makes_one_call_a_token(unit):
+    from plcbuilder.lang.tokens import Tokenizer
+    n = 10_000
+    text = unit * n
+
+    def tokenize():
+        for _line in Tokenizer(text, "M.plc", [], []).lines():
+            pass
+    tokens = n * len(unit.split()[0])
+    assert python_calls(tokenize) <= 1.05 * tokens + 100          # (before: 2 a token)
+
+
+def test_the_parser_makes_four_calls_an_operator():
+    from plcbuilder.lang.parser import parse_tokens
+    from plcbuilder.lang.preprocess import preprocess_text
+    n = 5_000
+    toks = preprocess_text("main(){ x=1" + "+1" * n + ";}", "M.plc").tokens
+    parse_tokens(toks)
+    assert python_calls(parse_tokens, toks) <= 4.2 * n + 200      # (before: 6 an operator)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("shape", ["; x N", "+ x N in an expression"])
+def test_a_run_of_one_byte_tokens_checks_within_twice_an_ordinary_source(shape, tmp_path):
+    """Through the command line as scripts/bench_hostile.py measures it
+    (processor time of ``plcbuilder check``, the two files taking turns,
+    the median of three rounds' ratios): within the goal, 2x."""
+    import resource
+    import statistics
+    import subprocess
+    import sys
+    size = 100_000
+    base, path = tmp_path / "ordinary.plc", tmp_path / "hostile.plc"
+    base.write_text(hostile_sources.ordinary(size))
+    path.write_text(hostile_sources.hostile(size)[shape])
+
+    def cpu(p) -> float:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        subprocess.run([sys.executable, "-m", "plcbuilder", "check", str(p)],
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    cpu(base)
+    ratios = [cpu(path) / cpu(base) for _ in range(3)]
+    assert statistics.median(ratios) <= 2.0, ratios
+
+
 # --------------------------------------------------------------- conditions
 def test_a_condition_compiles_in_time_linear_in_its_length():
     """Issue 24.2: 800/1,600/3,200 '(' took 2.2/5.6/16.4 s. Brackets past

@@ -206,3 +206,23 @@ def test_a_syntax_error_is_reparsed_only_around_itself():
     start, end = inc.parsed.reparsed
     assert end - start < len(inc.parsed.toks) // 10
     assert r.diagnostics == compile_source(broken, "P.plc").diagnostics
+
+
+def test_an_unterminated_comment_opened_and_closed_above_an_unused_procedure():
+    """The case reported from a random-edit run (seed 1419, edit 33, deep_ok.plc:
+    an unterminated ``/*``, and the incremental compile without the
+    ``unused-procedure`` warning the compile from scratch gave), spelled out:
+    a ``/*`` typed at each place of deep_ok.plc with a procedure main never
+    calls, before and after it, then taken out again, in one session."""
+    text = (GOLDEN / "limits" / "deep_ok.plc").read_text(encoding="utf-8")
+    lines = text.split("\n")
+    inc = Incremental()
+    for at in (0, lines.index("main()"), len(lines)):          # between procedures
+        with_proc = "\n".join(lines[:at] + ["spare()", "{", "    x = 1;", "};"] + lines[at:])
+        starts = [0] + [i + 1 for i, c in enumerate(with_proc) if c == "\n"]
+        for pos in starts + [with_proc.index("exit"), len(with_proc)]:
+            for step in (with_proc[:pos] + "/*" + with_proc[pos:], with_proc):
+                full = compile_source(step, "deep_ok.plc", CompileOptions())
+                got = compile_source(step, "deep_ok.plc", CompileOptions(), incremental=inc)
+                _assert_same(got, full, f"/* at {pos}:\n{step}")
+        assert any(d.code == "unused-procedure" for d in full.diagnostics)
