@@ -73,6 +73,10 @@ class DiagnosticsWorker(QObject):
         self._stopped = False
         self._held = False
         self._busy = False
+        #: jobs the worker thread took whose result the GUI thread has not
+        #: handled yet (compiling, or the result waiting in the event queue):
+        #: with an empty queue the worker is idle only when this is 0
+        self._taken = 0
         self._sig_done.connect(self._on_done)
         if sys.getswitchinterval() > GIL_SWITCH_S:
             sys.setswitchinterval(GIL_SWITCH_S)
@@ -131,7 +135,7 @@ class DiagnosticsWorker(QObject):
     def pending(self) -> bool:
         """True while anything is waiting for its timer, queued or compiling."""
         with self._cond:
-            queued = bool(self._queue)
+            queued = bool(self._queue) or self._taken > 0
         return queued or self._busy or any(t.isActive() for t in self._timers.values())
 
     def generation(self, key: str) -> int:
@@ -174,6 +178,7 @@ class DiagnosticsWorker(QObject):
                     return
                 key = next(iter(self._queue))
                 job = self._queue.pop(key)
+                self._taken += 1
                 incremental = self._incremental.get(key) if job.text is not None else None
             if job.text is not None and incremental is None:
                 # (loaded outside the lock: the GUI thread queues requests under it)
@@ -199,7 +204,8 @@ class DiagnosticsWorker(QObject):
 
     def _on_done(self, job: Job, result) -> None:
         with self._cond:
-            idle = not self._queue
+            self._taken -= 1
+            idle = not self._queue and self._taken == 0
         if idle and self._busy:
             self._busy = False
             self.sig_busy.emit(False)

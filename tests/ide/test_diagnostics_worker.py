@@ -102,3 +102,36 @@ def test_edits_of_an_open_file_compile_incrementally_to_the_same_result(worker, 
     assert worker._incremental["k"].parsed is not None
     worker.cancel("k")
     assert "k" not in worker._incremental
+
+
+def test_pending_while_a_later_job_is_still_compiling(worker, qtbot, tmp_path, monkeypatch):
+    """The worker was idle as soon as the first of two results arrived, while
+    the second was still compiling (the queue was empty by then): under load,
+    a test that waited for "not busy" read the Problems before the header's
+    error came in (test_problem_in_a_header_opens_the_header's flake)."""
+    import threading
+    started, release = threading.Event(), threading.Event()
+    real = api.compile_file
+
+    def slow(path, options):
+        if path.endswith("B.plc"):
+            started.set()
+            release.wait(10)
+        return real(path, options)
+    monkeypatch.setattr(api, "compile_file", slow)
+    for name in ("A", "B"):
+        (tmp_path / f"{name}.plc").write_text("main() { exit(99); }\n")
+    results = []
+    worker.sig_result.connect(lambda key, r: results.append(key))
+    worker.hold(True)
+    worker.submit("a", str(tmp_path / "A.plc"), None, api.CompileOptions())
+    worker.submit("b", str(tmp_path / "B.plc"), None, api.CompileOptions())
+    worker.hold(False)
+    assert started.wait(10)                  # A's result is on its way, B is compiling
+    try:
+        qtbot.waitUntil(lambda: results == ["a"], timeout=5000)
+        assert worker.pending()              # B's result has not arrived
+    finally:
+        release.set()
+    qtbot.waitUntil(lambda: results == ["a", "b"], timeout=5000)
+    qtbot.waitUntil(lambda: not worker.pending(), timeout=5000)
