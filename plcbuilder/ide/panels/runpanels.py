@@ -159,10 +159,11 @@ class RunPanels(QtCore.QObject):
             clear_compare.hide()
             label = ElidedLabel(min_chars=8)
             label.hide()
-            # (a row of their own under the plot's buttons: what is on show, then the links)
-            panel.toolbar.shown_row.addWidget(label, 1)
+            # (rows of their own under the plot's buttons: what is on show, then the links)
+            panel.toolbar.banner_row.addWidget(label, 1)
             panel.toolbar.shown_row.addWidget(back)
             panel.toolbar.shown_row.addWidget(clear_compare)
+            panel.toolbar.shown_row.addStretch(1)
             self.banner_links.append(back)
             self.compare_links.append(clear_compare)
             self.banners.append(label)
@@ -353,7 +354,10 @@ class RunPanels(QtCore.QObject):
             panel.set_comparison(comparison)
         for link in self.compare_links:
             link.show()
-        self._set_banner(f"comparing {comparison.base} (solid) with {comparison.name} "
+        # the key above the plots says which line is which trace: the bar says
+        # what the comparison found, the whole sentence in its tooltip
+        self._set_banner(f"{comparison.name} (dashed): {comparison.where}",
+                         f"comparing {comparison.base} (solid) with {comparison.name} "
                          f"(dashed): {comparison.where}")
         self.sig_comparison.emit(comparison.name)
         self.wake()
@@ -373,13 +377,15 @@ class RunPanels(QtCore.QObject):
         self.sig_comparison.emit(None)
         self.wake()
 
-    def _set_banner(self, text: str) -> None:
-        self._banner_text = text
+    def _set_banner(self, text: str, whole: Optional[str] = None) -> None:
+        """What is on show, above the plots (``whole``: the longer sentence
+        for its tooltip, default ``text``)."""
+        self._banner_text = whole or text
         for label in self.banners:
             label.setText(f"<span style='color:{MARKER_COLOUR}'>"
                           f"{html.escape(text, quote=False)}</span>")
-            label.setToolTip(f"{text}; the live telemetry is not shown until Back to Live "
-                             f"(or Clear)")
+            label.setToolTip(f"{whole or text}; the live telemetry is not shown until "
+                             f"Back to Live (or Clear)")
             label.show()
 
     def wake(self, *args) -> None:

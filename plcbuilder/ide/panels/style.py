@@ -291,8 +291,27 @@ class TitleLegend(Legend):
         title.opts["justify"] = "left"
         title.setText(title.text)
         title.resizeEvent(None)
-        plot.vb.sigResized.connect(lambda *_a: self.fit())
-        plot.geometryChanged.connect(lambda: self.fit())
+        self._detached = False
+        plot.vb.sigResized.connect(self._on_resized)
+        plot.geometryChanged.connect(self._on_resized)
+
+    def _on_resized(self, *_a) -> None:
+        if not self._detached:
+            self.fit()
+
+    def detach(self) -> None:
+        """Take the legend off its plot: its rows go, the title row gets its
+        own height back and a resize no longer places it."""
+        self.clear()
+        self._detached = True
+        for sig in (self.plot.vb.sigResized, self.plot.geometryChanged):
+            try:
+                sig.disconnect(self._on_resized)
+            except (RuntimeError, TypeError):
+                pass
+        scene = self.scene()
+        if scene is not None:
+            scene.removeItem(self)
 
     def addItem(self, item, name):  # noqa: N802 - pyqtgraph's name
         super().addItem(item, name)
@@ -301,6 +320,8 @@ class TitleLegend(Legend):
         QtCore.QTimer.singleShot(0, self, self._fit_again)
 
     def _fit_again(self) -> None:
+        if self._detached:
+            return
         try:
             self.fit(force=True)
         except RuntimeError:          # the plot went with its window meanwhile

@@ -6,8 +6,8 @@ the comparison found. A time panel given one (``set_comparison``)
 draws it over its own curves, dashed: the lanes in the theme's overlay colour
 inside each lane's band (a little inside the first trace's levels, so both
 show where they agree), each analog channel in its own colour, proc in the
-overlay colour. :func:`key` puts a small legend on a plot saying which line
-is which trace.
+overlay colour. :func:`key` puts a small legend above a plot saying which
+line is which trace.
 """
 
 from __future__ import annotations
@@ -67,8 +67,12 @@ def overlay_colour() -> str:
 
 
 def key(plot: pg.PlotItem, entries: list[tuple[QtGui.QPen, str]]) -> pg.LegendItem:
-    """A legend in the plot's top right corner: each pen's line and its text."""
-    lg = style.new_legend(plot, (-8, 8))
+    """A legend above the plot's view, right-aligned in its title row: each
+    pen's line and its text, side by side when they fit (over the view's top
+    right corner it covered the top lanes, OUT 0 and OUT 4 in the example)."""
+    c = style.plot_colours()
+    lg = style.TitleLegend(plot, labelTextColor=c.text, labelTextSize="8pt",
+                           colCount=len(entries), frame=False)
     lg.setZValue(40)
     for pen, text in entries:
         lg.addItem(pg.PlotDataItem(pen=pen), text)
@@ -87,7 +91,9 @@ def restyle_key(lg: Optional[pg.LegendItem], entries: list[tuple[QtGui.QPen, str
 
 def remove_key(lg: Optional[pg.LegendItem]) -> None:
     """Take a key off its plot (the scene unparents it)."""
-    if lg is not None:
+    if isinstance(lg, style.TitleLegend):
+        lg.detach()
+    elif lg is not None:
         scene = lg.scene()
         if scene is not None:
             scene.removeItem(lg)

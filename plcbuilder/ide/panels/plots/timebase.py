@@ -87,8 +87,12 @@ class TimeToolbar(QtWidgets.QWidget):
         self.extra.setSpacing(4)
         lay.addLayout(self.extra)
         lay.addStretch(1)
-        #: a row under the buttons for what is shown only at times (what is on
-        #: show, Back to Live, Clear Comparison): beside them, it widened the dock
+        #: rows under the buttons for what is shown only at times: beside them,
+        #: it widened the dock. What is on show has a row of its own (beside
+        #: the links, a comparison's text was cut at the default width) ...
+        self.banner_row = QtWidgets.QHBoxLayout()
+        outer.addLayout(self.banner_row)
+        #: ... and Back to Live, Clear Comparison the row under it
         self.shown_row = QtWidgets.QHBoxLayout()
         self.shown_row.setSpacing(8)
         outer.addLayout(self.shown_row)
