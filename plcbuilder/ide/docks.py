@@ -250,12 +250,12 @@ def place(win, table: DockTable) -> None:
 
 
 def whole_tab_titles(bar) -> None:
-    """A tab bar of docks tabbed together says each dock's whole title: Qt
-    elides them ("Ou…", "Disasse…", issue 23.15); it scrolls instead when the
-    tabs do not all fit."""
-    if bar.elideMode() != Qt.TextElideMode.ElideNone:
-        bar.setElideMode(Qt.TextElideMode.ElideNone)
-        bar.setUsesScrollButtons(True)
+    """A tab bar of docks tabbed together says each dock's whole title where
+    they fit (Qt elided them: "Ou…", "Disasse…", issue 23.15), and shortens them
+    evenly where they do not (scrolled, the tab before the current one was cut
+    at the bar's edge): tab_titles.fit_titles."""
+    from plcbuilder.ide.tab_titles import fit_titles
+    fit_titles(bar)
 
 
 def follow_tab_bars(win) -> None:

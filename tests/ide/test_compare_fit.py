@@ -113,3 +113,48 @@ def test_the_first_tab_of_the_plots_dock_shows_its_whole_label(compared, qtbot):
         for button in bar.findChildren(QToolButton):
             if button.isVisible():
                 assert not button.geometry().intersects(rect), (button.geometry(), rect)
+
+
+def _tab_bars(w):
+    return [b for b in w.findChildren(QTabBar) if b.parent() is w and b.isVisible()
+            and b.count() > 1]
+
+
+def test_no_dock_tab_is_cut_in_a_narrow_dock(qtbot, tmp_path, prompts_off):
+    """The screenshot's narrow left dock read "kpoints | Outline": its tab bar
+    scrolled to the current tab and cut the one before it. A tab bar whose
+    whole titles do not fit shortens them ("Call St…") with the whole title in
+    the tab's tooltip; no tab lies partly outside the bar or under its buttons;
+    where they fit (the default width) the titles are whole."""
+    from PySide6.QtWidgets import QToolButton
+    conn = RecordingConnection()
+    with windows(qtbot, Settings(str(tmp_path / "cfg" / "s.ini")), None) as make:
+        w = make(connection=conn, start_controller=True)
+        qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
+        w.open_project(make_project(tmp_path / "proj"))
+        w.outline_dock.show()
+        w.outline_dock.raise_()
+        _settle(qtbot, 100)
+        bar = next(b for b in _tab_bars(w) if "Outline" in
+                   [b.tabText(i) for i in range(b.count())])
+        for i in range(bar.count()):                    # the default width: whole titles
+            need = bar.fontMetrics().horizontalAdvance(bar.tabText(i))
+            assert bar.tabRect(i).width() >= need
+            assert bar.rect().contains(bar.tabRect(i))
+        w.resizeDocks([w.project_dock], [160], Qt.Orientation.Horizontal)
+        _settle(qtbot, 100)
+        assert bar.width() < sum(bar.tabSizeHint(i).width() for i in range(bar.count()))
+        buttons = [b.geometry() for b in bar.findChildren(QToolButton) if b.isVisible()]
+        for i in range(bar.count()):
+            rect, title = bar.tabRect(i), bar.tabText(i)
+            assert bar.rect().contains(rect), (title, rect, bar.rect())
+            assert not any(b.intersects(rect) for b in buttons), (title, rect, buttons)
+            if rect.width() < bar.fontMetrics().horizontalAdvance(title):
+                assert bar.elideMode() == Qt.TextElideMode.ElideRight
+                assert bar.tabToolTip(i) == title
+        # wide again: whole titles again
+        w.resizeDocks([w.project_dock], [400], Qt.Orientation.Horizontal)
+        _settle(qtbot, 100)
+        for i in range(bar.count()):
+            need = bar.fontMetrics().horizontalAdvance(bar.tabText(i))
+            assert bar.tabRect(i).width() >= need and bar.rect().contains(bar.tabRect(i))
