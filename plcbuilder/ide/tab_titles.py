@@ -6,7 +6,8 @@ short of room ("Ou…", "Disasse…", issue 23.15); with elision off, a bar too
 narrow for its tabs scrolls, and the tab before the current one is cut at the
 bar's edge (a narrow left dock read "kpoints | Outline"). :func:`fit_titles`
 keeps a bar's titles whole while they fit its width and shortens them all
-evenly (each tab's tooltip says its whole title) when they do not.
+evenly (each tab's tooltip says its whole title) when they do not; a bar too
+narrow even for the shortened titles scrolls, its current tab whole.
 """
 
 from __future__ import annotations
@@ -44,8 +45,15 @@ class _Fitter(QObject):
                 bar.setTabToolTip(i, bar.tabText(i))
         # what the tabs take with whole titles (the size hint is the whole
         # title's, whatever the elide mode)
-        whole = sum(bar.tabSizeHint(i).width() for i in range(n))
-        mode = _WHOLE if whole <= bar.width() else _SHORT
+        fm = bar.fontMetrics()
+        hints = [bar.tabSizeHint(i).width() for i in range(n)]
+        # shortened, a tab is at least two characters and "..." wide (Qt's rule)
+        short = sum(h - fm.horizontalAdvance(bar.tabText(i))
+                    + fm.horizontalAdvance(bar.tabText(i)[:2] + "...")
+                    for i, h in enumerate(hints))
+        # too narrow even for those: whole titles, scrolled to the current tab
+        # (shortened and scrolled, the current tab read "O…")
+        mode = _WHOLE if sum(hints) <= bar.width() or short > bar.width() else _SHORT
         if bar.elideMode() != mode:
             bar.setElideMode(mode)
 
