@@ -355,8 +355,10 @@ class RunPanels(QtCore.QObject):
         for link in self.compare_links:
             link.show()
         # the key above the plots says which line is which trace: the bar says
-        # what the comparison found, the whole sentence in its tooltip
-        self._set_banner(f"{comparison.name} (dashed): {comparison.where}",
+        # first what the comparison found (kept where the dock is narrow), the
+        # whole sentence (how they were lined up) in its tooltip
+        found = comparison.where.rpartition("; ")[2]
+        self._set_banner(f"{found}: {comparison.name} (dashed)",
                          f"comparing {comparison.base} (solid) with {comparison.name} "
                          f"(dashed): {comparison.where}")
         self.sig_comparison.emit(comparison.name)
