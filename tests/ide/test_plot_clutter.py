@@ -111,3 +111,30 @@ def test_the_xy_paths_tick_numbers_do_not_run_together(qtbot):
         for (x0, t0), (x1, t1) in zip(zip(px, texts), zip(px[1:], texts[1:])):
             assert x1 - x0 >= (fm.horizontalAdvance(t0) + fm.horizontalAdvance(t1)) / 2 + 4, \
                 texts
+
+
+@pytest.mark.parametrize("offset", [227097.0, 3.0])
+def test_the_time_axis_numbers_do_not_run_together_late_in_a_session(qtbot, offset):
+    """A capture 63 hours into a session, shown in the plots' narrow dock: the
+    time axis read "2270972270972270972270 98" (six-digit times a tenth of a
+    second apart). Its ticks are spaced for their numbers' width."""
+    from plcbuilder.ide.panels import style
+    w = style.plot_widget(style.time_axis(), menu=False)
+    style.style_plot(w.getPlotItem(), bottom="time (s)", bottom_units=None)
+    qtbot.addWidget(w)
+    w.resize(300, 160)
+    w.show()
+    qtbot.waitExposed(w)
+    ax = w.getPlotItem().getAxis("bottom")
+    ax.set_offset(offset)
+    w.getPlotItem().setXRange(0.0, 0.6, padding=0)
+    w.grab()
+    lo, hi = ax.range
+    fm = QtGui.QFontMetricsF(ax.style["tickFont"])
+    levels = ax.tickValues(lo, hi, ax.width())
+    spacing, values = levels[0]
+    assert len(values) >= 2
+    texts = ax.tickStrings(values, 1.0, spacing)
+    px = [(v - lo) * ax.width() / (hi - lo) for v in values]
+    for (x0, t0), (x1, t1) in zip(zip(px, texts), zip(px[1:], texts[1:])):
+        assert x1 - x0 >= (fm.horizontalAdvance(t0) + fm.horizontalAdvance(t1)) / 2 + 4, texts

@@ -170,7 +170,36 @@ class TimeAxis(pg.AxisItem):
 
     def tickStrings(self, values, scale, spacing):  # noqa: N802
         o = self.offset
-        return super().tickStrings([v + o for v in values], scale, spacing)
+        if self.logMode or scale != 1.0 or not spacing:
+            return super().tickStrings([v + o for v in values], scale, spacing)
+        return [_time_text(v + o, spacing) for v in values]
+
+    def tickSpacing(self, minVal, maxVal, size):  # noqa: N802 - pyqtgraph's name
+        """pyqtgraph's spacing, made wider (2×, 5×, 10× …) where the numbers
+        would run together: late in a session a time is six digits and more
+        ("2270972270972270972270 98" in a narrow dock). Called with absolute
+        times (tickValues)."""
+        levels = super().tickSpacing(minVal, maxVal, size)
+        if not levels or self.orientation not in ("bottom", "top") or size <= 0 \
+                or self.logMode or self.scale != 1.0:
+            return levels
+        fm = QtGui.QFontMetricsF(self.style.get("tickFont") or QtGui.QFont())
+        span = abs(maxVal - minVal) or 1.0
+        spacing, offset = levels[0]
+        for factor in (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000):
+            s = spacing * factor
+            widest = max(fm.horizontalAdvance(_time_text(v, s))
+                         for v in (minVal, maxVal)) + 10
+            if span / s * widest <= size:
+                break
+        return levels if factor == 1 else [(s, offset)]
+
+
+def _time_text(t: float, spacing: float) -> str:
+    """A tick's time with the decimals its spacing needs (pyqtgraph's own
+    turns to six significant digits from 10000 on: 227097.1 s read "227097")."""
+    places = max(0, math.ceil(-math.log10(spacing) - 1e-9)) if spacing < 1 else 0
+    return f"{t:.{places}f}"
 
 
 class SpacedAxis(pg.AxisItem):
