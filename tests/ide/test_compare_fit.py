@@ -158,3 +158,22 @@ def test_no_dock_tab_is_cut_in_a_narrow_dock(qtbot, tmp_path, prompts_off):
         for i in range(bar.count()):
             need = bar.fontMetrics().horizontalAdvance(bar.tabText(i))
             assert bar.tabRect(i).width() >= need and bar.rect().contains(bar.tabRect(i))
+
+
+def test_the_disassembly_column_titles_are_whole(qtbot):
+    """The walk's Disassembly read "Instructio": its columns were sized for the
+    code's monospace text, not for their titles."""
+    from plcbuilder import api
+    from plcbuilder.ide.panels.disasm_view import DisasmView
+    view = DisasmView()
+    qtbot.addWidget(view)
+    view.resize(400, 300)
+    view.show()
+    result = api.compile_source("main() { gvarset(7000, 1); exit(99); };\n", "/x/M01.plc",
+                                api.CompileOptions(kind=api.kind_of("M01.plc")))
+    assert view.show_result("/x/M01.plc", result) > 0
+    header = view.tree.header()
+    fm = header.fontMetrics()
+    for col in range(view.tree.columnCount() - 1):          # the last one stretches
+        title = view.tree.headerItem().text(col)
+        assert header.sectionSize(col) >= fm.horizontalAdvance(title) + 12, title

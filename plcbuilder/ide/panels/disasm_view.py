@@ -129,9 +129,13 @@ class DisasmView(QWidget):
             top.setFirstColumnSpanned(True)
         self.tree.expandAll()
         fm = self.tree.fontMetrics()
-        self.tree.setColumnWidth(0, self.tree.indentation() * 3 + fm.horizontalAdvance("000000"))
-        self.tree.setColumnWidth(1, fm.horizontalAdvance("00 00 00 00 00 00"))
-        self.tree.setColumnWidth(2, fm.horizontalAdvance("GVARSET000"))
+        head = self.tree.header().fontMetrics()
+        titles = self.tree.headerItem()
+        # wide enough for the code's text and for the column's title ("Instructio")
+        for col, width in enumerate((self.tree.indentation() * 3 + fm.horizontalAdvance("000000"),
+                                     fm.horizontalAdvance("00 00 00 00 00 00"),
+                                     fm.horizontalAdvance("GVARSET000"))):
+            self.tree.setColumnWidth(col, max(width, head.horizontalAdvance(titles.text(col)) + 16))
         return len(instrs)
 
     def follow(self, path: str, line: int) -> None:
