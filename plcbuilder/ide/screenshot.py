@@ -170,7 +170,10 @@ def _show_traces(win, traces: tuple) -> bool:
         panels.dock("cursors").show()
         panels.dock("cursors").raise_()
         panels.cursor_table.toggle.setChecked(True)
-    win.resizeDocks([outputs], [int(win.width() * 0.62)], Qt.Orientation.Horizontal)
+    # half the window (the editor keeps its least width), and the project's side
+    # room for its tabs' shortened titles (squeezed, it read "ints | Outline")
+    win.resizeDocks([win.project_dock, outputs], [180, int(win.width() * 0.5)],
+                    Qt.Orientation.Horizontal)
     if watched:
         h = win.height()
         win.resizeDocks([outputs, panels.dock("cursors"), panels.dock("analog")],
