@@ -124,8 +124,11 @@ ENDS_TICK = frozenset({Op.LOOP8, Op.LOOP16, Op.YIELD})
 BUILTIN_CALLS = frozenset({Op.PORTSET, Op.PORTCLR, Op.PORTGET, Op.GVARGET, Op.GVARSET, Op.G0MOVE})
 #: Constant pushes without an operand, and the value each pushes.
 IMPLICIT_CONST = {Op.PUSH0: 0, Op.PUSH1: 1}
-#: Conditional jumps: they pop the condition (LOOP also ends the tick).
-COND_JUMPS = frozenset({Op.JZ8, Op.JZ16, Op.JNZ8, Op.JNZ16, Op.LOOP8, Op.LOOP16})
+#: Conditional jumps: they pop the condition (LOOP also ends the tick); JZ jumps
+#: when it is 0, JNZ and LOOP when it is not.
+JUMPS_IF_ZERO = frozenset({Op.JZ8, Op.JZ16})
+JUMPS_IF_NOT_ZERO = frozenset({Op.JNZ8, Op.JNZ16, Op.LOOP8, Op.LOOP16})
+COND_JUMPS = JUMPS_IF_ZERO | JUMPS_IF_NOT_ZERO
 
 #: (values popped, values pushed) by each opcode. CALL and RET move no values
 #: (procedures share variables, not the stack).

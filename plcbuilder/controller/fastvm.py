@@ -58,7 +58,8 @@ from collections import namedtuple
 
 from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi, semantics
-from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST,
+from plcbuilder.bytecode.opcodes import (BINARY, COND_JUMPS, ENDS_TICK, HAS_CONST, HAS_JREL,
+                                         IMPLICIT_CONST, JUMPS_IF_NOT_ZERO, JUMPS_IF_ZERO,
                                          NO_FALLTHROUGH, STACK_EFFECT, UNARY, Instruction, Op,
                                          validate)
 from plcbuilder.bytecode.program import Kind, Program
@@ -74,9 +75,9 @@ if TYPE_CHECKING:
 
 __all__ = ["Unsupported", "translate", "make_runner", "factory", "io_shape"]
 
-_LOOPS = frozenset({Op.LOOP8, Op.LOOP16})
-_JZ = frozenset({Op.JZ8, Op.JZ16})
-_JNZ = frozenset({Op.JNZ8, Op.JNZ16})
+_LOOPS = COND_JUMPS & ENDS_TICK
+_JZ = JUMPS_IF_ZERO
+_JNZ = JUMPS_IF_NOT_ZERO - ENDS_TICK
 _JMP = HAS_JREL & NO_FALLTHROUGH
 #: Instructions that end a basic block.
 _TERMINATORS = HAS_JREL | {Op.YIELD, Op.CALL, Op.RET, Op.EXIT, Op.GVARGET}
