@@ -28,9 +28,10 @@ from __future__ import annotations
 
 from plcbuilder.bytecode import semantics
 from plcbuilder.bytecode.abi import MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET
-from plcbuilder.bytecode.opcodes import (BINARY, COND_JUMPS, ENDS_TICK, HAS_CONST, HAS_JREL,
-                                         IMPLICIT_CONST, JUMPS_IF_NOT_ZERO, JUMPS_IF_ZERO,
-                                         NO_FALLTHROUGH, UNARY, Op, size_of, validate)
+from plcbuilder.bytecode.opcodes import (BINARY, BUILTINS, COND_JUMPS, ENDS_TICK, HAS_CONST,
+                                         HAS_JREL, IMPLICIT_CONST, JUMPS_IF_NOT_ZERO,
+                                         JUMPS_IF_ZERO, NO_FALLTHROUGH, UNARY, Op, size_of,
+                                         validate)
 from plcbuilder.bytecode.program import Program
 from plcbuilder.bytecode.semantics import wrap
 
@@ -101,8 +102,13 @@ class Migrate(Exception):
 HANDOVER = object()
 
 
+#: The Host's functions the built-in calls reach, by name (opcodes.BUILTINS).
+CALLS = tuple(dict.fromkeys(c.host for c in BUILTINS.values()))
+
+
 class Host:
-    """What a running procedure reaches outside itself.
+    """What a running procedure reaches outside itself: a function for each
+    built-in call (:data:`CALLS`), and what the fast backend uses besides.
 
     ``gvarset`` is the general register write (prints and, for software
     procedures, the command registers 100020.., 100040, 100041 are handled by
@@ -122,19 +128,21 @@ class Host:
     place): then those are read instead (a list item is cheaper than a bit).
     """
 
-    __slots__ = ("portset", "portclr", "portget", "gvarget", "gvarset", "g0move", "plain",
-                 "lat", "pr", "raw_gvarset", "starthw", "seteparam", "softjog", "software", "io",
-                 "debug")
+    __slots__ = (*CALLS, "plain", "lat", "pr", "raw_gvarset", "starthw", "seteparam", "softjog",
+                 "software", "io", "debug")
 
-    def __init__(self, *, portset, portclr, portget, gvarget, gvarset, g0move,
-                 plain=None, lat: int = 0, pr=None, raw_gvarset=None, starthw=None,
-                 seteparam=None, softjog=None, software: bool = False, io=None):
-        self.portset, self.portclr, self.portget = portset, portclr, portget
-        self.gvarget, self.gvarset, self.g0move = gvarget, gvarset, g0move
+    def __init__(self, *, plain=None, lat: int = 0, pr=None, raw_gvarset=None, starthw=None,
+                 seteparam=None, softjog=None, software: bool = False, io=None, **calls):
+        if calls.keys() != set(CALLS):
+            raise TypeError(f"Host takes the built-in calls {', '.join(CALLS)}: "
+                            f"missing {sorted(set(CALLS) - calls.keys())}, "
+                            f"unknown {sorted(calls.keys() - set(CALLS))}")
+        for name, fn in calls.items():       # portset=..., portget=..., (opcodes.BUILTINS)
+            setattr(self, name, fn)
         self.plain = plain or (lambda _addr: True)
         self.lat = int(lat)
         self.pr = pr
-        self.raw_gvarset = raw_gvarset or gvarset
+        self.raw_gvarset = raw_gvarset or calls["gvarset"]
         self.starthw, self.seteparam, self.softjog = starthw, seteparam, softjog
         self.software = software
         self.io = io
@@ -149,10 +157,16 @@ class Host:
         through the reference interpreter: this one's reads and its writes, or
         ``write`` (a function refusing them) in place of each write; no
         latency, no debugger."""
-        return Host(portset=write or self.portset, portclr=write or self.portclr,
-                    portget=self.portget, gvarget=self.gvarget,
-                    gvarset=write or self.gvarset, g0move=write or self.g0move,
-                    plain=self.plain)
+        return Host(plain=self.plain, **{
+            c.host: write if write is not None and c.writes else getattr(self, c.host)
+            for c in BUILTINS.values()})
+
+    def replace(self, **changes) -> "Host":
+        """A copy of this host (its debugger view aside) with ``changes`` (a
+        target's own gvarget and gvarset over this one's, say)."""
+        kw = {name: getattr(self, name) for name in self.__slots__ if name != "debug"}
+        kw.update(changes)
+        return Host(**kw)
 
 
 # ------------------------------------------------------------- pre-decoding
@@ -160,11 +174,11 @@ class Host:
 # (kind, argument, next offset). A kind is what the interpreter does for an
 # opcode; opcodes of one role in opcodes.py share one (every constant push is
 # K_CONST, every binary operator K_BINARY with its semantics function as the
-# argument, LOOP and YIELD K_TICK_END).
+# argument, LOOP and YIELD K_TICK_END, every built-in call K_BUILTIN with its
+# row of opcodes.BUILTINS).
 
 (K_NOP, K_CONST, K_LOAD, K_STORE, K_INC, K_DEC, K_POP, K_BINARY, K_DIVIDE, K_UNARY,
- K_JMP, K_JZ, K_JNZ, K_TICK_END, K_CALL, K_RET, K_EXIT,
- K_PORTSET, K_PORTCLR, K_PORTGET, K_GVARGET, K_GVARSET, K_G0MOVE, K_END) = range(24)
+ K_JMP, K_JZ, K_JNZ, K_TICK_END, K_CALL, K_RET, K_EXIT, K_BUILTIN, K_GVARGET, K_END) = range(20)
 
 #: What a procedure's generator yields when the debugger halts it mid-tick (a tick
 #: end yields the code offset of the instruction that ended the tick).
@@ -173,8 +187,8 @@ HALT = object()
 _KIND_OF: dict[Op, int] = {
     Op.NOP: K_NOP, Op.LOAD: K_LOAD, Op.STORE: K_STORE, Op.INC: K_INC, Op.DEC: K_DEC,
     Op.POP: K_POP, Op.CALL: K_CALL, Op.RET: K_RET, Op.EXIT: K_EXIT,
-    Op.PORTSET: K_PORTSET, Op.PORTCLR: K_PORTCLR, Op.PORTGET: K_PORTGET,
-    Op.GVARGET: K_GVARGET, Op.GVARSET: K_GVARSET, Op.G0MOVE: K_G0MOVE,
+    **{op: K_BUILTIN for op in BUILTINS},
+    Op.GVARGET: K_GVARGET,                 # a built-in call with a latency of its own
     **{op: K_CONST for op in HAS_CONST | set(IMPLICIT_CONST)},
     **{op: K_DIVIDE if semantics.BINARY[op].divides else K_BINARY for op in BINARY},
     **{op: K_UNARY for op in UNARY},
@@ -196,7 +210,7 @@ def decoded(program: Program) -> tuple[list, list, list]:
     K_END. The argument of an instruction is what its kind needs: a constant's
     value, a slot, a jump's or call's target, an operator's function
     (K_DIVIDE: with its fault), a tick end's (target, whether it pops a
-    condition)."""
+    condition), a built-in call's (Host function, arguments, gives a value)."""
     key = (program.code, program.entry)
     hit = _DECODED.get(key)
     if hit is not None:
@@ -220,6 +234,9 @@ def decoded(program: Program) -> tuple[list, list, list]:
             arg = semantics.UNARY[op].fn
         elif k == K_TICK_END:
             arg = (ins.end if op is Op.YIELD else ins.target, op in COND_JUMPS)
+        elif k == K_BUILTIN:
+            c = BUILTINS[op]
+            arg = (c.host, c.args, c.value)
         elif ins.target is not None:
             arg = ins.target
         else:
@@ -299,9 +316,8 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
     stack = [] if stack is None else list(stack)
     calls = list(rets)
     push, pop = stack.append, stack.pop
-    portset, portclr, portget = host.portset, host.portclr, host.portget
-    gvarget, gvarset, g0move = host.gvarget, host.gvarset, host.g0move
-    plain, lat = host.plain, host.lat
+    reach = {name: getattr(host, name) for name in CALLS}
+    gvarget, plain, lat = host.gvarget, host.plain, host.lat
     try:
         while True:
             if watch[pc]:                  # the debugger or coverage sees it first
@@ -350,9 +366,19 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                     raise Handoff(pc, stack, tuple(calls), 0)
                 count = 0
                 continue
-            elif k == K_GVARSET:
-                v = pop()
-                gvarset(pop(), v)
+            elif k == K_BUILTIN:           # pop the arguments, call the host, push its value
+                name, n, value = args[pc]
+                if n == 1:                 # (the common case, without a list)
+                    r = reach[name](pop())
+                else:
+                    first = len(stack) - n
+                    if first < 0:
+                        raise VMFault(pc, FAULT_UNDERFLOW)
+                    argv = stack[first:]
+                    del stack[first:]
+                    r = reach[name](*argv)
+                if value:
+                    push(r)
             elif k == K_GVARGET:           # a plain register waits for the host's latency
                 a = pop()
                 if lat and plain(a):
@@ -363,16 +389,6 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                             pass
                     count = 0
                 push(gvarget(a))
-            elif k == K_PORTGET:
-                push(portget(pop()))
-            elif k == K_PORTSET:
-                portset(pop())
-            elif k == K_PORTCLR:
-                portclr(pop())
-            elif k == K_G0MOVE:
-                d = pop()
-                m = pop()
-                g0move(pop(), m, d)
             elif k == K_POP:
                 pop()
             elif k == K_CALL:
