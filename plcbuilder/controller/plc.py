@@ -688,8 +688,8 @@ class PLC:
                 except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
                     hw.at = at
                     return t + 1 if self._run_after(t, hw, exc) else t
-                code = slots[message_slot]
-                if code or rec:
+                if slots[message_slot] or rec:
+                    code = slots[message_slot]
                     if code:
                         send(hw, code)
                     if rec and (code or machine._sample is not seen
