@@ -121,11 +121,42 @@ BINARY = frozenset({Op.ADD, Op.SUB, Op.MUL, Op.DIV, Op.MOD, Op.SHL, Op.SHR, Op.A
                     Op.XOR, Op.EQ, Op.NE, Op.LT, Op.LE, Op.GT, Op.GE})
 UNARY = frozenset({Op.NEG, Op.NOT, Op.BNOT, Op.BOOL})
 ENDS_TICK = frozenset({Op.LOOP8, Op.LOOP16, Op.YIELD})
-BUILTIN_CALLS = frozenset({Op.PORTSET, Op.PORTCLR, Op.PORTGET, Op.GVARGET, Op.GVARSET, Op.G0MOVE})
+
+
+@dataclass(frozen=True)
+class BuiltinCall:
+    """What a built-in call opcode does: it pops ``args`` values (the first
+    argument was pushed first), calls the controller's function ``host`` (an
+    attribute of controller/vm.py ``Host``, a method of the machine of the same
+    name unless controller/plc.py says otherwise) with them, and pushes what
+    it returns when ``value``. ``writes``: it changes the machine (a breakpoint
+    condition or an evaluate may not call it)."""
+    host: str
+    args: int
+    value: bool
+    writes: bool
+
+
+#: The built-in calls: a new built-in function is a row here (and its opcode
+#: above), its row in lang/builtins.py (name, parameters, doc), and its
+#: semantics, the machine's method; both VMs, the Host, the debugger's
+#: expressions and the stack effects are made from this table.
+BUILTINS: dict[Op, BuiltinCall] = {
+    Op.PORTSET: BuiltinCall("portset", 1, False, True),
+    Op.PORTCLR: BuiltinCall("portclr", 1, False, True),
+    Op.PORTGET: BuiltinCall("portget", 1, True, False),
+    Op.GVARGET: BuiltinCall("gvarget", 1, True, False),
+    Op.GVARSET: BuiltinCall("gvarset", 2, False, True),
+    Op.G0MOVE: BuiltinCall("g0move", 3, False, True),
+}
+BUILTIN_CALLS = frozenset(BUILTINS)
 #: Constant pushes without an operand, and the value each pushes.
 IMPLICIT_CONST = {Op.PUSH0: 0, Op.PUSH1: 1}
-#: Conditional jumps: they pop the condition (LOOP also ends the tick).
-COND_JUMPS = frozenset({Op.JZ8, Op.JZ16, Op.JNZ8, Op.JNZ16, Op.LOOP8, Op.LOOP16})
+#: Conditional jumps: they pop the condition (LOOP also ends the tick); JZ jumps
+#: when it is 0, JNZ and LOOP when it is not.
+JUMPS_IF_ZERO = frozenset({Op.JZ8, Op.JZ16})
+JUMPS_IF_NOT_ZERO = frozenset({Op.JNZ8, Op.JNZ16, Op.LOOP8, Op.LOOP16})
+COND_JUMPS = JUMPS_IF_ZERO | JUMPS_IF_NOT_ZERO
 
 #: (values popped, values pushed) by each opcode. CALL and RET move no values
 #: (procedures share variables, not the stack).
@@ -134,8 +165,7 @@ STACK_EFFECT.update({op: (0, 1) for op in HAS_CONST | set(IMPLICIT_CONST) | {Op.
 STACK_EFFECT.update({op: (1, 0) for op in COND_JUMPS | {Op.STORE, Op.POP, Op.EXIT}})
 STACK_EFFECT.update({op: (2, 1) for op in BINARY})
 STACK_EFFECT.update({op: (1, 1) for op in UNARY})
-STACK_EFFECT.update({Op.PORTSET: (1, 0), Op.PORTCLR: (1, 0), Op.PORTGET: (1, 1),  # built-in calls:
-                     Op.GVARGET: (1, 1), Op.GVARSET: (2, 0), Op.G0MOVE: (3, 0)})  # their arguments
+STACK_EFFECT.update({op: (c.args, int(c.value)) for op, c in BUILTINS.items()})
 #: Opcodes after which execution does not fall through to the next instruction.
 NO_FALLTHROUGH = frozenset({Op.JMP8, Op.JMP16, Op.RET, Op.EXIT})
 #: Short form -> long form of each jump, for the compiler's relaxation pass.

@@ -9,11 +9,12 @@
     branch_coverage(program, branches)   # {file: {line: (ways each jump went, …)}}
 
 The reference interpreter (:func:`plcbuilder.controller.vm.run_reference`)
-records them: :meth:`CodeCoverage.table` gives it a copy of the program's
-decoded kinds with every instruction marked ``K_COVER``; the first time an
-instruction runs, the interpreter records its offset and puts its own kind
-back, so each instruction costs one extra step once. A controller without
-coverage runs exactly as before. The fast backend does not record coverage.
+records them through its per-instruction hook: :meth:`CodeCoverage.watch`
+gives it a list true at every instruction not yet seen and the function it
+calls before running one; that records the offset and clears the mark (a
+conditional jump's once it has gone both ways), so each instruction costs
+one call once. A controller without coverage runs exactly as before. The fast
+backend does not record coverage.
 """
 
 from __future__ import annotations
@@ -21,10 +22,9 @@ from __future__ import annotations
 from typing import Callable, Optional
 
 from plcbuilder.bytecode.program import Program
-from plcbuilder.controller.vm import K_COVER, K_END, K_JNZ, K_JZ, K_LOOP, decoded
+from plcbuilder.bytecode.opcodes import COND_JUMPS, JUMPS_IF_ZERO, validate
+from plcbuilder.controller.vm import K_END, decoded
 
-#: the conditional jumps: K_JZ jumps when the condition is 0, the others when it is not
-BRANCHES = frozenset({K_JZ, K_JNZ, K_LOOP})
 #: the ways a conditional jump went (bits of CodeCoverage.branches' values)
 JUMPED, FELL_THROUGH = 1, 2
 
@@ -39,30 +39,34 @@ class CodeCoverage:
         self.branches: dict[str, dict[int, int]] = {}
         self._tables: dict[str, tuple[bytes, list, Callable]] = {}
 
-    def table(self, program: Program, kinds: list) -> tuple[list, Callable]:
-        """(the marked kinds the interpreter runs, the function it calls with the
-        offset and the stack of a marked instruction about to run; it returns the
-        instruction's own kind, or its complement (``~kind``, negative) for a
-        conditional jump not yet seen both ways: keep it marked)."""
+    def watch(self, program: Program) -> tuple[list, Callable]:
+        """(a list per code offset, true at each instruction not yet seen; the
+        function the interpreter calls with the offset and the stack of such
+        an instruction before it runs: it records it and clears its mark, a
+        conditional jump's once it has gone both ways). Kept across runs of
+        the same code."""
         entry = self._tables.get(program.name)
         if entry is None or entry[0] != program.code:
             hits = self.hits.setdefault(program.name, set())
             hits.clear()
             ways = self.branches.setdefault(program.name, {})
             ways.clear()
-            marked = [K_COVER if k is not None and k != K_END else k for k in kinds]
-            original = list(kinds)
+            unseen = [k is not None and k != K_END for k in decoded(program)[0]]
+            branch = branches(program)
 
-            def hit(pc: int, stack: list, hits=hits, ways=ways, original=original) -> int:
+            def seen(pc: int, stack: list, hits=hits, ways=ways, branch=branch,
+                     unseen=unseen) -> None:
                 hits.add(pc)
-                k = original[pc]
-                if k not in BRANCHES:
-                    return k
-                jumps = (not stack[-1]) if k == K_JZ else bool(stack[-1])
-                seen = ways[pc] = ways.get(pc, 0) | (JUMPED if jumps else FELL_THROUGH)
-                return k if seen == JUMPED | FELL_THROUGH else ~k
+                if_zero = branch.get(pc)
+                if if_zero is None:
+                    unseen[pc] = False
+                    return
+                jumps = not stack[-1] if if_zero else bool(stack[-1])
+                way = ways[pc] = ways.get(pc, 0) | (JUMPED if jumps else FELL_THROUGH)
+                if way == JUMPED | FELL_THROUGH:
+                    unseen[pc] = False
 
-            entry = (program.code, marked, hit)
+            entry = (program.code, unseen, seen)
             self._tables[program.name] = entry
         return entry[1], entry[2]
 
@@ -76,6 +80,13 @@ class CodeCoverage:
             mine = self.branches.setdefault(name, {})
             for pc, seen in ways.items():
                 mine[pc] = mine.get(pc, 0) | seen
+
+
+def branches(program: Program) -> dict[int, bool]:
+    """The conditional jumps of ``program``: offset -> whether it jumps when its
+    condition is 0 (JZ; JNZ and LOOP jump when it is not)."""
+    return {ins.offset: ins.op in JUMPS_IF_ZERO
+            for ins in validate(program.code, program.entry) if ins.op in COND_JUMPS}
 
 
 def instruction_offsets(program: Program) -> list[int]:
@@ -103,11 +114,8 @@ def line_coverage(program: Program, hits: set[int]) -> dict[str, tuple[set[int],
 def branch_coverage(program: Program, ways: dict[int, int]) -> dict[str, dict[int, tuple]]:
     """Per source file, per line with conditional jumps: the ways each went
     (``JUMPED | FELL_THROUGH`` bits, 0: it never ran), in code order."""
-    kinds = decoded(program)[0]
     out: dict[str, dict[int, tuple]] = {}
-    for pc, k in enumerate(kinds):
-        if k not in BRANCHES:
-            continue
+    for pc in sorted(branches(program)):
         loc = program.location(pc)
         if loc is None:
             continue

@@ -4,7 +4,8 @@ mid-tick, stepping and the halted state (SPEC §6, docs/debugging.md).
 How it reaches the running code: each program has a list of *marks*, one per
 code offset, true where something is watched (a breakpoint's offset, a "run
 to" target, every statement start of a program being stepped). The reference
-interpreter sees the marks as K_BREAK in its instruction table; the fast
+interpreter asks before each marked instruction (its per-instruction hook,
+controller/vm.py ``_hooks``); the fast
 backend, for a program that has breakpoints when a procedure starts, runs a
 translation that tests the mark at every statement start (a plain translation
 otherwise; a procedure running plain code when its program gets a mark is
@@ -391,7 +392,7 @@ class Debugger:
                 if marks[pc] != on:
                     marks[pc] = on
                     if table is not None:
-                        table[1][pc] = vm.K_BREAK if on else table[0][pc]
+                        table[1][pc] = on or table[0][pc]
             if pcs:
                 for p in self.plc.running():
                     if p.program is program:
@@ -414,10 +415,13 @@ class Debugger:
         return marks
 
     def _table_of(self, program: Program, base: list) -> list:
+        """A list true where ``program`` is marked or ``base`` (coverage's list of
+        the offsets not yet seen) is; kept so as the marks change (:meth:`_remark`)
+        and by the interpreter as ``base`` changes (controller/vm.py ``_hooks``)."""
         entry = self._tables.get(program.name)
         if entry is None or entry[0] is not base:
             marks = self._marks_of(program)
-            table = [vm.K_BREAK if marks[pc] else k for pc, k in enumerate(base)]
+            table = [marks[pc] or bool(b) for pc, b in enumerate(base)]
             entry = self._tables[program.name] = (base, table)
         return entry[1]
 

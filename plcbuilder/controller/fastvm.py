@@ -58,7 +58,8 @@ from collections import namedtuple
 
 from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi, semantics
-from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST,
+from plcbuilder.bytecode.opcodes import (BINARY, BUILTINS, COND_JUMPS, ENDS_TICK, HAS_CONST, HAS_JREL,
+                                         IMPLICIT_CONST, JUMPS_IF_NOT_ZERO, JUMPS_IF_ZERO,
                                          NO_FALLTHROUGH, STACK_EFFECT, UNARY, Instruction, Op,
                                          validate)
 from plcbuilder.bytecode.program import Kind, Program
@@ -74,9 +75,9 @@ if TYPE_CHECKING:
 
 __all__ = ["Unsupported", "translate", "make_runner", "factory", "io_shape"]
 
-_LOOPS = frozenset({Op.LOOP8, Op.LOOP16})
-_JZ = frozenset({Op.JZ8, Op.JZ16})
-_JNZ = frozenset({Op.JNZ8, Op.JNZ16})
+_LOOPS = COND_JUMPS & ENDS_TICK
+_JZ = JUMPS_IF_ZERO
+_JNZ = JUMPS_IF_NOT_ZERO - ENDS_TICK
 _JMP = HAS_JREL & NO_FALLTHROUGH
 #: Instructions that end a basic block.
 _TERMINATORS = HAS_JREL | {Op.YIELD, Op.CALL, Op.RET, Op.EXIT, Op.GVARGET}
@@ -90,8 +91,8 @@ _YIELD = re.compile(r"\byield\b")
 _UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT_VAR00,
                        abi.SLOT_VAR00 + 1})
 #: The Host attributes the translated code calls by name (make(s, host, debug) takes them)
-_HOST_NAMES = ("portset", "portclr", "portget", "gvarget", "gvarset", "raw_gvarset", "g0move",
-               "pr", "plain", "lat", "seteparam", "starthw", "softjog", "io")
+_HOST_NAMES = (*vm.CALLS, "raw_gvarset", "pr", "plain", "lat", "seteparam", "starthw", "softjog",
+               "io")
 #: What the controller sends a suspended procedure to have its variables written back.
 SYNC = object()
 #: What the controller sends a procedure suspended at a tick end to have it raise
@@ -1064,12 +1065,18 @@ class _Gen:
             a = stack.pop()
             self.invalidate(stack, _IO, ind)
             self.emit(ind, self.gvarset(a, self.as_int(v)))
-        elif op is Op.G0MOVE:
-            d = stack.pop()
-            m = stack.pop()
-            f = stack.pop()
+        elif op in BUILTINS:            # any other built-in call: its Host function
+            c = BUILTINS[op]
+            argv = stack[len(stack) - c.args:]
+            del stack[len(stack) - c.args:]
             self.invalidate(stack, _IO, ind)
-            self.emit(ind, f"g0move({self.as_int(f)}, {self.as_int(m)}, {self.as_int(d)})")
+            call = f"{c.host}({', '.join(self.as_int(a) for a in argv)})"
+            if c.value:
+                name = self.temp()
+                self.emit(ind, f"{name} = {call}")
+                stack.append(_V(name))
+            else:
+                self.emit(ind, call)
         else:  # pragma: no cover - every opcode is handled above or as a terminator
             raise Unsupported(f"{op.name} inside a block")
 

@@ -41,7 +41,7 @@ from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.controller.events import Forces as ForcesEvent
 from plcbuilder.controller.events import Note
-from plcbuilder.controller.vm import HANDOVER, K_BREAK, Handoff, run_reference
+from plcbuilder.controller.vm import HANDOVER, Handoff, run_reference
 
 TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
 if TYPE_CHECKING:
@@ -343,12 +343,6 @@ class Forces:
             here = gen.gi_frame.f_locals if gen.gi_frame is not None else {}
             kw = dict(pc=h.pc, stack=list(here.get("stack") or ()), rets=h.rets,
                       count=int(here.get("count") or 0), passed=h.pc)
-            lifted = here.get("pending", -1)
-            if isinstance(lifted, int) and lifted >= 0:
-                # the watched offset it ran last has its mark lifted until the next
-                # transfer of control (vm.run_reference): put it back, or that
-                # statement would never be watched again
-                here["kinds"][lifted] = K_BREAK if here["marks"][lifted] else here["base"][lifted]
         elif gen.gi_suspended:            # at a tick end
             try:
                 p.sync()                   # (one that keeps locals takes HANDOVER after SYNC)

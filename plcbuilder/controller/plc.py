@@ -54,6 +54,10 @@ SAMPLE_BUFFER = 120_000
 SampleRow = namedtuple("SampleRow", "t running proc message fields")
 
 
+#: The machine's method a built-in call reaches where its name is not the Host's
+#: (vm.CALLS; every other one is the machine's method of the same name).
+_MACHINE_NAME = {"portclr": "portclear"}
+
 #: "no sample recorded yet": differs from every real one
 _NO_ROW = SampleRow(-1, object(), None, 0, None)
 #: matches no fields
@@ -237,9 +241,9 @@ class PLC:
 
             own = dict(gvarset=sw_gvarset, lat=0, starthw=starthw, seteparam=seteparam,
                        softjog=softjog, software=True)
-        return Host(portset=m.portset, portclr=m.portclear, portget=m.portget,
-                    gvarget=m.gvarget, g0move=m.g0move, plain=m.is_plain_register, pr=pr,
-                    raw_gvarset=raw, io=io, **own)
+        calls = {name: getattr(m, _MACHINE_NAME.get(name, name)) for name in vm.CALLS}
+        calls.update(own)
+        return Host(plain=m.is_plain_register, pr=pr, raw_gvarset=raw, io=io, **calls)
 
     def _spawn(self, program: Program, eparam: int) -> Process:
         eparam = wrap(int(eparam))
@@ -684,8 +688,8 @@ class PLC:
                 except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
                     hw.at = at
                     return t + 1 if self._run_after(t, hw, exc) else t
-                code = slots[message_slot]
-                if code or rec:
+                if slots[message_slot] or rec:
+                    code = slots[message_slot]
                     if code:
                         send(hw, code)
                     if rec and (code or machine._sample is not seen

@@ -28,14 +28,16 @@ from __future__ import annotations
 
 from plcbuilder.bytecode import semantics
 from plcbuilder.bytecode.abi import MAX_CALL_DEPTH, STACK_LIMIT, TICK_BUDGET
-from plcbuilder.bytecode.opcodes import (BINARY, HAS_CONST, HAS_JREL, IMPLICIT_CONST, Op, UNARY,
-                                         size_of, validate)
+from plcbuilder.bytecode.opcodes import (BINARY, BUILTINS, COND_JUMPS, ENDS_TICK, HAS_CONST,
+                                         HAS_JREL, IMPLICIT_CONST, JUMPS_IF_NOT_ZERO,
+                                         JUMPS_IF_ZERO, NO_FALLTHROUGH, UNARY, Op, size_of,
+                                         validate)
 from plcbuilder.bytecode.program import Program
-from plcbuilder.bytecode.semantics import c_div, c_mod, wrap
+from plcbuilder.bytecode.semantics import wrap
 
 TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
 if TYPE_CHECKING:
-    from typing import Iterator, Optional
+    from typing import Callable, Iterator, Optional
 
 FAULT_DIV = "division by zero"
 FAULT_MOD = "modulo by zero"
@@ -100,8 +102,13 @@ class Migrate(Exception):
 HANDOVER = object()
 
 
+#: The Host's functions the built-in calls reach, by name (opcodes.BUILTINS).
+CALLS = tuple(dict.fromkeys(c.host for c in BUILTINS.values()))
+
+
 class Host:
-    """What a running procedure reaches outside itself.
+    """What a running procedure reaches outside itself: a function for each
+    built-in call (:data:`CALLS`), and what the fast backend uses besides.
 
     ``gvarset`` is the general register write (prints and, for software
     procedures, the command registers 100020.., 100040, 100041 are handled by
@@ -121,25 +128,28 @@ class Host:
     place): then those are read instead (a list item is cheaper than a bit).
     """
 
-    __slots__ = ("portset", "portclr", "portget", "gvarget", "gvarset", "g0move", "plain",
-                 "lat", "pr", "raw_gvarset", "starthw", "seteparam", "softjog", "software", "io",
-                 "debug")
+    __slots__ = (*CALLS, "plain", "lat", "pr", "raw_gvarset", "starthw", "seteparam", "softjog",
+                 "software", "io", "debug")
 
-    def __init__(self, *, portset, portclr, portget, gvarget, gvarset, g0move,
-                 plain=None, lat: int = 0, pr=None, raw_gvarset=None, starthw=None,
-                 seteparam=None, softjog=None, software: bool = False, io=None):
-        self.portset, self.portclr, self.portget = portset, portclr, portget
-        self.gvarget, self.gvarset, self.g0move = gvarget, gvarset, g0move
+    def __init__(self, *, plain=None, lat: int = 0, pr=None, raw_gvarset=None, starthw=None,
+                 seteparam=None, softjog=None, software: bool = False, io=None, **calls):
+        if calls.keys() != set(CALLS):
+            raise TypeError(f"Host takes the built-in calls {', '.join(CALLS)}: "
+                            f"missing {sorted(set(CALLS) - calls.keys())}, "
+                            f"unknown {sorted(calls.keys() - set(CALLS))}")
+        for name, fn in calls.items():       # portset=..., portget=..., (opcodes.BUILTINS)
+            setattr(self, name, fn)
         self.plain = plain or (lambda _addr: True)
         self.lat = int(lat)
         self.pr = pr
-        self.raw_gvarset = raw_gvarset or gvarset
+        self.raw_gvarset = raw_gvarset or calls["gvarset"]
         self.starthw, self.seteparam, self.softjog = starthw, seteparam, softjog
         self.software = software
         self.io = io
         #: the debugger's view of this procedure (controller/debugger.py ``Watch``):
         #: ``marks`` (per code offset, watched or not), ``brk(pc, rets)`` (True: halt
-        #: before pc), ``table(program, base)`` (the kinds with K_BREAK where marked)
+        #: before pc), ``table(program, base)`` (a list true where marked or ``base``
+        #: is, kept so as marks change)
         self.debug = None
 
     def for_expression(self, write=None) -> "Host":
@@ -147,50 +157,60 @@ class Host:
         through the reference interpreter: this one's reads and its writes, or
         ``write`` (a function refusing them) in place of each write; no
         latency, no debugger."""
-        return Host(portset=write or self.portset, portclr=write or self.portclr,
-                    portget=self.portget, gvarget=self.gvarget,
-                    gvarset=write or self.gvarset, g0move=write or self.g0move,
-                    plain=self.plain)
+        return Host(plain=self.plain, **{
+            c.host: write if write is not None and c.writes else getattr(self, c.host)
+            for c in BUILTINS.values()})
+
+    def replace(self, **changes) -> "Host":
+        """A copy of this host (its debugger view aside) with ``changes`` (a
+        target's own gvarget and gvarset over this one's, say)."""
+        kw = {name: getattr(self, name) for name in self.__slots__ if name != "debug"}
+        kw.update(changes)
+        return Host(**kw)
 
 
 # ------------------------------------------------------------- pre-decoding
 # The interpreter walks the bytes once per program into per-offset tables
-# (kind, argument, next offset); the kinds group opcodes by what they do.
+# (kind, argument, next offset). A kind is what the interpreter does for an
+# opcode; opcodes of one role in opcodes.py share one (every constant push is
+# K_CONST, every binary operator K_BINARY with its semantics function as the
+# argument, LOOP and YIELD K_TICK_END, every built-in call K_BUILTIN with its
+# row of opcodes.BUILTINS).
 
-(K_CONST, K_LOAD, K_STORE, K_INC, K_DEC, K_POP, K_NOP, K_BIN, K_DIV, K_MOD, K_UN,
- K_JMP, K_JZ, K_JNZ, K_LOOP, K_YIELD, K_CALL, K_RET, K_EXIT,
- K_PORTSET, K_PORTCLR, K_PORTGET, K_GVARGET, K_GVARSET, K_G0MOVE, K_END, K_COVER,
- K_BREAK) = range(28)
-# K_COVER: an instruction not yet run while coverage is recorded (controller/coverage.py)
-# K_BREAK: an instruction the debugger watches (controller/debugger.py): its hook is
-#   asked first, and the instruction runs once it lets it (its own kind is in the base table)
+(K_NOP, K_CONST, K_LOAD, K_STORE, K_INC, K_DEC, K_POP, K_BINARY, K_DIVIDE, K_UNARY,
+ K_JMP, K_JZ, K_JNZ, K_TICK_END, K_CALL, K_RET, K_EXIT, K_BUILTIN, K_GVARGET, K_END) = range(20)
 
 #: What a procedure's generator yields when the debugger halts it mid-tick (a tick
 #: end yields the code offset of the instruction that ended the tick).
 HALT = object()
 
 _KIND_OF: dict[Op, int] = {
-    Op.LOAD: K_LOAD, Op.STORE: K_STORE, Op.INC: K_INC, Op.DEC: K_DEC, Op.POP: K_POP,
-    Op.NOP: K_NOP, Op.DIV: K_DIV, Op.MOD: K_MOD,
-    Op.JMP8: K_JMP, Op.JMP16: K_JMP, Op.JZ8: K_JZ, Op.JZ16: K_JZ, Op.JNZ8: K_JNZ,
-    Op.JNZ16: K_JNZ, Op.LOOP8: K_LOOP, Op.LOOP16: K_LOOP, Op.YIELD: K_YIELD,
-    Op.CALL: K_CALL, Op.RET: K_RET, Op.EXIT: K_EXIT,
-    Op.PORTSET: K_PORTSET, Op.PORTCLR: K_PORTCLR, Op.PORTGET: K_PORTGET,
-    Op.GVARGET: K_GVARGET, Op.GVARSET: K_GVARSET, Op.G0MOVE: K_G0MOVE,
+    Op.NOP: K_NOP, Op.LOAD: K_LOAD, Op.STORE: K_STORE, Op.INC: K_INC, Op.DEC: K_DEC,
+    Op.POP: K_POP, Op.CALL: K_CALL, Op.RET: K_RET, Op.EXIT: K_EXIT,
+    **{op: K_BUILTIN for op in BUILTINS},
+    Op.GVARGET: K_GVARGET,                 # a built-in call with a latency of its own
+    **{op: K_CONST for op in HAS_CONST | set(IMPLICIT_CONST)},
+    **{op: K_DIVIDE if semantics.BINARY[op].divides else K_BINARY for op in BINARY},
+    **{op: K_UNARY for op in UNARY},
+    **{op: K_TICK_END for op in ENDS_TICK},
+    **{op: K_JMP for op in HAS_JREL & NO_FALLTHROUGH},
+    **{op: K_JZ for op in JUMPS_IF_ZERO},
+    **{op: K_JNZ for op in JUMPS_IF_NOT_ZERO - ENDS_TICK},
 }
-for _op in HAS_CONST | set(IMPLICIT_CONST):
-    _KIND_OF[_op] = K_CONST
-for _op in BINARY - {Op.DIV, Op.MOD}:
-    _KIND_OF[_op] = K_BIN
-for _op in UNARY:
-    _KIND_OF[_op] = K_UN
 assert set(_KIND_OF) == set(Op), set(Op) - set(_KIND_OF)
+
+#: the fault of a zero divisor, by opcode
+_ZERO_DIVISOR = {Op.DIV: FAULT_DIV, Op.MOD: FAULT_MOD}
 
 _DECODED: dict[tuple[bytes, int], tuple[list, list, list]] = {}
 
 
 def decoded(program: Program) -> tuple[list, list, list]:
-    """(kinds, args, nexts), each indexed by code offset; offset len(code) is K_END."""
+    """(kinds, args, nexts), each indexed by code offset; offset len(code) is
+    K_END. The argument of an instruction is what its kind needs: a constant's
+    value, a slot, a jump's or call's target, an operator's function
+    (K_DIVIDE: with its fault), a tick end's (target, whether it pops a
+    condition), a built-in call's (Host function, arguments, gives a value)."""
     key = (program.code, program.entry)
     hit = _DECODED.get(key)
     if hit is not None:
@@ -201,19 +221,27 @@ def decoded(program: Program) -> tuple[list, list, list]:
     args: list = [None] * (n + 1)
     nexts: list = [None] * (n + 1)
     for ins in validate(code, program.entry):
-        k = _KIND_OF[ins.op]
+        op, k = ins.op, _KIND_OF[ins.op]
         kinds[ins.offset] = k
         nexts[ins.offset] = ins.end
         if k == K_CONST:
-            args[ins.offset] = IMPLICIT_CONST.get(ins.op, ins.arg)
-        elif ins.op in HAS_JREL or k == K_CALL:
-            args[ins.offset] = ins.target
-        elif k == K_BIN:
-            args[ins.offset] = semantics.BINARY[ins.op].fn
-        elif k == K_UN:
-            args[ins.offset] = semantics.UNARY[ins.op].fn
+            arg = IMPLICIT_CONST.get(op, ins.arg)
+        elif k == K_BINARY:
+            arg = semantics.BINARY[op].fn
+        elif k == K_DIVIDE:
+            arg = (semantics.BINARY[op].fn, _ZERO_DIVISOR[op])
+        elif k == K_UNARY:
+            arg = semantics.UNARY[op].fn
+        elif k == K_TICK_END:
+            arg = (ins.end if op is Op.YIELD else ins.target, op in COND_JUMPS)
+        elif k == K_BUILTIN:
+            c = BUILTINS[op]
+            arg = (c.host, c.args, c.value)
+        elif ins.target is not None:
+            arg = ins.target
         else:
-            args[ins.offset] = ins.arg
+            arg = ins.arg
+        args[ins.offset] = arg
     kinds[n] = K_END
     if len(_DECODED) > 512:
         _DECODED.clear()
@@ -221,17 +249,49 @@ def decoded(program: Program) -> tuple[list, list, list]:
     return kinds, args, nexts
 
 
+# ------------------------------------------------------------------ hooks
+# The debugger and coverage see the code through one per-instruction hook: a
+# list ``watch`` (per code offset, true where the hook wants to see the
+# instruction before it runs) and ``hook(pc, stack, calls)`` (True: halt
+# before pc). Both change their lists in place while procedures run.
+
+_UNWATCHED: dict[int, list] = {}
+
+
+def _hooks(program: Program, debug, cover) -> tuple[list, Optional[Callable]]:
+    """(watch, hook) for one run: the debugger's (``Host.debug``, a
+    controller/debugger.py ``Watch``), coverage's (a
+    controller/coverage.py ``CodeCoverage``), both, or neither."""
+    if debug is None and cover is None:
+        size = len(program.code) + 1
+        never = _UNWATCHED.get(size)
+        if never is None:
+            never = _UNWATCHED[size] = [False] * size
+        return never, None
+    if cover is not None:
+        unseen, seen = cover.watch(program)
+    if debug is None:
+        def cover_hook(pc: int, stack: list, calls: list) -> bool:
+            seen(pc, stack)
+            return False
+        return unseen, cover_hook
+    marks, brk = debug.marks, debug.brk
+    if cover is None:
+        def debug_hook(pc: int, stack: list, calls: list) -> bool:
+            return brk(pc, calls)
+        return marks, debug_hook
+    # both: the debugger keeps a list true where marked or not yet seen
+    watch = debug.table(program, unseen)
+
+    def both(pc: int, stack: list, calls: list) -> bool:
+        if unseen[pc]:
+            seen(pc, stack)
+            watch[pc] = marks[pc] or unseen[pc]
+        return marks[pc] and brk(pc, calls)
+    return watch, both
+
+
 # ------------------------------------------------------------ interpreter
-
-
-class _NoMarks:
-    """The debugger's marks when there is no debugger: nothing is watched."""
-
-    def __getitem__(self, pc: int) -> bool:
-        return False
-
-
-_NO_MARKS = _NoMarks()
 
 def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[int] = None,
                   stack: Optional[list[int]] = None, rets: tuple[int, ...] | list[int] = (),
@@ -241,47 +301,31 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
     The keyword arguments resume a procedure mid-tick from the state the fast
     backend hands over (see :class:`Handoff`). ``cover``, a
     :class:`~plcbuilder.controller.coverage.CodeCoverage`, records which
-    instructions run: its table marks each one K_COVER until it first runs
-    (then the mark is replaced by the instruction's own kind), so recording
-    costs one extra step per instruction once, and nothing when off. A
-    conditional jump stays marked until it has gone both ways (its recorder
-    reads the condition on the stack; until then each run lifts the mark, as
-    for the debugger, and the next transfer of control puts it back).
-
-    The debugger (``host.debug``) works the same way: the offsets it watches
-    are K_BREAK in its table, changed in place while the procedure runs. At one,
-    its hook decides whether to halt (the generator then yields :data:`HALT`,
-    mid-tick); the instruction itself runs once (its mark lifted) and the mark
-    comes back at the next transfer of control, the only way back to it.
-    ``passed``: the offset where a halt already happened (not asked again).
-    Each tick end yields the offset of the instruction that ended the tick.
+    instructions run (and the ways each conditional jump goes); the debugger
+    (``host.debug``) may halt before an instruction: at an instruction either
+    watches (see :func:`_hooks`) it is asked first, and when it halts the
+    generator yields :data:`HALT` (mid-tick), then runs the instruction when
+    resumed. ``passed``: the offset where a halt already happened (not asked
+    again). Each tick end yields the offset of the instruction that ended the
+    tick.
     """
     kinds, args, nexts = decoded(program)
-    if cover is not None:
-        kinds, cover_hit = cover.table(program, kinds)
-    debug = host.debug
-    base = kinds
-    pending = -1                           # a watched (or branch) offset whose mark is lifted
-    if debug is not None:
-        kinds = debug.table(program, base)
-        marks, brk = debug.marks, debug.brk
-    else:
-        marks = _NO_MARKS
-        if cover is not None:              # a table of its own: a branch's lifted mark
-            kinds = list(base)             # is put back from base
+    watch, hook = _hooks(program, host.debug, cover)
     if pc is None:
         pc = program.entry
     stack = [] if stack is None else list(stack)
     calls = list(rets)
     push, pop = stack.append, stack.pop
-    portset, portclr, portget = host.portset, host.portclr, host.portget
-    gvarget, gvarset, g0move = host.gvarget, host.gvarset, host.g0move
-    plain, lat = host.plain, host.lat
-    budget = TICK_BUDGET
+    reach = {name: getattr(host, name) for name in CALLS}
+    gvarget, plain, lat = host.gvarget, host.plain, host.lat
     try:
         while True:
+            if watch[pc]:                  # the debugger or coverage sees it first
+                if pc != passed and hook(pc, stack, calls):
+                    yield HALT             # halted before pc: it runs when resumed
+                passed = -1
             k = kinds[pc]
-            if count >= budget:            # (running off the end is not an instruction)
+            if count >= TICK_BUDGET:       # (running off the end is not an instruction)
                 raise VMFault(pc, FAULT_END if k == K_END else FAULT_BUDGET)
             count += 1
             if k == K_LOAD:
@@ -290,28 +334,19 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                 push(args[pc])
             elif k == K_STORE:
                 s[args[pc]] = pop()
-            elif k == K_BIN:
+            elif k == K_BINARY:
                 b = pop()
                 push(args[pc](pop(), b))
             elif k == K_JZ:
                 if not pop():
-                    if pending >= 0:
-                        kinds[pending] = K_BREAK if marks[pending] else base[pending]
-                        pending = -1
                     pc = args[pc]
                     continue
-            elif k == K_LOOP:
-                cond = pop()
-                if len(stack) > STACK_LIMIT:
-                    raise VMFault(pc, FAULT_OVERFLOW)
-                at, pc = pc, args[pc] if cond else nexts[pc]
-                if pending >= 0:
-                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
-                    pending = -1
-                passed = -1
-                if (yield at) is not None:
-                    raise Handoff(pc, stack, tuple(calls), 0)
-                count = 0
+            elif k == K_JNZ:
+                if pop():
+                    pc = args[pc]
+                    continue
+            elif k == K_JMP:
+                pc = args[pc]
                 continue
             elif k == K_INC:
                 i = args[pc]
@@ -319,25 +354,32 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
             elif k == K_DEC:
                 i = args[pc]
                 s[i] = wrap(s[i] - 1)
-            elif k == K_JMP:
-                if pending >= 0:
-                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
-                    pending = -1
-                pc = args[pc]
-                continue
-            elif k == K_JNZ:
-                if pop():
-                    if pending >= 0:
-                        kinds[pending] = K_BREAK if marks[pending] else base[pending]
-                        pending = -1
-                    pc = args[pc]
-                    continue
-            elif k == K_UN:
+            elif k == K_UNARY:
                 push(args[pc](pop()))
-            elif k == K_GVARSET:
-                v = pop()
-                gvarset(pop(), v)
-            elif k == K_GVARGET:
+            elif k == K_TICK_END:          # LOOP pops its condition: to its target if not 0
+                target, conditional = args[pc]
+                at, pc = pc, target if not conditional or pop() else nexts[pc]
+                if len(stack) > STACK_LIMIT:
+                    raise VMFault(at, FAULT_OVERFLOW)
+                passed = -1
+                if (yield at) is not None:
+                    raise Handoff(pc, stack, tuple(calls), 0)
+                count = 0
+                continue
+            elif k == K_BUILTIN:           # pop the arguments, call the host, push its value
+                name, n, value = args[pc]
+                if n == 1:                 # (the common case, without a list)
+                    r = reach[name](pop())
+                else:
+                    first = len(stack) - n
+                    if first < 0:
+                        raise VMFault(pc, FAULT_UNDERFLOW)
+                    argv = stack[first:]
+                    del stack[first:]
+                    r = reach[name](*argv)
+                if value:
+                    push(r)
+            elif k == K_GVARGET:           # a plain register waits for the host's latency
                 a = pop()
                 if lat and plain(a):
                     if len(stack) > STACK_LIMIT:
@@ -347,86 +389,32 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
                             pass
                     count = 0
                 push(gvarget(a))
-            elif k == K_PORTGET:
-                push(portget(pop()))
-            elif k == K_PORTSET:
-                portset(pop())
-            elif k == K_PORTCLR:
-                portclr(pop())
             elif k == K_POP:
                 pop()
-            elif k == K_YIELD:
-                if len(stack) > STACK_LIMIT:
-                    raise VMFault(pc, FAULT_OVERFLOW)
-                at, pc = pc, nexts[pc]
-                if pending >= 0:
-                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
-                    pending = -1
-                passed = -1
-                if (yield at) is not None:
-                    raise Handoff(pc, stack, tuple(calls), 0)
-                count = 0
-                continue
             elif k == K_CALL:
                 if len(calls) >= MAX_CALL_DEPTH:
                     raise VMFault(pc, FAULT_DEPTH)
                 if len(stack) > STACK_LIMIT:
                     raise VMFault(pc, FAULT_OVERFLOW)
-                if pending >= 0:
-                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
-                    pending = -1
                 calls.append(nexts[pc])
                 pc = args[pc]
                 continue
             elif k == K_RET:
                 if not calls:
                     raise ProcExit(0)
-                if pending >= 0:
-                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
-                    pending = -1
                 pc = calls.pop()
                 continue
             elif k == K_EXIT:
                 raise ProcExit(pop())
-            elif k == K_DIV or k == K_MOD:
+            elif k == K_DIVIDE:
+                fn, fault = args[pc]
                 b = pop()
                 a = pop()
                 if b == 0:
-                    raise VMFault(pc, FAULT_DIV if k == K_DIV else FAULT_MOD)
-                push(c_div(a, b) if k == K_DIV else c_mod(a, b))
-            elif k == K_G0MOVE:
-                d = pop()
-                m = pop()
-                g0move(pop(), m, d)
+                    raise VMFault(pc, fault)
+                push(fn(a, b))
             elif k == K_END:
                 raise VMFault(pc, FAULT_END)
-            elif k == K_COVER:            # first run of this instruction: record it, then run it
-                real = cover_hit(pc, stack)
-                if real < 0:              # a branch not yet seen both ways: run it, then the
-                    real = ~real          # next transfer of control marks it again
-                    if pending >= 0 and pending != pc:
-                        kinds[pending] = K_BREAK if marks[pending] else base[pending]
-                    kinds[pc] = real
-                    pending = pc
-                else:
-                    base[pc] = real
-                    if kinds[pc] == K_COVER:
-                        kinds[pc] = real
-                count -= 1
-                continue
-            elif k == K_BREAK:            # watched: ask the debugger, then run the instruction
-                count -= 1
-                if passed != pc:
-                    if brk(pc, calls):
-                        passed = pc
-                        yield HALT
-                        continue
-                passed = -1
-                if pending >= 0:
-                    kinds[pending] = K_BREAK if marks[pending] else base[pending]
-                kinds[pc] = base[pc]
-                pending = pc
-                continue
             # K_NOP: nothing
             pc = nexts[pc]
     except IndexError:
@@ -438,6 +426,3 @@ def run_reference(program: Program, s: list[int], host: Host, *, pc: Optional[in
     except VMFault as fault:
         fault.callers = [r - _CALL_SIZE for r in reversed(calls)]
         raise
-    finally:
-        if pending >= 0:                   # ended (exit, fault, stop) with a mark lifted
-            kinds[pending] = K_BREAK if marks[pending] else base[pending]

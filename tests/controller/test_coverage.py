@@ -6,9 +6,10 @@ from __future__ import annotations
 import pytest
 
 from plcbuilder.api import compile_source
-from plcbuilder.controller import vm
 from plcbuilder.controller.controller import Controller, ControllerError
-from plcbuilder.controller.coverage import CodeCoverage, instruction_offsets, line_coverage
+from plcbuilder.controller.coverage import (FELL_THROUGH, JUMPED, CodeCoverage, instruction_offsets,
+                                           line_coverage)
+from plcbuilder.controller.events import Ended
 
 LOOP = """main()
 {
@@ -71,17 +72,50 @@ def test_new_code_under_the_same_name_starts_afresh():
 
 
 def test_off_is_the_plain_interpreter():
-    """Without coverage the interpreter runs the shared decoded table, unmarked."""
+    """Without coverage (and no breakpoint) the interpreter is given no coverage
+    and watches no instruction."""
     p = program()
     c = Controller(backend="reference")
     c.load([p])
     c.start("P", 3)
     c.step(1)
-    kinds = vm.decoded(p)[0]
-    assert vm.K_COVER not in kinds
+    here = c.plc.hw.gen.gi_frame.f_locals
+    assert here["cover"] is None and not any(here["watch"])
     assert c.plc.coverage is None
 
 
 def test_coverage_needs_the_reference_backend():
     with pytest.raises(ControllerError, match="reference backend"):
         Controller(backend="fast", coverage=CodeCoverage())
+
+
+def test_coverage_and_a_breakpoint_in_one_run():
+    """The debugger and coverage share the interpreter's one hook: a breakpoint
+    in the loop halts at every pass (the loop's condition jumps back each time,
+    a branch coverage keeps watching until it falls through), coverage records
+    every line the run reaches, and the run ends as it does with neither; a
+    breakpoint removed while halted is not asked again."""
+    p = program()
+    cov = CodeCoverage()
+    c = Controller(backend="reference", coverage=cov)
+    c.load([p])
+    c.debugger.set_breakpoints("P.plc", [{"line": 7}])
+    c.start("P", 3)
+    halts = []
+    for _ in range(10):
+        c.step(10)
+        if c.debugger.halt is None:
+            break
+        st = c.debugger.halted_state()
+        halts.append((st["line"], st["t_ms"]))
+        if len(halts) == 2:
+            c.debugger.set_breakpoints("P.plc", [])
+        c.debugger.resume()
+    assert halts == [(7, 0), (7, 1)]
+    (code, ran), = line_coverage(p, cov.hits["P"]).values()
+    assert code - ran == {12}
+    # the if's jump went one way (total 6: over its body), the loop's both
+    assert sorted(cov.branches["P"].values()) == [JUMPED, JUMPED | FELL_THROUGH]
+    ended = [e for e in c.drain_events() if isinstance(e, Ended)]
+    assert [e.exit_code for e in ended] == [6]
+    assert ended == [e for e in run(p, 3)[0] if isinstance(e, Ended)]
