@@ -270,9 +270,9 @@ class HuazhongPLC(TargetPLC):
                     return
             put(addr, value)
 
-        return Host(portset=base.portset, portclr=base.portclr, portget=base.portget,
-                    gvarget=gvarget, gvarset=gvarset, g0move=base.g0move, plain=base.plain,
-                    lat=0, pr=base.pr, raw_gvarset=gvarset, io=None)
+        return base.replace(gvarget=gvarget, gvarset=gvarset, raw_gvarset=gvarset, lat=0,
+                            io=None, software=False, starthw=None, seteparam=None,
+                            softjog=None)
 
     def _element(self, bank: T.Bank, i: int, what: str) -> int:
         if not 0 <= i < bank.size:

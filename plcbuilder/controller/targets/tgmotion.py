@@ -266,9 +266,9 @@ class TgMotionPLC(TargetPLC):
                 return
             put(addr, value)
 
-        return Host(portset=base.portset, portclr=base.portclr, portget=base.portget,
-                    gvarget=gvarget, gvarset=gvarset, g0move=base.g0move, plain=base.plain,
-                    lat=0, pr=base.pr, raw_gvarset=gvarset, io=None)
+        return base.replace(gvarget=gvarget, gvarset=gvarset, raw_gvarset=gvarset, lat=0,
+                            io=None, software=False, starthw=None, seteparam=None,
+                            softjog=None)
 
     # ------------------------------------------------------ shared memories
     def _memory_get(self, addr: int) -> Optional[int]:
