@@ -15,33 +15,19 @@ import pytest
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.link.server import ControllerServer
 from tests.link.linkkit import compile_programs, image_of
-from tests.link.test_server_api import Line
+# the served controller (its Server API on) and a line to it, over this file's image
+from tests.link.test_server_api import Line, line, served  # noqa: F401
 
 WAIT_S = 30.0
 
 
 @pytest.fixture(scope="module")
-def job_image():
+def api_image():
     return image_of(compile_programs(["M03", "M05", "M08"], {
         "M03": (Kind.HARDWARE,
                 "main(){ portset(3); gvarset(5000, eparam); timer=300; "
                 "do{ timer--; }while(timer>0); exit(99); }"),
         "M08": (Kind.HARDWARE, "main(){ portset(8); exit(99); }")}))
-
-
-@pytest.fixture
-def served(job_image):
-    srv = ControllerServer(port=0, image=job_image, server_api=("127.0.0.1", 0))
-    srv.start()
-    yield srv
-    srv.close()
-
-
-@pytest.fixture
-def line(served):
-    c = Line(served.server_api.address)
-    yield c
-    c.close()
 
 
 def _on_sim(served, fn):
