@@ -13,7 +13,7 @@ from PySide6 import QtCore  # noqa: E402
 from plcbuilder import api  # noqa: E402
 from plcbuilder.ide.project_tree import ROLE_DESCRIPTION  # noqa: E402
 from plcbuilder.ide.settings import Settings  # noqa: E402
-from tests.controller._targets import compiled  # noqa: E402
+from tests.controller._targets import compiled, tgm  # noqa: E402
 from tests.ide._workbench import windows  # noqa: E402
 from tests.link.linkkit import image_of  # noqa: E402
 
@@ -101,6 +101,30 @@ def test_run_panels_show_huazhong_registers(qtbot, live_run_panels):
     assert "plc1" in panels.registers.calls.text()
     panels.set_target("mycnc")
     assert not panels.registers.isVisible()
+
+
+def test_run_panels_show_the_tgmotion_oscilloscope(qtbot, live_run_panels):
+    """Issue 27.9 in the IDE: the signals the project picks for TG Motion's
+    oscilloscope and their newest samples are shown under the registers."""
+    _win, conn, panels = live_run_panels
+    panels.set_target("tgmotion")
+    src = tgm(p04="n4++;")
+    conn.upload(image_of([compiled(src, "tgmotion")]),
+                {"name": "tgmotion", "scope": ["in 9", "plc.n4"]})
+    panels.dock("watch").show()
+    panels.dock("watch").raise_()
+    reg = panels.registers
+    qtbot.waitUntil(lambda: reg.report.get("oscilloscope", {}).get("samples", 0) > 2,
+                    timeout=WAIT)
+    assert reg.scope.isVisible() and "samples of in 9, plc.n4" in reg.scope_title.text()
+    headers = [reg.scope.horizontalHeaderItem(c).text() for c in range(reg.scope.columnCount())]
+    assert headers == ["t (µs)", "cycle", "in 9", "plc.n4"]
+    newest = [float(reg.scope.item(0, c).text()) for c in range(4)]
+    older = [float(reg.scope.item(1, c).text()) for c in range(4)]
+    assert newest[0] > older[0] and newest[3] == older[3] + 1     # n4 counts the samples
+    panels.set_target("huazhong")
+    reg.set_report({"target_profile": "huazhong", "registers": {}})
+    assert not reg.scope.isVisible()
 
 
 def test_the_embedded_controller_keeps_huazhong_b_across_ide_restarts(window, tmp_path):

@@ -2,7 +2,9 @@
 
 On Huazhong the banks' elements that are not 0 (X, Y and R bytes; G, F, P and
 B words), on TG Motion the TGM_Data words that are not 0, then how many times
-each procedure was called and the budget overruns. The values come with the
+each procedure was called and the budget overruns; on TG Motion also the
+oscilloscope: the signals the project picks (``[tgmotion] oscilloscope``) and
+their newest samples. The values come with the
 watch's poll of the controller (``sig_target_report``); the X and Y bits are also
 the input and output lanes, named X0.0 … and Y0.0 … (:func:`bit_names`).
 Hidden on myCNC.
@@ -44,11 +46,18 @@ class RegistersPanel(QtWidgets.QWidget):
         self.calls = QtWidgets.QLabel()
         self.calls.setWordWrap(True)
         self.calls.setObjectName("calls")
+        self.scope_title = QtWidgets.QLabel()
+        self.scope = QtWidgets.QTableWidget(0, 0)          # TG Motion's oscilloscope
+        self.scope.setObjectName("oscilloscope")
+        self.scope.verticalHeader().hide()
+        self.scope.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(0, 4, 0, 0)
         lay.addWidget(self.title)
         lay.addWidget(self.table, 1)
         lay.addWidget(self.calls)
+        lay.addWidget(self.scope_title)
+        lay.addWidget(self.scope, 1)
         self.report: dict = {}
         self.hide()
 
@@ -80,3 +89,29 @@ class RegistersPanel(QtWidgets.QWidget):
             text += "<br><span style='color:#b35c00'>over budget: " + ", ".join(
                 f"{n} {k}×" for n, k in over.items()) + "</span>"
         self.calls.setText(text)
+        self._show_scope(report.get("oscilloscope"))
+
+    def _show_scope(self, scope) -> None:
+        """The oscilloscope's newest samples, newest first: time (µs), cycle,
+        then one column a signal (hidden without an oscilloscope)."""
+        self.scope_title.setVisible(bool(scope))
+        self.scope.setVisible(bool(scope))
+        if not scope:
+            return
+        signals = [str(s) for s in scope.get("signals", [])]
+        self.scope_title.setText(f"<b>oscilloscope</b>: {int(scope.get('samples', 0))} "
+                                 f"samples of {', '.join(signals) or 'no signal'}")
+        headers = ["t (µs)", "cycle", *signals]
+        if [self.scope.horizontalHeaderItem(c).text() if self.scope.horizontalHeaderItem(c)
+                else "" for c in range(self.scope.columnCount())] != headers:
+            self.scope.setColumnCount(len(headers))
+            self.scope.setHorizontalHeaderLabels(headers)
+        rows = [list(r) for r in reversed(scope.get("last", []))]
+        self.scope.setRowCount(len(rows))
+        for r, row in enumerate(rows):
+            for c in range(len(headers)):
+                item = self.scope.item(r, c)
+                if item is None:
+                    item = QtWidgets.QTableWidgetItem()
+                    self.scope.setItem(r, c, item)
+                item.setText(str(row[c]) if c < len(row) else "")
