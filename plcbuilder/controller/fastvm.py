@@ -48,6 +48,12 @@ How the code is translated:
 Programs whose stack depth is not the same on every path into an instruction,
 that pop an empty stack, or that call or return with values on the stack, are
 not translated: :func:`make_runner` runs them on the reference interpreter.
+
+Why this is one long module: the translation is one pass over one program
+(stack simulation, ranges, blocks, emitting), and its parts share the same
+per-block state; split, each would reach into the others' internals. The
+reference interpreter (vm.py) is the short, readable definition; this file
+is where the speed is, read section by section (the ``# ---`` headings).
 """
 
 from __future__ import annotations
