@@ -505,45 +505,56 @@ def test_when_every_place_is_busy_a_new_client_is_refused_with_the_reason(served
 
 # ---------------------------------------------------------------- the manual's example
 
-def _manual_example() -> tuple[list[str], list[str]]:
-    """The piped nc example of docs/editors.md's Server API section: its
-    commands (the ``$`` lines) and the lines it shows."""
+def manual_example(marker: str) -> tuple[list[str], list[str]]:
+    """The piped nc example of docs/editors.md's Server API section after
+    ``<!-- MARKER -->``: its commands (the ``$`` lines) and the lines it shows."""
     import re
     from pathlib import Path
     text = (Path(__file__).resolve().parents[2] / "docs" / "editors.md").read_text()
-    m = re.search(r"<!-- server-api-nc -->\s*```\n(.*?)```", text, re.S)
-    assert m, "docs/editors.md lost its Server API nc example"
+    m = re.search(rf"<!-- {marker} -->\s*```\n(.*?)```", text, re.S)
+    assert m, f"docs/editors.md lost its {marker} example"
     lines = m.group(1).splitlines()
     return [x[2:] for x in lines if x.startswith("$ ")], [x for x in lines if not x.startswith("$")]
 
 
-@pytest.mark.skipif(shutil.which("nc") is None, reason="nc is not installed")
-def test_the_manuals_nc_example_gives_the_replies_it_shows(tmp_path):
-    """issue 25: the manual's piped example printed OK 0 where it shows OK 1."""
-    commands, shown = _manual_example()
+def served_controller(cwd, *args) -> tuple[subprocess.Popen, int]:
+    """``plcbuilder controller ARGS`` (which include ``--server-api 0``) started
+    as a user starts it, in ``cwd``: the process and its Server API port."""
+    proc = subprocess.Popen([sys.executable, "-m", "plcbuilder", "controller", *map(str, args)],
+                            cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    for _ in range(10):
+        out = proc.stdout.readline()
+        if "Server API on" in out:
+            return proc, int(out.split(":")[-1].split()[0])
+    proc.terminate()
+    raise AssertionError(f"no Server API: {proc.stderr.read()}")
+
+
+def run_manual_example(tmp_path, marker: str, timeout: float) -> tuple[list[str], list[str]]:
+    """Run the manual's nc example ``marker`` as the manual does, in a project
+    made by ``plcbuilder new`` and built, with the controller started as the
+    manual starts it: the lines nc printed, and the lines the manual shows."""
+    commands, shown = manual_example(marker)
     assert commands[0].split() == ["plcbuilder", "controller", "--image", "build/eeprom.rom",
                                    "--server-api", "4266", "&"]
-    command = commands[1]
     proj = tmp_path / "proj"
     run = lambda *a: subprocess.run([sys.executable, "-m", "plcbuilder", *a],  # noqa: E731
                                     capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert run("new", str(proj)).returncode == 0
     assert run("build", str(proj)).returncode == 0
-    proc = subprocess.Popen([sys.executable, "-m", "plcbuilder", "controller", "--image",
-                             "build/eeprom.rom", "--server-api", "0", "--runtime-file",
-                             str(tmp_path / "rt.json")], cwd=proj, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc, port = served_controller(proj, "--image", "build/eeprom.rom", "--server-api", "0",
+                                   "--runtime-file", tmp_path / "rt.json")
     try:
-        port = None
-        for _ in range(10):
-            out = proc.stdout.readline()
-            if "Server API on" in out:
-                port = int(out.split(":")[-1].split()[0])
-                break
-        assert port is not None
-        r = subprocess.run(["bash", "-c", command.replace("4266", str(port))], cwd=proj,
-                           capture_output=True, timeout=30)
-        assert r.stdout.decode().replace("\r\n", "\n").splitlines() == shown
+        r = subprocess.run(["bash", "-c", commands[1].replace("4266", str(port))], cwd=proj,
+                           capture_output=True, timeout=timeout)
+        return r.stdout.decode().replace("\r\n", "\n").splitlines(), shown
     finally:
         proc.terminate()
         proc.wait(20)
+
+
+@pytest.mark.skipif(shutil.which("nc") is None, reason="nc is not installed")
+def test_the_manuals_nc_example_gives_the_replies_it_shows(tmp_path):
+    """issue 25: the manual's piped example printed OK 0 where it shows OK 1."""
+    printed, shown = run_manual_example(tmp_path, "server-api-nc", timeout=30)
+    assert printed == shown

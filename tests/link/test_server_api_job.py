@@ -8,15 +8,14 @@ import shutil
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 
 from plcbuilder.bytecode.program import Kind
-from plcbuilder.link.server import ControllerServer
 from tests.link.linkkit import compile_programs, image_of
 # the served controller (its Server API on) and a line to it, over this file's image
-from tests.link.test_server_api import Line, line, served  # noqa: F401
+from tests.link.test_server_api import (Line, line, run_manual_example, served,  # noqa: F401
+                                        served_controller)
 
 WAIT_S = 30.0
 
@@ -127,46 +126,12 @@ def test_a_program_sent_line_by_line_and_one_that_cannot_run(served, line, tmp_p
 
 # ---------------------------------------------------------------- the manual's example
 
-def _manual_job_example() -> tuple[list[str], list[str]]:
-    """The piped nc example of docs/editors.md that runs the example project's
-    job.nc: its commands (the ``$`` lines) and the lines it shows."""
-    text = (Path(__file__).resolve().parents[2] / "docs" / "editors.md").read_text()
-    m = re.search(r"<!-- server-api-job -->\s*```\n(.*?)```", text, re.S)
-    assert m, "docs/editors.md lost its Server API G-code job example"
-    lines = m.group(1).splitlines()
-    return [x[2:] for x in lines if x.startswith("$ ")], [x for x in lines if not x.startswith("$")]
-
-
 @pytest.mark.skipif(shutil.which("nc") is None, reason="nc is not installed")
 def test_the_manuals_job_example_gives_the_replies_it_shows(tmp_path):
     """ProgramFileOpen job.nc + ProgramPlay on a controller started as the manual
     starts it, in a project made by plcbuilder new: M03 runs with S12000."""
-    commands, shown = _manual_job_example()
-    assert commands[0].split() == ["plcbuilder", "controller", "--image", "build/eeprom.rom",
-                                   "--server-api", "4266", "&"]
-    proj = tmp_path / "proj"
-    run = lambda *a: subprocess.run([sys.executable, "-m", "plcbuilder", *a],  # noqa: E731
-                                    capture_output=True, text=True, timeout=120, cwd=tmp_path)
-    assert run("new", str(proj)).returncode == 0
-    assert run("build", str(proj)).returncode == 0
-    proc = subprocess.Popen([sys.executable, "-m", "plcbuilder", "controller", "--image",
-                             "build/eeprom.rom", "--server-api", "0", "--runtime-file",
-                             str(tmp_path / "rt.json")], cwd=proj, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    try:
-        port = None
-        for _ in range(10):
-            out = proc.stdout.readline()
-            if "Server API on" in out:
-                port = int(out.split(":")[-1].split()[0])
-                break
-        assert port is not None
-        r = subprocess.run(["bash", "-c", commands[1].replace("4266", str(port))], cwd=proj,
-                           capture_output=True, timeout=60)
-        assert r.stdout.decode().replace("\r\n", "\n").splitlines() == shown
-    finally:
-        proc.terminate()
-        proc.wait(20)
+    printed, shown = run_manual_example(tmp_path, "server-api-job", timeout=60)
+    assert printed == shown
 
 
 def _cli(*args, cwd):
@@ -178,15 +143,9 @@ def _served_controller(tmp_path, cwd, *extra):
     """``plcbuilder controller --server-api 0 ...`` as a user starts it; the
     process, its Server API port and its runtime file."""
     rt = tmp_path / "rt.json"
-    proc = subprocess.Popen([sys.executable, "-m", "plcbuilder", "controller", "--port", "0",
-                             "--server-api", "0", "--runtime-file", str(rt), *map(str, extra)],
-                            cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    for _ in range(10):
-        out = proc.stdout.readline()
-        if "Server API on" in out:
-            return proc, int(out.split(":")[-1].split()[0]), rt
-    proc.terminate()
-    raise AssertionError(f"no Server API: {proc.stderr.read()}")
+    proc, port = served_controller(cwd, "--port", "0", "--server-api", "0", "--runtime-file", rt,
+                                   *extra)
+    return proc, port, rt
 
 
 def _ask(port: int, command: str) -> str:
