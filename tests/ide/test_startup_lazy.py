@@ -34,22 +34,33 @@ NOT_AT_FIRST_PAINT = ("lark", "plcbuilder.lang.pipeline", "pyside6_scintilla", "
                       "plcbuilder.bytecode.program", "plcbuilder.bytecode.opcodes",
                       "importlib.resources")
 
+#: A window opening the project (argv 1; with argv 4, a file the last session
+#: had open in it), its settings in argv 2; at the first paint it notes which of
+#: the modules of argv 3 (JSON) are loaded, whether QStyle was used from Python,
+#: whether the tree's descriptions are still to be read and whether an editor
+#: is open. Prints that (and the application's style sheet) as JSON.
 _PROBE = r"""
-import sys
+import json, sys
 from PySide6.QtCore import QEvent, QObject, QTimer
 from plcbuilder.ide.app import create_application
 from plcbuilder.ide.main_window import MainWindow
 from plcbuilder.ide.settings import Settings
 app = create_application()
-win = MainWindow(Settings(sys.argv[2]), start_controller=False)
+st = Settings(sys.argv[2])
+if len(sys.argv) > 4:
+    st.save_session(sys.argv[1], [sys.argv[4]], sys.argv[4])
+    st.sync()
+win = MainWindow(st, start_controller=False)
+modules = json.loads(sys.argv[3])
 class FirstPaint(QObject):
     def eventFilter(self, obj, ev):
         if ev.type() == QEvent.Type.Paint and not hasattr(self, "seen"):
-            self.seen = sorted(m for m in %r if m in sys.modules)
+            self.seen = sorted(m for m in modules if m in sys.modules)
             import PySide6.QtWidgets as widgets
             # resolved from Python, a Qt class builds all its enums: QStyle's take 5 ms
             self.qstyle = "QStyle" in widgets.__dict__
             self.described = win.tree.describing()
+            self.editor = win.current_editor() is not None
             QTimer.singleShot(0, app.quit)
         return False
 f = FirstPaint()
@@ -57,23 +68,32 @@ win.installEventFilter(f)
 win.show()
 win.open_project(sys.argv[1])
 app.exec()
-print(f.seen, repr(app.styleSheet()))
-print(f.qstyle, f.described)
+print(json.dumps({"seen": f.seen, "style_sheet": app.styleSheet(), "qstyle": f.qstyle,
+                  "described": f.described, "editor": f.editor}))
 win.shutdown()
-""" % (NOT_AT_FIRST_PAINT,)
+"""
+
+
+def _first_paint(project, settings, modules, reopen=None) -> dict:
+    """What :data:`_PROBE` saw at the first paint of a window opening ``project``."""
+    import json
+    import os
+    args = [sys.executable, "-c", _PROBE, str(project), str(settings), json.dumps(list(modules))]
+    r = subprocess.run(args + ([str(reopen)] if reopen else []), capture_output=True, text=True,
+                       timeout=120, env={**os.environ, "QT_QPA_PLATFORM": "offscreen"})
+    assert r.returncode == 0, r.stderr
+    return json.loads(r.stdout.splitlines()[-1])
 
 
 def test_the_first_paint_waits_for_no_editor_link_or_compiler(tmp_path):
     project = create_project(tmp_path / "example").root
-    r = subprocess.run([sys.executable, "-c", _PROBE, str(project), str(tmp_path / "s.ini")],
-                       capture_output=True, text=True, timeout=120,
-                       env={**__import__("os").environ, "QT_QPA_PLATFORM": "offscreen"})
-    assert r.returncode == 0, r.stderr
+    seen = _first_paint(project, tmp_path / "s.ini", NOT_AT_FIRST_PAINT)
+    assert seen["seen"] == [], seen
     # no application-wide style sheet: it makes every widget slower to build and paint
-    assert r.stdout.split("\n")[0] == "[] ''", r.stdout
+    assert seen["style_sheet"] == "", seen
     # QStyle is not used from Python before the first paint, and the tree's
     # descriptions (which need it to be drawn) are still to be read then
-    assert r.stdout.split("\n")[1] == "False True", r.stdout
+    assert seen["qstyle"] is False and seen["described"] is True, seen
 
 
 def test_the_trees_descriptions_come_after_the_first_paint_a_batch_at_a_time(
@@ -258,33 +278,8 @@ def test_the_embedded_controller_process_starts_before_the_first_paint(
     qtbot.waitUntil(lambda: not pre[1].alive(), timeout=10000)
 
 
-_EDITOR_PROBE = r"""
-import sys
-from PySide6.QtCore import QEvent, QObject, QTimer
-from plcbuilder.ide.app import create_application
-from plcbuilder.ide.main_window import MainWindow
-from plcbuilder.ide.settings import Settings
-app = create_application()
-st = Settings(sys.argv[2])
-f = sys.argv[1] + "/hardware/M71.plc"
-st.save_session(sys.argv[1], [f], f)
-st.sync()
-win = MainWindow(st, start_controller=False)
-class FirstPaint(QObject):
-    def eventFilter(self, obj, ev):
-        if ev.type() == QEvent.Type.Paint and not hasattr(self, "seen"):
-            self.seen = sorted(m for m in %r if m in sys.modules)
-            self.editor = win.current_editor() is not None
-            QTimer.singleShot(0, app.quit)
-        return False
-f = FirstPaint()
-win.installEventFilter(f)
-win.show()
-win.open_project(sys.argv[1])
-app.exec()
-print(f.seen, f.editor)
-win.shutdown()
-""" % (("plcbuilder.ide.completion", "plcbuilder.lang.symbols", "plcbuilder.lang.preprocess"),)
+#: the compiler's symbols (what the editor's defines need)
+SYMBOLS = ("plcbuilder.ide.completion", "plcbuilder.lang.symbols", "plcbuilder.lang.preprocess")
 
 
 def test_the_first_editor_paints_without_the_compilers_symbols(qtbot, make_window, tmp_path):
@@ -292,11 +287,9 @@ def test_the_first_editor_paints_without_the_compilers_symbols(qtbot, make_windo
     defines it colours (found with the compiler's symbols, 60 ms to load) come
     after the paint, with the headers' defines."""
     project = create_project(tmp_path / "example").root
-    r = subprocess.run([sys.executable, "-c", _EDITOR_PROBE, str(project),
-                        str(tmp_path / "s.ini")], capture_output=True, text=True, timeout=120,
-                       env={**__import__("os").environ, "QT_QPA_PLATFORM": "offscreen"})
-    assert r.returncode == 0, r.stderr
-    assert r.stdout.split("\n")[0] == "[] True", r.stdout
+    seen = _first_paint(project, tmp_path / "s.ini", SYMBOLS,
+                        reopen=project / "hardware" / "M71.plc")
+    assert seen["seen"] == [] and seen["editor"] is True, seen
     # in a window: the editor made before the paint gets its defines after it
     w = make_window()
     w.open_project(project)
