@@ -102,10 +102,8 @@ class RegistersPanel(QtWidgets.QWidget):
         self.scope_title.setText(f"<b>oscilloscope</b>: {int(scope.get('samples', 0))} "
                                  f"samples of {', '.join(signals) or 'no signal'}")
         headers = ["t (µs)", "cycle", *signals]
-        if [self.scope.horizontalHeaderItem(c).text() if self.scope.horizontalHeaderItem(c)
-                else "" for c in range(self.scope.columnCount())] != headers:
-            self.scope.setColumnCount(len(headers))
-            self.scope.setHorizontalHeaderLabels(headers)
+        self.scope.setColumnCount(len(headers))
+        self.scope.setHorizontalHeaderLabels(headers)
         rows = [list(r) for r in reversed(scope.get("last", []))]
         self.scope.setRowCount(len(rows))
         for r, row in enumerate(rows):
