@@ -206,32 +206,6 @@ def test_the_parser_makes_four_calls_an_operator():
     assert python_calls(parse_tokens, toks) <= 4.2 * n + 200      # (before: 6 an operator)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("shape", ["; x N", "+ x N in an expression"])
-def test_a_run_of_one_byte_tokens_checks_within_twice_an_ordinary_source(shape, tmp_path):
-    """Through the command line as scripts/bench_hostile.py measures it
-    (processor time of ``plcbuilder check``, the two files taking turns,
-    the median of three rounds' ratios): within the goal, 2x."""
-    import resource
-    import statistics
-    import subprocess
-    import sys
-    size = 100_000
-    base, path = tmp_path / "ordinary.plc", tmp_path / "hostile.plc"
-    base.write_text(hostile_sources.ordinary(size))
-    path.write_text(hostile_sources.hostile(size)[shape])
-
-    def cpu(p) -> float:
-        before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        subprocess.run([sys.executable, "-m", "plcbuilder", "check", str(p)],
-                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
-        after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        return (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
-    cpu(base)
-    ratios = [cpu(path) / cpu(base) for _ in range(3)]
-    assert statistics.median(ratios) <= 2.0, ratios
-
-
 # --------------------------------------------------------------- conditions
 def test_a_condition_compiles_in_time_linear_in_its_length():
     """Issue 24.2: 800/1,600/3,200 '(' took 2.2/5.6/16.4 s. Brackets past
