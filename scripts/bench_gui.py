@@ -25,6 +25,7 @@
 
     python scripts/bench_gui.py cpu|startup|lanes   # one figure only
     PLCB_BENCH_BEFORE=DIR python scripts/bench_gui.py startup   # and DIR's package beside
+    PLCB_BENCH_X=display ...   # on the X server at $DISPLAY instead of an Xvfb of its own
 """
 
 from __future__ import annotations
@@ -458,7 +459,8 @@ app.exec()
 #: project comes back with its editors), watched from inside without changing
 #: what it does: an import hook wraps two methods when their modules load.
 #: "painted": the window's first paint pass with the project's tree and an
-#: editor of it done; "live": the run panels got their first telemetry.
+#: editor of it done; "live": the run panels' first redraw with telemetry
+#: received and a panel in every run dock on screen.
 _IDE_PROBE = r"""
 import sys, time
 WANT_LIVE = sys.argv[1] == "live"
@@ -482,15 +484,19 @@ def _painted(mw):
     mw.MainWindow.paintEvent = paintEvent
 
 def _live(rp):
-    orig = rp.RunPanels._on_samples
-    def _on_samples(self, samples):
-        orig(self, samples)
-        if samples and not getattr(self, "_probe_live", False):
+    from plcbuilder.ide.docks import on_screen
+    orig = rp.RunPanels.tick
+    def tick(self):
+        orig(self)
+        # live: telemetry came and every run dock on screen has its panel,
+        # redrawn (this tick) with it
+        if not getattr(self, "_probe_live", False) and len(self.model) \
+                and all(d.widget() is not None for d in self._docks.values() if on_screen(d)):
             self._probe_live = True
             print("live", time.monotonic(), flush=True)
             print("child", getattr(self.connection, "child_pid", None) or 0, flush=True)
             self.parent().close()
-    rp.RunPanels._on_samples = _on_samples
+    rp.RunPanels.tick = tick
 
 class Hook:
     WANT = {"plcbuilder.ide.main_window": _painted, "plcbuilder.ide.panels.runpanels": _live}
@@ -573,7 +579,9 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None,
     from plcbuilder.project.model import Project
     from plcbuilder.project.new import create_project
     if x is None:
-        with XServer() as x:
+        # PLCB_BENCH_X=display: the X server at $DISPLAY (e.g. a helper's own
+        # Xvfb), not one of the benchmark's own
+        with XServer("display" if os.environ.get("PLCB_BENCH_X") == "display" else "own") as x:
             return startup_figures(runs, x, before)
     got: dict[str, list[float]] = {"bare": [], "painted": [], "live": [], "without": [],
                                    "b_painted": [], "b_live": []}

@@ -56,7 +56,7 @@ class DockSpec:
         return f"{self.key}_dock"
 
 
-_RUN = "plcbuilder.ide.run_actions:run_panel"
+_RUN = "plcbuilder.ide.main_window:run_dock_panel"
 _WB = "plcbuilder.ide.workbench:dock_panel"
 _DBG = "plcbuilder.ide.debug:dock_panel"
 
@@ -148,6 +148,9 @@ class DockTable:
             if spec.then:
                 _resolve(spec.then)(self.win, key)
             self.adopt()
+            guard = getattr(self.win, "wheel_guard", None)
+            if guard is not None:            # (a dock shown before its panel was made)
+                guard.guard(dock)
         return panel
 
     def adopt(self) -> None:
@@ -160,15 +163,30 @@ class DockTable:
     def view(self, keys: Iterable[str]) -> "PanelsView":
         return PanelsView(self, tuple(keys))
 
-    def release(self) -> None:
-        """The window painted: the docks that showed meanwhile get their panel."""
+    def release(self, then: Optional[Callable[[], None]] = None) -> None:
+        """The window painted: the docks that showed meanwhile get their panel,
+        one per turn of the event loop (the window answers between them);
+        ``then`` after the last."""
         if not self.held:
+            if then is not None:
+                then()
             return
         self.held = False
         due, self._due = self._due, []
-        for key in due:
+        self._make_due(due, then)
+
+    def _make_due(self, due: list, then) -> None:
+        if getattr(self.win, "_closing", False):
+            return
+        while due:
+            key = due.pop(0)
             if key not in self.made and on_screen(self.docks[key]):
                 self.panel(key)
+                if due:
+                    QTimer.singleShot(0, lambda: self._make_due(due, then))
+                    return
+        if then is not None:
+            then()
 
     def _shown(self, key: str) -> None:
         if key in self.made:

@@ -589,13 +589,16 @@ class MainWindow(QMainWindow):
 
     def ensure_run_panels(self):
         """Make the run panels now, if they are due and not made yet (the
-        window makes them after its first paint); returns them (or None)."""
+        window makes them after its first paint); returns them (or None).
+        Only what receives the controller's telemetry and the log are made
+        here: each other panel when its dock first shows or it is asked for
+        (the dock table: :func:`run_dock_panel`)."""
         if self.run_panels is not None or not self.run_docks or self._closing:
             return self.run_panels
         try:
             from plcbuilder.ide.panels import RunPanels
-            self.run_panels = RunPanels(self, self.connection, docks=self.run_docks)
-            self.dock_table.adopt()          # it filled every run dock
+            self.run_panels = RunPanels(self, self.connection, docks=self.run_docks, lazy=True)
+            self.dock_table.adopt()          # the log's dock
         except Exception as exc:  # noqa: BLE001 - the editor side works without them
             import traceback
             traceback.print_exc()
@@ -675,8 +678,11 @@ class MainWindow(QMainWindow):
 
     def _after_run_panels(self) -> None:
         """The rest of the start: the docks shown meanwhile get their panels,
-        the checks, the other editors."""
-        self.dock_table.release()
+        one per turn of the event loop (the window answers between them);
+        then the checks and the other editors."""
+        self.dock_table.release(then=self._after_panels)
+
+    def _after_panels(self) -> None:
         self.lint.hold(False)
         self._open_due_editors()
         if self._lint_due and not self._closing:
@@ -869,6 +875,17 @@ class MainWindow(QMainWindow):
                 self.connection.shutdown()
             except Exception:  # noqa: BLE001
                 pass
+
+
+def run_dock_panel(win: MainWindow, key: str):
+    """The panel of a run dock (docks.DOCKS), made now: the run panels make
+    it (pyqtgraph loads with the first); if they cannot be made, a line that
+    says so."""
+    panels = win.ensure_run_panels()
+    if panels is not None:
+        return panels.panel(key)
+    from PySide6.QtWidgets import QLabel
+    return QLabel("The run panels are not available (see the status bar).")
 
 
 def tests_dock_panel(win: MainWindow, key: str):

@@ -606,14 +606,3 @@ class RunActions(QObject):
                 return
             host, port, token = res
         self.connection.connect_to(host.strip("[]"), int(port), token)
-
-
-def run_panel(win, key: str):
-    """The panel of a run dock (docks.DOCKS): the run panels fill all their
-    docks at once (pyqtgraph loads then); if they cannot be made, a line
-    that says so."""
-    panels = win.ensure_run_panels()
-    if panels is not None:
-        return panels.dock(key).widget()
-    from PySide6.QtWidgets import QLabel
-    return QLabel("The run panels are not available (see the status bar).")

@@ -297,3 +297,52 @@ def test_the_first_editor_paints_without_the_compilers_symbols(qtbot, make_windo
     assert not w._painted and "ARC_TIMEOUT" not in ed.highlighter.defines
     qtbot.waitUntil(lambda: "ARC_TIMEOUT" in ed.highlighter.defines, timeout=20000)
     assert w._painted
+
+
+def test_the_run_panels_make_the_docks_on_screen_one_per_turn_and_the_others_when_shown(
+        qtbot, make_window, tmp_path):
+    """Issue 26.5: after the paint only the run docks on screen get their
+    panel (and the log, which keeps every message), each on a turn of the
+    event loop of its own (the window answers between them); a dock hidden or
+    tabbed away gets its panel when it first shows, and that panel shows what
+    the others do (here a recorded run on show: its banner, link and marker)."""
+    from PySide6.QtCore import QTimer
+
+    from plcbuilder.ide.docks import on_screen
+    turn = [0]
+    ticker = QTimer()
+    ticker.timeout.connect(lambda: turn.__setitem__(0, turn[0] + 1))
+    ticker.start(0)                                   # one tick a turn of the event loop
+    conn = _workbench.FakeConnection()
+    w = make_window(connection=conn, start_controller=True)
+    made_on: dict = {}
+    panel = w.dock_table.panel
+
+    def noted(key):
+        made_on.setdefault(key, turn[0])
+        return panel(key)
+    w.dock_table.panel = noted
+    w.open_project(create_project(tmp_path / "example").root)
+    qtbot.waitUntil(lambda: w._painted and w.run_panels is not None, timeout=10000)
+    _workbench.settle(qtbot, w)
+    ticker.stop()
+    panels = w.run_panels
+    shown = {k for k, d in w.run_docks.items() if on_screen(d)}
+    assert shown and "outputs" in shown and "axes" not in shown
+    assert set(panels.made) == shown | {"log"}, (panels.made, shown)
+    for key, dock in w.run_docks.items():
+        assert (dock.widget() is not None) == (key in panels.made), key
+    turns = [made_on[k] for k in shown if k != "log"]
+    assert len(set(turns)) == len(turns), made_on             # one a turn
+    # a recorded run on show; then the Axes dock shows: its panel shows it too
+    panels.show_recorded("a test", [], [], failing_ms=100)
+    assert "axes" not in panels.made
+    w.run_docks["axes"].raise_()
+    qtbot.waitUntil(lambda: "axes" in panels.made)
+    axes = panels.axes
+    assert w.run_docks["axes"].widget() is axes
+    banner = [b for b in panels.banners if axes.isAncestorOf(b)]
+    assert banner and "showing test run 'a test'" in banner[0].plain_text()
+    assert any(p is axes for p, _plot, _line in panels._markers)
+    back = [b for b in panels.banner_links if axes.isAncestorOf(b)]
+    assert back and back[0].isVisibleTo(axes)

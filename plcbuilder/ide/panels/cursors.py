@@ -46,7 +46,8 @@ class Cursors(QtCore.QObject):
             return
         self.enabled = on
         if on:
-            panel = self.panels.proc
+            made = self.panels.time_panels
+            panel = made[0] if made else self.panels.lanes
             t0, t1 = panel.visible_span()
             if self.a is None or not (t0 <= self.a <= t1):
                 self.a = t0 + (t1 - t0) / 3
@@ -54,25 +55,31 @@ class Cursors(QtCore.QObject):
                 self.b = t0 + 2 * (t1 - t0) / 3
             self.panels.timebase.set_follow(False)
             for p in self.panels.time_panels:
-                for plot in p._time_plots:
-                    for which in ("A", "B"):
-                        line = pg.InfiniteLine(
-                            angle=90, movable=True,
-                            pen=pg.mkPen(COLOURS[which], width=1.5),
-                            hoverPen=pg.mkPen(COLOURS[which], width=3),
-                            label=which, labelOpts={"position": 0.96, "color": COLOURS[which],
-                                                    "fill": "#ffffffc0"})
-                        line.setZValue(30)
-                        line.sigPositionChanged.connect(
-                            lambda ln, p=p, w=which: self._dragged(p, w, ln))
-                        plot.addItem(line, ignoreBounds=True)
-                        self._lines.append((p, plot, which, line))
+                self.add_panel(p)
             self.place()
         else:
             for _p, plot, _w, line in self._lines:
                 plot.removeItem(line)
             self._lines = []
         self.sig_moved.emit()
+
+    def add_panel(self, p) -> None:
+        """Lines A and B in each plot of time panel ``p`` (one made while the
+        cursors show gets them too)."""
+        for plot in p._time_plots:
+            for which in ("A", "B"):
+                line = pg.InfiniteLine(
+                    angle=90, movable=True,
+                    pen=pg.mkPen(COLOURS[which], width=1.5),
+                    hoverPen=pg.mkPen(COLOURS[which], width=3),
+                    label=which, labelOpts={"position": 0.96, "color": COLOURS[which],
+                                            "fill": "#ffffffc0"})
+                line.setZValue(30)
+                line.sigPositionChanged.connect(
+                    lambda ln, p=p, w=which: self._dragged(p, w, ln))
+                plot.addItem(line, ignoreBounds=True)
+                self._lines.append((p, plot, which, line))
+        self.place()
 
     def set_times(self, a: float, b: float) -> None:
         """Put A and B at these absolute times (seconds)."""

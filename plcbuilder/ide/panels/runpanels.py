@@ -82,49 +82,42 @@ class RunPanels(QtCore.QObject):
 
     def __init__(self, main_window: Optional[QtWidgets.QWidget], connection,
                  capacity: int = 30000, fps: int = FPS,
-                 docks: Optional[Mapping[str, QtWidgets.QDockWidget]] = None):
+                 docks: Optional[Mapping[str, QtWidgets.QDockWidget]] = None,
+                 lazy: bool = False):
         """``docks``: empty docks to fill (by key), made before the window
-        showed; by default the panels make their own."""
+        showed; by default the panels make their own. ``lazy``: a dock's panel
+        is made when it is first asked for (:meth:`panel`, or its attribute:
+        ``.lanes``), not now: the window makes those of the docks on screen,
+        one per turn of its event loop, and the others when their dock shows.
+        The log is made at once either way (it keeps every message)."""
         super().__init__(main_window)
         self.connection = connection
         self.model = RunModel(capacity)
         self.live_capacity = int(capacity)
         self.timebase = TimeBase(parent=self)
-        clear = self.clear
-        self.proc = ProcPanel(self.model, self.timebase, clear)
-        self.lanes = LanesPanel(self.model, self.timebase, clear)
-        self.analog = AnalogPanel(self.model, self.timebase, clear)
-        self.axes = AxesPanel(self.model, self.timebase, clear)
-        self.inputs = InputsPanel(self.model)
-        self.watch = WatchPanel()
-        #: a target's registers, under the watch (hidden on myCNC: docs/targets.md)
-        self.registers = RegistersPanel()
-        self.watch.layout().addWidget(self.registers)
         self.target = "mycnc"
-        self._pin_names: tuple[dict, dict] = ({}, {})
-        self.log = LogPanel()
-        self.time_panels = (self.proc, self.lanes, self.analog, self.axes)
+        self._pin_names: tuple[dict, dict] = default_pin_names()
+        self._made: dict[str, QtWidgets.QWidget] = {}   # the panels made, by dock key
+        self._status = "No controller"      # what the proc panel's status says
+        self._registers_report: dict = {}   # the last register report (not myCNC)
+        self._span: Optional[tuple[float, float]] = None  # a recorded run's span on show
         self.traces = TraceTools(self)
-        self.lanes.layout().insertWidget(1, self.traces.bar)
         self.traces.sig_note.connect(lambda text: self.log.add_note(text, "link"))
         self.cursors = Cursors(self)
-        self.cursor_table = CursorTable(self, self.cursors)
-        self.sig_comparison.connect(self.cursor_table.set_compared)
-        widgets = {"proc": self.proc, "outputs": self.lanes, "analog": self.analog,
-                   "axes": self.axes, "inputs": self.inputs, "watch": self.watch,
-                   "log": self.log, "cursors": self.cursor_table}
+        self.banners: list[ElidedLabel] = []        # "showing test run …" beside
+        self.banner_links: list[QtWidgets.QLabel] = []   # "Back to Live"
+        self.compare_links: list[QtWidgets.QLabel] = []  # "Clear Comparison"
         self._docks: dict[str, QtWidgets.QDockWidget] = {}
         for key, title, object_name in self.DOCKS:
             dock = docks.get(key) if docks else None
             if dock is None:
                 dock = QtWidgets.QDockWidget(title, main_window)
                 dock.setObjectName(object_name)
-            dock.setWidget(widgets[key])
             dock.setAllowedAreas(Qt.DockWidgetArea.AllDockWidgetAreas)
             dock.visibilityChanged.connect(self._on_visibility)
             self._docks[key] = dock
         #: each panel's dock (a panel stays in its dock: on_screen need not look for it)
-        self._dock_of = {id(widgets[key]): dock for key, dock in self._docks.items()}
+        self._dock_of: dict[int, QtWidgets.QDockWidget] = {}
         self.forces: list = []
         self._stopped = True          # until the timers exist
         self._state = ControllerStatus()
@@ -134,52 +127,18 @@ class RunPanels(QtCore.QObject):
         self._busy_until = 0.0        # monotonic time the plots may move until
         self.ticks = 0                # redraw timer ticks (tests count them)
         self._inputs_shown = None     # the inputs and ADC values the inputs panel shows
-        self.inputs.set_enabled(False)
-        for panel in self.time_panels:
-            panel.sig_dirty.connect(self.wake)
         self.recorded: Optional[str] = None   # the test run shown instead of live telemetry
         self.failing_ms: Optional[int] = None
         self.held = 0                 # live samples not shown while a recorded run is
         self._markers: list = []      # (panel, plot, InfiniteLine) at the failing tick
-        self.banners: list[ElidedLabel] = []        # "showing test run …" beside
-        self.banner_links: list[QtWidgets.QLabel] = []   # "Back to Live"
-        self.compare_links: list[QtWidgets.QLabel] = []  # "Clear Comparison"
+        self._marker_label: Optional[str] = None
         #: a second trace drawn over the one on show (plots/overlay.py)
         self.comparison = None
         self._banner_text = ""
-        for panel in self.time_panels:
-            # a long test name must never widen the dock (and the window), nor
-            # vanish in a narrow one: the link keeps its room, the text elides
-            back = QtWidgets.QLabel("<a href='live'>Back to Live</a>")
-            back.linkActivated.connect(lambda _link: self.back_to_live())
-            back.hide()
-            clear_compare = QtWidgets.QLabel("<a href='clear'>Clear Comparison</a>")
-            clear_compare.setToolTip("Stop drawing the compared trace over this one")
-            clear_compare.linkActivated.connect(lambda _link: self.clear_comparison())
-            clear_compare.hide()
-            label = ElidedLabel(min_chars=8)
-            label.hide()
-            # (rows of their own under the plot's buttons: what is on show, then the links)
-            panel.toolbar.banner_row.addWidget(label, 1)
-            panel.toolbar.shown_row.addWidget(back)
-            panel.toolbar.shown_row.addWidget(clear_compare)
-            panel.toolbar.shown_row.addStretch(1)
-            self.banner_links.append(back)
-            self.compare_links.append(clear_compare)
-            self.banners.append(label)
+        self._banner_shown = ""       # the banner's text as shown ("": hidden)
+        self._connected_to: Optional[str] = None   # the controller's address (None: none)
+        self._variables: Optional[tuple] = None    # the last variables polled, for the watch
 
-        self.log.sig_open_location.connect(self.sig_open_location)
-        self.inputs.sig_set_input.connect(lambda pin, v: self.connection.set_input(pin, v))
-        self.inputs.sig_set_input.connect(self.wake)
-        self.inputs.sig_set_adc.connect(lambda ch, v: self.connection.set_adc(ch, v))
-        if hasattr(connection, "force"):          # the debugger's write/force/release
-            c = connection
-            self.watch.sig_write.connect(lambda t, v: c.write(t, v))
-            self.watch.sig_force.connect(lambda t, v: c.force(t, v))
-            self.watch.sig_release.connect(lambda t, m: c.release(t, m))
-            self.inputs.sig_force.connect(lambda t, v: c.force(t, v))
-            self.inputs.sig_force.connect(self.wake)
-            self.inputs.sig_release.connect(lambda t, m: c.release(t, m))
         c = connection
         c.sig_samples.connect(self._on_samples)
         c.sig_events.connect(self._on_events)
@@ -193,6 +152,7 @@ class RunPanels(QtCore.QObject):
             c.sig_variables.connect(self._on_variables)
         if hasattr(c, "sig_target_report"):
             c.sig_target_report.connect(self._on_registers)
+        self.panel("log")                   # it keeps every message, shown or not
         if getattr(c, "connected", False):
             self._on_connected(getattr(c, "address", ""))
 
@@ -205,8 +165,158 @@ class RunPanels(QtCore.QObject):
         self.var_timer.setInterval(VARIABLES_INTERVAL_MS)
         self.var_timer.timeout.connect(self._poll_variables)
         self._stopped = False
-        self.set_pin_names(*default_pin_names())
+        if not lazy:
+            for key, _title, _name in self.DOCKS:
+                self.panel(key)
         self.wake()
+
+    # ------------------------------------------------------------- the panels
+    #: the time panels' dock keys, in the order :attr:`time_panels` lists them
+    TIME_KEYS = ("proc", "outputs", "analog", "axes")
+
+    def panel(self, key: str) -> QtWidgets.QWidget:
+        """The panel of run dock ``key``, made now (and put in its dock) if it
+        was not: it catches up with what the others show (the samples, a
+        recorded run or comparison on show, the cursors, pin names, forces)."""
+        made = self._made.get(key)
+        if made is None:
+            made = self._made[key] = self._make(key)
+            self._dock_of[id(made)] = self._docks[key]
+            self._docks[key].setWidget(made)
+            if key in self.TIME_KEYS:
+                self._catch_up(made)
+            self.wake()
+        return made
+
+    @property
+    def made(self) -> dict:
+        """The panels made so far, by dock key."""
+        return dict(self._made)
+
+    proc = property(lambda self: self.panel("proc"))
+    lanes = property(lambda self: self.panel("outputs"))
+    analog = property(lambda self: self.panel("analog"))
+    axes = property(lambda self: self.panel("axes"))
+    inputs = property(lambda self: self.panel("inputs"))
+    watch = property(lambda self: self.panel("watch"))
+    log = property(lambda self: self.panel("log"))
+    cursor_table = property(lambda self: self.panel("cursors"))
+
+    @property
+    def registers(self) -> RegistersPanel:
+        """A target's registers, under the watch (hidden on myCNC: docs/targets.md)."""
+        return self.watch.registers
+
+    @property
+    def time_panels(self) -> tuple:
+        """The time panels made so far (proc, outputs, analog, axes)."""
+        return tuple(self._made[k] for k in self.TIME_KEYS if k in self._made)
+
+    def _make(self, key: str) -> QtWidgets.QWidget:
+        if key in self.TIME_KEYS:
+            return self._make_time_panel(key)
+        c = self.connection
+        force = hasattr(c, "force")          # the debugger's write/force/release
+        debugger = bool(getattr(c, "debugger", False)) and self._connected_to is not None
+        if key == "inputs":
+            inputs = InputsPanel(self.model)
+            inputs.sig_set_input.connect(lambda pin, v: self.connection.set_input(pin, v))
+            inputs.sig_set_input.connect(self.wake)
+            inputs.sig_set_adc.connect(lambda ch, v: self.connection.set_adc(ch, v))
+            if force:
+                inputs.sig_force.connect(lambda t, v: c.force(t, v))
+                inputs.sig_force.connect(self.wake)
+                inputs.sig_release.connect(lambda t, m: c.release(t, m))
+            inputs.set_enabled(self._connected_to is not None)
+            inputs.force_by_hand = debugger
+            own = self._pin_names[0]
+            inputs.set_pin_names(own, "X" if self.target == "huazhong" else None)
+            inputs.set_forces(self.forces)
+            self._inputs_shown = None
+            return inputs
+        if key == "watch":
+            watch = WatchPanel()
+            watch.registers = RegistersPanel()
+            watch.layout().addWidget(watch.registers)
+            if self.target != "mycnc":
+                watch.registers.set_report(self._registers_report)
+            if force:
+                watch.sig_write.connect(lambda t, v: c.write(t, v))
+                watch.sig_force.connect(lambda t, v: c.force(t, v))
+                watch.sig_release.connect(lambda t, m: c.release(t, m))
+            watch.editable = debugger
+            watch.set_forces(self.forces)
+            if self._variables is not None:
+                watch.set_variables(*self._variables)
+            return watch
+        if key == "log":
+            log = LogPanel()
+            log.sig_open_location.connect(self.sig_open_location)
+            return log
+        if key == "cursors":
+            table = CursorTable(self, self.cursors)
+            self.sig_comparison.connect(table.set_compared)
+            if self.comparison is not None:
+                table.set_compared(self.comparison.name)
+            return table
+        raise KeyError(key)
+
+    def _make_time_panel(self, key: str):
+        kind = {"proc": ProcPanel, "outputs": LanesPanel, "analog": AnalogPanel,
+                "axes": AxesPanel}[key]
+        panel = kind(self.model, self.timebase, self.clear)
+        panel.sig_dirty.connect(self.wake)
+        if key == "outputs":
+            panel.layout().insertWidget(1, self.traces.bar)
+            names = self._pin_names
+            if self.target == "huazhong":
+                names = self._bank_names(*names)
+            panel.set_pin_names(*names)
+            panel.set_forces(self.forces)
+            if bool(getattr(self.connection, "debugger", False)) and self._connected_to:
+                panel.force_menu = self._lane_force_menu
+        # a long test name must never widen the dock (and the window), nor
+        # vanish in a narrow one: the link keeps its room, the text elides
+        back = QtWidgets.QLabel("<a href='live'>Back to Live</a>")
+        back.linkActivated.connect(lambda _link: self.back_to_live())
+        back.setVisible(self.recorded is not None)
+        clear_compare = QtWidgets.QLabel("<a href='clear'>Clear Comparison</a>")
+        clear_compare.setToolTip("Stop drawing the compared trace over this one")
+        clear_compare.linkActivated.connect(lambda _link: self.clear_comparison())
+        clear_compare.setVisible(self.comparison is not None)
+        label = ElidedLabel(min_chars=8)
+        label.hide()
+        # (rows of their own under the plot's buttons: what is on show, then the links)
+        panel.toolbar.banner_row.addWidget(label, 1)
+        panel.toolbar.shown_row.addWidget(back)
+        panel.toolbar.shown_row.addWidget(clear_compare)
+        panel.toolbar.shown_row.addStretch(1)
+        self.banner_links.append(back)
+        self.compare_links.append(clear_compare)
+        self.banners.append(label)
+        if self._banner_shown:
+            self._show_banner(label)
+        panel._epoch = self.model.epoch
+        panel.model_cleared()
+        panel._view_dirty = True
+        if key == "proc":
+            panel.set_status(self._status)
+            if self.model.messages:
+                panel.add_messages(self.model.messages)
+        return panel
+
+    def _catch_up(self, panel) -> None:
+        """A time panel made now, in its dock, shows what the others show: a
+        comparison, a recorded run's span and marker, the cursors."""
+        if self.comparison is not None:
+            panel.set_comparison(self.comparison)
+        if self.recorded is not None and self.failing_ms is not None:
+            self._add_markers(panel)
+            self._place_markers()
+        if self.recorded is not None and self._span is not None:
+            panel.show_span(*self._span)
+        if self.cursors.enabled:
+            self.cursors.add_panel(panel)
 
     # ------------------------------------------------------------------- API
     def docks(self) -> list[QtWidgets.QDockWidget]:
@@ -222,21 +332,27 @@ class RunPanels(QtCore.QObject):
         Huazhong target each is first the bank bit it is (X0.0, Y0.7)."""
         inputs, outputs = dict(inputs), dict(outputs)
         self._pin_names = (inputs, outputs)
-        own_inputs = inputs
-        if self.target == "huazhong":
-            inputs = bit_names(max(64, max(inputs, default=0) + 1), "X", inputs)
-            outputs = bit_names(max(64, max(outputs, default=0) + 1), "Y", outputs)
-        self.lanes.set_pin_names(inputs, outputs)
-        # the toggles say the bank bit where the pin number would be (not both)
-        self.inputs.set_pin_names(own_inputs, "X" if self.target == "huazhong" else None)
+        lanes, toggles = self._made.get("outputs"), self._made.get("inputs")
+        if lanes is not None:
+            lanes.set_pin_names(*(self._bank_names(inputs, outputs)
+                                  if self.target == "huazhong" else (inputs, outputs)))
+        if toggles is not None:
+            # the toggles say the bank bit where the pin number would be (not both)
+            toggles.set_pin_names(inputs, "X" if self.target == "huazhong" else None)
+
+    @staticmethod
+    def _bank_names(inputs: dict, outputs: dict) -> tuple[dict, dict]:
+        """Huazhong: each pin first the bank bit it is (X0.0, Y0.7)."""
+        return (bit_names(max(64, max(inputs, default=0) + 1), "X", inputs),
+                bit_names(max(64, max(outputs, default=0) + 1), "Y", outputs))
 
     def set_forces(self, forces: list) -> None:
         """What is forced: the watch, the inputs and the lanes mark it."""
         forces = list(forces or [])
         self.forces = forces
-        self.watch.set_forces(forces)
-        self.inputs.set_forces(forces)
-        self.lanes.set_forces(forces)
+        for key in ("watch", "inputs", "outputs"):
+            if key in self._made:
+                self._made[key].set_forces(forces)
         self.wake()
 
     def _lane_force_menu(self, menu: QtWidgets.QMenu, lane: tuple) -> None:
@@ -254,7 +370,9 @@ class RunPanels(QtCore.QObject):
         the registers under the watch (shown once the controller reports them)."""
         self.target = target or "mycnc"
         if self.target == "mycnc":
-            self.registers.set_report({})
+            self._registers_report = {}
+            if "watch" in self._made:
+                self.registers.set_report({})
         self.set_pin_names(*self._pin_names)
 
     def project_changed(self) -> None:
@@ -291,7 +409,7 @@ class RunPanels(QtCore.QObject):
         self.model.set_watched(variables or {}, bits)
         self._cleared()
         rows = self.model.add_events(events)
-        if rows:
+        if rows and "proc" in self._made:
             self.proc.add_messages(rows)
         if text is None:
             at = f", failing at t = {failing_ms} ms" if failing_ms is not None else ""
@@ -301,31 +419,44 @@ class RunPanels(QtCore.QObject):
         for link in self.banner_links:
             link.show()
         self._remove_markers()
+        self._marker_label = marker_label
         if failing_ms is not None:
-            pen = pg.mkPen(MARKER_COLOUR, width=1.5, style=Qt.PenStyle.DashLine)
-            opts = {"label": marker_label,
-                    "labelOpts": {"position": 0.5, "color": MARKER_COLOUR}} \
-                if marker_label else {}
             for panel in self.time_panels:
-                for plot in panel._time_plots:
-                    line = pg.InfiniteLine(angle=90, movable=False, pen=pen, **opts)
-                    line.setZValue(20)
-                    plot.addItem(line, ignoreBounds=True)
-                    self._markers.append((panel, plot, line))
+                self._add_markers(panel)
+        self._span = None
         for key in ("proc", "outputs"):
             self._docks[key].show()
             self._docks[key].raise_()
+            self.panel(key)
         t = self.model.time.view()
         first = float(t[0]) if len(t) else 0.0
         t1 = max(self.model.t_end, (failing_ms or 0) * 1e-3)
         t0 = max(first, t1 - self.timebase.window) if self.timebase.window > 0 else first
         if t1 - t0 < 0.01:
             t1 = t0 + 0.01
-        for panel in self.time_panels:
-            panel.show_span(t0, t1)
+        self.show_span(t0, t1)
         self._place_markers()
         self.sig_recorded.emit(name)
         self.wake()
+
+    def show_span(self, t0: float, t1: float) -> None:
+        """Every time panel shows ``t0..t1`` (seconds; those made later too,
+        while a recorded run is on show)."""
+        self._span = (t0, t1)
+        for panel in self.time_panels:
+            panel.show_span(t0, t1)
+
+    def _add_markers(self, panel) -> None:
+        """A line at the failing tick (or the trigger) in each plot of ``panel``."""
+        pen = pg.mkPen(MARKER_COLOUR, width=1.5, style=Qt.PenStyle.DashLine)
+        label = self._marker_label
+        opts = {"label": label, "labelOpts": {"position": 0.5, "color": MARKER_COLOUR}} \
+            if label else {}
+        for plot in panel._time_plots:
+            line = pg.InfiniteLine(angle=90, movable=False, pen=pen, **opts)
+            line.setZValue(20)
+            plot.addItem(line, ignoreBounds=True)
+            self._markers.append((panel, plot, line))
 
     def back_to_live(self) -> None:
         """Stop showing a recorded test run: the plots start over with the
@@ -333,7 +464,8 @@ class RunPanels(QtCore.QObject):
         if self.recorded is None:
             return
         self.clear_comparison()
-        self.recorded, self.failing_ms = None, None
+        self.recorded, self.failing_ms, self._span = None, None, None
+        self._banner_shown = ""
         for label in self.banners + self.banner_links:
             label.hide()
         self._remove_markers()
@@ -383,12 +515,16 @@ class RunPanels(QtCore.QObject):
         """What is on show, above the plots (``whole``: the longer sentence
         for its tooltip, default ``text``)."""
         self._banner_text = whole or text
+        self._banner_shown = text
         for label in self.banners:
-            label.setText(f"<span style='color:{MARKER_COLOUR}'>"
-                          f"{html.escape(text, quote=False)}</span>")
-            label.setToolTip(f"{whole or text}; the live telemetry is not shown until "
-                             f"Back to Live (or Clear)")
-            label.show()
+            self._show_banner(label)
+
+    def _show_banner(self, label: ElidedLabel) -> None:
+        label.setText(f"<span style='color:{MARKER_COLOUR}'>"
+                      f"{html.escape(self._banner_shown, quote=False)}</span>")
+        label.setToolTip(f"{self._banner_text}; the live telemetry is not shown until "
+                         f"Back to Live (or Clear)")
+        label.show()
 
     def wake(self, *args) -> None:
         """Something may need a redraw: run the redraw timer (it stops itself).
@@ -420,19 +556,22 @@ class RunPanels(QtCore.QObject):
                     due = d if due is None else min(due, d)
         if self._markers:
             self._place_markers()
+        made = self._made
         if self.cursors.enabled:
             self.cursors.place()
-            if work and self._shown(self.cursor_table):
-                self.cursor_table.refresh()
-        self.proc.flush()
-        self.log.flush()
-        if self._shown(self.inputs):
+            if work and "cursors" in made and self._shown(made["cursors"]):
+                made["cursors"].refresh()
+        if "proc" in made:
+            made["proc"].flush()
+        made["log"].flush()
+        inputs = made.get("inputs")
+        if inputs is not None and self._shown(inputs):
             s = self.model.last_sample
             key = (s.inputs, s.adc) if s is not None else None
-            pending = bool(getattr(self.inputs, "_pending", None))
+            pending = bool(getattr(inputs, "_pending", None))
             if key != self._inputs_shown or pending:
                 self._inputs_shown = key
-                self.inputs.refresh()
+                inputs.refresh()
         else:
             pending = False
         if self._stopped:
@@ -455,6 +594,11 @@ class RunPanels(QtCore.QObject):
         self.var_timer.stop()
 
     # --------------------------------------------------------------- private
+    def _shown_key(self, key: str) -> bool:
+        """The panel of dock ``key`` is made and can be seen."""
+        w = self._made.get(key)
+        return w is not None and self._shown(w)
+
     def _shown(self, w: QtWidgets.QWidget) -> bool:
         """``w`` can be seen (docks.on_screen: a dock tabbed away is "visible"
         to Qt), for a panel of these docks without looking for its dock."""
@@ -487,7 +631,7 @@ class RunPanels(QtCore.QObject):
     def _on_visibility(self, visible: bool) -> None:
         if visible:
             self.wake()
-            if self._shown(self.watch) and not self._stopped:
+            if self._shown_key("watch") and not self._stopped:
                 self._poll_variables()
                 if self._final_poll > 0 or self.busy():
                     self.var_timer.start()
@@ -514,7 +658,7 @@ class RunPanels(QtCore.QObject):
         for panel in self.time_panels:
             if self._shown(panel) and (panel._view_dirty or panel.data_changed()):
                 return True
-        if self._shown(self.inputs):
+        if self._shown_key("inputs"):
             s = self.model.last_sample
             if s is not None and (s.inputs, s.adc) != self._inputs_shown:
                 return True
@@ -523,7 +667,7 @@ class RunPanels(QtCore.QObject):
     def _on_events(self, events: list) -> None:
         self.traces.feed([], events)
         rows = self.model.add_events(events) if self.recorded is None else []
-        if rows:
+        if rows and "proc" in self._made:
             self.proc.add_messages(rows)
         self.log.add_events(events)
         if any(isinstance(e, (ev.Ended, ev.Fault)) for e in events):
@@ -536,7 +680,7 @@ class RunPanels(QtCore.QObject):
         self._state = st
         self._running = st.running
         if (st.running or st.software) and not self.var_timer.isActive() and \
-                not self._stopped and self._shown(self.watch):
+                not self._stopped and self._shown_key("watch"):
             self.var_timer.start()
         parts = []
         if self._running:
@@ -579,23 +723,36 @@ class RunPanels(QtCore.QObject):
             parts.append(f"<span style='color:#b35c00'>telemetry behind: "
                          f"{missed - self._missed} samples dropped</span>")
         self._missed = missed
-        self.proc.set_status("  ·  ".join(parts))
+        self._set_status("  ·  ".join(parts))
+
+    def _set_status(self, text: str) -> None:
+        self._status = text
+        if "proc" in self._made:
+            self.proc.set_status(text)
 
     def _on_connected(self, address: str) -> None:
-        self.inputs.set_enabled(True)
+        self._connected_to = address
+        made = self._made
         debugger = bool(getattr(self.connection, "debugger", False))
-        self.watch.editable = self.inputs.force_by_hand = debugger
-        self.lanes.force_menu = self._lane_force_menu if debugger else None
-        self.proc.set_status(f"Connected to {address}")     # not "Disconnected" any more
+        if "inputs" in made:
+            made["inputs"].set_enabled(True)
+            made["inputs"].force_by_hand = debugger
+        if "watch" in made:
+            made["watch"].editable = debugger
+        if "outputs" in made:
+            made["outputs"].force_menu = self._lane_force_menu if debugger else None
+        self._set_status(f"Connected to {address}")     # not "Disconnected" any more
         self.log.add_note(f"connected to the controller at {address}", "link")
 
     def _on_disconnected(self, reason: str) -> None:
-        self.inputs.set_enabled(False)
+        self._connected_to = None
+        if "inputs" in self._made:
+            self._made["inputs"].set_enabled(False)
         if reason == CLOSED_BY_IDE:          # another project, quitting: not an error
-            self.proc.set_status("No controller")
+            self._set_status("No controller")
             self.log.add_note("disconnected from the controller (the IDE closed it)", "link")
             return
-        self.proc.set_status(f"<span style='color:#c62828'>Disconnected</span>: {reason}")
+        self._set_status(f"<span style='color:#c62828'>Disconnected</span>: {reason}")
         self.log.add_note(f"controller disconnected: {reason}", "error")
 
     def _poll_variables(self) -> None:
@@ -605,7 +762,7 @@ class RunPanels(QtCore.QObject):
             return
         if not getattr(self.connection, "connected", False):
             return
-        if not self._shown(self.watch):
+        if not self._shown_key("watch"):
             self.var_timer.stop()           # until the watch shows (the final polls wait too)
             return
         if not busy:
@@ -615,7 +772,11 @@ class RunPanels(QtCore.QObject):
 
     def _on_registers(self, report: dict) -> None:
         if self.target != "mycnc":
-            self.registers.set_report(report)
+            self._registers_report = report
+            if "watch" in self._made:
+                self.registers.set_report(report)
 
     def _on_variables(self, variables: dict) -> None:
-        self.watch.set_variables(variables, self._running)
+        self._variables = (variables, self._running)
+        if "watch" in self._made:
+            self.watch.set_variables(variables, self._running)

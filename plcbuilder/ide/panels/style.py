@@ -394,7 +394,9 @@ class TitleLegend(Legend):
         plot.layout.setRowFixedHeight(0, max(row, y + h + 2) if self.items else row)
         if shown:
             title.setMaximumHeight(TITLE_ROW)
-        self.setPos(max(view_left, right - self.width()), y)
+        # right-aligned; a key wider than the room right of the axis goes over
+        # the axis column (in the title row) rather than out of the plot
+        self.setPos(max(0.0, right - self.width()), y)
 
     @classmethod
     def _columns(cls, widths: list, room: float) -> int:

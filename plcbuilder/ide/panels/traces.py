@@ -313,8 +313,7 @@ class TraceTools(QtCore.QObject):
         self.show(tr, f"the whole session, {tr.t_start / 1000:.3f}..{tr.t_end / 1000:.3f} s")
         panels = self.panels
         t0, t1 = tr.t_start * 1e-3, max(tr.t_end * 1e-3, tr.t_start * 1e-3 + 0.01)
-        for panel in panels.time_panels:
-            panel.show_span(t0, t1)
+        panels.show_span(t0, t1)
         return tr
 
     def current(self) -> api.Trace:
