@@ -90,6 +90,7 @@ class MainWindow(QMainWindow):
         self.run_docks: dict = {}            # the run docks by key (empty until then)
         self._pin_defines: Optional[dict] = None
         self._painted = False
+        self._after_paint_done = False       # _after_first_paint ran
         self._controller_due = False         # started after the first paint
         self._lint_due = False               # the project's check, after the first paint
         self._editors_due = None             # the last session's other editors, after it too
@@ -658,7 +659,12 @@ class MainWindow(QMainWindow):
         """The window is up: start the embedded controller (a child process,
         spawned by the connection's thread), then build the run panels while
         it starts; the checks in the background and the last session's other
-        editors come once the panels are made (each would hold them up)."""
+        editors come once the panels are made (each would hold them up). Once:
+        the paint or the fallback, whichever comes first (the other would run
+        the rest before the panels are made)."""
+        if self._after_paint_done:
+            return
+        self._after_paint_done = True
         self._painted = True
         startup_done()
         self.workbench.outline.release()         # (each of these once: then no-ops)

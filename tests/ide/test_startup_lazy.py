@@ -322,9 +322,13 @@ def test_the_run_panels_make_the_docks_on_screen_one_per_turn_and_the_others_whe
         made_on.setdefault(key, turn[0])
         return panel(key)
     w.dock_table.panel = noted
+    rest = w._after_panels                  # the checks, the other editors: after the panels
+    rested = []
+    w._after_panels = lambda: (rested.append(set(w.run_panels.made)), rest())
     w.open_project(create_project(tmp_path / "example").root)
     qtbot.waitUntil(lambda: w._painted and w.run_panels is not None, timeout=10000)
     _workbench.settle(qtbot, w)
+    qtbot.wait(700)                         # (past the fallback for a window never painted)
     ticker.stop()
     panels = w.run_panels
     shown = {k for k, d in w.run_docks.items() if on_screen(d)}
@@ -334,6 +338,7 @@ def test_the_run_panels_make_the_docks_on_screen_one_per_turn_and_the_others_whe
         assert (dock.widget() is not None) == (key in panels.made), key
     turns = [made_on[k] for k in shown if k != "log"]
     assert len(set(turns)) == len(turns), made_on             # one a turn
+    assert rested == [shown | {"log"}]                        # once, after them
     # a recorded run on show; then the Axes dock shows: its panel shows it too
     panels.show_recorded("a test", [], [], failing_ms=100)
     assert "axes" not in panels.made
