@@ -166,7 +166,7 @@ class DockTable:
     def release(self, then: Optional[Callable[[], None]] = None) -> None:
         """The window painted: the docks that showed meanwhile get their panel,
         one per turn of the event loop (the window answers between them);
-        ``then`` after the last."""
+        ``then`` on the turn after the last (the panels redraw first)."""
         if not self.held:
             if then is not None:
                 then()
@@ -182,9 +182,8 @@ class DockTable:
             key = due.pop(0)
             if key not in self.made and on_screen(self.docks[key]):
                 self.panel(key)
-                if due:
-                    QTimer.singleShot(0, lambda: self._make_due(due, then))
-                    return
+                QTimer.singleShot(0, lambda: self._make_due(due, then))
+                return
         if then is not None:
             then()
 

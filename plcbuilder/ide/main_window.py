@@ -656,20 +656,18 @@ class MainWindow(QMainWindow):
             QTimer.singleShot(0, self._after_first_paint)
 
     def _after_first_paint(self) -> None:
-        """The window is up: start the embedded controller (a child process,
-        spawned by the connection's thread), then build the run panels while
-        it starts; the checks in the background and the last session's other
-        editors come once the panels are made (each would hold them up). Once:
-        the paint or the fallback, whichever comes first (the other would run
-        the rest before the panels are made)."""
+        """The window is up: connect to the embedded controller (its process
+        started with the project), then make the run panels of the docks on
+        screen while it comes up; the outline, the tree's descriptions, the
+        whole dock tab titles, the checks in the background and the last
+        session's other editors come once the panels are made (each would
+        hold them up). Once: the paint or the fallback, whichever comes first
+        (the other would run the rest before the panels are made)."""
         if self._after_paint_done:
             return
         self._after_paint_done = True
         self._painted = True
         startup_done()
-        self.workbench.outline.release()         # (each of these once: then no-ops)
-        self._guard_wheel()
-        self.tree.release_descriptions()
         if self._controller_due and not self._closing:
             self._controller_due = False
             self.run_actions.start_controller_for_project()
@@ -689,6 +687,9 @@ class MainWindow(QMainWindow):
         self.dock_table.release(then=self._after_panels)
 
     def _after_panels(self) -> None:
+        self.workbench.outline.release()         # (each of these once: then no-ops)
+        self._guard_wheel()
+        self.tree.release_descriptions()
         self.lint.hold(False)
         self._open_due_editors()
         if self._lint_due and not self._closing:

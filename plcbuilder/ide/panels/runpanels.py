@@ -185,7 +185,8 @@ class RunPanels(QtCore.QObject):
             self._docks[key].setWidget(made)
             if key in self.TIME_KEYS:
                 self._catch_up(made)
-            self.wake()
+            if not self._stopped:
+                self.timer.start(0)          # drawn on the next turn, not a frame later
         return made
 
     @property
