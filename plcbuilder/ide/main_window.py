@@ -723,6 +723,11 @@ class MainWindow(QMainWindow):
     def _save_session(self) -> None:
         if self.project is not None:
             files = [ed.path for ed in self.editors()]
+            due = self._editors_due
+            if due is not None and due[0] == self.project.root:
+                # closed before the last session's other editors opened (they
+                # follow the first paint): they stay in the session, in order
+                files = list(due[1]) + [f for f in files if f not in due[1]]
             cur = self.current_editor()
             self.settings.save_session(self.project.root, files, cur.path if cur else "")
 

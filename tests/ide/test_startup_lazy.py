@@ -257,6 +257,26 @@ def test_the_last_session_shows_its_current_editor_first_and_compiles_after_the_
     assert w.workbench.outline.items                         # outlined once painted
 
 
+def test_closing_before_the_last_sessions_other_editors_open_keeps_them(
+        qtbot, make_window, tmp_path):
+    """Issue 26.5: the last session's other editors open after the first
+    paint (and the run panels); a window closed before then saves them in
+    the session all the same, in their order."""
+    from plcbuilder.ide.settings import Settings
+    project = create_project(tmp_path / "example").root
+    files = [str(project / "hardware" / n) for n in ("M03.plc", "M05.plc")] + \
+        [str(project / "software" / "LUBE.plc")]
+    st = Settings(str(tmp_path / "config" / "settings.ini"))
+    st.save_session(project, files, files[1])
+    st.sync()
+    w = make_window(settings=st)
+    w.open_project(project)
+    assert [e.path for e in w.editors()] == [files[1]] and w._editors_due is not None
+    w.close()
+    again = Settings(str(tmp_path / "config" / "settings.ini"))
+    assert again.open_files(project) == files and again.current_file(project) == files[1]
+
+
 def test_the_embedded_controller_process_starts_before_the_first_paint(
         qtbot, make_window, tmp_path):
     """Issue 26.5: the controller's own Python start is the longest part of
