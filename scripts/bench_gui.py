@@ -26,6 +26,7 @@
     python scripts/bench_gui.py cpu|startup|lanes   # one figure only
     PLCB_BENCH_BEFORE=DIR python scripts/bench_gui.py startup   # and DIR's package beside
     PLCB_BENCH_X=display ...   # on the X server at $DISPLAY instead of an Xvfb of its own
+    PLCB_BENCH_RUNS=15 ...     # start-up: rounds (default 7)
 """
 
 from __future__ import annotations
@@ -919,7 +920,8 @@ if __name__ == "__main__":
         if w == "cpu":
             lines += cpu_figures()
         elif w == "startup":
-            lines += startup_figures(before=os.environ.get("PLCB_BENCH_BEFORE") or None)
+            lines += startup_figures(int(os.environ.get("PLCB_BENCH_RUNS") or 7),
+                                     before=os.environ.get("PLCB_BENCH_BEFORE") or None)
         elif w == "lanes":
             lines += lane_figures()
         elif w == "diagnostics":
