@@ -91,6 +91,7 @@ class MainWindow(QMainWindow):
         self._pin_defines: Optional[dict] = None
         self._painted = False
         self._after_paint_done = False       # _after_first_paint ran
+        self._overdue_waits = 0              # (_paint_overdue)
         self._controller_due = False         # started after the first paint
         self._lint_due = False               # the project's check, after the first paint
         self._editors_due = None             # the last session's other editors, after it too
@@ -647,7 +648,22 @@ class MainWindow(QMainWindow):
             # this is in case no paint comes (a minimised window): 500 ms
             # from the event loop's first turn (opening the last project
             # between show() and that turn must not let it come before the paint)
-            QTimer.singleShot(0, lambda: QTimer.singleShot(500, self._after_first_paint))
+            QTimer.singleShot(0, lambda: QTimer.singleShot(500, self._paint_overdue))
+
+    def _paint_overdue(self) -> None:
+        """No paint yet, 500 ms after the event loop's first turn: a window
+        that cannot be seen (minimised, not mapped) starts the rest now; one on
+        screen whose paint is only slow (a loaded machine, the window manager
+        late) is waited for, up to 5 s more: the run panels' modules loaded
+        before its paint would hold the paint up."""
+        if self._after_paint_done or self._closing:
+            return
+        handle = self.windowHandle()
+        if handle is not None and handle.isExposed() and self._overdue_waits < 10:
+            self._overdue_waits += 1
+            QTimer.singleShot(500, self._paint_overdue)
+            return
+        self._after_first_paint()
 
     def paintEvent(self, event) -> None:  # noqa: N802 - Qt override
         super().paintEvent(event)

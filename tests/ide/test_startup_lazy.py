@@ -371,3 +371,20 @@ def test_the_run_panels_make_the_docks_on_screen_one_per_turn_and_the_others_whe
     assert any(p is axes for p, _plot, _line in panels._markers)
     back = [b for b in panels.banner_links if axes.isAncestorOf(b)]
     assert back and back[0].isVisibleTo(axes)
+
+
+def test_a_window_on_screen_whose_paint_is_late_is_waited_for(qtbot, make_window, tmp_path,
+                                                              monkeypatch):
+    """Issue 26.5: the start's rest (the run panels' modules among it) waits
+    for the first paint; the fallback for a window that never paints (500 ms
+    after the first turn) ran it before a paint that was only late (a loaded
+    machine), which then waited for pyqtgraph. A window on screen is waited
+    for; one that cannot be seen starts the rest at once."""
+    w = make_window(connection=_workbench.FakeConnection(), start_controller=True)
+    qtbot.waitUntil(lambda: w.windowHandle() is not None and w.windowHandle().isExposed())
+    w._after_paint_done, w._painted = False, False      # as if no paint had come yet
+    w._paint_overdue()
+    assert not w._after_paint_done and w._overdue_waits == 1
+    monkeypatch.setattr(type(w.windowHandle()), "isExposed", lambda self: False)
+    w._paint_overdue()                                  # minimised, unmapped: now
+    assert w._after_paint_done
