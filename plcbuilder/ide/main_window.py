@@ -57,6 +57,8 @@ if TYPE_CHECKING:
 __all__ = ["APP_NAME", "Act", "MainWindow", "SPEEDS"]
 
 SOURCE_SUFFIXES = (".plc", ".h")
+#: telemetry kept for the run panels until they are made (samples, events), at most
+EARLY_SAMPLES, EARLY_EVENTS = 30000, 5000
 TEXT_SUFFIXES = (".plc", ".h", ".toml", ".xml", ".md", ".txt")
 
 
@@ -88,6 +90,8 @@ class MainWindow(QMainWindow):
         self._last_state: Optional[ControllerStatus] = None   # the controller's last state
         self.run_panels = None               # made after the first paint (see ensure_run_panels)
         self.run_docks: dict = {}            # the run docks by key (empty until then)
+        self._early_samples: list = []       # telemetry before the run panels are made
+        self._early_events: list = []
         self._pin_defines: Optional[dict] = None
         self._painted = False
         self._after_paint_done = False       # _after_first_paint ran
@@ -586,8 +590,34 @@ class MainWindow(QMainWindow):
             c.sig_error.connect(lambda t: self.statusBar().showMessage(t, 6000))
             if hasattr(c, "sig_result"):
                 c.sig_result.connect(self._on_request_done)
+            if self.run_docks:
+                # what comes before the run panels are made is kept for them
+                c.sig_samples.connect(self._keep_samples)
+                c.sig_events.connect(self._keep_events)
         self.debug.wire_connection()
         run.wire_connection()
+
+    def _keep_samples(self, samples: list) -> None:
+        if self.run_panels is None:
+            self._early_samples.extend(samples)
+            del self._early_samples[:-EARLY_SAMPLES]
+
+    def _keep_events(self, events: list) -> None:
+        if self.run_panels is None:
+            self._early_events.extend(events)
+            del self._early_events[:-EARLY_EVENTS]
+
+    def _stop_keeping(self) -> tuple[list, list]:
+        """The telemetry kept until the run panels were made (and no more kept)."""
+        c = self.connection
+        for sig, slot in ((c.sig_samples, self._keep_samples), (c.sig_events, self._keep_events)):
+            try:
+                sig.disconnect(slot)
+            except (RuntimeError, TypeError):
+                pass
+        kept = self._early_samples, self._early_events
+        self._early_samples, self._early_events = [], []
+        return kept
 
     def ensure_run_panels(self):
         """Make the run panels now, if they are due and not made yet (the
@@ -601,11 +631,15 @@ class MainWindow(QMainWindow):
             from plcbuilder.ide.panels import RunPanels
             self.run_panels = RunPanels(self, self.connection, docks=self.run_docks, lazy=True)
             self.dock_table.adopt()          # the log's dock
+            # the telemetry that came since the connection started (it starts
+            # first, while the panels' modules load): the session from its start
+            self.run_panels.feed(*self._stop_keeping())
         except Exception as exc:  # noqa: BLE001 - the editor side works without them
             import traceback
             traceback.print_exc()
             self.run_panels = None
             self.run_docks = {}
+            self._stop_keeping()
             self.statusBar().showMessage(f"The run panels are not available: {exc}")
             return None
         self.run_panels.sig_open_location.connect(lambda f, ln: self.open_location(f, ln))

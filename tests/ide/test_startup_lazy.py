@@ -388,3 +388,26 @@ def test_a_window_on_screen_whose_paint_is_late_is_waited_for(qtbot, make_window
     monkeypatch.setattr(type(w.windowHandle()), "isExposed", lambda self: False)
     w._paint_overdue()                                  # minimised, unmapped: now
     assert w._after_paint_done
+
+
+def test_telemetry_before_the_run_panels_are_made_is_shown_by_them(qtbot, make_window, tmp_path):
+    """Issue 26.5: the connection starts right after the first paint and the
+    run panels are made once their modules load: the telemetry that came
+    meanwhile (the inputs that changed as the controller started, its first
+    messages) is theirs too, not lost: the Outputs dock showed no lane for
+    an input that had changed before."""
+    from tests.ide.test_panels import sample
+    from plcbuilder.api import events as ev
+    conn = _workbench.FakeConnection()
+    w = make_window(connection=conn, start_controller=True)
+    assert w.run_panels is None
+    conn.sig_samples.emit([sample(10, inputs=0), sample(20, inputs=1 << 4, outputs=1 << 5)])
+    conn.sig_events.emit([ev.Message(t_ms=20, message=7, name=None, command=0, parameter=0,
+                                     source="M03")])
+    qtbot.waitUntil(lambda: w.run_panels is not None, timeout=10000)
+    panels = w.run_panels
+    assert len(panels.model) == 2
+    assert panels.model.active_inputs == {4} and panels.model.active_outputs == {5}
+    assert [m.code for m in panels.model.messages] == [7]
+    conn.sig_samples.emit([sample(30, inputs=0)])
+    assert len(panels.model) == 3 and w._early_samples == []    # once, then no more kept

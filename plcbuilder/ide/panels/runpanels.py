@@ -328,6 +328,14 @@ class RunPanels(QtCore.QObject):
         """One dock by key: proc, outputs, analog, axes, inputs, watch, log."""
         return self._docks[key]
 
+    def feed(self, samples: list, events: list) -> None:
+        """Telemetry that came before the panels were made (the window keeps
+        it for them): shown as if it had just come."""
+        if events:
+            self._on_events(list(events))
+        if samples:
+            self._on_samples(list(samples))
+
     def set_pin_names(self, inputs: Mapping[int, str], outputs: Mapping[int, str]) -> None:
         """Names for the lanes and toggles (from the project's pins.h); on the
         Huazhong target each is first the bank bit it is (X0.0, Y0.7)."""
