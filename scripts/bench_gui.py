@@ -444,7 +444,8 @@ class FirstPaint(QObject):
     def eventFilter(self, obj, ev):
         if ev.type() == QEvent.Type.Paint and not getattr(self, "done", False):
             self.done = True
-            QTimer.singleShot(0, lambda: (print("painted", time.monotonic(), flush=True),
+            QTimer.singleShot(0, lambda: (print("painted", time.monotonic(),
+                                                time.process_time(), flush=True),
                                           app.quit()))
         return False
 app = QApplication(sys.argv[:1])
@@ -475,7 +476,7 @@ def _painted(mw):
             self._probe_painted = True
             from PySide6.QtCore import QTimer
             def mark():
-                print("painted", time.monotonic(), flush=True)
+                print("painted", time.monotonic(), time.process_time(), flush=True)
                 if not WANT_LIVE:
                     self.close()
             # queued before the window's own after-the-paint work: this paint
@@ -494,7 +495,7 @@ def _live(rp):
         if not getattr(self, "_probe_live", False) and len(self.model) \
                 and all(d.widget() is not None for d in self._docks.values() if on_screen(d)):
             self._probe_live = True
-            print("live", time.monotonic(), flush=True)
+            print("live", time.monotonic(), time.process_time(), flush=True)
             print("child", getattr(self.connection, "child_pid", None) or 0, flush=True)
             self.parent().close()
     rp.RunPanels.tick = tick
@@ -528,8 +529,10 @@ raise SystemExit(main(argv))
 
 def _launch(code: str, args: list, env: dict, timeout: float = 120.0) -> dict:
     """Start ``python -c code args`` and return the seconds from launching it
-    to each ``WORD MONOTONIC`` line it prints (time.monotonic is one clock for
-    every process)."""
+    to each ``WORD MONOTONIC [CPU]`` line it prints (time.monotonic is one
+    clock for every process), and as ``WORD_cpu`` the processor time the
+    process had used by then (its own work, which the machine's load moves
+    far less than the time between)."""
     import subprocess
     import sys
     t0 = time.monotonic()
@@ -543,7 +546,10 @@ def _launch(code: str, args: list, env: dict, timeout: float = 120.0) -> dict:
             if word == "child":
                 child = int(value)
             else:
-                got.setdefault(word, float(value) - t0)
+                at, _, cpu = value.partition(" ")
+                got.setdefault(word, float(at) - t0)
+                if cpu:
+                    got.setdefault(f"{word}_cpu", float(cpu))
         except ValueError:
             pass
     if not got:
@@ -585,7 +591,9 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None,
         with XServer("display" if os.environ.get("PLCB_BENCH_X") == "display" else "own") as x:
             return startup_figures(runs, x, before)
     got: dict[str, list[float]] = {"bare": [], "painted": [], "live": [], "without": [],
-                                   "b_painted": [], "b_live": []}
+                                   "b_painted": [], "b_live": [], "bare_cpu": [],
+                                   "painted_cpu": [], "live_cpu": [], "b_painted_cpu": [],
+                                   "b_live_cpu": []}
     errors: list[str] = []
     with tempfile.TemporaryDirectory() as d:
         project = create_project(Path(d) / "example").root
@@ -619,6 +627,10 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None,
                 got["bare"].append(bare["painted"])
                 got["painted"].append(ide["painted"])
                 got["live"].append(ide["live"])
+                if "painted_cpu" in bare and "live_cpu" in ide:
+                    got["bare_cpu"].append(bare["painted_cpu"])
+                    got["painted_cpu"].append(ide["painted_cpu"])
+                    got["live_cpu"].append(ide["live_cpu"])
             else:
                 errors.append(str(bare.get("error") or ide.get("error") or ide))
             if "painted" in without:
@@ -626,6 +638,9 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None,
             if "painted" in old and "live" in old and "painted" in bare:
                 got["b_painted"].append(old["painted"])
                 got["b_live"].append(old["live"])
+                if "live_cpu" in old:
+                    got["b_painted_cpu"].append(old["painted_cpu"])
+                    got["b_live_cpu"].append(old["live_cpu"])
             elif before:
                 errors.append(str(old.get("error") or old))
     if not got["bare"]:
@@ -654,6 +669,22 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None,
                    + ", ".join(f"{a / b:.2f}" for a, b in zip(got["b_painted"], got["bare"]))
                    + f"), live {med['b_live'] * 1000:.0f} ms, {b_after * 1000:.0f} ms after "
                    "the paint")
+    if got["live_cpu"]:
+        k = len(got["live_cpu"])
+        c_ratio = statistics.median(got["painted_cpu"][i] / got["bare_cpu"][i] for i in range(k))
+        c_after = statistics.median(got["live_cpu"][i] - got["painted_cpu"][i] for i in range(k))
+        out.append(f"  processor time of the process (its own work, which the load moves less): "
+                   f"bare window {med['bare_cpu'] * 1000:.0f} ms to its paint; IDE "
+                   f"{med['painted_cpu'] * 1000:.0f} ms to the paint = {c_ratio:.2f}x, "
+                   f"{c_after * 1000:.0f} ms more to live")
+        if got["b_live_cpu"]:
+            j = len(got["b_live_cpu"])
+            b_ratio = statistics.median(got["b_painted_cpu"][i] / got["bare_cpu"][i]
+                                        for i in range(j))
+            b_after = statistics.median(got["b_live_cpu"][i] - got["b_painted_cpu"][i]
+                                        for i in range(j))
+            out.append(f"  before, processor time: {med['b_painted_cpu'] * 1000:.0f} ms to the "
+                       f"paint = {b_ratio:.2f}x, {b_after * 1000:.0f} ms more to live")
     if errors:
         out.append(f"  ({len(errors)} rounds failed: {errors[0]!r})")
     return out

@@ -186,7 +186,9 @@ class RunPanels(QtCore.QObject):
             if key in self.TIME_KEYS:
                 self._catch_up(made)
             if not self._stopped:
-                self.timer.start(0)          # drawn on the next turn, not a frame later
+                # drawn on the next turn (before what was queued after it), not
+                # a frame later
+                QtCore.QTimer.singleShot(0, self, self.tick)
         return made
 
     @property
