@@ -51,13 +51,32 @@ class RegistersPanel(QtWidgets.QWidget):
         self.scope.setObjectName("oscilloscope")
         self.scope.verticalHeader().hide()
         self.scope.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
+        # the registers over the oscilloscope: a splitter's two sections
+        regs = QtWidgets.QWidget()
+        rl = QtWidgets.QVBoxLayout(regs)
+        rl.setContentsMargins(0, 4, 0, 0)
+        rl.addWidget(self.title)
+        rl.addWidget(self.table, 1)
+        rl.addWidget(self.calls)
+        self.scope_part = QtWidgets.QWidget()
+        sl = QtWidgets.QVBoxLayout(self.scope_part)
+        sl.setContentsMargins(0, 4, 0, 0)
+        sl.addWidget(self.scope_title)
+        sl.addWidget(self.scope, 1)
+        self.scope_part.hide()
+        self.split = QtWidgets.QSplitter(Qt.Orientation.Vertical)
+        self.split.setObjectName("registersSplitter")
+        self.split.setChildrenCollapsible(False)
+        self.split.addWidget(regs)
+        self.split.addWidget(self.scope_part)
+        from plcbuilder.ide.panels.watch import SplitterSizes, small_minimum
+        small_minimum(self.table)
+        small_minimum(self.scope)
+        self.sizes = SplitterSizes(self.split, "registers")
+        self.sizes.watch(self.scope_part)
         lay = QtWidgets.QVBoxLayout(self)
-        lay.setContentsMargins(0, 4, 0, 0)
-        lay.addWidget(self.title)
-        lay.addWidget(self.table, 1)
-        lay.addWidget(self.calls)
-        lay.addWidget(self.scope_title)
-        lay.addWidget(self.scope, 1)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(self.split)
         self.report: dict = {}
         self.hide()
 
@@ -94,8 +113,7 @@ class RegistersPanel(QtWidgets.QWidget):
     def _show_scope(self, scope) -> None:
         """The oscilloscope's newest samples, newest first: time (µs), cycle,
         then one column a signal (hidden without an oscilloscope)."""
-        self.scope_title.setVisible(bool(scope))
-        self.scope.setVisible(bool(scope))
+        self.scope_part.setVisible(bool(scope))
         if not scope:
             return
         signals = [str(s) for s in scope.get("signals", [])]

@@ -99,7 +99,7 @@ class RunPanels(QtCore.QObject):
         self.watch = WatchPanel()
         #: a target's registers, under the watch (hidden on myCNC: docs/targets.md)
         self.registers = RegistersPanel()
-        self.watch.layout().addWidget(self.registers)
+        self.watch.add_section(self.registers)
         self.target = "mycnc"
         self._pin_names: tuple[dict, dict] = ({}, {})
         self.log = LogPanel()
