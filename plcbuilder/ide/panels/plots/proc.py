@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import bisect
+import re
 
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets  # before pyqtgraph (it takes the loaded binding)
 import pyqtgraph as pg  # noqa: E402,I001
 
 from plcbuilder.api import abi
-from plcbuilder.ide.elided_label import ElidedLabel
+from plcbuilder.ide.elided_label import _plain_of
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.tables import RowsModel
@@ -20,6 +21,75 @@ from plcbuilder.ide.panels.plots.timebase import (TimeBase, TimePanel, center_it
 Qt = QtCore.Qt
 
 
+#: what the status's facts are joined with (a line may break there, not inside one)
+SEPARATOR = "  ·  "
+_TAG_OR_SPACE = re.compile(r"(<[^>]*>)| ")
+
+
+def _unbroken(fact: str) -> str:
+    """A fact of the status whose words stay on one line (its spaces made
+    non-breaking; the markup's own spaces kept)."""
+    return _TAG_OR_SPACE.sub(lambda m: m.group(1) or "\u00a0", fact)
+
+
+class StatusLine(QtWidgets.QLabel):
+    """The proc panel's status: every fact shows, wrapped onto as many lines
+    as the dock's width needs (a fact is never broken, nor elided), and it
+    never widens the dock."""
+
+    def __init__(self, text: str = "", parent=None):
+        super().__init__(parent)
+        self._full = self._plain = ""
+        self._pending: str | None = None
+        self.setWordWrap(True)
+        self.setTextFormat(Qt.TextFormat.AutoText)
+        self.setContentsMargins(6, 1, 6, 2)
+        # the dock decides the width; the height follows it
+        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,
+                           QtWidgets.QSizePolicy.Policy.Minimum)
+        self.setMinimumWidth(1)
+        self.setText(text)
+
+    def setText(self, text: str) -> None:  # noqa: N802 - Qt override
+        self._pending = None
+        self._full = text or ""
+        self._plain = _plain_of(self._full)
+        super().setText(SEPARATOR.join(_unbroken(f) for f in self._full.split(SEPARATOR)))
+
+    def set_text_when_shown(self, text: str) -> None:
+        """A text that changes often: set at once when visible, else when it
+        shows (a new text lays the window out again, which costs while nobody
+        can see it). :meth:`plain_text` gives the new text at once."""
+        text = text or ""
+        if text == self._full:
+            return
+        if self.isVisible():
+            self.setText(text)
+            return
+        self._pending, self._full, self._plain = text, text, _plain_of(text)
+
+    def showEvent(self, event) -> None:  # noqa: N802 - Qt override
+        if self._pending is not None:
+            text, self._pending = self._pending, None
+            self.setText(text)
+        super().showEvent(event)
+
+    def text(self) -> str:
+        """The text as set (the label draws it with its facts kept whole)."""
+        return self._full
+
+    def full_text(self) -> str:
+        return self._full
+
+    def plain_text(self) -> str:
+        return self._plain
+
+    def is_elided(self) -> bool:
+        """True when some of the text is cut off (never, once laid out)."""
+        rect = self.contentsRect()
+        return rect.width() > 0 and self.heightForWidth(self.width()) > self.height()
+
+
 class ProcPanel(TimePanel):
     """``proc`` as a step plot with its states named on the y axis, message
     markers with their names, and a decoded message log."""
@@ -28,11 +98,11 @@ class ProcPanel(TimePanel):
 
     def __init__(self, model: RunModel, timebase: TimeBase, on_clear=None, parent=None):
         super().__init__(model, timebase, on_clear, parent)
-        # a long status (running, software, speed, a disconnect reason) elides:
-        # it must never widen the dock
-        self.status = ElidedLabel("No controller")
-        self.toolbar.extra.addSpacing(12)
-        self.toolbar.extra.addWidget(self.status, 1)
+        # the status (running, the job, software, proc, speed, a disconnect
+        # reason) on a row of its own under the tools, wrapped: every fact shows
+        # at the dock's default width, and it never widens the dock
+        self.status = StatusLine("No controller")
+        self.status.setObjectName("procStatus")
 
         self.widget = style.plot_widget(style.time_axis(), menu=False)
         self.plot = self.widget.getPlotItem()
@@ -94,6 +164,7 @@ class ProcPanel(TimePanel):
         lay.setContentsMargins(0, 0, 0, 0)
         lay.setSpacing(0)
         lay.addWidget(self.toolbar)
+        lay.addWidget(self.status)
         lay.addWidget(split, 1)
 
     def watched(self) -> list:
