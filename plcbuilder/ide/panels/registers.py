@@ -52,6 +52,7 @@ class RegistersPanel(QtWidgets.QWidget):
         self.scope.verticalHeader().hide()
         self.scope.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         # the registers over the oscilloscope: a splitter's two sections
+        from plcbuilder.ide.panels.watch import GripSplitter, SplitterSizes, small_minimum
         regs = QtWidgets.QWidget()
         rl = QtWidgets.QVBoxLayout(regs)
         rl.setContentsMargins(0, 4, 0, 0)
@@ -64,12 +65,10 @@ class RegistersPanel(QtWidgets.QWidget):
         sl.addWidget(self.scope_title)
         sl.addWidget(self.scope, 1)
         self.scope_part.hide()
-        self.split = QtWidgets.QSplitter(Qt.Orientation.Vertical)
+        self.split = GripSplitter(Qt.Orientation.Vertical)
         self.split.setObjectName("registersSplitter")
-        self.split.setChildrenCollapsible(False)
         self.split.addWidget(regs)
         self.split.addWidget(self.scope_part)
-        from plcbuilder.ide.panels.watch import SplitterSizes, small_minimum
         small_minimum(self.table)
         small_minimum(self.scope)
         self.sizes = SplitterSizes(self.split, "registers")

@@ -54,7 +54,39 @@ def small_minimum(table: QtWidgets.QTableWidget, rows: int = 1) -> None:
     sections filled a short dock at their minimums, and no handle moved)."""
     header = table.horizontalHeader().sizeHint().height()
     row = table.verticalHeader().defaultSectionSize()
-    table.setMinimumHeight(header + rows * row + 2 * table.frameWidth() + 2)
+    bar = table.horizontalScrollBar().sizeHint().height()     # (it may show: a row's room)
+    table.setMinimumHeight(header + rows * row + bar + 2 * table.frameWidth() + 2)
+
+
+class _GripHandle(QtWidgets.QSplitterHandle):
+    """A splitter handle that shows it is one: a short grip across its middle."""
+
+    def paintEvent(self, event) -> None:  # noqa: N802 - Qt's name
+        p = QtGui.QPainter(self)
+        colour = self.palette().color(QtGui.QPalette.ColorRole.Mid)
+        p.setPen(QtGui.QPen(colour, 1))
+        r = self.rect()
+        cx, cy = r.center().x(), r.center().y()
+        if self.orientation() == Qt.Orientation.Vertical:
+            for dy in (-1, 1):
+                p.drawLine(cx - 14, cy + dy, cx + 14, cy + dy)
+        else:
+            for dx in (-1, 1):
+                p.drawLine(cx + dx, cy - 14, cx + dx, cy + 14)
+        p.end()
+
+
+class GripSplitter(QtWidgets.QSplitter):
+    """A QSplitter whose handles show a grip (a plain one is an invisible
+    strip: nobody knew the sections could be resized)."""
+
+    def __init__(self, orientation, parent=None):
+        super().__init__(orientation, parent)
+        self.setHandleWidth(7)
+        self.setChildrenCollapsible(False)
+
+    def createHandle(self) -> QtWidgets.QSplitterHandle:  # noqa: N802 - Qt's name
+        return _GripHandle(self.orientation(), self)
 
 
 class SplitterSizes(QtCore.QObject):
@@ -176,9 +208,8 @@ class WatchPanel(QtWidgets.QWidget):
         plain.addWidget(self.table, 1)
         plain.addWidget(self.hint)
         small_minimum(self.table)
-        self.split = QtWidgets.QSplitter(Qt.Orientation.Vertical)
+        self.split = GripSplitter(Qt.Orientation.Vertical)
         self.split.setObjectName("watchSplitter")
-        self.split.setChildrenCollapsible(False)
         self.split.addWidget(part)
         self.sizes = SplitterSizes(self.split, "watch")
         lay = QtWidgets.QVBoxLayout(self)
