@@ -31,6 +31,32 @@ def bit_names(pins: int, bank: str, names: dict[int, str]) -> dict[int, str]:
     return out
 
 
+class _WrappedLabel(QtWidgets.QLabel):
+    """A word-wrapped label in a splitter section: its minimum height is what
+    its text needs at its width (a splitter does not ask a label's height for
+    its width, and squeezed the calls line under the registers' table)."""
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.setWordWrap(True)
+
+    def _fit(self) -> None:
+        if self.width() > 0:
+            need = self.heightForWidth(self.width())
+            if need > 0 and need != self.minimumHeight():
+                self.setMinimumHeight(need)
+
+    def setText(self, text: str) -> None:  # noqa: N802 - Qt's name
+        if text != self.text():
+            super().setText(text)
+            self._fit()
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt's name
+        super().resizeEvent(event)
+        if event.size().width() != event.oldSize().width():
+            self._fit()
+
+
 class RegistersPanel(QtWidgets.QWidget):
     """A table of the target's non-zero registers, and the calls."""
 
@@ -43,8 +69,7 @@ class RegistersPanel(QtWidgets.QWidget):
         self.table.verticalHeader().hide()
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         self.table.horizontalHeader().setStretchLastSection(True)
-        self.calls = QtWidgets.QLabel()
-        self.calls.setWordWrap(True)
+        self.calls = _WrappedLabel()
         self.calls.setObjectName("calls")
         self.scope_title = QtWidgets.QLabel()
         self.scope = QtWidgets.QTableWidget(0, 0)          # TG Motion's oscilloscope
