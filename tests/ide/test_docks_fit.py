@@ -194,4 +194,9 @@ def test_the_proc_status_shows_every_fact_at_the_default_dock_width(runwin, qtbo
     room = status.contentsRect().width()
     assert all(fm.horizontalAdvance(f) <= room for f in facts)
     assert status.heightForWidth(status.width()) <= status.height()
-    assert rp.proc.toolbar.geometry().bottom() <= status.geometry().top()
+    assert not rp.proc.status_beside          # (too long for the tools' row: under it)
+    # a short status takes no row from the plot: it sits beside the tools
+    rp.proc.set_status("Idle")
+    _settle(qtbot)
+    assert rp.proc.status_beside and rp.proc.status.parentWidget() is rp.proc.toolbar
+    assert not status.is_elided()

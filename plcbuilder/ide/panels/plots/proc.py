@@ -99,10 +99,12 @@ class ProcPanel(TimePanel):
     def __init__(self, model: RunModel, timebase: TimeBase, on_clear=None, parent=None):
         super().__init__(model, timebase, on_clear, parent)
         # the status (running, the job, software, proc, speed, a disconnect
-        # reason) on a row of its own under the tools, wrapped: every fact shows
-        # at the dock's default width, and it never widens the dock
+        # reason): beside the tools where it fits on their row, else on a row
+        # of its own under them, wrapped; every fact shows, and it never
+        # widens the dock (nor takes a row from the plot when it need not)
         self.status = StatusLine("No controller")
         self.status.setObjectName("procStatus")
+        self.status_beside: bool | None = None
 
         self.widget = style.plot_widget(style.time_axis(), menu=False)
         self.plot = self.widget.getPlotItem()
@@ -164,8 +166,8 @@ class ProcPanel(TimePanel):
         lay.setContentsMargins(0, 0, 0, 0)
         lay.setSpacing(0)
         lay.addWidget(self.toolbar)
-        lay.addWidget(self.status)
         lay.addWidget(split, 1)
+        self._place_status()
 
     def watched(self) -> list:
         return [self.model.scalars]
@@ -226,6 +228,42 @@ class ProcPanel(TimePanel):
 
     def set_status(self, text: str) -> None:
         self.status.set_text_when_shown(text)     # with the time: only what can be seen
+        self._place_status()
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        if event.size().width() != event.oldSize().width():
+            self._place_status()
+
+    def _tools_width(self) -> int:
+        """The width the toolbar's own buttons and boxes take on their row."""
+        row = self.toolbar.layout().itemAt(0).layout()
+        out, n = 0, 0
+        for i in range(row.count()):
+            w = row.itemAt(i).widget()
+            if w is not None and not w.isHidden():
+                out, n = out + w.sizeHint().width(), n + 1
+        m = self.toolbar.layout().contentsMargins()
+        return out + row.spacing() * (n + 1) + m.left() + m.right()
+
+    def _place_status(self) -> None:
+        """The status beside the tools when its text fits there on one line,
+        else on its own row under them (where it wraps)."""
+        st = self.status
+        need = st.fontMetrics().horizontalAdvance(st.plain_text()) + 12 + 14 + \
+            st.contentsMargins().left() + st.contentsMargins().right()
+        beside = self.width() > 0 and self._tools_width() + need <= self.width()
+        if beside == self.status_beside:
+            return
+        self.status_beside = beside
+        lay = self.layout()
+        if beside:
+            lay.removeWidget(st)
+            self.toolbar.extra.addWidget(st, 1)
+        else:
+            self.toolbar.extra.removeWidget(st)
+            lay.insertWidget(1, st)
+        st.show()
 
     def y_labels(self) -> list[str]:
         """The state names on the y axis, lowest value first."""
