@@ -65,6 +65,7 @@ class Act:
     PAUSE_GCODE = "pause_gcode"
     PLAY_GCODE = "play_gcode"
     STOP_GCODE = "stop_gcode"
+    ISSUE_CODE = "issue_code"
     # the debugger (plcbuilder.ide.debug.actions makes these)
     PAUSE = "pause"
     STEP_OVER = "step_over"
@@ -206,6 +207,9 @@ def build_actions(win) -> dict[str, QAction]:
       "Continue the paused G-code job, or run it again from its first line")
     A(Act.STOP_GCODE, "Stop G-code Program", lambda: win.run_actions.job("stop"), None, None,
       "Stop the G-code job (its move decelerates; __HANDLER_GCODE_STOP runs)")
+    A(Act.ISSUE_CODE, "&Issue Code…", lambda: win.run_actions.issue_code(), None, None,
+      "The CNC issues an M, S, B or T code (M3, S12000) to the running controller, as a "
+      "G-code program or a scenario's 'code M3' does")
     A(Act.RUN_TESTS, "Run &Tests", lambda: (win.tests_dock.show(), win.tests_dock.raise_(),
                                             win.tests_panel.run_tests()), "Ctrl+T", None,
       "Build the project and run its scenario tests (tests/*.toml)")
@@ -268,7 +272,8 @@ def build_menus(win) -> None:
         m.addAction(a(name))
     m = mb.addMenu("&Run")
     for name in (Act.START, Act.START_CURRENT, Act.BUILD_UPLOAD_START, Act.STOP, None,
-                 Act.RUN_GCODE, Act.PAUSE_GCODE, Act.PLAY_GCODE, Act.STOP_GCODE, None,
+                 Act.RUN_GCODE, Act.PAUSE_GCODE, Act.PLAY_GCODE, Act.STOP_GCODE,
+                 Act.ISSUE_CODE, None,
                  Act.RUN_TESTS, None, Act.SAVE_RECORDING, Act.REPLAY_SESSION):
         m.addAction(a(name)) if name else m.addSeparator()
     m.addSeparator()
@@ -370,7 +375,7 @@ def update_actions(win) -> None:
         win.action(Act.TOGGLE_COMMENT).setEnabled(False)
     run = win.connection is not None and has_project
     for name in (Act.UPLOAD, Act.START, Act.START_CURRENT, Act.STOP, Act.RESET_CONTROLLER,
-                 Act.BUILD_UPLOAD_START, Act.RUN_GCODE):
+                 Act.BUILD_UPLOAD_START, Act.RUN_GCODE, Act.ISSUE_CODE):
         win.action(name).setEnabled(run)
     for name, verb in ((Act.PAUSE_GCODE, "pause"), (Act.PLAY_GCODE, "play"),
                        (Act.STOP_GCODE, "stop")):         # as the job's state allows

@@ -312,7 +312,7 @@ class _Worker(threading.Thread):
         if result is POSTED:
             return
         self.post("result", (verb, result))
-        if verb in ("upload", "reset", "start", "stop") and self.debugging:
+        if verb in ("upload", "reset", "start", "stop", "code") and self.debugging:
             self._debug_state(client)
 
     # One method a verb (the GUI's ``_send(verb, *args)``): its result, or POSTED.
@@ -606,6 +606,11 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
     def stop(self) -> None:
         """Press Stop (the first time starts M02, the second OFF)."""
         self._send("stop")
+
+    def issue_code(self, letter: str, value: int) -> None:
+        """The CNC issues code ``letter`` ``value`` (M3, S12000): the link's
+        ``code`` request, recorded by the controller as a scenario's ``code``."""
+        self._send("code", {"letter": str(letter), "value": int(value)})
 
     def job(self, verb: str, text: Optional[str] = None, file: Optional[str] = None,
             play: bool = False) -> None:

@@ -1,7 +1,8 @@
 """Is what the controller runs what the editors show? (issue 13.3)
 
 Three things can differ before a Start: an editor with unsaved changes, a
-source saved after ``build/eeprom.rom`` was written (not built), and an image
+source whose content changed since ``build/eeprom.rom`` was built (not
+built: compared by SHA-256 with what the build read), and an image
 on the controller other than the project's (not uploaded). :func:`stale_reasons`
 names each, for the warning that offers "Build, Upload and Start".
 """
@@ -13,6 +14,7 @@ from pathlib import Path
 from typing import Iterable, Optional
 
 from plcbuilder._support.files import read_bounded
+from plcbuilder.lang.source import MAX_SOURCE_BYTES
 from plcbuilder.link.protocol import MAX_IMAGE
 
 
@@ -37,15 +39,29 @@ def sources(project) -> list[Path]:
 
 
 def newer_sources(project) -> list[Path]:
-    """Sources saved after the image was built (all of them when there is none)."""
+    """Sources that changed since the image was built (all of them when there
+    is none). A file saved after it is compared by content with what the last
+    Build All read (build/.cache.json, when it describes this image): saved
+    again with the bytes that were built, it has not changed; one the build did
+    not read, or without a cache, counts as changed by its time alone."""
+    import hashlib
+
+    from plcbuilder.project.build.cache import built_from
     try:
         built = project.image_path.stat().st_mtime
     except OSError:
         return sources(project)
+    hashes = None
     out = []
     for p in sources(project):
         try:
-            if p.stat().st_mtime > built:
+            if p.stat().st_mtime <= built:
+                continue
+            if hashes is None:
+                hashes = built_from(project.build_dir, project.image_path) or {}
+            was = hashes.get(str(p))
+            if was is None or hashlib.sha256(
+                    read_bounded(p, MAX_SOURCE_BYTES, "source")).hexdigest() != was:
                 out.append(p)
         except OSError:
             continue

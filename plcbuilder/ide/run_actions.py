@@ -376,6 +376,46 @@ class RunActions(QObject):
             self.connection.stop()
             self.sig_message.emit("Stop", 3000)
 
+    #: the project setting that keeps the codes issued last (newest first, a line each)
+    CODE_HISTORY = "code_history"
+
+    def code_history(self) -> list[str]:
+        """The codes issued last in this project, newest first."""
+        if self.project is None or self.settings is None:
+            return []
+        text = self.settings.project_value(self.project.root, self.CODE_HISTORY, "") or ""
+        return [line for line in str(text).splitlines() if line.strip()]
+
+    def issue_code(self, text: Optional[str] = None) -> bool:
+        """Run › Issue Code…: the CNC issues M, S, B or T codes (``M3``,
+        ``S12000 M3``) to the running controller, in order, through the link's
+        ``code`` request (the controller records each, as it does a start or a
+        force). ``text``: the codes, without the dialog. False: nothing issued."""
+        if self.connection is None or not self.connected():
+            self.sig_message.emit("No controller to issue a code to", 4000)
+            return False
+        from plcbuilder.ide.dialogs.issue_code import HISTORY, code_text, parse_codes
+        if text is None:
+            from plcbuilder.ide.dialogs.issue_code import IssueCodeDialog
+            target = getattr(self.project, "target", None) or "mycnc"
+            codes = IssueCodeDialog.get_codes(self.parent(), self.code_history(), target)
+            if not codes:
+                return False
+        else:
+            codes, why = parse_codes(text)
+            if not codes:
+                self.sig_message.emit(why or "Not a code", 5000)
+                return False
+        for letter, value in codes:
+            self.connection.issue_code(letter, value)
+        said = code_text(codes)
+        if self.project is not None and self.settings is not None:
+            history = [said] + [h for h in self.code_history() if h != said]
+            self.settings.set_project_value(self.project.root, self.CODE_HISTORY,
+                                            "\n".join(history[:HISTORY]))
+        self.sig_message.emit(f"Issued {said}", 4000)
+        return True
+
     def set_speed(self, mode: str) -> None:
         for label, m in SPEEDS:
             if m == mode:
@@ -479,6 +519,17 @@ class RunActions(QObject):
         c.sig_connected.connect(self._on_connected)
         c.sig_state.connect(self._on_state)
         c.sig_state.connect(self._follow_job)
+        if hasattr(c, "sig_result"):
+            c.sig_result.connect(self._on_result)
+
+    def _on_result(self, verb: str, result: dict) -> None:
+        """A code issued: the status bar says what it did (a refusal comes as
+        the connection's error, with the controller's reason)."""
+        if verb == "code" and isinstance(result, dict):
+            started = result.get("started")
+            self.sig_message.emit(f"{result.get('code', 'The code')} issued at t = "
+                                  f"{result.get('t_ms', 0)} ms"
+                                  + (f": started {started}" if started else ""), 5000)
 
     #: which of Pause / Continue / Stop G-code Program each state of the job allows
     #: (controller/job.py's STATES; no job open: none of them)

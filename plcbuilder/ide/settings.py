@@ -108,6 +108,18 @@ class Settings:
         self.qs.setValue("window/geometry", geometry)
         self.qs.setValue("window/state", state)
 
+    def splitter_sizes(self, name: str) -> Optional[list[int]]:
+        """A panel's splitter sizes as the user left them (None: never moved)."""
+        value = self.qs.value(f"window/splitters/{name}", None)
+        try:
+            sizes = [int(v) for v in str(value).split(",")] if value else []
+        except ValueError:
+            return None
+        return sizes if sizes and all(s >= 0 for s in sizes) else None
+
+    def save_splitter_sizes(self, name: str, sizes: list[int]) -> None:
+        self.qs.setValue(f"window/splitters/{name}", ",".join(str(int(s)) for s in sizes))
+
     def open_files(self, project) -> list[str]:
         value = self.qs.value(f"session/{_key(project)}/files", [])
         if isinstance(value, str):

@@ -339,6 +339,10 @@ class Client:
         """``__HANDLER_GCODE_START`` or ``__HANDLER_GCODE_STOP``."""
         return self.request("event", handler=handler)
 
+    def issue_code(self, letter: str, value: int) -> dict:
+        """The CNC issues code ``letter`` ``value`` (M3, S1200): ``{code, started, t_ms}``."""
+        return self.request("code", letter=letter, value=int(value))
+
     def job(self, verb: str, text: Optional[str] = None, file: Optional[str] = None,
             play: bool = False) -> dict:
         """The G-code job: ``open`` (``text``, ``file``; ``play`` starts it too),

@@ -25,7 +25,7 @@ Messages
         subscribe {samples?, events?}   unsubscribe {}
         speed {mode, factor?}           step {ms}
         reset {}                        event {handler}
-        ping {}
+        ping {}                         code {letter, value}   (the CNC issues M3, S1200, T5, B2)
         set_breakpoints {file, breakpoints}   debug_state {}      (docs/protocol.md, "Debugging")
         debug_continue {}  debug_pause {}  debug_step {kind, procedure?}  debug_run_to {file, line}
         debug_evaluate {code, procedure?}   (an expression compiled as a condition -> {value})
@@ -105,7 +105,7 @@ _MAX_ID_TEXT = 64
 #: only ever looks a type up in these sets.
 REQUESTS = frozenset({"hello", "upload", "start", "stop", "input", "adc", "state", "variables",
                       "subscribe", "unsubscribe", "speed", "step", "reset", "event", "ping",
-                      "registers", "recording", "watch", "job"}
+                      "registers", "recording", "watch", "job", "code"}
                      | {"set_breakpoints", "debug_continue", "debug_pause", "debug_step",
                         "debug_run_to", "debug_state", "debug_evaluate"}
                      | {"debug_step_back", "debug_run_back"})

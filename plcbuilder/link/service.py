@@ -231,6 +231,22 @@ class Service(DebugVerbs):
         started = self._on_sim(lambda: self.sim.controller.event(handler))
         return {"handler": handler, "started": bool(started)}
 
+    def handle_code(self, msg: dict, session: Session) -> dict:
+        """The simulated CNC issues a code (a scenario's ``code M3``): ``letter``
+        M, S, B or T and ``value``; on myCNC an M code starts its procedure, on
+        Huazhong the code goes to the handler init() registered (recorded as
+        the run's other actions are)."""
+        letter = protocol.field_str(msg, "letter", max_len=1).upper()
+        if letter not in ("M", "S", "B", "T"):
+            raise BadRequest("code: letter must be one of M, S, B, T")
+        value = protocol.field_int(msg, "value", lo=0, hi=(1 << 31) - 1)
+
+        def go():
+            started = self.sim.controller.issue_code(letter, value)
+            return started, self.sim.controller.t_ms
+        started, t = self._on_sim(go)
+        return {"code": f"{letter}{value}", "started": started, "t_ms": t}
+
     def handle_job(self, msg: dict, session: Session) -> dict:
         """The G-code job (SPEC §10): ``open`` (``text``, ``file``; ``play``: start it
         too), ``play``, ``pause``, ``stop``, ``reset``."""

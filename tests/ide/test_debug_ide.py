@@ -434,6 +434,50 @@ def test_start_with_unsaved_changes_offers_build_upload_and_start(make_window, e
     assert conn.calls[-1] == ("start", "M03", 5)
 
 
+def test_saved_back_to_what_was_built_is_not_changed_since_the_build(make_window, example,
+                                                                     qtbot):
+    """Save, undo, save again: the file's bytes are the ones Build All read,
+    only its time is newer. Start starts at once (staleness compares content);
+    a real change saved is still named."""
+    w, conn = make_window()
+    _build(w, qtbot, example)
+    image = (example / "build" / "eeprom.rom").read_bytes()
+    conn.last_state = ControllerStatus(image_crc32=f"{zlib.crc32(image):08x}")
+    conn.connect_now()
+    path = example / "hardware" / "M03.plc"
+    built = path.read_bytes()
+    ed = w.open_file(path)
+    ed.goto_line(5)
+    seen = []
+
+    def answer():
+        box = w.run_actions.stale_box
+        if box is not None:
+            seen.append(box.text())
+            box.reject()
+
+    qtbot.keyClicks(ed, "x")
+    qtbot.keyClick(ed, Qt.Key.Key_S, Qt.KeyboardModifier.ControlModifier)
+    qtbot.waitUntil(lambda: not w.is_modified(ed) and path.read_bytes() != built, timeout=5000)
+    qtbot.keyClick(ed, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert w.is_modified(ed)
+    qtbot.keyClick(ed, Qt.Key.Key_S, Qt.KeyboardModifier.ControlModifier)
+    qtbot.waitUntil(lambda: not w.is_modified(ed), timeout=5000)
+    assert path.read_bytes() == built
+    assert path.stat().st_mtime_ns > (example / "build" / "eeprom.rom").stat().st_mtime_ns
+    QTimer.singleShot(50, answer)
+    assert w.start_procedure("M03", 0)
+    assert seen == [] and conn.calls[-1] == ("start", "M03", 0)
+    assert w.run_actions.stale_reasons() == []
+
+    qtbot.keyClicks(ed, "y")                       # a real change, saved
+    qtbot.keyClick(ed, Qt.Key.Key_S, Qt.KeyboardModifier.ControlModifier)
+    qtbot.waitUntil(lambda: not w.is_modified(ed), timeout=5000)
+    QTimer.singleShot(50, answer)
+    assert not w.start_procedure("M03", 0)
+    assert "M03.plc changed since the last Build All" in seen[-1]
+
+
 def test_an_empty_controller_gets_the_projects_image(make_window, example, qtbot):
     w, conn = make_window()
     _build(w, qtbot, example)

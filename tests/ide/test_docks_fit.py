@@ -53,8 +53,9 @@ def test_a_long_status_never_widens_the_proc_dock(runwin, qtbot):
     assert "plots thinned" in rp.proc.status.plain_text()
     assert (proc_dock.width(), w.width(), w.centralWidget().width()) == before
     assert proc_dock.minimumSizeHint().width() < proc_dock.width()
-    assert rp.proc.status.is_elided()
-    assert "plc_proc_spindle" in rp.proc.status.toolTip()       # the whole text is there
+    # every fact shows, on more lines: nothing is elided into the tooltip
+    assert not rp.proc.status.is_elided() and rp.proc.status.height() > \
+        rp.proc.status.fontMetrics().height() * 2
     # then kill the controller: the reason is long too
     conn.connected = False
     conn.sig_disconnected.emit("the controller process ended (killed by SIGKILL) while "
@@ -163,3 +164,39 @@ def test_dock_tabs_show_their_whole_titles(qtbot, tmp_path, prompts_off):
                 need = bar.fontMetrics().horizontalAdvance(text)
                 assert bar.tabRect(i).width() >= need, (text, bar.tabRect(i).width(), need)
         assert {"Disassembly", "Registers", "Outputs", "Axes", "PWM / DAC / ADC"} <= titles
+
+
+def test_the_proc_status_shows_every_fact_at_the_default_dock_width(runwin, qtbot):
+    """The Proc & messages status was elided at the default dock width (the
+    facts only in its tooltip): it wraps under the dock's tools, each fact whole."""
+    w, conn = runwin
+    rp = w.run_panels
+    proc_dock = w.run_docks["proc"]
+    proc_dock.show()
+    proc_dock.raise_()
+    _settle(qtbot)
+    conn.connected = True
+    conn.sig_connected.emit("127.0.0.1:5555")
+    conn.sig_state.emit(ControllerStatus(t_ms=5000, running="M03", proc=70,
+                                         proc_name="plc_proc_spindle", software=["LUBE"],
+                                         speed={"mode": "realtime", "factor": 1.0},
+                                         job={"file": "job.nc", "line": 3, "lines": 13,
+                                              "state": "running"}), 0)
+    _settle(qtbot)
+    status = rp.proc.status
+    facts = ["Running M03", "G-code job.nc line 3/13 running", "software: LUBE",
+             "proc plc_proc_spindle (70)", "realtime"]
+    assert status.plain_text() == " · ".join(facts)      # (as rich text shows it)
+    assert status.isVisible() and not status.is_elided()
+    assert status.toolTip() == ""
+    # each fact on one line of the label as drawn (a line breaks between facts)
+    fm = status.fontMetrics()
+    room = status.contentsRect().width()
+    assert all(fm.horizontalAdvance(f) <= room for f in facts)
+    assert status.heightForWidth(status.width()) <= status.height()
+    assert not rp.proc.status_beside          # (too long for the tools' row: under it)
+    # a short status takes no row from the plot: it sits beside the tools
+    rp.proc.set_status("Idle")
+    _settle(qtbot)
+    assert rp.proc.status_beside and rp.proc.status.parentWidget() is rp.proc.toolbar
+    assert not status.is_elided()

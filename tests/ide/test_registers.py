@@ -124,3 +124,44 @@ def test_what_is_this_on_a_number_selects_what_it_means(win, project, qtbot):
     caret_on(ed, "99")
     assert w.workbench.what_is_this().startswith("exit code 99")
     assert w.workbench.registers.current_name() == "plc_exit_normal"
+
+
+def test_a_target_project_lists_its_headers_names(win, project, qtbot, tmp_path):
+    """View › Registers on a TG Motion project lists tgmotion.h's TGM_… names
+    (and on a Huazhong one plc.h's), found by the search like the ABI's; back
+    on a myCNC project they are gone."""
+    from plcbuilder import api
+    w = win
+    w.action(Act.REGISTERS).trigger()
+    b = w.workbench.registers
+    qtbot.waitUntil(b.isVisible)
+    b.search.setText("TGM_DATA")
+    assert listed(b) == []
+    tg = api.create_project(tmp_path / "tg", target="tgmotion")
+    assert w.open_project(tg.root, offer_recovery=False)
+    names = listed(b)                             # the search kept, the rows followed
+    row = names.index("TGM_DATA")                 # (then the names whose comment names it)
+    assert (listed(b, COL_NUMBER)[row], listed(b, COL_KIND)[row]) == \
+        (2000000, "tgmotion.h name")
+    b.search.setText("DIO_")
+    assert listed(b) == ["DIO_DI", "DIO_DO", "DIO_AI", "DIO_AO"]
+    assert "ADC channel" in b.proxy.index(2, 4).data()
+    assert b.kind.findData("tgmotion.h name") > 0
+    b.search.setText("TGM_")
+    assert {"TGM_DATA", "TGM_SERVO", "TGM_DIO", "TGM_OSC"} <= set(listed(b))
+
+    hz = api.create_project(tmp_path / "hz", target="huazhong")
+    assert w.open_project(hz.root, offer_recovery=False)
+    assert listed(b) == []                        # TG Motion's are gone
+    b.search.setText("M_CODE")
+    assert listed(b) == ["M_CODE"] and listed(b, COL_KIND) == ["plc.h name"]
+    assert b.kind.findData("tgmotion.h name") < 0 and b.kind.findData("plc.h name") > 0
+    b.table.setCurrentIndex(b.proxy.index(0, 0))   # Enter inserts it, as an ABI name
+    ed = w.open_file(hz.root / "hardware" / "plc.plc")
+    ed.goto_line(1, 1)
+    b.table.setFocus()
+    qtbot.keyClick(b.table, Qt.Key.Key_Return)
+    assert ed.line_text(0).startswith("M_CODE")
+
+    assert w.open_project(project, offer_recovery=False)
+    assert listed(b) == [] and b.kind.findData("plc.h name") < 0

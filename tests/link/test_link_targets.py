@@ -122,3 +122,38 @@ def test_upload_carries_the_oscilloscopes_signals():
     import pytest
     with pytest.raises(protocol.BadRequest):
         protocol.decode_target(bad)
+
+
+HZ_CODES = """#include plc.h
+init() { set_m_func(onm); set_s_func(ons); }
+plc1() { plc1_time = 1; }
+plc2() { }
+onm() { m = gvarget(M_CODE); if (m == 3) Y[0] |= 0x01; if (m == 5) Y[0] &= ~0x01; }
+ons() { G[5] = gvarget(S_CODE); }
+"""
+
+
+def test_the_code_request_issues_a_code_and_it_is_recorded(served):
+    """``code {letter, value}``: the CNC issues M3 or S12000 as a scenario's
+    ``code M3`` does; on Huazhong it reaches init()'s handler, and the
+    recording has it (so replay and step back do it again)."""
+    srv, c = served
+    c.upload(image_of([compiled(HZ_CODES, "huazhong")]), target={"name": "huazhong"})
+    assert _wait(lambda: c.variables_and_target()[1].get("handlers") == {"M": "onm", "S": "ons"})
+    answer = c.issue_code("M", 3)
+    assert answer["code"] == "M3" and answer["started"] is None
+    assert _wait(lambda: 0 in c.state().outputs)
+    assert c.issue_code("S", 12000)["code"] == "S12000"
+    assert _wait(lambda: c.variables_and_target()[1]["registers"].get("G", {}).get("5") == 12000)
+    text = c.request("recording")["text"]
+    assert "code M3 @" in text and "code S12000 @" in text
+    with pytest.raises(RefusedError, match="letter must be one of M, S, B, T"):
+        c.request("code", letter="X", value=1)
+
+
+def test_the_code_request_on_mycnc_starts_the_m_codes_procedure(client):
+    answer = client.issue_code("M", 5)
+    assert answer["started"] == "M05"
+    assert "start M05" in client.request("recording")["text"]
+    with pytest.raises(RefusedError, match="issues M codes only"):
+        client.issue_code("S", 12000)

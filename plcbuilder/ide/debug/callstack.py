@@ -45,15 +45,48 @@ def frames_of(proc: dict) -> list[dict]:
     return stack
 
 
+def current_procedure(state: dict) -> Optional[dict]:
+    """The running procedure a halted state is about: the one that halted,
+    while it runs; once it ended while the controller stayed halted (Stop
+    pressed: it ended and ``M02`` or ``OFF`` waits at its first line), the
+    hardware procedure running, else the first running; None: none runs."""
+    procs = [p for p in state.get("procedures") or () if isinstance(p, dict)]
+    halting = state.get("procedure")
+    return next((p for p in procs if p.get("name") == halting), None) or \
+        next((p for p in procs if p.get("kind") == "hardware"), None) or \
+        (procs[0] if procs else None)
+
+
+def halting_ended(state: dict) -> bool:
+    """The procedure that halted has ended since (the controller is still halted)."""
+    halting = state.get("procedure")
+    return bool(halting) and all(p.get("name") != halting for p in state.get("procedures") or ()
+                                 if isinstance(p, dict))
+
+
+def _where(proc: dict) -> str:
+    if proc.get("file") and proc.get("line"):
+        return f" at {Path(str(proc['file'])).name}:{proc['line']}"
+    return ""
+
+
 def halted_text(state: dict) -> str:
-    """One line about why and where the controller halted."""
+    """One line about why and where the controller halted (and, when the
+    procedure that halted ended since, that it did and what waits now)."""
+    t = int(state.get("t_ms") or 0)
+    if halting_ended(state):
+        now = current_procedure(state)
+        text = f"Halted, t = {t} ms: {state['procedure']} ended"
+        if now is not None:
+            text += f"; {now.get('name')} waits{_where(now)}"
+        return text + " (Continue runs on)"
     reason = REASONS.get(state.get("reason"), f"halted ({state.get('reason')})")
     where = ""
     if state.get("procedure"):
         where = f" in {state['procedure']}"
         if state.get("file") and state.get("line"):
             where += f" at {Path(str(state['file'])).name}:{state['line']}"
-    text = f"{reason.capitalize()}{where}, t = {int(state.get('t_ms') or 0)} ms"
+    text = f"{reason.capitalize()}{where}, t = {t} ms"
     fault = state.get("fault")
     if isinstance(fault, dict) and fault.get("text"):
         text += f": {fault['text']}"
@@ -99,6 +132,7 @@ class CallStackPanel(QWidget):
         bold = QFont()
         bold.setBold(True)
         halting = state.get("procedure")
+        current = (current_procedure(state) or {}).get("name")
         for proc in state.get("procedures") or ():
             name = str(proc.get("name"))
             top = QTreeWidgetItem(self.tree)
@@ -109,7 +143,7 @@ class CallStackPanel(QWidget):
             top.setToolTip(0, f"{name} ({proc.get('kind', '')}): {state}"
                            + (" (for the next tick)" if waiting else ""))
             top.setIcon(0, icon("file-plc-sw" if proc.get("kind") == "software" else "file-plc"))
-            if name == halting:
+            if name == current:
                 top.setFont(0, bold)
             for f in frames_of(proc):
                 item = QTreeWidgetItem(top)

@@ -140,7 +140,8 @@ class DebugSession(QObject):
         if self.picked is not None:
             return self.picked[0]
         st = self.halted or {}
-        if st.get("procedure"):
+        from plcbuilder.ide.debug.callstack import halting_ended
+        if st.get("procedure") and not halting_ended(st):
             return str(st["procedure"])
         names = [str(p.get("name")) for p in self.procedures()]
         ed = self.win.current_editor()
@@ -362,13 +363,16 @@ class DebugSession(QObject):
             dock.raise_()
         for ed in self.win.editors():
             self._show_in(ed, scroll=True)
-        file, line = state.get("file"), state.get("line")
+        from plcbuilder.ide.debug.callstack import current_procedure, halted_text
+        # where it is now: the line that halted, or (the procedure that halted
+        # ended since, as after Stop) the line the procedure that runs now waits at
+        now = current_procedure(state) or {}
+        file, line = state.get("file") or now.get("file"), state.get("line") or now.get("line")
         if file and line:
             ed = self.win.open_location(str(file), int(line))
             if ed is not None:
                 self._show_in(ed, scroll=True)
         self._update_watch()
-        from plcbuilder.ide.debug.callstack import halted_text
         self.sig_message.emit(halted_text(state), 0)
         self.sig_state_changed.emit()
 

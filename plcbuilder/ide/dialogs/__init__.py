@@ -1,6 +1,7 @@
 """The IDE's dialogs: procedure and header names and go to line (:mod:`.files`),
 the start-procedure picker and connect to a controller (:mod:`.run`), a new
-project (:mod:`.new_project`) and preferences (:mod:`.preferences`). The find/replace bar is
+project (:mod:`.new_project`), preferences (:mod:`.preferences`) and issue a
+code to the controller (:mod:`.issue_code`). The find/replace bar is
 :mod:`plcbuilder.ide.editor.find_bar`.
 
 Each modal dialog has a ``get_…`` class method that runs it and returns the
@@ -15,7 +16,7 @@ from plcbuilder._support.lazy import lazy_names
 _WHERE = {"GoToLineDialog": "files", "HeaderNameDialog": "files",
           "ProcedureNameDialog": "files", "check_procedure_name": "files",
           "PreferencesDialog": "preferences", "ConnectDialog": "run", "StartDialog": "run",
-          "NewProjectDialog": "new_project"}
+          "NewProjectDialog": "new_project", "IssueCodeDialog": "issue_code"}
 
 
 __getattr__ = lazy_names(__name__, _WHERE)
@@ -25,5 +26,6 @@ def __dir__() -> list:
     return sorted(set(globals()) | set(__all__))
 
 
-__all__ = ["ConnectDialog", "GoToLineDialog", "HeaderNameDialog", "NewProjectDialog",
+__all__ = ["ConnectDialog", "GoToLineDialog", "HeaderNameDialog", "IssueCodeDialog",
+           "NewProjectDialog",
            "PreferencesDialog", "ProcedureNameDialog", "StartDialog", "check_procedure_name"]

@@ -2,7 +2,10 @@
 (:mod:`plcbuilder.bytecode.abi`, through the facade) with its number — the
 registers, the predefined variables that live in registers, messages and
 commands, proc states and exit codes — searchable by name, number or meaning.
-Double-click or Enter inserts the name at the editor's caret.
+Double-click or Enter inserts the name at the editor's caret. On a target
+project (TG Motion, Huazhong: docs/targets.md) the names its built-in header
+defines (``tgmotion.h``'s ``TGM_…``, Huazhong's ``plc.h``) are listed too, of
+the kind ``tgmotion.h name`` / ``plc.h name``, with the header's comment.
 
 When a controller is connected, the Value column shows the live value of the
 registers among the rows on screen: the browser asks for those (and no
@@ -55,6 +58,41 @@ def rows() -> list[tuple[str, int, str, str]]:
         desc = abi.describe_register(reg) or ""
         ro = " (read-only)" if name in abi.READ_ONLY_VARIABLES else ""
         out.append((name, reg, KIND_VARIABLE, f"register {reg}, {desc}{ro}"))
+    return out
+
+
+#: the built-in header (lang/builtin_headers.py) whose names each target lists too
+TARGET_HEADERS = {"tgmotion": "tgmotion.h", "huazhong": "plc.h"}
+
+_DEFINE = re.compile(r"^\s*#\s*define\s+([A-Za-z_]\w*)\s+(0[xX][0-9A-Fa-f]+|-?\d+)\b"
+                     r"\s*(?://\s*(.*))?$")
+
+
+def header_rows(target: str) -> list[tuple[str, int, str, str]]:
+    """(name, number, kind, meaning) of each number the target's built-in
+    header #defines (none for myCNC): the meaning is the define's comment,
+    else the first line of the comment above its group."""
+    header = TARGET_HEADERS.get(target or "")
+    if header is None:
+        return []
+    from plcbuilder.lang.builtin_headers import builtin_header
+    text = builtin_header(header) or ""
+    out, section, comment_block = [], "", False
+    for line in text.splitlines():
+        stripped = line.strip()
+        if stripped.startswith("//"):
+            if not comment_block:               # a group's comment: its first line
+                section = stripped[2:].strip()
+            comment_block = True
+            continue
+        comment_block = False
+        if not stripped:
+            section = ""
+            continue
+        m = _DEFINE.match(line)
+        if m:
+            name, value, own = m.group(1), int(m.group(2), 0), (m.group(3) or "").strip()
+            out.append((name, value, f"{header} name", own or section))
     return out
 
 
@@ -159,6 +197,14 @@ class RegisterBrowser(QWidget):
         self.timer = QTimer(self)
         self.timer.setInterval(poll_ms)
         self.timer.timeout.connect(self.poll)
+        self._abi_rows = self.model.rowCount()
+        self.target = "mycnc"
+        # the open project's target header names: now, and with each project
+        self._window = parent
+        opened = getattr(parent, "sig_project_opened", None)
+        if opened is not None:
+            opened.connect(lambda _root: self._follow_project())
+        self._follow_project()
         self._show_count()
 
     # ------------------------------------------------------------ public
@@ -169,6 +215,39 @@ class RegisterBrowser(QWidget):
             connection.sig_registers.connect(self.on_registers)
             connection.sig_disconnected.connect(lambda _why: self.clear_values())
         self._run_timer()
+
+    def set_target(self, target: Optional[str]) -> None:
+        """List the names of ``target``'s built-in header after the ABI's (and
+        no other target's); myCNC's names are the ABI's alone."""
+        target = target or "mycnc"
+        if target == self.target:
+            return
+        self.target = target
+        extra = self.model.rowCount() - self._abi_rows
+        if extra:
+            self.model.removeRows(self._abi_rows, extra)
+        for i in range(self.kind.count() - 1, 0, -1):
+            if self.kind.itemData(i).endswith(".h name"):
+                self.kind.removeItem(i)
+        added = header_rows(target)
+        for name, value, kind, meaning in added:
+            items = [QStandardItem(name), QStandardItem(str(value)), QStandardItem(""),
+                     QStandardItem(kind), QStandardItem(meaning)]
+            for it in items:
+                it.setEditable(False)
+            items[COL_NUMBER].setData(int(value), Qt.ItemDataRole.DisplayRole)
+            items[COL_NUMBER].setTextAlignment(Qt.AlignmentFlag.AlignRight |
+                                               Qt.AlignmentFlag.AlignVCenter)
+            items[COL_NAME].setToolTip(f"{name} = {value} ({TARGET_HEADERS[target]})\n"
+                                       "Double-click or Enter inserts it")
+            self.model.appendRow(items)
+        if added:
+            self.kind.addItem(added[0][2], added[0][2])
+        self._refilter()
+
+    def _follow_project(self) -> None:
+        project = getattr(self._window, "project", None)
+        self.set_target(getattr(project, "target", None) if project is not None else None)
 
     def select_name(self, name: str) -> bool:
         """Show and select the row of ``name`` (the search is cleared); False if none."""
@@ -247,6 +326,7 @@ class RegisterBrowser(QWidget):
 
     def showEvent(self, event) -> None:  # noqa: N802 - Qt override
         super().showEvent(event)
+        self._follow_project()          # (a project's settings may have changed its target)
         self._run_timer()
 
     def hideEvent(self, event) -> None:  # noqa: N802 - Qt override

@@ -31,6 +31,32 @@ def bit_names(pins: int, bank: str, names: dict[int, str]) -> dict[int, str]:
     return out
 
 
+class _WrappedLabel(QtWidgets.QLabel):
+    """A word-wrapped label in a splitter section: its minimum height is what
+    its text needs at its width (a splitter does not ask a label's height for
+    its width, and squeezed the calls line under the registers' table)."""
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.setWordWrap(True)
+
+    def _fit(self) -> None:
+        if self.width() > 0:
+            need = self.heightForWidth(self.width())
+            if need > 0 and need != self.minimumHeight():
+                self.setMinimumHeight(need)
+
+    def setText(self, text: str) -> None:  # noqa: N802 - Qt's name
+        if text != self.text():
+            super().setText(text)
+            self._fit()
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt's name
+        super().resizeEvent(event)
+        if event.size().width() != event.oldSize().width():
+            self._fit()
+
+
 class RegistersPanel(QtWidgets.QWidget):
     """A table of the target's non-zero registers, and the calls."""
 
@@ -43,21 +69,38 @@ class RegistersPanel(QtWidgets.QWidget):
         self.table.verticalHeader().hide()
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
         self.table.horizontalHeader().setStretchLastSection(True)
-        self.calls = QtWidgets.QLabel()
-        self.calls.setWordWrap(True)
+        self.calls = _WrappedLabel()
         self.calls.setObjectName("calls")
         self.scope_title = QtWidgets.QLabel()
         self.scope = QtWidgets.QTableWidget(0, 0)          # TG Motion's oscilloscope
         self.scope.setObjectName("oscilloscope")
         self.scope.verticalHeader().hide()
         self.scope.setEditTriggers(QtWidgets.QAbstractItemView.EditTrigger.NoEditTriggers)
+        # the registers over the oscilloscope: a splitter's two sections
+        from plcbuilder.ide.panels.watch import GripSplitter, SplitterSizes, small_minimum
+        regs = QtWidgets.QWidget()
+        rl = QtWidgets.QVBoxLayout(regs)
+        rl.setContentsMargins(0, 4, 0, 0)
+        rl.addWidget(self.title)
+        rl.addWidget(self.table, 1)
+        rl.addWidget(self.calls)
+        self.scope_part = QtWidgets.QWidget()
+        sl = QtWidgets.QVBoxLayout(self.scope_part)
+        sl.setContentsMargins(0, 4, 0, 0)
+        sl.addWidget(self.scope_title)
+        sl.addWidget(self.scope, 1)
+        self.scope_part.hide()
+        self.split = GripSplitter(Qt.Orientation.Vertical)
+        self.split.setObjectName("registersSplitter")
+        self.split.addWidget(regs)
+        self.split.addWidget(self.scope_part)
+        small_minimum(self.table)
+        small_minimum(self.scope)
+        self.sizes = SplitterSizes(self.split, "registers")
+        self.sizes.watch(self.scope_part)
         lay = QtWidgets.QVBoxLayout(self)
-        lay.setContentsMargins(0, 4, 0, 0)
-        lay.addWidget(self.title)
-        lay.addWidget(self.table, 1)
-        lay.addWidget(self.calls)
-        lay.addWidget(self.scope_title)
-        lay.addWidget(self.scope, 1)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(self.split)
         self.report: dict = {}
         self.hide()
 
@@ -94,8 +137,7 @@ class RegistersPanel(QtWidgets.QWidget):
     def _show_scope(self, scope) -> None:
         """The oscilloscope's newest samples, newest first: time (µs), cycle,
         then one column a signal (hidden without an oscilloscope)."""
-        self.scope_title.setVisible(bool(scope))
-        self.scope.setVisible(bool(scope))
+        self.scope_part.setVisible(bool(scope))
         if not scope:
             return
         signals = [str(s) for s in scope.get("signals", [])]

@@ -240,7 +240,7 @@ class RunPanels(QtCore.QObject):
         if key == "watch":
             watch = WatchPanel()
             watch.registers = RegistersPanel()
-            watch.layout().addWidget(watch.registers)
+            watch.add_section(watch.registers)
             if self.target != "mycnc":
                 watch.registers.set_report(self._registers_report)
             if force:
@@ -390,7 +390,7 @@ class RunPanels(QtCore.QObject):
         """Another project (or none): a recorded test run or a trace of the last
         one is no longer shown, and its trigger no longer waits (issue 23.8, 9)."""
         self.back_to_live()
-        self.traces.disarm()
+        self.traces.project_changed()         # disarmed, the project's own trigger shown
 
     def clear(self) -> None:
         """Forget the recorded samples and messages (the log keeps its rows);

@@ -184,10 +184,73 @@ class TraceTools(QtCore.QObject):
         refused = getattr(panels.connection, "sig_refused", None)
         if refused is not None:
             refused.connect(self._refused)
+        # the trigger's spec, times and mode belong to the project: remembered
+        # as they change, each project's own brought back when it opens
+        self._restoring = False
+        self.restore_trigger()
+        bar = self.bar
+        bar.spec.textChanged.connect(self._remember_trigger)
+        bar.pre.valueChanged.connect(self._remember_trigger)
+        bar.post.valueChanged.connect(self._remember_trigger)
+        bar.mode.currentIndexChanged.connect(self._remember_trigger)
 
     @staticmethod
     def _new_history() -> api.History:
         return api.History(input_count=PINS, output_count=PINS, axes=api.abi.AXES)
+
+    # ------------------------------------------------- the project's trigger
+    #: the bar's fields as a project remembers them: (settings key, default)
+    TRIGGER_KEYS = (("trigger", ""), ("trigger_pre", 100), ("trigger_post", 500),
+                    ("trigger_mode", "single"))
+
+    def _project_settings(self):
+        """(the open project's root, the window's Settings), or (None, None)."""
+        parent = getattr(self.panels, "parent", None)
+        win = parent() if callable(parent) else None
+        project, settings = getattr(win, "project", None), getattr(win, "settings", None)
+        if project is None or settings is None or not hasattr(settings, "project_value"):
+            return None, None
+        return project.root, settings
+
+    def restore_trigger(self) -> None:
+        """The open project's trigger spec, pre, post and mode, as it left them
+        (a project never seen, or none open: an empty spec and the defaults)."""
+        root, settings = self._project_settings()
+        saved = {}
+        for key, default in self.TRIGGER_KEYS:
+            saved[key] = settings.project_value(root, key, default) if root else default
+        bar = self.bar
+        self._restoring = True
+        try:
+            bar.spec.setText(str(saved["trigger"] or ""))
+            for box, key, default in ((bar.pre, "trigger_pre", 100),
+                                      (bar.post, "trigger_post", 500)):
+                try:
+                    box.setValue(int(saved[key]))
+                except (TypeError, ValueError):
+                    box.setValue(default)
+            at = bar.mode.findData(str(saved["trigger_mode"]))
+            bar.mode.setCurrentIndex(at if at >= 0 else 0)
+        finally:
+            self._restoring = False
+
+    def _remember_trigger(self, *_args) -> None:
+        if self._restoring:
+            return
+        root, settings = self._project_settings()
+        if root is None:
+            return
+        bar = self.bar
+        for key, value in (("trigger", bar.spec.text()), ("trigger_pre", bar.pre.value()),
+                           ("trigger_post", bar.post.value()),
+                           ("trigger_mode", bar.mode.currentData())):
+            settings.set_project_value(root, key, value)
+
+    def project_changed(self) -> None:
+        """Another project (or none): its trigger no longer waits, and the bar
+        shows the new project's own trigger (not the last project's)."""
+        self.disarm()
+        self.restore_trigger()
 
     # ------------------------------------------------------------ live data
     def feed(self, samples: list, events: list = ()) -> None:

@@ -48,6 +48,103 @@ def _order(names: list[str]) -> list[str]:
     return own + pre + rest + regs
 
 
+def small_minimum(table: QtWidgets.QTableWidget, rows: int = 1) -> None:
+    """A table in a splitter section may be dragged down to its header and
+    ``rows`` rows (a table's own minimum is about four rows: three such
+    sections filled a short dock at their minimums, and no handle moved)."""
+    header = table.horizontalHeader().sizeHint().height()
+    row = table.verticalHeader().defaultSectionSize()
+    bar = table.horizontalScrollBar().sizeHint().height()     # (it may show: a row's room)
+    table.setMinimumHeight(header + rows * row + bar + 2 * table.frameWidth() + 2)
+
+
+class _GripHandle(QtWidgets.QSplitterHandle):
+    """A splitter handle that shows it is one: a short grip across its middle."""
+
+    def paintEvent(self, event) -> None:  # noqa: N802 - Qt's name
+        p = QtGui.QPainter(self)
+        colour = self.palette().color(QtGui.QPalette.ColorRole.Mid)
+        p.setPen(QtGui.QPen(colour, 1))
+        r = self.rect()
+        cx, cy = r.center().x(), r.center().y()
+        if self.orientation() == Qt.Orientation.Vertical:
+            for dy in (-1, 1):
+                p.drawLine(cx - 14, cy + dy, cx + 14, cy + dy)
+        else:
+            for dx in (-1, 1):
+                p.drawLine(cx + dx, cy - 14, cx + dx, cy + 14)
+        p.end()
+
+
+class GripSplitter(QtWidgets.QSplitter):
+    """A QSplitter whose handles show a grip (a plain one is an invisible
+    strip: nobody knew the sections could be resized)."""
+
+    def __init__(self, orientation, parent=None):
+        super().__init__(orientation, parent)
+        self.setHandleWidth(7)
+        self.setChildrenCollapsible(False)
+
+    def createHandle(self) -> QtWidgets.QSplitterHandle:  # noqa: N802 - Qt's name
+        return _GripHandle(self.orientation(), self)
+
+
+class SplitterSizes(QtCore.QObject):
+    """Keeps a panel's splitter sizes in the window's settings (``name``): saved
+    as the user moves a handle while every section shows, and given back when
+    they all show again (the registers and oscilloscope appear with a target
+    project). The window is the first ancestor with ``settings``."""
+
+    def __init__(self, splitter: QtWidgets.QSplitter, name: str):
+        super().__init__(splitter)
+        self.splitter, self.name = splitter, name
+        self._applied = False
+        splitter.splitterMoved.connect(self._moved)
+        splitter.installEventFilter(self)
+
+    def watch(self, widget: QtWidgets.QWidget) -> None:
+        """A section whose showing may make every section show."""
+        widget.installEventFilter(self)
+
+    def _settings(self):
+        w = self.splitter.parentWidget()
+        while w is not None:
+            s = getattr(w, "settings", None)
+            if s is not None and hasattr(s, "splitter_sizes"):
+                return s
+            w = w.parentWidget()
+        return None
+
+    def _all_shown(self) -> bool:
+        sp = self.splitter
+        return sp.count() > 1 and all(not sp.widget(i).isHidden() for i in range(sp.count()))
+
+    def eventFilter(self, obj, event) -> bool:  # noqa: N802 - Qt's name
+        kind = event.type()
+        if kind == QtCore.QEvent.Type.Show:
+            QtCore.QTimer.singleShot(0, self.restore)
+        elif kind == QtCore.QEvent.Type.Hide and obj is not self.splitter:
+            self._applied = False
+        return False
+
+    def restore(self) -> None:
+        """The sizes saved, once every section shows (and the splitter does)."""
+        if self._applied or not self._all_shown() or not self.splitter.isVisible():
+            return
+        self._applied = True
+        s = self._settings()
+        sizes = s.splitter_sizes(self.name) if s is not None else None
+        if sizes and len(sizes) == self.splitter.count():
+            self.splitter.setSizes(sizes)
+
+    def _moved(self, *_args) -> None:
+        if not self._all_shown():
+            return
+        s = self._settings()
+        if s is not None:
+            s.save_splitter_sizes(self.name, self.splitter.sizes())
+
+
 class WatchPanel(QtWidgets.QWidget):
     """A table of one procedure's variables, refreshed from polls."""
 
@@ -102,12 +199,24 @@ class WatchPanel(QtWidgets.QWidget):
         self.hint = QtWidgets.QLabel("Variables appear while a procedure runs.")
         self.hint.setStyleSheet("color: #6a6a6a; padding: 2px 6px;")
 
+        # the watch, and under it (a target project) the registers and the
+        # oscilloscope: sections of a splitter, each as tall as the user drags it
+        part = QtWidgets.QWidget()
+        plain = QtWidgets.QVBoxLayout(part)
+        plain.setContentsMargins(0, 0, 0, 0)
+        plain.setSpacing(2)
+        plain.addWidget(self.table, 1)
+        plain.addWidget(self.hint)
+        small_minimum(self.table)
+        self.split = GripSplitter(Qt.Orientation.Vertical)
+        self.split.setObjectName("watchSplitter")
+        self.split.addWidget(part)
+        self.sizes = SplitterSizes(self.split, "watch")
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
         lay.setSpacing(2)
         lay.addWidget(self.bar)
-        lay.addWidget(self.table, 1)
-        lay.addWidget(self.hint)
+        lay.addWidget(self.split, 1)
 
         self.variables: dict[str, dict[str, int]] = {}
         self._changed: dict[tuple[str, str], float] = {}
@@ -118,6 +227,14 @@ class WatchPanel(QtWidgets.QWidget):
         self._rows: list[str] = []              # the variable of each row
 
     # ------------------------------------------------------------------ API
+    def add_section(self, widget: QtWidgets.QWidget) -> None:
+        """Another section under the watch (the target's registers), with a
+        splitter handle above it; hidden, it takes no room."""
+        self.split.addWidget(widget)
+        self.split.setStretchFactor(0, 2)
+        self.split.setStretchFactor(self.split.count() - 1, 1)
+        self.sizes.watch(widget)
+
     def set_variables(self, variables: dict, running: Optional[str] = None) -> None:
         """A poll's answer: ``{procedure: {variable: value}}``."""
         now = time.monotonic()

@@ -367,6 +367,25 @@ def _json_chunks(doc: dict, big: tuple = ("files", "procedures")) -> Iterator[by
     yield "".join(batch).encode("utf-8")
 
 
+def built_from(build_dir: Path, image_path: Path) -> Optional[dict[str, str]]:
+    """{path: SHA-256} of each source and header the image at ``image_path``
+    was made from, as the last Build All read them; None when the cache does
+    not describe that image (no cache, another compiler, the image not written
+    by the build that wrote the cache, or changed since). The IDE compares
+    content with it to tell whether a source changed since the last Build All
+    (a save that only touched the file's time does not count)."""
+    doc = _load(build_dir)
+    image, files = doc.get("image"), doc.get("files")
+    if doc.get("version") != CACHE_VERSION or not isinstance(image, dict) \
+            or not isinstance(files, dict):
+        return None
+    stat = _stat(image_path)
+    if stat is None or image.get("stat") != stat:
+        return None
+    return {name: rec[3] for name, rec in files.items()
+            if isinstance(rec, list) and len(rec) == 6 and isinstance(rec[3], str)}
+
+
 def _load(build_dir: Path) -> dict:
     try:
         doc = json.loads(read_bounded(build_dir / CACHE_FILE, MAX_CACHE_BYTES).decode("utf-8"))

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import bisect
+import re
 
 import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets  # before pyqtgraph (it takes the loaded binding)
 import pyqtgraph as pg  # noqa: E402,I001
 
 from plcbuilder.api import abi
-from plcbuilder.ide.elided_label import ElidedLabel
+from plcbuilder.ide.elided_label import _plain_of
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.tables import RowsModel
@@ -20,6 +21,75 @@ from plcbuilder.ide.panels.plots.timebase import (TimeBase, TimePanel, center_it
 Qt = QtCore.Qt
 
 
+#: what the status's facts are joined with (a line may break there, not inside one)
+SEPARATOR = "  ·  "
+_TAG_OR_SPACE = re.compile(r"(<[^>]*>)| ")
+
+
+def _unbroken(fact: str) -> str:
+    """A fact of the status whose words stay on one line (its spaces made
+    non-breaking; the markup's own spaces kept)."""
+    return _TAG_OR_SPACE.sub(lambda m: m.group(1) or "\u00a0", fact)
+
+
+class StatusLine(QtWidgets.QLabel):
+    """The proc panel's status: every fact shows, wrapped onto as many lines
+    as the dock's width needs (a fact is never broken, nor elided), and it
+    never widens the dock."""
+
+    def __init__(self, text: str = "", parent=None):
+        super().__init__(parent)
+        self._full = self._plain = ""
+        self._pending: str | None = None
+        self.setWordWrap(True)
+        self.setTextFormat(Qt.TextFormat.AutoText)
+        self.setContentsMargins(6, 1, 6, 2)
+        # the dock decides the width; the height follows it
+        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored,
+                           QtWidgets.QSizePolicy.Policy.Minimum)
+        self.setMinimumWidth(1)
+        self.setText(text)
+
+    def setText(self, text: str) -> None:  # noqa: N802 - Qt override
+        self._pending = None
+        self._full = text or ""
+        self._plain = _plain_of(self._full)
+        super().setText(SEPARATOR.join(_unbroken(f) for f in self._full.split(SEPARATOR)))
+
+    def set_text_when_shown(self, text: str) -> None:
+        """A text that changes often: set at once when visible, else when it
+        shows (a new text lays the window out again, which costs while nobody
+        can see it). :meth:`plain_text` gives the new text at once."""
+        text = text or ""
+        if text == self._full:
+            return
+        if self.isVisible():
+            self.setText(text)
+            return
+        self._pending, self._full, self._plain = text, text, _plain_of(text)
+
+    def showEvent(self, event) -> None:  # noqa: N802 - Qt override
+        if self._pending is not None:
+            text, self._pending = self._pending, None
+            self.setText(text)
+        super().showEvent(event)
+
+    def text(self) -> str:
+        """The text as set (the label draws it with its facts kept whole)."""
+        return self._full
+
+    def full_text(self) -> str:
+        return self._full
+
+    def plain_text(self) -> str:
+        return self._plain
+
+    def is_elided(self) -> bool:
+        """True when some of the text is cut off (never, once laid out)."""
+        rect = self.contentsRect()
+        return rect.width() > 0 and self.heightForWidth(self.width()) > self.height()
+
+
 class ProcPanel(TimePanel):
     """``proc`` as a step plot with its states named on the y axis, message
     markers with their names, and a decoded message log."""
@@ -28,11 +98,13 @@ class ProcPanel(TimePanel):
 
     def __init__(self, model: RunModel, timebase: TimeBase, on_clear=None, parent=None):
         super().__init__(model, timebase, on_clear, parent)
-        # a long status (running, software, speed, a disconnect reason) elides:
-        # it must never widen the dock
-        self.status = ElidedLabel("No controller")
-        self.toolbar.extra.addSpacing(12)
-        self.toolbar.extra.addWidget(self.status, 1)
+        # the status (running, the job, software, proc, speed, a disconnect
+        # reason): beside the tools where it fits on their row, else on a row
+        # of its own under them, wrapped; every fact shows, and it never
+        # widens the dock (nor takes a row from the plot when it need not)
+        self.status = StatusLine("No controller")
+        self.status.setObjectName("procStatus")
+        self.status_beside: bool | None = None
 
         self.widget = style.plot_widget(style.time_axis(), menu=False)
         self.plot = self.widget.getPlotItem()
@@ -95,6 +167,7 @@ class ProcPanel(TimePanel):
         lay.setSpacing(0)
         lay.addWidget(self.toolbar)
         lay.addWidget(split, 1)
+        self._place_status()
 
     def watched(self) -> list:
         return [self.model.scalars]
@@ -155,6 +228,42 @@ class ProcPanel(TimePanel):
 
     def set_status(self, text: str) -> None:
         self.status.set_text_when_shown(text)     # with the time: only what can be seen
+        self._place_status()
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        if event.size().width() != event.oldSize().width():
+            self._place_status()
+
+    def _tools_width(self) -> int:
+        """The width the toolbar's own buttons and boxes take on their row."""
+        row = self.toolbar.layout().itemAt(0).layout()
+        out, n = 0, 0
+        for i in range(row.count()):
+            w = row.itemAt(i).widget()
+            if w is not None and not w.isHidden():
+                out, n = out + w.sizeHint().width(), n + 1
+        m = self.toolbar.layout().contentsMargins()
+        return out + row.spacing() * (n + 1) + m.left() + m.right()
+
+    def _place_status(self) -> None:
+        """The status beside the tools when its text fits there on one line,
+        else on its own row under them (where it wraps)."""
+        st = self.status
+        need = st.fontMetrics().horizontalAdvance(st.plain_text()) + 12 + 14 + \
+            st.contentsMargins().left() + st.contentsMargins().right()
+        beside = self.width() > 0 and self._tools_width() + need <= self.width()
+        if beside == self.status_beside:
+            return
+        self.status_beside = beside
+        lay = self.layout()
+        if beside:
+            lay.removeWidget(st)
+            self.toolbar.extra.addWidget(st, 1)
+        else:
+            self.toolbar.extra.removeWidget(st)
+            lay.insertWidget(1, st)
+        st.show()
 
     def y_labels(self) -> list[str]:
         """The state names on the y axis, lowest value first."""
