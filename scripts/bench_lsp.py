@@ -100,11 +100,15 @@ class _Server:
 
 #: the IDE's path in a process of a checkout's own: reads an edit a line
 #: ("line col line col text" as JSON) from stdin, applies it, compiles as the
-#: diagnostics worker does and prints the seconds it took
+#: diagnostics worker does (the collector paused until the result is handed
+#: over, where the checkout's worker does that) and prints the seconds it took
 _IN_PROCESS = r"""
 import json, sys, time
 from plcbuilder.api import CompileOptions, Kind, compile_source
 from plcbuilder.lang.incremental import Incremental
+from plcbuilder.ide import diagnostics_worker as worker
+# the worker's collector pause where the checkout's worker has one
+hold, release = getattr(worker, "_hold_gc", None), getattr(worker, "_release_gc", None)
 path, text = sys.argv[1], open(sys.argv[1]).read()
 opts = CompileOptions(kind=Kind.SOFTWARE, code_limit=65536)
 inc = Incremental()
@@ -116,9 +120,13 @@ for line in sys.stdin:
     a = sum(len(x) + 1 for x in lines[:l0]) + c0
     b = sum(len(x) + 1 for x in lines[:l1]) + c1
     text = text[:a] + new + text[b:]
+    if hold is not None:
+        hold()
     t = time.perf_counter()
     r = compile_source(text, path, opts, incremental=inc)
     print(time.perf_counter() - t, flush=True)
+    if hold is not None:
+        release()
 """
 
 
