@@ -8,9 +8,7 @@ the code generator never has to guess.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
-from plcbuilder._support.records import dataclass, field
+from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder.bytecode import abi, semantics
 from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.program import Kind
