@@ -14,10 +14,19 @@ so a keystroke costs what it changed, not the whole file: headers are not
 tokenized again and only the procedures around the edit are parsed again
 (the result is the same as a compile from scratch). Closing the file
 (:meth:`DiagnosticsWorker.cancel`) drops it.
+
+Python's cyclic garbage collector is paused from the start of a compile until
+its result has been handed to the window, and the young generations are
+collected then, on the window's thread, while the Problems panel waits for
+its refresh: a compile leaves tens of thousands of new objects, and the
+collection of them that followed at once was a tenth of a keystroke's time
+before its diagnostics (the language server does the same,
+:mod:`plcbuilder.lsp.checks`).
 """
 
 from __future__ import annotations
 
+import gc
 import sys
 import threading
 import traceback
@@ -48,6 +57,31 @@ class Job:
     path: str                    # the name diagnostics use (the file's path)
     text: Optional[str]          # None: compile the file from disk
     options: api.CompileOptions
+    gc_held: bool = False        # the collector is paused for it until its result is handled
+
+
+_gc_lock = threading.Lock()
+_gc_holds = 0                    # jobs holding the collector paused
+_gc_was_enabled = False
+
+
+def _hold_gc() -> None:
+    global _gc_holds, _gc_was_enabled
+    with _gc_lock:
+        if _gc_holds == 0:
+            _gc_was_enabled = gc.isenabled()
+            gc.disable()
+        _gc_holds += 1
+
+
+def _release_gc() -> None:
+    global _gc_holds
+    with _gc_lock:
+        _gc_holds -= 1
+        if _gc_holds or not _gc_was_enabled:
+            return
+        gc.enable()
+    gc.collect(1)                # the compile's young objects (see the module docstring)
 
 
 class DiagnosticsWorker(QObject):
@@ -186,6 +220,8 @@ class DiagnosticsWorker(QObject):
                 incremental = Incremental()
                 with self._cond:
                     incremental = self._incremental.setdefault(key, incremental)
+            _hold_gc()
+            job.gc_held = True
             try:
                 if job.text is None:
                     result = api.compile_file(job.path, job.options)
@@ -196,22 +232,29 @@ class DiagnosticsWorker(QObject):
                 result = _internal_error(job, exc)
             with self._cond:
                 if self._stopped:
+                    _release_gc()
                     return
             try:
                 self._sig_done.emit(job, result)
             except RuntimeError:       # the QObject is gone (application quitting)
+                _release_gc()
                 return
 
     def _on_done(self, job: Job, result) -> None:
-        with self._cond:
-            self._taken -= 1
-            idle = not self._queue and self._taken == 0
-        if idle and self._busy:
-            self._busy = False
-            self.sig_busy.emit(False)
-        if job.generation != self._generation.get(job.key, 0):
-            return                                  # stale: newer text was requested
-        self.sig_result.emit(job.key, result)
+        try:
+            with self._cond:
+                self._taken -= 1
+                idle = not self._queue and self._taken == 0
+            if idle and self._busy:
+                self._busy = False
+                self.sig_busy.emit(False)
+            if job.generation != self._generation.get(job.key, 0):
+                return                                  # stale: newer text was requested
+            self.sig_result.emit(job.key, result)
+        finally:
+            if job.gc_held:
+                job.gc_held = False
+                _release_gc()
 
 
 def _internal_error(job: Job, exc: BaseException):

@@ -164,20 +164,33 @@ def _parts(t: type) -> tuple:
     return parts
 
 
+#: node type -> its mover (written for every node type when first needed)
 _MOVERS: dict[type, object] = {}
 
 
 def _mover(t: type):
-    """A function ``(node, span_mover, node_mover) -> a copy of node`` for node
-    type ``t``, written for its fields (one call a node: an Enter moves every
-    procedure after it, thousands of nodes)."""
-    args = []
+    """A function ``(node, movers, file, lines) -> a copy of node`` with its
+    spans in ``file`` moved ``lines`` lines down, written for the fields of
+    node type ``t``: the copy is made without calling ``__init__``, the spans
+    moved in line and the children moved through ``movers`` (one call a node:
+    an Enter moves every procedure after it, thousands of nodes)."""
+    body = ["def move(n, M, F, L):", "    o = new(T)"]
     for name, kind in _parts(t):
-        args.append(f"s(n.{name})" if kind == "s" else f"m(n.{name})" if kind == "n" else
-                    f"[m(x) for x in n.{name}]" if kind == "l" else f"n.{name}")
-    src = f"def move(n, s, m):\n    return T({', '.join(args)})\n"
+        if kind == "s":
+            body += [f"    v = n.{name}",
+                     f"    o.{name} = span(Span, (F, v[1] + L, v[2], v[3] + L, v[4])) "
+                     "if v is not None and v[0] == F else v"]
+        elif kind == "n":
+            body += [f"    v = n.{name}",
+                     f"    o.{name} = None if v is None else M[type(v)](v, M, F, L)"]
+        elif kind == "l":
+            body.append(f"    o.{name} = [M[type(x)](x, M, F, L) for x in n.{name}]")
+        else:
+            body.append(f"    o.{name} = n.{name}")
+    body.append("    return o")
     ns: dict = {}
-    exec(compile(src, f"<move {t.__name__}>", "exec"), {"T": t}, ns)  # noqa: S102 - our own source
+    exec(compile("\n".join(body) + "\n", f"<move {t.__name__}>", "exec"),  # noqa: S102 - our own source
+         {"T": t, "new": object.__new__, "span": tuple.__new__, "Span": Span}, ns)
     return ns["move"]
 
 
@@ -185,22 +198,10 @@ def moved(node, file: str, lines: int):
     """A copy of ``node`` (a node, a list of nodes or None) with every span in
     ``file`` moved ``lines`` lines down: what an unchanged procedure looks like
     after lines were added (or removed) above it."""
-    new = tuple.__new__
     movers = _MOVERS
-
-    def s(v):
-        if v is not None and v[0] == file:
-            return new(Span, (file, v[1] + lines, v[2], v[3] + lines, v[4]))
-        return v
-
-    def m(x):
-        if x is None:
-            return None
-        f = movers.get(type(x))
-        if f is None:
-            f = movers[type(x)] = _mover(type(x))
-        return f(x, s, m)
-
+    if not movers:
+        movers.update((t, _mover(t)) for t in list(globals().values())
+                      if type(t) is type and "__record_types__" in t.__dict__)
     if type(node) is list:
-        return [m(x) for x in node]
-    return m(node)
+        return [None if x is None else movers[type(x)](x, movers, file, lines) for x in node]
+    return None if node is None else movers[type(node)](node, movers, file, lines)

@@ -8,7 +8,7 @@ the code generator never has to guess.
 
 from __future__ import annotations
 
-from plcbuilder._support.records import dataclass, field
+from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder.bytecode import abi, semantics
 from plcbuilder.bytecode import targets as T
 from plcbuilder.bytecode.program import Kind
@@ -58,11 +58,80 @@ class Symbols:
     defines: dict = field(default_factory=dict)
 
 
+class CheckCache:
+    """What the checker found in each procedure, kept from one compile of a
+    file to the next (an open file checked at every pause in typing). A
+    procedure whose tree is the same object as last time (the incremental
+    parser reuses the procedures an edit did not reach), or a copy of it moved
+    by some lines, is not walked again while the procedures' names, the kind,
+    the target and the options are the same: its names, variables and calls
+    are taken from its last walk (a walk that found a mistake is not kept: its
+    messages quote the text), and whether it can reach its end (with the
+    warnings on the way) from its last look, as long as the procedures it
+    calls still do what they did then. Procedures not checked in the last
+    compile are dropped."""
+
+    def __init__(self):
+        self.key: tuple = ()
+        #: id(procedure) -> (the procedure it is a copy of, the file, moved by how many lines)
+        self.moved: dict = {}
+        self._old: tuple = ({}, {}, {})     # walks, flows, falls: id -> (procedure, found)
+        self._new: tuple = ({}, {}, {})
+
+    def begin(self, key: tuple) -> None:
+        if key != self.key:
+            self.key, self._old = key, ({}, {}, {})
+        self._new = ({}, {}, {})
+
+    def end(self) -> None:
+        self._old, self._new = self._new, ({}, {}, {})
+
+    def get(self, table: int, p: A.ProcDef):
+        got = self._old[table].get(id(p))
+        if got is None or got[0] is not p:
+            was = self.moved.get(id(p))
+            got = self._old[table].get(id(was[0])) if was is not None else None
+            if got is None or got[0] is not was[0]:
+                return None
+            got = (p, _MOVERS[table](got[1], *was[1:]))
+        self._new[table][id(p)] = got
+        return got[1]
+
+    def put(self, table: int, p: A.ProcDef, found) -> None:
+        self._new[table][id(p)] = (p, found)
+
+
+_new_span = tuple.__new__
+
+
+def _mv(s: Optional[Span], file: str, by: int) -> Optional[Span]:
+    if s is not None and s[0] == file:
+        return _new_span(Span, (file, s[1] + by, s[2], s[3] + by, s[4]))
+    return s
+
+
+def _mv_diag(d: Diagnostic, file: str, by: int) -> Diagnostic:
+    return replace(d, span=_mv(d.span, file, by),
+                   related=tuple(replace(r, span=_mv(r.span, file, by)) for r in d.related))
+
+
+_WALK, _FLOW, _FALLS = range(3)
+_MOVERS = (
+    lambda w, f, by: (w[0], w[1], w[2], [(n, _mv(a, f, by), _mv(b, f, by), _mv(c, f, by))
+                                         for n, a, b, c in w[3]],
+                      [(n, _mv(s, f, by)) for n, s in w[4]]),
+    lambda w, f, by: (w[0], [_mv_diag(d, f, by) for d in w[1]], w[2]),
+    lambda w, f, by: w,
+)
+
+
 class Checker:
     def __init__(self, module: A.Module, kind: Kind, strict: bool, main_file: str,
                  source_line=None, syntax_errors: bool = False, target: str = T.MYCNC,
-                 defines=()):
+                 defines=(), cache: Optional[CheckCache] = None):
         self.syntax_errors = syntax_errors
+        self.cache = cache
+        self._consulted: list[list] = []    # (callee, falls) looked up, per walk being kept
         #: the #define names in scope (for "did you mean?": they are gone from the tree)
         self.defines = tuple(defines)
         self._suggested: dict = {}
@@ -99,10 +168,17 @@ class Checker:
                                         "a procedure cannot have its name", p.name_span))
                 continue
             procs[p.name] = p
+        cache = self.cache
+        if cache is not None:
+            cache.begin((self.kind, self.strict, self.profile.name, self.syntax_errors,
+                         self.main_file, tuple(procs)))
         for p in procs.values():
             self.calls[p.name] = []
             self._current = p.name
-            self._stmt(p.body)
+            if cache is None:
+                self._stmt(p.body)
+            else:
+                self._walk(p, cache)
         if not self.profile.has_main:
             self._required()
         elif "main" not in procs and not (self.syntax_errors and not procs):
@@ -115,9 +191,47 @@ class Checker:
         if not self.syntax_errors:
             # with syntax errors the tree is incomplete: flow warnings would be noise
             self._flow()
+        if cache is not None:
+            cache.end()
         syms = Symbols(variables=list(self.res.user_vars),
                        procedures={n: p.name_span for n, p in procs.items()})
         return self.diags, self.res, syms
+
+    def _walk(self, p: A.ProcDef, cache: CheckCache) -> None:
+        """Check one procedure's statements, or take what its last walk found;
+        either way merge its names, variables and calls into the file's."""
+        found = cache.get(_WALK, p)
+        if found is None:
+            res = self.res
+            outer = res.slots, res.mapped, res.constants, self.vars
+            res.slots, res.mapped, res.constants, self.vars = {}, {}, {}, {}
+            n = len(self.diags)
+            try:
+                self._stmt(p.body)
+            finally:
+                inner = res.slots, res.mapped, res.constants, self.vars
+                res.slots, res.mapped, res.constants, self.vars = outer
+            found = (inner[0], inner[1], inner[2],
+                     [(v.name, v.first, v.assigned, v.read) for v in inner[3].values()],
+                     list(self.calls[p.name]))
+            if len(self.diags) == n:
+                cache.put(_WALK, p, found)
+        else:
+            self.calls[p.name] = list(found[4])
+        slots, mapped, constants, names, _calls = found
+        self.res.slots.update(slots)
+        self.res.mapped.update(mapped)
+        self.res.constants.update(constants)
+        at, vars_ = p.name, self.vars
+        for name, first, assigned, read in names:
+            v = vars_.get(name)
+            if v is None:
+                v = vars_[name] = VarInfo(name, first)
+            v.procs.add(at)
+            if v.assigned is None:
+                v.assigned = assigned
+            if v.read is None:
+                v.read = read
 
     # ================================================================ statements
     def _stmt(self, s) -> None:
@@ -554,7 +668,7 @@ class Checker:
         for n in self.res.reachable or list(self.res.procs):
             p = self.res.procs[n]
             self._current = n
-            falls = self._falls(p.body, report=True)
+            falls = self._body_falls(p)
             if falls and self.profile.name == T.TGMOTION and n in self.profile.required:
                 self.diags.append(warning(
                     "no-status", f"{n}() can reach its end without exit(): it then returns 0"
@@ -567,13 +681,50 @@ class Checker:
                                     "the procedure then ends with exit code 0",
                     p.body.end_span, "end it with exit(99); (plc_exit_normal)"))
 
+    def _body_falls(self, p: A.ProcDef) -> bool:
+        """Can control reach the end of procedure p (warning of the code that
+        cannot be reached on the way)?"""
+        cache = self.cache
+        if cache is None:
+            return self._falls(p.body, report=True)
+        found = cache.get(_FLOW, p)
+        if found is not None and self._same_callees(found[2]):
+            self.diags += found[1]
+            return found[0]
+        n = len(self.diags)
+        self._consulted.append([])
+        try:
+            r = self._falls(p.body, report=True)
+        finally:
+            consulted = self._consulted.pop()
+        cache.put(_FLOW, p, (r, self.diags[n:], consulted))
+        return r
+
+    def _same_callees(self, consulted: list) -> bool:
+        """Do the procedures a kept look consulted still reach their ends as
+        they did (asked in the same order: the walk would ask them so)?"""
+        return all(self._proc_falls(c) == was for c, was in consulted)
+
     def _proc_falls(self, name: str) -> bool:
         if name in self._falls_cache:
             return self._falls_cache[name]
         if name in self._in_progress or name not in self.res.procs:
             return True
         self._in_progress.add(name)
-        r = self._falls(self.res.procs[name].body, report=False)
+        p = self.res.procs[name]
+        cache = self.cache
+        found = cache.get(_FALLS, p) if cache is not None else None
+        if found is not None and self._same_callees(found[1]):
+            r = found[0]
+        elif cache is None:
+            r = self._falls(p.body, report=False)
+        else:
+            self._consulted.append([])
+            try:
+                r = self._falls(p.body, report=False)
+            finally:
+                consulted = self._consulted.pop()
+            cache.put(_FALLS, p, (r, consulted))
         self._in_progress.discard(name)
         self._falls_cache[name] = r
         return r
@@ -594,7 +745,10 @@ class Checker:
             if s.call.name == "exit":
                 return False
             if s.call.name in self.res.procs:
-                return self._proc_falls(s.call.name)
+                r = self._proc_falls(s.call.name)
+                if self._consulted:
+                    self._consulted[-1].append((s.call.name, r))
+                return r
             return True
         if t is A.If:
             c = _const(s.cond)

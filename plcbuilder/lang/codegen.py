@@ -44,18 +44,20 @@ def generate(res: Resolved, name: str, kind: Kind, file_namer,
 
 
 class CodeCache:
-    """The instructions emitted for each procedure, kept from one compile of a
-    file to the next: a procedure whose tree is the same object as last time
-    (the incremental parser reuses the procedures an edit did not reach) and
-    whose names mean the same (the same variable slots and registers) is not
-    walked again. Procedures not emitted in the last compile are dropped."""
+    """Each procedure's assembled code, kept from one compile of a file to the
+    next: a procedure whose tree is the same object as last time (the
+    incremental parser reuses the procedures an edit did not reach), or a copy
+    of it moved by some lines, and whose names mean the same (the same
+    variable slots and registers) is neither walked nor assembled again: only
+    the program is linked. Procedures not emitted in the last compile are
+    dropped."""
 
     def __init__(self):
         self._procs: dict[int, tuple] = {}
         #: id(procedure) -> (the procedure it is a copy of, the file, moved by how many lines)
         self.moved: dict = {}
 
-    def get(self, p: A.ProcDef, res: Resolved) -> Optional[tuple[int, int, list]]:
+    def get(self, p: A.ProcDef, res: Resolved) -> Optional["_Asm"]:
         got = self._procs.get(id(p))
         shift = None
         if got is None or got[0] is not p:
@@ -65,29 +67,44 @@ class CodeCache:
                 return None
             shift = was[1:]
         slots, mapped = res.slots, res.mapped
-        for n, slot, addr in got[4]:
+        for n, slot, addr in got[2]:
             if slots.get(n) != slot or mapped.get(n) != addr:
                 return None
+        asm = got[1]
         if shift is not None:           # the same code, its lines moved
-            file, lines = shift
-            items = [_Ins(it.op, it.arg, (file, it.loc[1] + lines) if it.loc[0] == file else it.loc,
-                          it.label, it.proc) if type(it) is not tuple else it for it in got[3]]
-            got = (p, got[1], got[2], items, got[4])
-            self._procs[id(p)] = got
-        return got[1], got[2], got[3]
+            asm = asm.moved(*shift)
+            self._procs[id(p)] = (p, asm, got[2])
+        return asm
 
-    def put(self, p: A.ProcDef, base: int, count: int, items: list, names: set, res: Resolved,
-            keep: dict) -> None:
+    def put(self, p: A.ProcDef, asm: "_Asm", names: set, res: Resolved, keep: dict) -> None:
         slots, mapped = res.slots, res.mapped
-        keep[id(p)] = (p, base, count, items, tuple((n, slots.get(n), mapped.get(n)) for n in names))
+        keep[id(p)] = (p, asm, tuple((n, slots.get(n), mapped.get(n)) for n in names))
 
-    def keep(self, p: A.ProcDef, base: int, items: list, keep: dict) -> None:
-        """Keep a procedure that was reused, its labels now from ``base``."""
-        _p, _base, count, _items, names = self._procs[id(p)]
-        keep[id(p)] = (p, base, count, items, names)
+    def keep(self, p: A.ProcDef, keep: dict) -> None:
+        """Keep a procedure that was reused."""
+        keep[id(p)] = self._procs[id(p)]
 
     def replace(self, keep: dict) -> None:
         self._procs = keep
+
+
+class _Asm:
+    """One procedure assembled on its own (its jumps never leave it): its
+    code with the CALLs' targets still zero, where those CALLs are, and its
+    line table, offsets counted from the procedure's start."""
+
+    __slots__ = ("code", "calls", "lines", "far")
+
+    def __init__(self, code: bytes, calls: list, lines: list, far: bool):
+        self.code = code
+        self.calls = calls          # (offset of a CALL, the procedure it calls)
+        self.lines = lines          # (offset, (file, line)) where the line changes
+        self.far = far              # a jump further than a 16-bit offset reaches
+
+    def moved(self, file: str, by: int) -> "_Asm":
+        return _Asm(self.code, self.calls,
+                    [(o, (f, n + by)) if f == file else (o, (f, n)) for o, (f, n) in self.lines],
+                    self.far)
 
 
 @dataclass
@@ -143,23 +160,17 @@ class Generator:
 
     # --------------------------------------------------------------- driver
     def run(self) -> tuple[Optional[Program], int]:
-        proc_labels = {n: self.label() for n in self.res.reachable}
-        self.proc_labels = proc_labels
         cache = self.cache
         keep: dict = {}
+        done: list[tuple[str, _Asm]] = []
         for n in self.res.reachable:
             p = self.res.procs[n]
-            self.place(proc_labels[n])
-            hit = cache.get(p, self.res) if cache is not None else None
-            if hit is not None:             # the same procedure, its names meaning the same
-                base, count, items = hit
-                if base != self.nlabels:
-                    items = _relabel(items, self.nlabels - base)
-                self.items += items
-                cache.keep(p, self.nlabels, items, keep)
-                self.nlabels += count
+            asm = cache.get(p, self.res) if cache is not None else None
+            if asm is not None:             # the same procedure, its names meaning the same
+                cache.keep(p, keep)
+                done.append((n, asm))
                 continue
-            start, base = len(self.items), self.nlabels
+            self.items, self.nlabels = [], 0
             self.names = set() if cache is not None else None
             self.at(p.name_span)
             self.stmt(p.body)
@@ -167,11 +178,13 @@ class Generator:
             if not (type(last) is A.CallStmt and last.call.name == "exit"):
                 self.at(p.body.end_span)
                 self.emit(Op.RET)
+            asm = _assemble(self.items)
             if cache is not None:
-                cache.put(p, base, self.nlabels - base, self.items[start:], self.names, self.res, keep)
+                cache.put(p, asm, self.names, self.res, keep)
+            done.append((n, asm))
         if cache is not None:
             cache.replace(keep)
-        return self.assemble()
+        return self.link(done)
 
     # --------------------------------------------------------------- statements
     def stmt(self, s) -> None:
@@ -419,73 +432,93 @@ class Generator:
         self.place(end)
 
     # --------------------------------------------------------------- assembly
-    def assemble(self) -> tuple[Optional[Program], int]:
-        items = self.items
-        long: set[int] = set()   # indexes of jumps that need the long form
-        sizes = [0 if type(it) is tuple else _size(it, False) for it in items]
-        labels = [(i, it[1]) for i, it in enumerate(items) if type(it) is tuple]
-        short = [(i, it.label) for i, it in enumerate(items)
-                 if type(it) is not tuple and it.label is not None]
-        while True:                # relax: lengthen the jumps that do not reach, until none
-            ins_pos = list(accumulate(sizes, initial=0))
-            pos = ins_pos.pop()
-            offsets = {label: ins_pos[i] for i, label in labels}
-            grown = [(i, label) for i, label in short
-                     if not fits(Operand.REL8, offsets[label] - (ins_pos[i] + 2))]
-            if not grown:
-                break
-            for i, _label in grown:
-                long.add(i)
-                sizes[i] = _size(items[i], True)
-            short = [j for j in short if j[0] not in long]
-        if pos > ADDRESS_LIMIT or any(
-                not fits(Operand.REL16, offsets[items[i].label] - (ins_pos[i] + 3)) for i in long):
+    def link(self, done: list) -> tuple[Optional[Program], int]:
+        """The program of the procedures assembled (main first): their code one
+        after another, each CALL given its target, and one line table."""
+        starts: dict[str, int] = {}
+        pos = 0
+        for n, asm in done:
+            starts[n] = pos
+            pos += len(asm.code)
+        if pos > ADDRESS_LIMIT or any(asm.far for _n, asm in done):
             return None, pos
         code = bytearray()
         lines: list[LineEntry] = []
         files: list[str] = []
         file_index: dict[str, int] = {}
+        stored_as: dict[str, int] = {}
         last_loc = None
         procs: list[tuple[str, int]] = []
-        label_names = {lbl: n for n, lbl in self.proc_labels.items()}
-        for i, it in enumerate(items):
-            if type(it) is tuple:
-                if it[1] in label_names:
-                    procs.append((label_names[it[1]], len(code)))
-                continue
-            here = len(code)
-            if it.loc != last_loc and it.loc[0]:
-                stored = self.file_namer(it.loc[0])
-                if stored not in file_index:
-                    file_index[stored] = len(files)
-                    files.append(stored)
-                lines.append(LineEntry(here, file_index[stored], it.loc[1]))
-                last_loc = it.loc
-            op = it.op
-            if it.label is not None:
-                if i in long:
-                    op = LONG_FORM[op]
-                rel = offsets[it.label] - (here + (3 if i in long else 2))
-                code += encode(op, rel)
-            elif it.proc is not None:
-                code += encode(Op.CALL, offsets[self.proc_labels[it.proc]])
-            else:
-                code += encode(op, it.arg)
+        for n, asm in done:
+            base = len(code)
+            procs.append((n, base))
+            code += asm.code
+            for at, callee in asm.calls:
+                code[base + at:base + at + 3] = encode(Op.CALL, starts[callee])
+            for at, loc in asm.lines:
+                if loc == last_loc:
+                    continue
+                i = stored_as.get(loc[0])
+                if i is None:
+                    stored = self.file_namer(loc[0])
+                    if stored not in file_index:
+                        file_index[stored] = len(files)
+                        files.append(stored)
+                    i = stored_as[loc[0]] = file_index[stored]
+                lines.append(LineEntry(base + at, i, loc[1]))
+                last_loc = loc
         return Program(self.name, self.kind, bytes(code), 0, list(self.res.user_vars), files, lines,
                        procs), len(code)
 
 
-def _relabel(items: list, by: int) -> list:
-    """A procedure's instructions with its labels renumbered (``by`` more)."""
-    out = []
-    for it in items:
+def _assemble(items: list) -> _Asm:
+    """One procedure's instructions -> its code: a jump takes one byte of
+    offset unless it must take two (lengthened until every jump reaches).
+    Jumps stay within their procedure, so this is what assembling the whole
+    program at once gives."""
+    long: set[int] = set()   # indexes of jumps that need the long form
+    sizes = [0 if type(it) is tuple else _size(it, False) for it in items]
+    labels = [(i, it[1]) for i, it in enumerate(items) if type(it) is tuple]
+    short = [(i, it.label) for i, it in enumerate(items)
+             if type(it) is not tuple and it.label is not None]
+    while True:                # relax: lengthen the jumps that do not reach, until none
+        ins_pos = list(accumulate(sizes, initial=0))
+        ins_pos.pop()
+        offsets = {label: ins_pos[i] for i, label in labels}
+        grown = [(i, label) for i, label in short
+                 if not fits(Operand.REL8, offsets[label] - (ins_pos[i] + 2))]
+        if not grown:
+            break
+        for i, _label in grown:
+            long.add(i)
+            sizes[i] = _size(items[i], True)
+        short = [j for j in short if j[0] not in long]
+    far = any(not fits(Operand.REL16, offsets[items[i].label] - (ins_pos[i] + 3)) for i in long)
+    code = bytearray()
+    calls: list[tuple[int, str]] = []
+    lines: list[tuple[int, tuple]] = []
+    last_loc = None
+    for i, it in enumerate(items):
         if type(it) is tuple:
-            out.append((it[0], it[1] + by))
-        elif it.label is not None:
-            out.append(_Ins(it.op, it.arg, it.loc, it.label + by, it.proc))
+            continue
+        here = len(code)
+        if it.loc != last_loc and it.loc[0]:
+            lines.append((here, it.loc))
+            last_loc = it.loc
+        op = it.op
+        if it.label is not None:
+            is_long = i in long
+            if far:                 # no program comes of it: only its size counts
+                code += bytes(3 if is_long else 2)
+                continue
+            rel = offsets[it.label] - (here + (3 if is_long else 2))
+            code += encode(LONG_FORM[op] if is_long else op, rel)
+        elif it.proc is not None:
+            calls.append((here, it.proc))
+            code += encode(Op.CALL, 0)
         else:
-            out.append(it)
-    return out
+            code += encode(op, it.arg)
+    return _Asm(bytes(code), calls, lines, far)
 
 
 def _size(it: _Ins, long: bool) -> int:

@@ -11,14 +11,21 @@ An :class:`Incremental` belongs to one open file and is handed to
   the first token that changed and stops as soon as it is back where the old
   parse was, reusing the procedures after the edit (moved by the lines the
   edit added or removed) — see :func:`plcbuilder.lang.parser.parse_incremental`,
-- the instructions emitted for each procedure: a procedure the parse reused
-  whose names mean the same is not walked again (the whole program is still
-  assembled, so sizes and jumps are exact).
+- what the checker found in each procedure (its names, variables and calls;
+  whether it can reach its end): a procedure the parse reused is not walked
+  again while the procedures' names and the options are the same
+  (:class:`~plcbuilder.lang.checker.CheckCache`),
+- the code assembled for each procedure: a procedure the parse reused whose
+  names mean the same is neither walked nor assembled again; the program is
+  linked from the procedures' code (so sizes, calls and the line table are
+  exact).
 
-The preprocessor (defines, conditionals) and the checker's whole-file checks
-(names, variables, recursion, main, flow) run in full every time: they are
-cheap next to tokenizing and parsing. The result is the same, diagnostic for
-diagnostic and byte for byte, as a compile from scratch.
+An Enter (or a deleted line) moves the procedures below it: what is kept of
+them is moved with them (a procedure's line table, its variables' and calls'
+spans), not made again. The preprocessor (defines, conditionals) and the
+checker's whole-file checks (names, variables, recursion, main) run in full
+every time, over what the procedures' walks found. The result is the same,
+diagnostic for diagnostic and byte for byte, as a compile from scratch.
 """
 
 from __future__ import annotations
@@ -27,6 +34,7 @@ from _thread import allocate_lock
 
 from plcbuilder.diagnostics import Diagnostic
 from plcbuilder.lang import ast as A
+from plcbuilder.lang.checker import CheckCache
 from plcbuilder.lang.codegen import CodeCache
 from plcbuilder.lang.parser import Parsed, parse_incremental
 from plcbuilder.lang.preprocess import TokenCache
@@ -45,11 +53,12 @@ class Incremental:
         self.tokens = TokenCache()
         self.parsed: Optional[Parsed] = None
         self.code = CodeCache()
+        self.checks = CheckCache()
         self.lock = allocate_lock()
 
     def parse(self, toks: list[Tok], main_file: str) -> tuple[A.Module, list[Diagnostic]]:
         self.parsed = parse_incremental(toks, self.parsed, main_file)
-        self.code.moved = self.parsed.moved
+        self.code.moved = self.checks.moved = self.parsed.moved
         return self.parsed.module, self.parsed.diagnostics
 
     def done(self) -> None:
@@ -60,3 +69,4 @@ class Incremental:
         self.tokens = TokenCache()
         self.parsed = None
         self.code = CodeCache()
+        self.checks = CheckCache()

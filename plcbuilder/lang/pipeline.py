@@ -221,7 +221,8 @@ def _compile_preprocessed(pre: Preprocessed, path: str, file_path: Optional[Path
     diags += lowered
     checker = Checker(checked, options.kind, options.strict, path, pre.sources.line,
                       syntax_errors=any(d.is_error for d in diags), target=options.target,
-                      defines=pre.defines)
+                      defines=pre.defines,
+                      cache=incremental.checks if incremental is not None else None)
     check_diags, resolved, symbols = checker.run()
     diags += check_diags
     symbols.defines = {n: (d.text, d.span) for n, d in pre.defines.items()}

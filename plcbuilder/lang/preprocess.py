@@ -222,10 +222,16 @@ def _moved_diag(d: Diagnostic, lines: int) -> Diagnostic:
 
 def _moved_line(line: tuple, lines: int) -> tuple:
     is_dir, toks, hash_span, raw = line
-    new = tuple.__new__          # (a Span without the named tuple's Python __new__)
-    return (is_dir, [Tok(t.kind, t.value, new(Span, (s[0], s[1] + lines, s[2], s[3] + lines, s[4])),
-                         t.number) for t in toks for s in (t.span,)],
-            _moved_span(hash_span, lines), raw)
+    new = tuple.__new__          # (a Span without the named tuple's Python __new__,
+    make = object.__new__        # a Tok without a call of its __init__: every token below an Enter)
+    out = []
+    for t in toks:
+        s = t.span
+        u = make(Tok)
+        u.kind, u.value, u.number, u.macro, u.synthetic = t.kind, t.value, t.number, None, False
+        u.span = new(Span, (s[0], s[1] + lines, s[2], s[3] + lines, s[4]))
+        out.append(u)
+    return is_dir, out, _moved_span(hash_span, lines), raw
 
 
 class Preprocessor:

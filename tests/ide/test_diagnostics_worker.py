@@ -135,3 +135,18 @@ def test_pending_while_a_later_job_is_still_compiling(worker, qtbot, tmp_path, m
         release.set()
     qtbot.waitUntil(lambda: results == ["a", "b"], timeout=5000)
     qtbot.waitUntil(lambda: not worker.pending(), timeout=5000)
+
+
+def test_the_collector_waits_until_the_result_is_handled(worker, qtbot):
+    """The cyclic garbage collector stays paused from the compile until its
+    result has been handed over (the collection of the compile's objects is
+    not in the keystroke's time), and is on again after."""
+    import gc
+    assert gc.isenabled()
+    seen = []
+    worker.sig_result.connect(lambda key, r: seen.append(gc.isenabled()))
+    for text in ("main() { a = 1; exit(99); }", "main() { a = 2; exit(99); }"):
+        worker.submit("k", "<a>", text, api.CompileOptions())
+        qtbot.waitUntil(lambda: not worker.pending(), timeout=5000)
+    assert seen == [False, False]
+    assert gc.isenabled()

@@ -226,3 +226,104 @@ def test_an_unterminated_comment_opened_and_closed_above_an_unused_procedure():
                 got = compile_source(step, "deep_ok.plc", CompileOptions(), incremental=inc)
                 _assert_same(got, full, f"/* at {pos}:\n{step}")
         assert any(d.code == "unused-procedure" for d in full.diagnostics)
+
+
+#: statements for a program whose procedures call one another: calls (back
+#: up the chain too: recursion), exits (the code after a call that never
+#: returns cannot be reached), variables first read or assigned elsewhere
+CALLING_STATEMENTS = ["step1();", "step2();", "step5();", "step13();", "main();", "exit(1);",
+                      "exit(99);", "b = a0;", "a0 = 1;", "c = c + 1;", "if (a1) { exit(2); };",
+                      "do { step4(); } while (1);", "sens = 1;", "portset(1);", "a2++;",
+                      "if (b) { step3(); } else { exit(4); };", "stepx();"]
+
+
+def _calling_program(procs: int) -> str:
+    out = []
+    for i in range(procs):
+        body = f"    a{i % 3} = gvarget(6060) + {i};\n"
+        if i % 4 == 1:
+            body += f"    step{(i + 1) % procs}();\n    b = a{i % 3};\n"
+        if i % 5 == 2:
+            body += "    exit(3);\n"
+        if i % 6 == 3:
+            body += f"    step{max(i - 2, 0)}();\n"        # back up the chain
+        out.append(f"step{i}()\n{{\n{body}}};\n")
+    out.append("main()\n{\n" + "".join(f"    step{i}();\n" for i in range(0, procs, 2)) +
+               "    exit(99);\n};\n")
+    return "#include pins.h\n" + "".join(out)
+
+
+def _calling_edit(rng: random.Random, text: str) -> str:
+    """A statement added or deleted, an Enter or a deleted empty line (the
+    lines below move), or a procedure renamed: the text stays a program
+    (the random edits above break its syntax; these are for the checker)."""
+    lines = text.split("\n")
+    body = [i for i, ln in enumerate(lines) if ln.startswith("    ")]
+    heads = [i for i, ln in enumerate(lines) if ln.endswith("()") and not ln.startswith(" ")]
+    k = rng.random()
+    if k < 0.35:
+        lines.insert(rng.choice(body) + rng.randrange(2), "    " + rng.choice(CALLING_STATEMENTS))
+    elif k < 0.5 and len(body) > 1:
+        del lines[rng.choice(body)]
+    elif k < 0.75:
+        lines.insert(rng.randrange(len(lines)), "")             # Enter: every line below moves
+    elif k < 0.85:
+        empty = [i for i, ln in enumerate(lines) if not ln]
+        if empty:
+            del lines[rng.choice(empty)]
+    else:
+        i = rng.choice(heads)
+        lines[i] = rng.choice(["step1()", "step6()", "step12()", "stepy()", "main()"])
+    return "\n".join(lines)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_random_edits_of_procedures_that_call_one_another(seed):
+    """What the checker keeps of each procedure (its names, variables and
+    calls; whether it reaches its end, and the code it cannot reach) is what
+    a check from scratch finds, for every kind and option, as procedures
+    are edited, moved, renamed, made to call back up the chain and to exit."""
+    rng = random.Random(100 + seed)
+    options = [CompileOptions(), CompileOptions(kind=Kind.SOFTWARE),
+               CompileOptions(strict=True)]
+    for opts in options:
+        text = _calling_program(14)
+        inc = Incremental()
+        for step in range(30):
+            text = _calling_edit(rng, text)
+            full = compile_source(text, "P.plc", opts)
+            got = compile_source(text, "P.plc", opts, incremental=inc)
+            _assert_same(got, full, f"{opts}, seed {seed}, edit {step}:\n{text}")
+            if step % 10 == 9:           # the same file under other options: the keys differ
+                other = rng.choice(options)
+                _assert_same(compile_source(text, "P.plc", other, incremental=inc),
+                             compile_source(text, "P.plc", other), f"{other}, edit {step}")
+
+
+def test_the_checker_keeps_the_procedures_an_edit_did_not_reach():
+    """A keystroke in one procedure walks that one again, not the others; an
+    Enter above the others moves what was kept of them."""
+    from plcbuilder.lang.checker import Checker
+    text = _calling_program(30)
+    inc = Incremental()
+    compile_source(text, "P.plc", incremental=inc)
+    walked = []
+    real = Checker._stmt
+
+    def spy(self, s):
+        if type(s) is A.Block and s is getattr(self.res.procs.get(self._current), "body", None):
+            walked.append(self._current)
+        return real(self, s)
+    lines = text.split("\n")
+    at = lines.index("step20()") + 2
+    typed = "\n".join(lines[:at] + [lines[at].replace("+ 20", "+ 21")] + lines[at + 1:])
+    entered = "\n".join(lines[:at] + ["", lines[at]] + lines[at + 1:])
+    try:
+        Checker._stmt = spy
+        for new in (typed, entered):
+            walked.clear()
+            got = compile_source(new, "P.plc", incremental=inc)
+            assert walked == ["step20"], walked
+            _assert_same(got, compile_source(new, "P.plc"), new)
+    finally:
+        Checker._stmt = real
