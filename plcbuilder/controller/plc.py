@@ -243,7 +243,9 @@ class PLC:
                        softjog=softjog, software=True)
         calls = {name: getattr(m, _MACHINE_NAME.get(name, name)) for name in vm.CALLS}
         calls.update(own)
-        return Host(plain=m.is_plain_register, pr=pr, raw_gvarset=raw, io=io, **calls)
+        store = getattr(m, "register_store", None)      # (gvarget is the machine's own)
+        return Host(plain=m.is_plain_register, pr=pr, raw_gvarset=raw, io=io,
+                    registers=store() if store is not None else None, **calls)
 
     def _spawn(self, program: Program, eparam: int) -> Process:
         eparam = wrap(int(eparam))
