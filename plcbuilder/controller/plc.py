@@ -78,7 +78,8 @@ class Process:
         self.eparam = eparam
         self.started_at = started_at
         self.host = host
-        self.resume: Callable[[], None] = lambda: None
+        #: runs its next tick: ``resume(None)`` (its generator's send: cheaper than __next__)
+        self.resume: Callable[[None], object] = _not_started
         self.ended_at: Optional[int] = None
         self.exit_code: Optional[int] = None
         #: the fast backend's generator when it keeps variables in locals between ticks
@@ -98,7 +99,8 @@ class Process:
 
     def set_gen(self, gen) -> None:
         self.gen = gen
-        self.resume = gen.__next__
+        # (one halted at its fault ends there when it goes on, whatever runs it)
+        self.resume = gen.send if self.fault is None else _at_fault
 
     def on_reference(self) -> bool:
         """Whether the reference interpreter runs it now."""
@@ -312,6 +314,7 @@ class PLC:
         debugger is on (``halt``), it halts there first: p ends when it goes on."""
         if halt and self.debugger is not None and self.debugger.faulted(p, pc, text, callers):
             p.fault = (pc, text, tuple(callers))
+            p.resume = _at_fault               # going on ends it (_outcome)
             return
         prog = p.program
         chain = []
@@ -332,7 +335,12 @@ class PLC:
         """A procedure's tick raised: it ended, faulted, or hands over to the
         reference interpreter (which then finishes this tick)."""
         while True:
-            if isinstance(exc, ProcExit):
+            if isinstance(exc, _AtFault):       # halted at its fault: now it ends
+                if p.fault is not None:
+                    pc, text, callers = p.fault
+                    p.fault = None
+                    self._fault(p, pc, text, callers, halt=False)
+            elif isinstance(exc, ProcExit):
                 self._end(p, wrap(exc.code))
             elif isinstance(exc, VMFault):
                 self._fault(p, exc.pc, exc.text, exc.callers)
@@ -348,7 +356,7 @@ class PLC:
                                            stack=exc.stack, rets=exc.rets, count=exc.count))
                 p.syncing, p.watched = None, True
                 try:
-                    at = p.resume()
+                    at = p.resume(None)
                     if at is not HALT:
                         p.at = at
                     return
@@ -527,23 +535,21 @@ class PLC:
         tick (``ran``: hardware first, then software). False when the debugger
         halted one: the rest of the tick waits in ``_rest``, the halted one first."""
         dbg = self.debugger
-        for i, p in enumerate(todo):
-            if p.ended_at is not None:
-                continue
-            if p.fault is None:
-                try:
-                    at = p.resume()
-                except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
-                    self._outcome(p, exc)
-                else:
-                    if at is not HALT:
-                        p.at = at
-            else:                              # halted at its fault: now it ends
-                pc, text, callers = p.fault
-                p.fault = None
-                self._fault(p, pc, text, callers, halt=False)
+        for p in todo:
+            # (one that ended raises StopIteration, which changes nothing; one
+            # halted at its fault raises _AtFault: _outcome ends it)
+            try:
+                at = p.resume(None)
+            except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                self._outcome(p, exc)
+            else:
+                if not p.watched:      # plain fast code: it cannot halt, nor yield HALT
+                    p.at = at
+                    continue
+                if at is not HALT:
+                    p.at = at
             if dbg is not None and dbg.halt is not None:
-                self._rest = (t, todo[i:], ran)
+                self._rest = (t, todo[todo.index(p):], ran)
                 return False
         self._rest = None
         self._after_tick(t, ran)
@@ -580,8 +586,8 @@ class PLC:
         """Make p run code that asks the debugger: a procedure running plain
         fast code goes over to the reference interpreter, exactly where it is
         (suspended at a tick end, or not started yet)."""
-        if p.watched or p.ended_at is not None or p.gen is None:
-            return
+        if p.watched or p.ended_at is not None or p.gen is None or p.fault is not None:
+            return                      # (halted at its fault: it only ends from there)
         import inspect                  # (debugging only: not loaded at start)
         if self.backend == "fast" and inspect.getgeneratorstate(p.gen) == inspect.GEN_CREATED:
             p.set_gen(fastvm.make_runner(p.program, p.slots, p.host, watched=True))
@@ -592,7 +598,7 @@ class PLC:
     def to_reference(self, p: Process) -> None:
         """Hand p (suspended at a tick end, or not started) to the reference
         interpreter, exactly where it is."""
-        if p.ended_at is not None or p.gen is None:
+        if p.ended_at is not None or p.gen is None or p.fault is not None:
             return
         if p.on_reference():
             p.watched = True
@@ -623,8 +629,8 @@ class PLC:
         msg = 0
         message_slot = abi.SLOT_MESSAGE
         for p in ran:
-            code = p.slots[message_slot]
-            if code:
+            if p.slots[message_slot]:
+                code = p.slots[message_slot]
                 self._send(p, code)
                 if not msg:
                     msg = code
@@ -686,7 +692,7 @@ class PLC:
             for t in range(t, stop):
                 self.t = t
                 try:
-                    at = resume()
+                    at = resume(None)
                 except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
                     hw.at = at
                     return t + 1 if self._run_after(t, hw, exc) else t
@@ -817,5 +823,17 @@ class PLC:
                 self.start_hardware(name, eparam)
 
 
-def _finished() -> None:
+def _not_started(_value=None) -> None:
+    return None
+
+
+def _finished(_value=None) -> None:
     raise StopIteration
+
+
+class _AtFault(Exception):
+    """What a procedure halted at its fault raises when it goes on (it ends then)."""
+
+
+def _at_fault(_value=None) -> None:
+    raise _AtFault
