@@ -26,6 +26,7 @@ from __future__ import annotations
 from collections import deque, namedtuple
 
 from plcbuilder.bytecode import abi
+from plcbuilder.bytecode.opcodes import Op, decode
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.bytecode.semantics import wrap
 from plcbuilder.controller import fastvm, vm
@@ -39,6 +40,8 @@ if TYPE_CHECKING:
     from typing import Callable, Iterable, Optional
 
 SOFTWARE_PERIOD_MS = 100
+#: the instructions that write a variable slot
+_SLOT_WRITES = frozenset({Op.STORE, Op.INC, Op.DEC})
 #: Exit code reported for a procedure that ended with a runtime fault (not in the seed's table).
 FAULT_EXIT_CODE = -1
 BACKENDS = ("fast", "reference")
@@ -183,9 +186,13 @@ class PLC:
         self.job = None
         # advance() can be skipped while the machine is quiet and has no notes pending
         notes = getattr(machine, "pending_notes", None)
-        if notes is None or not hasattr(machine, "quiet"):
+        quiet_machine = notes is not None and hasattr(machine, "quiet")
+        if not quiet_machine:
             notes = (None,)                # another machine: always call advance()
         self._notes_pending = notes
+        #: the machine's clock (t_ms) only moves 1 ms a tick while it is quiet
+        #: with no notes pending: then the PLC moves it (_advance, _hardware_alone)
+        self._quiet_machine = quiet_machine
 
     def prepare(self, programs: Iterable[Program]) -> None:
         """Translate programs for the fast backend now (as they will be run),
@@ -689,26 +696,49 @@ class PLC:
             # record again (machine._sample: the cached sample_fields() dict,
             # None once something changed), so that it is not asked
             seen, seen_proc = _NEVER, None
-            for t in range(t, stop):
-                self.t = t
-                try:
-                    at = resume(None)
-                except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
-                    hw.at = at
-                    return t + 1 if self._run_after(t, hw, exc) else t
-                if slots[message_slot] or rec:
-                    code = slots[message_slot]
-                    if code:
-                        send(hw, code)
-                    if rec and (code or machine._sample is not seen
-                                or slots[proc_slot] != seen_proc):
-                        seen_proc = slots[proc_slot]
-                        record(t, name, seen_proc, code)
-                        seen = machine._sample if only and not code else _NEVER
-                if notes_pending or not machine.quiet:
-                    advance(t)
-                else:
-                    machine.t_ms += 1              # advance() would do only this
+            # a quiet machine's clock reads t at the start of tick t (as it does
+            # unless the machine ran before the PLC): it is set so from t (the
+            # same int) instead of adding 1 ms (a new int) at each tick's end
+            synced = self._quiet_machine and machine.t_ms == t
+            if synced and not rec and not hw.watched and not slots[message_slot] \
+                    and not _writes_message(hw.program):
+                # the common case: no sample to record, no message to send (plain
+                # fast code that never writes its message: none can be pending)
+                for t in range(t, stop):
+                    machine.t_ms = t
+                    self.t = t
+                    try:
+                        at = resume(None)
+                    except Exception as exc:  # noqa: BLE001 - as below
+                        hw.at = at
+                        return t + 1 if self._run_after(t, hw, exc) else t
+                    if notes_pending or not machine.quiet:
+                        advance(t)
+            else:
+                for t in range(t, stop):
+                    if synced:
+                        machine.t_ms = t
+                    self.t = t
+                    try:
+                        at = resume(None)
+                    except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                        hw.at = at
+                        return t + 1 if self._run_after(t, hw, exc) else t
+                    if slots[message_slot] or rec:
+                        code = slots[message_slot]
+                        if code:
+                            send(hw, code)
+                        if rec and (code or machine._sample is not seen
+                                    or slots[proc_slot] != seen_proc):
+                            seen_proc = slots[proc_slot]
+                            record(t, name, seen_proc, code)
+                            seen = machine._sample if only and not code else _NEVER
+                    if notes_pending or not machine.quiet:
+                        advance(t)
+                    elif not synced:
+                        machine.t_ms += 1          # advance() would do only this
+            if synced:
+                machine.t_ms = stop                # (the last tick's 1 ms)
             t = stop
             hw.at = at
             if t == end:
@@ -821,6 +851,26 @@ class PLC:
         for _t, name, eparam in due:
             if name in self.programs:
                 self.start_hardware(name, eparam)
+
+
+#: program code -> whether it may write its ``message`` (a STORE, INC or DEC of the slot)
+_MESSAGE_WRITERS: dict[bytes, bool] = {}
+
+
+def _writes_message(program: Program) -> bool:
+    """Whether ``program``'s code may write its ``message`` slot."""
+    code = program.code
+    known = _MESSAGE_WRITERS.get(code)
+    if known is None:
+        if len(_MESSAGE_WRITERS) > 256:
+            _MESSAGE_WRITERS.clear()
+        try:
+            known = any(i.op in _SLOT_WRITES and i.arg == abi.SLOT_MESSAGE
+                        for i in decode(code))
+        except Exception:  # noqa: BLE001 - code that does not decode: assume it may
+            known = True
+        _MESSAGE_WRITERS[code] = known
+    return known
 
 
 def _not_started(_value=None) -> None:
