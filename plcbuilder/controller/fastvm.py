@@ -29,6 +29,9 @@ How the code is translated:
   interpreter goes on from that point (a debugger forcing a variable).
 - A constant pin's ``portget`` reads ``io.in_bits`` where the value is used,
   and ``portset``/``portclr`` test ``io.out_bits`` before calling.
+- A constant address's ``gvarget`` (not a PLS field) reads the host's register
+  store (``Host.registers``) when ``make`` found it a plain register and no
+  register is forced; otherwise it calls ``gvarget``.
 - Control flow: a block with exactly one predecessor is written inline at its
   predecessor's branch (``if``/``else``); every other block is a *label*. A
   function with several labels is a ``while True`` loop dispatching on ``pc``
@@ -63,7 +66,7 @@ import zlib
 from collections import namedtuple
 
 from plcbuilder._support.records import dataclass, field
-from plcbuilder.bytecode import abi, semantics
+from plcbuilder.bytecode import abi, semantics, softmc
 from plcbuilder.bytecode.opcodes import (BINARY, BUILTINS, COND_JUMPS, ENDS_TICK, HAS_CONST, HAS_JREL,
                                          IMPLICIT_CONST, JUMPS_IF_NOT_ZERO, JUMPS_IF_ZERO,
                                          NO_FALLTHROUGH, STACK_EFFECT, UNARY, Instruction, Op,
@@ -112,6 +115,11 @@ _SYNC_WAIT = "while (_m := (yield "
 #: A pseudo slot that values read from the host's ``io`` depend on: any call
 #: out (which may change the pins) first writes them to temporaries.
 _IO = -1
+
+
+def _plain_flag(addr: int) -> str:
+    """The generated code's name saying that constant address ``addr`` is a plain register."""
+    return f"_g{addr}" if addr >= 0 else f"_gm{-addr}"
 
 
 class Unsupported(Exception):
@@ -645,6 +653,9 @@ class _Gen:
             self.tracked = True            # a halt names the call stack
         self.out: list[str] = []
         self.ntemp = 0
+        #: the constant addresses gvarget reads (from the host's register store
+        #: where they are plain registers: ``_g<addr>`` says so, set by make)
+        self.reads: set[int] = set()
         self.ranges = _Ranges(None, frozenset(), False, pins)
 
     # -------------------------------------------------------------- helpers
@@ -723,8 +734,17 @@ class _Gen:
         # the host's functions as the closures' free variables (Host's own names)
         self.emit(1, f"{', '.join(_HOST_NAMES)}, = {', '.join('host.' + n for n in _HOST_NAMES)},")
         self.emit(1, "B, brk = (debug.marks, debug.brk) if debug is not None else (None, None)")
+        mark = len(self.out)
         for start in sorted(self.funcs):
             self.function(self.funcs[start])
+        if self.reads:
+            # Host.registers: a constant plain register is read from the store
+            # while no register is forced (what gvarget would do, without the call)
+            self.out[mark:mark] = [
+                "    _rget, _held = (host.registers[0].get, host.registers[1]) "
+                "if host.registers is not None else (None, None)",
+                *(f"    {_plain_flag(a)} = _rget is not None and plain({a})"
+                  for a in sorted(self.reads))]
         entry = self.program.entry
         args = "(), 0" if self.budget else "()" if self.tracked else ""
         self.emit(1, f"return f_{entry}({args})")
@@ -1271,7 +1291,12 @@ class _Gen:
                     self.emit(ind + 1, "n = 0")
                 self.known.pop(abi.SLOT_MESSAGE, None)
             k = len(stack)
-            self.emit(ind, f"_{k} = gvarget({addr})")
+            if a.const is not None and softmc.pls_field(a.const) is None:
+                self.reads.add(a.const)
+                self.emit(ind, f"_{k} = _rget({addr}, 0) if {_plain_flag(a.const)} and not _held "
+                               f"else gvarget({addr})")
+            else:
+                self.emit(ind, f"_{k} = gvarget({addr})")
             stack.append(_pos(k))
             return i.end, stack
         if op is Op.RET:

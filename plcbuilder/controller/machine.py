@@ -120,13 +120,16 @@ class Machine(MachineForces):
         self._fout_mask = self._fout_val = 0
         self._adc_force: dict[int, int] = {}
         #: forced register address -> [held value, the program's last write]
-        self._held: dict[int, list[int]] = {}
+        #: (one dict for the machine's life: register_store() gives it out)
+        self._held: dict[int, list[int]] = getattr(self, "_held", {})
+        self._held.clear()
         self._plain_held: set[int] = set()
         self._unheld: dict[int, tuple] = {}     # address -> its own (get, set) functions
         self.sensors.reset(self.motion.ipos, 0)
         self.in_bits = 0
         self.in_levels[:] = [0] * self.input_count
-        self._regs: dict[int, int] = {}
+        self._regs: dict[int, int] = getattr(self, "_regs", {})    # (one dict, as _held)
+        self._regs.clear()
         self._special: dict[int, int] = {}
         self._pwm = [0] * 8
         self._dac = [0] * 8
@@ -240,6 +243,13 @@ class Machine(MachineForces):
         if addr in self._plain_held:
             return True
         return addr not in self._get and softmc.pls_field(addr) is None
+
+    def register_store(self) -> tuple[dict, dict]:
+        """``(store, forced)``: while ``forced`` is empty, gvarget(addr) of an
+        address ``is_plain_register(addr)`` is true for reads ``store.get(addr, 0)``
+        (the fast backend reads constant plain registers so). Both dicts are
+        this machine's for its whole life, changed in place."""
+        return self._regs, self._held
 
     def g0move(self, flags: int, mask: int, distance: int) -> None:
         """g0moveA(flags, mask, distance): bit 0 absolute, bit 1 machine coordinates,

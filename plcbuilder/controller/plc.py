@@ -26,6 +26,7 @@ from __future__ import annotations
 from collections import deque, namedtuple
 
 from plcbuilder.bytecode import abi
+from plcbuilder.bytecode.opcodes import Op, decode
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.bytecode.semantics import wrap
 from plcbuilder.controller import fastvm, vm
@@ -39,6 +40,8 @@ if TYPE_CHECKING:
     from typing import Callable, Iterable, Optional
 
 SOFTWARE_PERIOD_MS = 100
+#: the instructions that write a variable slot
+_SLOT_WRITES = frozenset({Op.STORE, Op.INC, Op.DEC})
 #: Exit code reported for a procedure that ended with a runtime fault (not in the seed's table).
 FAULT_EXIT_CODE = -1
 BACKENDS = ("fast", "reference")
@@ -78,7 +81,8 @@ class Process:
         self.eparam = eparam
         self.started_at = started_at
         self.host = host
-        self.resume: Callable[[], None] = lambda: None
+        #: runs its next tick: ``resume(None)`` (its generator's send: cheaper than __next__)
+        self.resume: Callable[[None], object] = _not_started
         self.ended_at: Optional[int] = None
         self.exit_code: Optional[int] = None
         #: the fast backend's generator when it keeps variables in locals between ticks
@@ -98,7 +102,8 @@ class Process:
 
     def set_gen(self, gen) -> None:
         self.gen = gen
-        self.resume = gen.__next__
+        # (one halted at its fault ends there when it goes on, whatever runs it)
+        self.resume = gen.send if self.fault is None else _at_fault
 
     def on_reference(self) -> bool:
         """Whether the reference interpreter runs it now."""
@@ -181,9 +186,13 @@ class PLC:
         self.job = None
         # advance() can be skipped while the machine is quiet and has no notes pending
         notes = getattr(machine, "pending_notes", None)
-        if notes is None or not hasattr(machine, "quiet"):
+        quiet_machine = notes is not None and hasattr(machine, "quiet")
+        if not quiet_machine:
             notes = (None,)                # another machine: always call advance()
         self._notes_pending = notes
+        #: the machine's clock (t_ms) only moves 1 ms a tick while it is quiet
+        #: with no notes pending: then the PLC moves it (_advance, _hardware_alone)
+        self._quiet_machine = quiet_machine
 
     def prepare(self, programs: Iterable[Program]) -> None:
         """Translate programs for the fast backend now (as they will be run),
@@ -243,7 +252,9 @@ class PLC:
                        softjog=softjog, software=True)
         calls = {name: getattr(m, _MACHINE_NAME.get(name, name)) for name in vm.CALLS}
         calls.update(own)
-        return Host(plain=m.is_plain_register, pr=pr, raw_gvarset=raw, io=io, **calls)
+        store = getattr(m, "register_store", None)      # (gvarget is the machine's own)
+        return Host(plain=m.is_plain_register, pr=pr, raw_gvarset=raw, io=io,
+                    registers=store() if store is not None else None, **calls)
 
     def _spawn(self, program: Program, eparam: int) -> Process:
         eparam = wrap(int(eparam))
@@ -310,6 +321,7 @@ class PLC:
         debugger is on (``halt``), it halts there first: p ends when it goes on."""
         if halt and self.debugger is not None and self.debugger.faulted(p, pc, text, callers):
             p.fault = (pc, text, tuple(callers))
+            p.resume = _at_fault               # going on ends it (_outcome)
             return
         prog = p.program
         chain = []
@@ -330,7 +342,12 @@ class PLC:
         """A procedure's tick raised: it ended, faulted, or hands over to the
         reference interpreter (which then finishes this tick)."""
         while True:
-            if isinstance(exc, ProcExit):
+            if isinstance(exc, _AtFault):       # halted at its fault: now it ends
+                if p.fault is not None:
+                    pc, text, callers = p.fault
+                    p.fault = None
+                    self._fault(p, pc, text, callers, halt=False)
+            elif isinstance(exc, ProcExit):
                 self._end(p, wrap(exc.code))
             elif isinstance(exc, VMFault):
                 self._fault(p, exc.pc, exc.text, exc.callers)
@@ -346,7 +363,7 @@ class PLC:
                                            stack=exc.stack, rets=exc.rets, count=exc.count))
                 p.syncing, p.watched = None, True
                 try:
-                    at = p.resume()
+                    at = p.resume(None)
                     if at is not HALT:
                         p.at = at
                     return
@@ -525,23 +542,21 @@ class PLC:
         tick (``ran``: hardware first, then software). False when the debugger
         halted one: the rest of the tick waits in ``_rest``, the halted one first."""
         dbg = self.debugger
-        for i, p in enumerate(todo):
-            if p.ended_at is not None:
-                continue
-            if p.fault is None:
-                try:
-                    at = p.resume()
-                except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
-                    self._outcome(p, exc)
-                else:
-                    if at is not HALT:
-                        p.at = at
-            else:                              # halted at its fault: now it ends
-                pc, text, callers = p.fault
-                p.fault = None
-                self._fault(p, pc, text, callers, halt=False)
+        for p in todo:
+            # (one that ended raises StopIteration, which changes nothing; one
+            # halted at its fault raises _AtFault: _outcome ends it)
+            try:
+                at = p.resume(None)
+            except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                self._outcome(p, exc)
+            else:
+                if not p.watched:      # plain fast code: it cannot halt, nor yield HALT
+                    p.at = at
+                    continue
+                if at is not HALT:
+                    p.at = at
             if dbg is not None and dbg.halt is not None:
-                self._rest = (t, todo[i:], ran)
+                self._rest = (t, todo[todo.index(p):], ran)
                 return False
         self._rest = None
         self._after_tick(t, ran)
@@ -578,8 +593,8 @@ class PLC:
         """Make p run code that asks the debugger: a procedure running plain
         fast code goes over to the reference interpreter, exactly where it is
         (suspended at a tick end, or not started yet)."""
-        if p.watched or p.ended_at is not None or p.gen is None:
-            return
+        if p.watched or p.ended_at is not None or p.gen is None or p.fault is not None:
+            return                      # (halted at its fault: it only ends from there)
         import inspect                  # (debugging only: not loaded at start)
         if self.backend == "fast" and inspect.getgeneratorstate(p.gen) == inspect.GEN_CREATED:
             p.set_gen(fastvm.make_runner(p.program, p.slots, p.host, watched=True))
@@ -590,7 +605,7 @@ class PLC:
     def to_reference(self, p: Process) -> None:
         """Hand p (suspended at a tick end, or not started) to the reference
         interpreter, exactly where it is."""
-        if p.ended_at is not None or p.gen is None:
+        if p.ended_at is not None or p.gen is None or p.fault is not None:
             return
         if p.on_reference():
             p.watched = True
@@ -621,8 +636,8 @@ class PLC:
         msg = 0
         message_slot = abi.SLOT_MESSAGE
         for p in ran:
-            code = p.slots[message_slot]
-            if code:
+            if p.slots[message_slot]:
+                code = p.slots[message_slot]
                 self._send(p, code)
                 if not msg:
                     msg = code
@@ -681,26 +696,49 @@ class PLC:
             # record again (machine._sample: the cached sample_fields() dict,
             # None once something changed), so that it is not asked
             seen, seen_proc = _NEVER, None
-            for t in range(t, stop):
-                self.t = t
-                try:
-                    at = resume()
-                except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
-                    hw.at = at
-                    return t + 1 if self._run_after(t, hw, exc) else t
-                if slots[message_slot] or rec:
-                    code = slots[message_slot]
-                    if code:
-                        send(hw, code)
-                    if rec and (code or machine._sample is not seen
-                                or slots[proc_slot] != seen_proc):
-                        seen_proc = slots[proc_slot]
-                        record(t, name, seen_proc, code)
-                        seen = machine._sample if only and not code else _NEVER
-                if notes_pending or not machine.quiet:
-                    advance(t)
-                else:
-                    machine.t_ms += 1              # advance() would do only this
+            # a quiet machine's clock reads t at the start of tick t (as it does
+            # unless the machine ran before the PLC): it is set so from t (the
+            # same int) instead of adding 1 ms (a new int) at each tick's end
+            synced = self._quiet_machine and machine.t_ms == t
+            if synced and not rec and not hw.watched and not slots[message_slot] \
+                    and not _writes_message(hw.program):
+                # the common case: no sample to record, no message to send (plain
+                # fast code that never writes its message: none can be pending)
+                for t in range(t, stop):
+                    machine.t_ms = t
+                    self.t = t
+                    try:
+                        at = resume(None)
+                    except Exception as exc:  # noqa: BLE001 - as below
+                        hw.at = at
+                        return t + 1 if self._run_after(t, hw, exc) else t
+                    if notes_pending or not machine.quiet:
+                        advance(t)
+            else:
+                for t in range(t, stop):
+                    if synced:
+                        machine.t_ms = t
+                    self.t = t
+                    try:
+                        at = resume(None)
+                    except Exception as exc:  # noqa: BLE001 - ProcExit, VMFault, Handoff or a bug
+                        hw.at = at
+                        return t + 1 if self._run_after(t, hw, exc) else t
+                    if slots[message_slot] or rec:
+                        code = slots[message_slot]
+                        if code:
+                            send(hw, code)
+                        if rec and (code or machine._sample is not seen
+                                    or slots[proc_slot] != seen_proc):
+                            seen_proc = slots[proc_slot]
+                            record(t, name, seen_proc, code)
+                            seen = machine._sample if only and not code else _NEVER
+                    if notes_pending or not machine.quiet:
+                        advance(t)
+                    elif not synced:
+                        machine.t_ms += 1          # advance() would do only this
+            if synced:
+                machine.t_ms = stop                # (the last tick's 1 ms)
             t = stop
             hw.at = at
             if t == end:
@@ -815,5 +853,37 @@ class PLC:
                 self.start_hardware(name, eparam)
 
 
-def _finished() -> None:
+#: program code -> whether it may write its ``message`` (a STORE, INC or DEC of the slot)
+_MESSAGE_WRITERS: dict[bytes, bool] = {}
+
+
+def _writes_message(program: Program) -> bool:
+    """Whether ``program``'s code may write its ``message`` slot."""
+    code = program.code
+    known = _MESSAGE_WRITERS.get(code)
+    if known is None:
+        if len(_MESSAGE_WRITERS) > 256:
+            _MESSAGE_WRITERS.clear()
+        try:
+            known = any(i.op in _SLOT_WRITES and i.arg == abi.SLOT_MESSAGE
+                        for i in decode(code))
+        except Exception:  # noqa: BLE001 - code that does not decode: assume it may
+            known = True
+        _MESSAGE_WRITERS[code] = known
+    return known
+
+
+def _not_started(_value=None) -> None:
+    return None
+
+
+def _finished(_value=None) -> None:
     raise StopIteration
+
+
+class _AtFault(Exception):
+    """What a procedure halted at its fault raises when it goes on (it ends then)."""
+
+
+def _at_fault(_value=None) -> None:
+    raise _AtFault

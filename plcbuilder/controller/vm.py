@@ -126,13 +126,20 @@ class Host:
     ``io`` may also keep a list per pin, ``in_levels`` (0 or 1) and ``out_on``
     (False or True), always equal to the bits and never replaced (changed in
     place): then those are read instead (a list item is cheaper than a bit).
+
+    ``registers``, when given, is the register store ``gvarget`` reads, as a
+    pair of dicts ``(store, forced)`` (the machine's ``register_store()``): while
+    ``forced`` is empty, ``gvarget(addr)`` of an address ``plain(addr)`` is true
+    for is ``store.get(addr, 0)``, and the fast backend reads a constant plain
+    register so instead of calling. :meth:`replace` drops it with a new ``gvarget``.
     """
 
     __slots__ = (*CALLS, "plain", "lat", "pr", "raw_gvarset", "starthw", "seteparam", "softjog",
-                 "software", "io", "debug")
+                 "software", "io", "registers", "debug")
 
     def __init__(self, *, plain=None, lat: int = 0, pr=None, raw_gvarset=None, starthw=None,
-                 seteparam=None, softjog=None, software: bool = False, io=None, **calls):
+                 seteparam=None, softjog=None, software: bool = False, io=None, registers=None,
+                 **calls):
         if calls.keys() != set(CALLS):
             raise TypeError(f"Host takes the built-in calls {', '.join(CALLS)}: "
                             f"missing {sorted(set(CALLS) - calls.keys())}, "
@@ -146,6 +153,7 @@ class Host:
         self.starthw, self.seteparam, self.softjog = starthw, seteparam, softjog
         self.software = software
         self.io = io
+        self.registers = registers
         #: the debugger's view of this procedure (controller/debugger.py ``Watch``):
         #: ``marks`` (per code offset, watched or not), ``brk(pc, rets)`` (True: halt
         #: before pc), ``table(program, base)`` (a list true where marked or ``base``
@@ -165,6 +173,8 @@ class Host:
         """A copy of this host (its debugger view aside) with ``changes`` (a
         target's own gvarget and gvarset over this one's, say)."""
         kw = {name: getattr(self, name) for name in self.__slots__ if name != "debug"}
+        if "gvarget" in changes and "registers" not in changes:
+            kw["registers"] = None          # the store read was the old gvarget's
         kw.update(changes)
         return Host(**kw)
 

@@ -9,7 +9,7 @@ import pytest
 from plcbuilder import api
 from plcbuilder.controller.controller import Controller
 from plcbuilder.controller.debugger import DebugError
-from plcbuilder.controller.events import Halted, Log, Resumed
+from plcbuilder.controller.events import Fault, Halted, Log, Resumed
 
 from tests.controller._sim import BACKENDS, COUNT, EXAMPLE, compile_proc
 
@@ -275,6 +275,23 @@ def test_a_fault_halts_at_its_line_before_the_procedure_ends(backend):
     assert "division by zero" in st["fault"]["text"]
     assert c.plc.hw is not None                    # not ended yet
     c.debugger.resume()
+    assert c.plc.hw is None and c.plc.last["M40"].exit_code == -1
+
+
+def test_a_breakpoint_set_while_halted_at_a_fault_keeps_the_fault(backend):
+    """Setting a breakpoint in the faulted procedure's file while it is halted
+    at its fault hands nothing over: going on ends it with that fault (the fast
+    backend's procedure ended as an internal error before)."""
+    src = "main()\n{\n  d = 2;\n  do\n  {\n    d--;\n    q = 10 / d;\n  }while(1);\n}\n"
+    c = _c(backend, compile_proc(src, "M40"))
+    c.debugger.halt_on_fault = True
+    c.start("M40")
+    c.step(100)
+    assert c.debugger.halted_state()["reason"] == "fault"
+    c.debugger.set_breakpoints("M40.plc", [{"line": 6}])
+    c.debugger.resume()
+    faults = [(e.text, e.line) for e in c.drain_events() if isinstance(e, Fault)]
+    assert faults == [("division by zero", 7)]
     assert c.plc.hw is None and c.plc.last["M40"].exit_code == -1
 
 

@@ -556,6 +556,57 @@ def test_the_fast_paths_run_exactly_as_the_tick_function(backend):
     assert events == events2 and samples == samples2 and t_end == t_end2
 
 
+@pytest.mark.parametrize("clock", [0, 7])
+def test_the_plain_hardware_path_runs_exactly_as_the_tick_function(backend, clock):
+    """Without samples, a hardware procedure that never writes its ``message``
+    runs through the plainest fast path (the machine's clock set from the tick,
+    no message asked): the same events, machine clock and positions as the
+    tick function gives, with a message written from outside between steps,
+    motion (the machine not quiet), prints, a start due and a fault; also with
+    a machine whose clock ran before the PLC (``clock`` ms)."""
+    m10 = compile_proc("""main(){
+        timer=300; do { timer--; if (timer==10) { gvarset(20000, timer); }; } while (timer>0);
+        g0moveA(0, 1, 500);
+        do { s=gvarget(6060); n++; } while (s==0);
+        timer=700; do { timer--; } while (timer>0);
+        a=5/eparam;
+        exit(99); };""", "M10")
+    s1 = compile_proc("""main(){ n=0; do { n++; if (n==30) { gvarset(100040, 11); }; }
+        while (n<35); exit(99); };""", "S1", software=True)
+    m11 = compile_proc("main(){ timer=5; do { timer--; } while (timer>0); exit(98); };", "M11")
+
+    def session(bound: bool):
+        c = Controller(backend=backend, record_samples=False)
+        c.machine.t_ms = clock
+        c.load([m10, m11, s1])
+        plc = c.plc
+        fast = []
+        hardware_alone = plc._hardware_alone
+        plc._hardware_alone = lambda *a: fast.append("hw") or hardware_alone(*a)
+        if bound:
+            c.set_input(40, 0)
+            c.bind_input(40, "M11")          # never rises: every tick is the general one
+        c.start("M10")
+        seen = []
+        for ms in (1, 37, 250, 99, 100, 3, 1200, 98):
+            c.step(ms)
+            if ms == 99:
+                c.write("M10.message", 23)   # sent at the end of the next tick (387)
+            seen.append((c.t_ms, c.machine.t_ms, tuple(c.machine.motion.ipos)))
+        c.run_until_idle(3000)
+        seen.append((c.t_ms, c.machine.t_ms))
+        return c.drain_events(), seen, fast
+
+    events, seen, fast = session(bound=False)
+    events2, seen2, fast2 = session(bound=True)
+    assert "hw" in fast and fast2 == []
+    assert of(events, Fault) and of(events, Print)
+    assert [(e.t_ms, e.message, e.source) for e in of(events, Message)][0] == (387, 23, "M10")
+    assert [e.name for e in of(events, Started)] == ["S1", "M10", "M11"]
+    assert events == events2 and seen == seen2
+    assert all(s[1] == s[0] + clock for s in seen)
+
+
 # ------------------------------------------------- the software grid and order
 def test_the_software_grid_starts_at_the_first_load(backend):
     """"The software grid starts at the tick of the controller's first load (so
