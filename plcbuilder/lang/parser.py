@@ -266,6 +266,9 @@ def _callbacks(t: Tables, builder: "AstBuilder") -> list:
     out = []
     for _origin, size, method, expand1, children in t.rules:
         if method is None:
+            if children == ((0, True), (1, False)):
+                out.append(_APPEND)     # ``x* x``: the list, extended in place
+                continue
             fn = None if children is None else _splicer(children, None)
             out.append(fn if fn is not None else list)
             continue
@@ -280,6 +283,14 @@ def _callbacks(t: Tables, builder: "AstBuilder") -> list:
         else:
             out.append(_splicer(children, m, expand1))
     return out
+
+
+def _APPEND(kids: list) -> list:
+    """A helper list's ``x* x``: the list with the item appended (in place, as
+    lark does for left recursion). The parser's loop does this inline."""
+    kept = kids[0]
+    kept.append(kids[1])
+    return kept
 
 
 def _splicer(children: tuple, make, expand1: bool = False):
@@ -477,13 +488,22 @@ class _Run:
 
     def _drive(self) -> tuple[int, object]:
         """Feed the tokens from ``self.pos`` (and then the end of the input) to
-        the parser: lark's ``parse_from_state``, with the loop unrolled."""
+        the parser: lark's ``parse_from_state``, with the loop unrolled.
+
+        A reduction replaces the values it pops in place (one fewer list
+        operation each); a helper list's ``x* x`` appends to the list; a run
+        of ``;`` where an item or a statement may start is taken at once
+        (:func:`_semi_runs`): the most tokens a file of a given size can
+        hold, each a stray item or an empty statement."""
         toks, n = self.toks, len(self.toks)
         states, reduce = self.t.states, self.reduce
         chains = _CHAINS
+        runs = _semi_runs(self.t)
+        empty = A.Empty
         ss, vs = self.ss, self.vs
         limit = STACK_LIMIT
         pos = self.pos
+        last = self.last
         prev = None
         while pos < n:
             t = toks[pos]
@@ -503,34 +523,66 @@ class _Run:
                     if hit is None:
                         hit = chains[key] = _chain(states, reduce, ss[-2], origin, kind)
                     ss[-1], act = hit
+                    continue
+                if size == 1:
+                    vs[-1] = fn([vs[-1]])
+                elif fn is _APPEND:
+                    x = vs.pop()
+                    vs[-1].append(x)
+                    del ss[-1]
+                elif size:
+                    kids = vs[-size:]
+                    del vs[1 - size:]
+                    vs[-1] = fn(kids)
+                    del ss[1 - size:]
                 else:
-                    if size:
-                        kids = vs[-size:]
-                        del vs[-size:]
-                        del ss[-size:]
-                    else:
-                        kids = []
-                    vs.append(fn(kids))
-                    ss.append(states[ss[-1]][origin])
-                act = states[ss[-1]].get(kind)
+                    vs.append(fn([]))
+                    ss.append(0)
+                top = ss[-1] = states[ss[-2]][origin]
+                act = states[top].get(kind)
             if act is None:
                 self.pos = pos + 1
+                self.last = last
                 return _ERROR, pos
             ss.append(act)                          # shift
             vs.append(t)
-            self.last = pos
+            last = pos
             pos += 1
             if len(ss) > limit:
                 self.pos = pos
+                self.last = last
                 return _DEEP, pos - 1
             # a mark where an item may start (not inside a run of ';': a
             # parse restarts from the run's first, and marks cost time)
-            if (kind == "NAME" or kind == "SEMI" and prev != "SEMI") and len(ss) <= 3:
+            if kind == "SEMI":
+                if prev != "SEMI" and len(ss) <= 3:
+                    self.pos = pos
+                    if self._at_item(pos - 1):
+                        self.last = last
+                        return _SYNCED, None
+                run = runs.get((ss[-2], act)) if pos < n and toks[pos].kind == "SEMI" else None
+                if run is not None:
+                    # each ';' up to the run's last reduces the one before
+                    # (to a stray item, None, or an empty statement) and is
+                    # shifted: the one before the run's last stays shifted
+                    j = pos + 1
+                    while j < n and toks[j].kind == "SEMI":
+                        j += 1
+                    if run == "stray_semi":
+                        vs[-2].extend([None] * (j - pos))
+                    else:
+                        vs[-2].extend([empty(x.span) for x in toks[pos - 1:j - 1]])
+                    vs[-1] = toks[j - 1]
+                    last = j - 1
+                    pos = j
+            elif kind == "NAME" and len(ss) <= 3:
                 self.pos = pos
                 if self._at_item(pos - 1):
+                    self.last = last
                     return _SYNCED, None
             prev = kind
         self.pos = n
+        self.last = last
         value = self.feed("$END", None)
         if value is _FAILED:
             return _ERROR, n
@@ -656,6 +708,50 @@ def _chain(states: list, reduce: list, below: int, origin: str, kind: str) -> tu
         top = states[below][reduce[~act][0]]
         act = states[top].get(kind)
     return top, act
+
+#: Tables -> {(a helper list's state, the state after ';' in it): the
+#: method ';' reduces by there ("stray_semi" or "empty")}
+_RUNS: dict = {}
+
+
+def _semi_runs(t: Tables) -> dict:
+    """Where a run of ``;`` can be taken at once: states L of a helper list
+    (``item*``, ``stmt*``) whose ``;`` goes to a state S that, on a next
+    ``;``, reduces that ``;`` alone to an item or statement (``stray_semi``,
+    None; ``empty``, an Empty) and appends it to the list, back in L. On
+    (L, S) with a ``;`` next, the parser appends the value and shifts the next
+    ``;``: the stacks stay as they are but for the list and the top token.
+    Read from the tables, so a grammar that no longer has this shape has no
+    runs (each ``;`` is then parsed one by one)."""
+    runs = _RUNS.get(id(t))
+    if runs is not None and runs[0] is t:
+        return runs[1]
+    states, rules = t.states, t.rules
+    out = {}
+    for row in states:
+        for sym, lst in row.items():
+            if not (sym.startswith("__") and lst >= 0):
+                continue
+            semi = states[lst].get("SEMI")
+            if semi is None or semi < 0:
+                continue
+            r1 = states[semi].get("SEMI")
+            if r1 is None or r1 >= 0:
+                continue
+            origin1, size1, method1 = rules[~r1][:3]
+            if size1 != 1 or method1 not in ("stray_semi", "empty"):
+                continue
+            item_state = states[lst].get(origin1)
+            r2 = states[item_state].get("SEMI") if item_state is not None else None
+            if r2 is None or r2 >= 0:
+                continue
+            origin2, size2, method2, _e, children2 = rules[~r2]
+            if origin2 == sym and size2 == 2 and method2 is None \
+                    and children2 == ((0, True), (1, False)):
+                out[(lst, semi)] = method1
+    _RUNS[id(t)] = (t, out)
+    return out
+
 
 def _moved_diag(d: Diagnostic, file: Optional[str], lines: int) -> Diagnostic:
     if not lines:

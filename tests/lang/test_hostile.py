@@ -249,3 +249,40 @@ def test_a_file_past_the_token_limit_reports_that_alone():
 def test_a_long_line_past_the_token_limit_reports_that_alone():
     errs = errors("main(){ " + "x=1;" * (MAX_TOKENS // 4 + 10) + "exit(99); };")
     assert [d.code for d in errs] == ["too-large"]
+
+
+def test_a_run_of_semicolons_is_taken_at_once():
+    """';' x N (between procedures: stray items; in a block: empty
+    statements) is the most tokens a file can hold: the parser takes a run of
+    them at once, with no call a ';' between procedures and one (its Empty)
+    in a block (before: 2 calls a ';', each through the whole loop)."""
+    from plcbuilder.lang.parser import parse_tokens
+    from plcbuilder.lang.preprocess import preprocess_text
+    n = 10_000
+    top = preprocess_text(";" * n + "main(){exit(99);};", "M.plc").tokens
+    parse_tokens(top)
+    assert python_calls(parse_tokens, top) <= 100
+    block = preprocess_text("main(){" + ";" * n + "exit(99);};", "M.plc").tokens
+    parse_tokens(block)
+    assert python_calls(parse_tokens, block) <= 1.01 * n + 100
+
+
+@pytest.mark.parametrize("text", [
+    ";;;", ";", ";;;main(){};;", "main(){;;;}", "main(){ ;;; x=1;;; };;;; main(){};;",
+    ";;}", "main(){ if(x);;; };", "main(){;;;", ";;;main", "main(){ {;;};; }",
+    "main(){ do ;;; while(1); };", "main(){ x=1;; ;; @;; };", ";;@;;main(){};"])
+def test_a_run_of_semicolons_parses_as_one_at_a_time(text, monkeypatch):
+    """The run taken at once gives the tree, diagnostics, items and marks that
+    the tokens parsed one by one (the runs switched off) give."""
+    from plcbuilder.lang import parser
+    from plcbuilder.lang.lalr import tables
+    from plcbuilder.lang.preprocess import preprocess_text
+
+    def outcome():
+        p = parser.parse_incremental(preprocess_text(text, "M.plc").tokens)
+        return (repr(p.module), [(d.code, d.message, d.span) for d in p.diagnostics],
+                repr(p.items), [(m.idx, m.stack, m.nitems) for m in p.marks])
+    assert parser._semi_runs(tables())          # the grammar has the runs
+    fast = outcome()
+    monkeypatch.setitem(parser._RUNS, id(tables()), (tables(), {}))
+    assert outcome() == fast
