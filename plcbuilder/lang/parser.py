@@ -445,9 +445,15 @@ class _Run:
             if mark is not None:
                 pos = mark.idx
                 self.ss = list(mark.stack)
-                if len(mark.stack) > 1:
-                    self.vs = [mark.items_ref[:mark.nitems]]
                 self.marks = [m for m in prev.marks if m.idx < mark.idx]
+                if len(mark.stack) > 1:
+                    # the item list goes on in a copy: the marks taken in it
+                    # so far refer to the copy too (one list, one object:
+                    # what :meth:`_splice` tells lists apart by)
+                    ref, live = mark.items_ref, mark.items_ref[:mark.nitems]
+                    self.vs = [live]
+                    self.marks = [m if m.items_ref is not ref else replace(m, items_ref=live)
+                                  for m in self.marks]
                 rec.diags = prev.rec_diags[:mark.nrec]
                 rec.errors = [x for x in prev.errors if x.idx <= mark.idx]
                 rec.count, rec.quiet_until, rec.last_error_idx = mark.count, mark.quiet_until, \
@@ -657,7 +663,10 @@ class _Run:
     # ---------------------------------------------------------- results
     def _done(self, module: A.Module, usable: bool) -> Parsed:
         rec, builder = self.rec, self.builder
-        return Parsed(self.toks, module, rec.diags + builder.diags, list(builder.items),
+        # the item list itself, not a copy: the marks of its items refer to it
+        # (``items_ref``), and :meth:`_splice` tells them from the marks of an
+        # earlier item list by it (nothing changes it once the parse is done)
+        return Parsed(self.toks, module, rec.diags + builder.diags, builder.items,
                       self.marks if usable else [], rec.errors, rec.diags, builder.diags, rec.count,
                       (self.start, len(self.toks)))
 
@@ -680,16 +689,33 @@ class _Run:
         build_diags = builder.diags + [move(d) for d in prev.build_diags[old.nbuild:]]
         errors = rec.errors + [_Error(x.idx + shift, x.lo + shift, x.hi + shift, x.min_stack)
                                for x in prev.errors if x.idx > old.idx]
-        marks = self.marks
+        live = vs[0] if len(vs) == 2 else None
+        marks = [m if live is None or m.items_ref is not live else replace(m, items_ref=items)
+                 for m in self.marks]
+        # A mark refers to the item list it was taken in. The previous parse's
+        # last list is the one spliced here (``items``); a list error recovery
+        # started again after ``old`` and later dropped (it unwound the parser
+        # below the item list: syncing allows that only when ``old`` had no
+        # list) is all after ``old``: its marks keep it, moved as the lines
+        # moved, and count from its start as before.
+        earlier: dict = {}
         for m in prev.marks:
             if m.idx > old.idx:
+                ref, nitems = m.items_ref, m.nitems
+                if ref is prev.items:
+                    ref, nitems = items, nitems - old.nitems + new.nitems
+                elif lines:
+                    got = earlier.get(id(ref))
+                    if got is None:
+                        got = earlier[id(ref)] = A.moved(ref, file, lines)
+                    ref = got
                 marks.append(_Mark(
-                    m.idx + shift, m.stack, m.nitems - old.nitems + new.nitems,
+                    m.idx + shift, m.stack, nitems,
                     m.nrec - old.nrec + new.nrec, m.nbuild - old.nbuild + new.nbuild,
                     m.count - old.count + new.count,
                     m.quiet_until + shift if m.quiet_until > old.idx else new.quiet_until,
                     m.last_error + shift if m.last_error > old.idx else new.last_error,
-                    m.too_deep, max(new.hi, m.hi + shift) if m.hi >= 0 else new.hi, items))
+                    m.too_deep, max(new.hi, m.hi + shift) if m.hi >= 0 else new.hi, ref))
         module = A.Module([i for i in items if isinstance(i, A.ProcDef)])
         return Parsed(self.toks, module, rec_diags + build_diags, items, marks, errors, rec_diags,
                       build_diags, prev.count - old.count + new.count, (self.start, new.idx), moved)
