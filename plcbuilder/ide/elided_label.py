@@ -13,29 +13,14 @@ from PySide6.QtWidgets import QLabel, QSizePolicy, QStyleOption
 MIN_CHARS = 6
 
 
-class ElidedLabel(QLabel):
-    """A one-line QLabel (plain or rich text) whose minimum width is a few
-    characters: when the text is wider than the label it is drawn as plain
-    text, elided at the right, and the full text is the tooltip."""
+class ShownText:
+    """For a QLabel subclass whose ``setText`` keeps ``_full`` (the text as
+    set) and ``_plain`` (without markup), and which sets ``_pending = None``
+    in its ``__init__``: a text that changes often is set when it can be seen."""
 
-    def __init__(self, text: str = "", parent=None, *, min_chars: int = MIN_CHARS):
-        super().__init__(parent)
-        self._full = ""
-        self._plain = ""
-        self._min_chars = min_chars
-        self._own_tip = ""
-        self._pending: str | None = None     # a text to show when the label shows
-        self.setSizePolicy(QSizePolicy.Policy.Preferred, QSizePolicy.Policy.Preferred)
-        self.setWordWrap(False)
-        self.setText(text)
-
-    # QLabel API -----------------------------------------------------------
-    def setText(self, text: str) -> None:  # noqa: N802 - Qt override
-        self._pending = None
-        self._full = text or ""
-        self._plain = _plain_of(self._full)
-        super().setText(self._full)
-        self._update_tip()
+    _full: str
+    _plain: str
+    _pending: "str | None"
 
     def set_text_when_shown(self, text: str) -> None:
         """Set a text that changes often (a status with the time in it): at once
@@ -59,10 +44,6 @@ class ElidedLabel(QLabel):
             self.setText(text)
         super().showEvent(event)
 
-    def setToolTip(self, tip: str) -> None:  # noqa: N802 - Qt override
-        self._own_tip = tip or ""
-        self._update_tip()
-
     def full_text(self) -> str:
         """The text as set (rich or plain)."""
         return self._full
@@ -70,6 +51,35 @@ class ElidedLabel(QLabel):
     def plain_text(self) -> str:
         """The text without markup."""
         return self._plain
+
+
+class ElidedLabel(ShownText, QLabel):
+    """A one-line QLabel (plain or rich text) whose minimum width is a few
+    characters: when the text is wider than the label it is drawn as plain
+    text, elided at the right, and the full text is the tooltip."""
+
+    def __init__(self, text: str = "", parent=None, *, min_chars: int = MIN_CHARS):
+        super().__init__(parent)
+        self._full = ""
+        self._plain = ""
+        self._min_chars = min_chars
+        self._own_tip = ""
+        self._pending: str | None = None     # a text to show when the label shows
+        self.setSizePolicy(QSizePolicy.Policy.Preferred, QSizePolicy.Policy.Preferred)
+        self.setWordWrap(False)
+        self.setText(text)
+
+    # QLabel API -----------------------------------------------------------
+    def setText(self, text: str) -> None:  # noqa: N802 - Qt override
+        self._pending = None
+        self._full = text or ""
+        self._plain = _plain_of(self._full)
+        super().setText(self._full)
+        self._update_tip()
+
+    def setToolTip(self, tip: str) -> None:  # noqa: N802 - Qt override
+        self._own_tip = tip or ""
+        self._update_tip()
 
     def is_elided(self) -> bool:
         """True when the label is too narrow for its text."""

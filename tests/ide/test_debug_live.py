@@ -9,7 +9,7 @@ from __future__ import annotations
 from plcbuilder.controller import events as ev
 from plcbuilder.ide.actions import Act
 
-from tests.ide._debug import HOME_LINE, click_margin
+from tests.ide._debug import HOME_LINE, click_margin, halt_m80_at_home
 
 WAIT = 30_000
 LOOP_END = 62          # M80.plc: "  gvarset(8635,0); //stop jog" right after the loop
@@ -24,23 +24,8 @@ def _halted_at(w, line):
 
 def test_halt_step_force_and_continue_in_m80(live_example, qtbot):
     w, root = live_example
-    events = []
-    assert w.open_project(root)
-    with qtbot.waitSignal(w.sig_build_finished, timeout=WAIT):
-        assert w.build_all()
-    c = w.connection
-    c.sig_events.connect(events.extend)
-    qtbot.waitUntil(lambda: c.connected and w.debug.connected(), timeout=WAIT)
-    # an empty controller gets the project's image
-    qtbot.waitUntil(lambda: c.last_state.image_crc32 is not None, timeout=WAIT)
+    events, ed = halt_m80_at_home(w, root, qtbot, WAIT)
     panels = w.ensure_run_panels()
-    ed = w.open_file(root / "hardware" / "M80.plc")
-    click_margin(qtbot, ed, HOME_LINE)
-    bp = w.debug.store.at(ed.path, HOME_LINE)
-    qtbot.waitUntil(lambda: bp.verified is True, timeout=WAIT)
-
-    assert w.start_procedure("M80", 0)
-    qtbot.waitUntil(lambda: _halted_at(w, HOME_LINE), timeout=WAIT)
     st = w.debug.halted
     assert st["reason"] == "breakpoint" and st["procedure"] == "M80"
     assert w.current_editor() is ed and ed.debug_marks.exec_lines() == [HOME_LINE]

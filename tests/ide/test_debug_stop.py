@@ -10,7 +10,7 @@ from __future__ import annotations
 from plcbuilder.controller import events as ev
 from plcbuilder.ide.actions import Act
 
-from tests.ide._debug import HOME_LINE, click_margin
+from tests.ide._debug import HOME_LINE, halt_m80_at_home
 
 WAIT = 30_000
 M02_FIRST = 7          # M02.plc: "  gvarset(8635,0);  //stop any jog"
@@ -18,21 +18,9 @@ M02_FIRST = 7          # M02.plc: "  gvarset(8635,0);  //stop any jog"
 
 def test_stop_while_halted_after_a_step_says_what_is_true(live_example, qtbot):
     w, root = live_example
-    events = []
-    assert w.open_project(root)
-    with qtbot.waitSignal(w.sig_build_finished, timeout=WAIT):
-        assert w.build_all()
+    events, m80 = halt_m80_at_home(w, root, qtbot, WAIT)
     c = w.connection
-    c.sig_events.connect(events.extend)
-    qtbot.waitUntil(lambda: c.connected and w.debug.connected(), timeout=WAIT)
-    qtbot.waitUntil(lambda: c.last_state.image_crc32 is not None, timeout=WAIT)
     panels = w.ensure_run_panels()
-    m80 = w.open_file(root / "hardware" / "M80.plc")
-    click_margin(qtbot, m80, HOME_LINE)
-    bp = w.debug.store.at(m80.path, HOME_LINE)
-    qtbot.waitUntil(lambda: bp.verified is True, timeout=WAIT)
-    assert w.start_procedure("M80", 0)
-    qtbot.waitUntil(lambda: (w.debug.halted or {}).get("line") == HOME_LINE, timeout=WAIT)
     w.action(Act.STEP_OVER).trigger()
     qtbot.waitUntil(lambda: (w.debug.halted or {}).get("line") == HOME_LINE + 1, timeout=WAIT)
     assert w.statusBar().currentMessage().startswith("Halted after a step in M80")

@@ -10,7 +10,7 @@ from PySide6 import QtCore, QtGui, QtWidgets  # before pyqtgraph (it takes the l
 import pyqtgraph as pg  # noqa: E402,I001
 
 from plcbuilder.api import abi
-from plcbuilder.ide.elided_label import _plain_of
+from plcbuilder.ide.elided_label import ShownText, _plain_of
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import RunModel
 from plcbuilder.ide.panels.tables import RowsModel
@@ -32,7 +32,7 @@ def _unbroken(fact: str) -> str:
     return _TAG_OR_SPACE.sub(lambda m: m.group(1) or "\u00a0", fact)
 
 
-class StatusLine(QtWidgets.QLabel):
+class StatusLine(ShownText, QtWidgets.QLabel):
     """The proc panel's status: every fact shows, wrapped onto as many lines
     as the dock's width needs (a fact is never broken, nor elided), and it
     never widens the dock."""
@@ -56,33 +56,9 @@ class StatusLine(QtWidgets.QLabel):
         self._plain = _plain_of(self._full)
         super().setText(SEPARATOR.join(_unbroken(f) for f in self._full.split(SEPARATOR)))
 
-    def set_text_when_shown(self, text: str) -> None:
-        """A text that changes often: set at once when visible, else when it
-        shows (a new text lays the window out again, which costs while nobody
-        can see it). :meth:`plain_text` gives the new text at once."""
-        text = text or ""
-        if text == self._full:
-            return
-        if self.isVisible():
-            self.setText(text)
-            return
-        self._pending, self._full, self._plain = text, text, _plain_of(text)
-
-    def showEvent(self, event) -> None:  # noqa: N802 - Qt override
-        if self._pending is not None:
-            text, self._pending = self._pending, None
-            self.setText(text)
-        super().showEvent(event)
-
     def text(self) -> str:
         """The text as set (the label draws it with its facts kept whole)."""
         return self._full
-
-    def full_text(self) -> str:
-        return self._full
-
-    def plain_text(self) -> str:
-        return self._plain
 
     def is_elided(self) -> bool:
         """True when some of the text is cut off (never, once laid out)."""
