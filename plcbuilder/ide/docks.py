@@ -365,6 +365,13 @@ def reset_layout(win) -> None:
         if spec.front:
             table.docks[spec.key].raise_()
     default_dock_sizes(win)
+    # the panels' splitters (the Watch dock's sections) as they first came
+    settings = getattr(win, "settings", None)
+    if settings is not None and hasattr(settings, "forget_splitter_sizes"):
+        settings.forget_splitter_sizes()
+    from plcbuilder.ide.panels.watch import SplitterSizes
+    for kept in win.findChildren(SplitterSizes):
+        kept.reset()
     QTimer.singleShot(0, lambda: scroll_editors_home(win))
 
 

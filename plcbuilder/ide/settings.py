@@ -120,6 +120,10 @@ class Settings:
     def save_splitter_sizes(self, name: str, sizes: list[int]) -> None:
         self.qs.setValue(f"window/splitters/{name}", ",".join(str(int(s)) for s in sizes))
 
+    def forget_splitter_sizes(self) -> None:
+        """Every panel's splitter sizes (View › Reset Layout)."""
+        self.qs.remove("window/splitters")
+
     def open_files(self, project) -> list[str]:
         value = self.qs.value(f"session/{_key(project)}/files", [])
         if isinstance(value, str):

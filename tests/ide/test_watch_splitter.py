@@ -99,6 +99,27 @@ def test_the_watch_registers_and_oscilloscope_share_the_dock_by_splitters(
                         timeout=5000)
 
 
+def test_reset_layout_gives_the_sections_their_first_sizes(qtbot, tmp_path, prompts_off):  # noqa: F811
+    """View › Reset Layout puts the splitters back as they first came and
+    forgets the sizes the user left (the next window starts from them too)."""
+    settings = Settings(str(tmp_path / "cfg" / "settings.ini"))
+    with windows(qtbot, settings, (1200, 800)) as make:
+        w, panels = _tgmotion_window(make, tmp_path, qtbot)
+        outer = panels.watch.split
+        first = outer.sizes()
+        _drag(qtbot, outer, 1, -80)
+        assert outer.sizes() != first and settings.splitter_sizes("watch") == outer.sizes()
+        w.reset_layout()
+        _settle(qtbot)
+        assert settings.splitter_sizes("watch") is None
+        assert settings.splitter_sizes("registers") is None
+        if not w.run_docks["watch"].isFloating():       # docked again: its height is the layout's
+            assert abs(_share(outer.sizes()) - _share(first)) < 0.05
+        w.run_docks["watch"].show()
+        _settle(qtbot)
+        assert abs(_share(outer.sizes()) - _share(first)) < 0.05
+
+
 def _calls_whole(regs) -> None:
     """The calls line (wrapped) has the height its text needs, under the table."""
     calls = regs.calls

@@ -99,6 +99,7 @@ class SplitterSizes(QtCore.QObject):
         super().__init__(splitter)
         self.splitter, self.name = splitter, name
         self._applied = False
+        self._default: Optional[list[int]] = None   # Qt's own sizes, before any saved ones
         splitter.splitterMoved.connect(self._moved)
         splitter.installEventFilter(self)
 
@@ -132,10 +133,18 @@ class SplitterSizes(QtCore.QObject):
         if self._applied or not self._all_shown() or not self.splitter.isVisible():
             return
         self._applied = True
+        if self._default is None:
+            self._default = self.splitter.sizes()
         s = self._settings()
         sizes = s.splitter_sizes(self.name) if s is not None else None
         if sizes and len(sizes) == self.splitter.count():
             self.splitter.setSizes(sizes)
+
+    def reset(self) -> None:
+        """View › Reset Layout: the sizes the splitter had before any the user
+        left (the saved ones are forgotten by the settings)."""
+        if self._default is not None and len(self._default) == self.splitter.count():
+            self.splitter.setSizes(self._default)
 
     def _moved(self, *_args) -> None:
         if not self._all_shown():
