@@ -200,3 +200,23 @@ def test_the_proc_status_shows_every_fact_at_the_default_dock_width(runwin, qtbo
     _settle(qtbot)
     assert rp.proc.status_beside and rp.proc.status.parentWidget() is rp.proc.toolbar
     assert not status.is_elided()
+
+
+def test_the_axes_panel_made_late_never_widens_its_dock(runwin, qtbot):
+    """The run panels are made when their dock first shows: the Axes panel
+    (two time plots and the XY path side by side) asked for 324 px, so the
+    first look at it widened a right-hand dock the user had made narrower."""
+    w, _conn = runwin
+    rp = w.run_panels
+    outputs, axes = w.run_docks["outputs"], w.run_docks["axes"]
+    outputs.show()
+    outputs.raise_()
+    w.resizeDocks([outputs], [120], Qt.Orientation.Horizontal)     # as narrow as it goes
+    _settle(qtbot)
+    narrow = outputs.width()
+    assert "axes" not in rp._made                                     # not made yet
+    axes.show()
+    axes.raise_()
+    _settle(qtbot)
+    assert "axes" in rp._made and axes.widget() is not None
+    assert axes.width() == narrow                                     # not widened

@@ -57,6 +57,11 @@ class AxesPanel(TimePanel):
         self._vel: dict[int, pg.PlotDataItem] = {}
         self._path_version = -1
 
+        # each side may be narrow: the panel asks no more width than the other
+        # run panels, so making it never widens the dock it joins (the plots'
+        # own minimums summed to 324 px and widened a narrower dock)
+        self.widget.setMinimumWidth(120)
+        self.xy_widget.setMinimumWidth(90)
         split = QtWidgets.QSplitter(Qt.Orientation.Horizontal)
         split.addWidget(self.widget)
         split.addWidget(self.xy_widget)
