@@ -220,3 +220,11 @@ def test_the_axes_panel_made_late_never_widens_its_dock(runwin, qtbot):
     _settle(qtbot)
     assert "axes" in rp._made and axes.widget() is not None
     assert axes.width() == narrow                                     # not widened
+    # too narrow for both plots side by side: the XY path folds away and the
+    # time plots keep the width their axes and titles need (never cut)
+    panel = rp.axes
+    assert panel.xy_folded()
+    assert panel.widget.width() >= panel.widget.ci.minimumWidth()
+    w.resizeDocks([axes], [panel.side_by_side_width() + 40], Qt.Orientation.Horizontal)
+    _settle(qtbot)
+    assert not panel.xy_folded() and panel.xy_widget.width() > 60

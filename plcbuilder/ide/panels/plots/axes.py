@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from PySide6 import QtCore, QtWidgets  # before pyqtgraph (it takes the loaded binding)
 import pyqtgraph as pg  # noqa: E402,I001
@@ -57,12 +59,15 @@ class AxesPanel(TimePanel):
         self._vel: dict[int, pg.PlotDataItem] = {}
         self._path_version = -1
 
-        # each side may be narrow: the panel asks no more width than the other
-        # run panels, so making it never widens the dock it joins (the plots'
-        # own minimums summed to 324 px and widened a narrower dock)
+        # side by side where the dock is wide enough for both plots, else the
+        # XY path folded away at the right (its handle stays, to drag it out):
+        # the panel asks no more width than the other run panels, so making it
+        # never widens the dock it joins (the plots' minimums summed to 324 px
+        # and widened a narrower dock), and the time plots are never cut
         self.widget.setMinimumWidth(120)
         self.xy_widget.setMinimumWidth(90)
-        split = QtWidgets.QSplitter(Qt.Orientation.Horizontal)
+        self._narrow = False
+        self.split = split = QtWidgets.QSplitter(Qt.Orientation.Horizontal)
         split.addWidget(self.widget)
         split.addWidget(self.xy_widget)
         split.setStretchFactor(0, 3)
@@ -72,6 +77,25 @@ class AxesPanel(TimePanel):
         lay.setSpacing(0)
         lay.addWidget(self.toolbar)
         lay.addWidget(split, 1)
+
+    def side_by_side_width(self) -> int:
+        """The least width that shows both plots whole side by side."""
+        # (the plots' scenes know it; their views' own hints are a few pixels)
+        frames = sum(2 * w.frameWidth() for w in (self.widget, self.xy_widget))
+        return (math.ceil(self.widget.ci.minimumWidth()) + math.ceil(self.xy.minimumWidth())
+                + frames + self.split.handleWidth())
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 - Qt override
+        narrow = event.size().width() < self.side_by_side_width()
+        if narrow != self._narrow:
+            self._narrow = narrow
+            self.split.setSizes([1, 0] if narrow else [3, 2])
+            self.split.handle(1).setToolTip("Drag to show the XY path" if narrow else "")
+        super().resizeEvent(event)
+
+    def xy_folded(self) -> bool:
+        """True while the XY path is folded away (a narrow dock)."""
+        return self.split.sizes()[1] == 0
 
     def draw(self, a: int, b: int, t0: float, t1: float) -> None:
         m = self.model
