@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Callable, Optional
 from PySide6.QtCore import QObject, QTimer, Signal
 
 from plcbuilder import api
+from plcbuilder._support import gcpause
 from plcbuilder.api import Span, error
 # the compiler (lark and the stages) loads on the worker thread with its first
 # job, not with the main window: the IDE paints before it is there
@@ -60,28 +61,9 @@ class Job:
     gc_held: bool = False        # the collector is paused for it until its result is handled
 
 
-_gc_lock = threading.Lock()
-_gc_holds = 0                    # jobs holding the collector paused
-_gc_was_enabled = False
-
-
-def _hold_gc() -> None:
-    global _gc_holds, _gc_was_enabled
-    with _gc_lock:
-        if _gc_holds == 0:
-            _gc_was_enabled = gc.isenabled()
-            gc.disable()
-        _gc_holds += 1
-
-
 def _release_gc() -> None:
-    global _gc_holds
-    with _gc_lock:
-        _gc_holds -= 1
-        if _gc_holds or not _gc_was_enabled:
-            return
-        gc.enable()
-    gc.collect(1)                # the compile's young objects (see the module docstring)
+    if gcpause.release():
+        gc.collect(1)            # the compile's young objects (see the module docstring)
 
 
 class DiagnosticsWorker(QObject):
@@ -220,7 +202,7 @@ class DiagnosticsWorker(QObject):
                 incremental = Incremental()
                 with self._cond:
                     incremental = self._incremental.setdefault(key, incremental)
-            _hold_gc()
+            gcpause.hold()
             job.gc_held = True
             try:
                 if job.text is None:

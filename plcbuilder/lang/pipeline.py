@@ -9,13 +9,13 @@ input becomes diagnostics, never an exception.
 
 from __future__ import annotations
 
-import gc
 import os
 import sys
 from _thread import allocate_lock
 from contextlib import contextmanager
 from pathlib import Path
 
+from plcbuilder._support import gcpause
 from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.diagnostics import Diagnostic, Span, error
@@ -46,32 +46,28 @@ RECURSION_LIMIT = 4000
 _limit_lock = allocate_lock()
 _limit_users = 0                   # compiles running (in any thread)
 _limit_saved: Optional[int] = None  # the limit to restore when the last one ends
-_gc_was_on = False                 # the collector was on when the first compile started
 
 
 @contextmanager
 def _compiling():
     """While the block runs: the recursion limit at least RECURSION_LIMIT, and
-    Python's cyclic garbage collector paused. A compile makes a few objects a
-    token (tokens, spans, nodes) and keeps most of them to its end: the
-    collector went through them again and again, a third to two fifths of a
-    compile's time, for garbage a compile does not make (its objects refer
-    to their children, never back). Both are global to the process: the
-    first compile to start sets them and the last to end puts them back, so
-    concurrent compiles do not undo each other."""
-    global _limit_users, _limit_saved, _gc_was_on
+    Python's cyclic garbage collector paused (:mod:`plcbuilder._support.gcpause`
+    says why). The limit is global to the process: the first compile to start
+    sets it and the last to end puts it back, so concurrent compiles do not
+    undo each other."""
+    global _limit_users, _limit_saved
     with _limit_lock:
         if _limit_users == 0:
             old = sys.getrecursionlimit()
             _limit_saved = old if old < RECURSION_LIMIT else None
             if _limit_saved is not None:
                 sys.setrecursionlimit(RECURSION_LIMIT)
-            _gc_was_on = gc.isenabled()
-            gc.disable()
         _limit_users += 1
+    gcpause.hold()
     try:
         yield
     finally:
+        gcpause.release()
         with _limit_lock:
             _limit_users -= 1
             if _limit_users == 0:
@@ -79,8 +75,6 @@ def _compiling():
                     if sys.getrecursionlimit() == RECURSION_LIMIT:   # unless changed meanwhile
                         sys.setrecursionlimit(_limit_saved)
                     _limit_saved = None
-                if _gc_was_on:
-                    gc.enable()
 
 
 # ====================================================================== options

@@ -28,12 +28,12 @@ checked. A full collection still comes now and then, between checks.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import gc
 import logging
 import threading
 from typing import Callable, Optional
 
+from plcbuilder._support import gcpause
 from plcbuilder.lsp.analysis import Analysis, Job, Outcome
 
 log = logging.getLogger(__name__)
@@ -171,30 +171,5 @@ class Checks:
 
     def _compute(self, job: Job) -> Outcome:
         """The compile, with the cyclic garbage collector paused (see the docstring)."""
-        with _gc_paused():
+        with gcpause.paused():   # every session's compiles share the one collector
             return self.analysis.compute(job)
-
-
-_gc_lock = threading.Lock()
-_gc_users = 0                 # compiles running with the collector paused (every session's)
-_gc_was_enabled = False
-
-
-@contextlib.contextmanager
-def _gc_paused():
-    """Pause the cyclic garbage collector while the block runs; the first of
-    the concurrent blocks pauses it and the last to end restores it (the
-    collector is one for the process, and each TCP session has its worker)."""
-    global _gc_users, _gc_was_enabled
-    with _gc_lock:
-        if _gc_users == 0:
-            _gc_was_enabled = gc.isenabled()
-            gc.disable()
-        _gc_users += 1
-    try:
-        yield
-    finally:
-        with _gc_lock:
-            _gc_users -= 1
-            if _gc_users == 0 and _gc_was_enabled:
-                gc.enable()
