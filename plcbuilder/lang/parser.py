@@ -266,7 +266,7 @@ def _callbacks(t: Tables, builder: "AstBuilder") -> list:
     out = []
     for _origin, size, method, expand1, children in t.rules:
         if method is None:
-            if children == ((0, True), (1, False)):
+            if children == APPEND_CHILDREN:
                 out.append(_APPEND)     # ``x* x``: the list, extended in place
                 continue
             fn = None if children is None else _splicer(children, None)
@@ -283,6 +283,10 @@ def _callbacks(t: Tables, builder: "AstBuilder") -> list:
         else:
             out.append(_splicer(children, m, expand1))
     return out
+
+
+#: the children of a helper list's ``x* x`` rule: the list (spliced), then the item
+APPEND_CHILDREN = ((0, True), (1, False))
 
 
 def _APPEND(kids: list) -> list:
@@ -773,7 +777,7 @@ def _semi_runs(t: Tables) -> dict:
                 continue
             origin2, size2, method2, _e, children2 = rules[~r2]
             if origin2 == sym and size2 == 2 and method2 is None \
-                    and children2 == ((0, True), (1, False)):
+                    and children2 == APPEND_CHILDREN:
                 out[(lst, semi)] = method1
     _RUNS[id(t)] = (t, out)
     return out
