@@ -115,6 +115,7 @@ OPERAND.update({
 #: Opcodes by shape and role (like dis.hasjrel / dis.hasconst).
 HAS_CONST = frozenset({Op.PUSH8, Op.PUSH16, Op.PUSH32})
 HAS_SLOT = frozenset({Op.LOAD, Op.STORE, Op.INC, Op.DEC})
+WRITES_SLOT = frozenset({Op.STORE, Op.INC, Op.DEC})      # (of HAS_SLOT, those that write it)
 HAS_JREL = frozenset(op for op, shape in OPERAND.items() if shape in (Operand.REL8, Operand.REL16))
 HAS_JABS = frozenset({Op.CALL})
 BINARY = frozenset({Op.ADD, Op.SUB, Op.MUL, Op.DIV, Op.MOD, Op.SHL, Op.SHR, Op.AND, Op.OR,

@@ -27,7 +27,7 @@ import re
 
 from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi
-from plcbuilder.bytecode.opcodes import Op, size_of, validate
+from plcbuilder.bytecode.opcodes import HAS_SLOT, Op, size_of, validate
 from plcbuilder.bytecode.program import LoadError, Program
 from plcbuilder.controller import halted_state, vm
 from plcbuilder.controller.events import Halted, Log, Resumed
@@ -40,7 +40,6 @@ REASONS = ("breakpoint", "step", "pause", "fault")
 HIT_MODES = ("eq", "ge", "every")
 STEP_KINDS = ("tick", "into", "over", "out")
 _CALL_SIZE = size_of(Op.CALL)
-_SLOT_OPS = frozenset({Op.LOAD, Op.STORE, Op.INC, Op.DEC})
 _PLACEHOLDER = re.compile(r"\{([A-Za-z_][A-Za-z0-9_]*)\}")
 #: The longest condition or log text a breakpoint takes (the compiler's limit for a
 #: condition, plcbuilder.project.conditions.MAX_CONDITION_CHARS, and the link's).
@@ -159,7 +158,7 @@ def bind(condition: Program, target: Program) -> Program:
     own = {abi.FIRST_USER_SLOT + i: n for i, n in enumerate(condition.var_names)}
     code = bytearray(condition.code)
     for ins in validate(condition.code, condition.entry):
-        if ins.op in _SLOT_OPS and ins.arg in own:
+        if ins.op in HAS_SLOT and ins.arg in own:
             name = own[ins.arg]
             if name not in slots:
                 raise DebugError(f"the condition reads {name!r}, which is not a variable "

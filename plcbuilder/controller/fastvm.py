@@ -68,7 +68,7 @@ from collections import namedtuple
 from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi, semantics, softmc
 from plcbuilder.bytecode.opcodes import (BINARY, BUILTINS, COND_JUMPS, ENDS_TICK, HAS_CONST, HAS_JREL,
-                                         IMPLICIT_CONST, JUMPS_IF_NOT_ZERO, JUMPS_IF_ZERO,
+                                         HAS_SLOT, IMPLICIT_CONST, JUMPS_IF_NOT_ZERO, JUMPS_IF_ZERO,
                                          NO_FALLTHROUGH, STACK_EFFECT, UNARY, Instruction, Op,
                                          validate)
 from plcbuilder.bytecode.program import Kind, Program
@@ -814,7 +814,7 @@ class _Gen:
         if self.budget or self.latency or self.debug or not func.gen or func.callees:
             return frozenset()
         used = {i.arg for b in func.blocks.values() for i in b.ins
-                if i.op in (Op.LOAD, Op.STORE, Op.INC, Op.DEC)}
+                if i.op in HAS_SLOT}
         return frozenset(used - _UNCACHED)
 
     def _function_body(self, func: _Func) -> None:

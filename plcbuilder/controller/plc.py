@@ -26,7 +26,7 @@ from __future__ import annotations
 from collections import deque, namedtuple
 
 from plcbuilder.bytecode import abi
-from plcbuilder.bytecode.opcodes import Op, decode
+from plcbuilder.bytecode.opcodes import WRITES_SLOT, decode
 from plcbuilder.bytecode.program import Kind, Program
 from plcbuilder.bytecode.semantics import wrap
 from plcbuilder.controller import fastvm, vm
@@ -40,8 +40,6 @@ if TYPE_CHECKING:
     from typing import Callable, Iterable, Optional
 
 SOFTWARE_PERIOD_MS = 100
-#: the instructions that write a variable slot
-_SLOT_WRITES = frozenset({Op.STORE, Op.INC, Op.DEC})
 #: Exit code reported for a procedure that ended with a runtime fault (not in the seed's table).
 FAULT_EXIT_CODE = -1
 BACKENDS = ("fast", "reference")
@@ -865,7 +863,7 @@ def _writes_message(program: Program) -> bool:
         if len(_MESSAGE_WRITERS) > 256:
             _MESSAGE_WRITERS.clear()
         try:
-            known = any(i.op in _SLOT_WRITES and i.arg == abi.SLOT_MESSAGE
+            known = any(i.op in WRITES_SLOT and i.arg == abi.SLOT_MESSAGE
                         for i in decode(code))
         except Exception:  # noqa: BLE001 - code that does not decode: assume it may
             known = True
