@@ -33,13 +33,19 @@ def _settle(qtbot):
     qtbot.wait(20)
 
 
+def _in_front(w, key: str, qtbot):
+    """A run dock shown and in front of its tabs, laid out."""
+    dock = w.run_docks[key]
+    dock.show()
+    dock.raise_()
+    _settle(qtbot)
+    return dock
+
+
 def test_a_long_status_never_widens_the_proc_dock(runwin, qtbot):
     w, conn = runwin
     rp = w.run_panels
-    proc_dock = w.run_docks["proc"]
-    proc_dock.show()
-    proc_dock.raise_()
-    _settle(qtbot)
+    proc_dock = _in_front(w, "proc", qtbot)
     before = (proc_dock.width(), w.width(), w.centralWidget().width())
     conn.connected = True
     conn.sig_connected.emit("127.0.0.1:5555")
@@ -171,10 +177,7 @@ def test_the_proc_status_shows_every_fact_at_the_default_dock_width(runwin, qtbo
     facts only in its tooltip): it wraps under the dock's tools, each fact whole."""
     w, conn = runwin
     rp = w.run_panels
-    proc_dock = w.run_docks["proc"]
-    proc_dock.show()
-    proc_dock.raise_()
-    _settle(qtbot)
+    _in_front(w, "proc", qtbot)
     conn.connected = True
     conn.sig_connected.emit("127.0.0.1:5555")
     conn.sig_state.emit(ControllerStatus(t_ms=5000, running="M03", proc=70,

@@ -234,13 +234,7 @@ def test_the_last_session_shows_its_current_editor_first_and_compiles_after_the_
     diagnostics thread held the interpreter, and the main thread waited for
     its lock while it loaded the compiler) and the outline waits; then the
     other editors come in their places, with every check."""
-    from plcbuilder.ide.settings import Settings
-    project = create_project(tmp_path / "example").root
-    files = [str(project / "hardware" / n) for n in ("M03.plc", "M05.plc")] + \
-        [str(project / "software" / "LUBE.plc")]
-    st = Settings(str(tmp_path / "config" / "settings.ini"))
-    st.save_session(project, files, files[1])
-    st.sync()
+    project, files, st = _last_session(tmp_path)
     w = make_window()
     compiled = []
     w.lint.worker.sig_result.connect(lambda key, result: compiled.append(key))
@@ -262,17 +256,12 @@ def test_closing_before_the_last_sessions_other_editors_open_keeps_them(
     """Issue 26.5: the last session's other editors open after the first
     paint (and the run panels); a window closed before then saves them in
     the session all the same, in their order."""
-    from plcbuilder.ide.settings import Settings
-    project = create_project(tmp_path / "example").root
-    files = [str(project / "hardware" / n) for n in ("M03.plc", "M05.plc")] + \
-        [str(project / "software" / "LUBE.plc")]
-    st = Settings(str(tmp_path / "config" / "settings.ini"))
-    st.save_session(project, files, files[1])
-    st.sync()
+    project, files, st = _last_session(tmp_path)
     w = make_window(settings=st)
     w.open_project(project)
     assert [e.path for e in w.editors()] == [files[1]] and w._editors_due is not None
     w.close()
+    from plcbuilder.ide.settings import Settings
     again = Settings(str(tmp_path / "config" / "settings.ini"))
     assert again.open_files(project) == files and again.current_file(project) == files[1]
 
@@ -411,3 +400,16 @@ def test_telemetry_before_the_run_panels_are_made_is_shown_by_them(qtbot, make_w
     assert [m.code for m in panels.model.messages] == [7]
     conn.sig_samples.emit([sample(30, inputs=0)])
     assert len(panels.model) == 3 and w._early_samples == []    # once, then no more kept
+
+
+def _last_session(tmp_path):
+    """The example project with three editors saved as its last session (the
+    second one current): (its folder, the files, the settings)."""
+    from plcbuilder.ide.settings import Settings
+    project = create_project(tmp_path / "example").root
+    files = [str(project / "hardware" / n) for n in ("M03.plc", "M05.plc")] + \
+        [str(project / "software" / "LUBE.plc")]
+    st = Settings(str(tmp_path / "config" / "settings.ini"))
+    st.save_session(project, files, files[1])
+    st.sync()
+    return project, files, st
