@@ -391,13 +391,19 @@ class _Worker(threading.Thread):
         return POSTED
 
     def _debug_state(self, client: Client) -> None:
+        """Ask for the halted state. Its answer is posted by the link's reader
+        thread as it is read, so it keeps its place among the ``halted`` and
+        ``resumed`` notifications, which that thread posts too: posted from
+        here, a slow wake of this thread let a stale "not halted" land after
+        a newer halt and hide it (seen as a halt that never came, under load)."""
+        def post(result: dict) -> None:
+            halted = result.get("halted")
+            self.post("debug_state", halted if isinstance(halted, dict) else None)
         try:
-            halted = client.request("debug_state").get("halted")
+            client.request("debug_state", on_reply=post)
         except _link()[0].RefusedError as exc:     # a controller without the debugger
             self.debugging = False
             self.post("error", f"debug_state: {exc.reason}")
-            return
-        self.post("debug_state", halted if isinstance(halted, dict) else None)
 
     def _close(self) -> None:
         c, self.client = self.client, None

@@ -86,6 +86,8 @@ class Telemetry:
 class _Pending:
     done: threading.Event = field(default_factory=threading.Event)
     reply: Optional[dict] = None
+    #: called on the reader thread with the result, before the waiter wakes
+    on_reply: Optional[Callable[[dict], None]] = None
 
 
 def parse_address(text: str) -> tuple[str, int]:
@@ -232,14 +234,18 @@ class Client:
         self.close()
 
     # ------------------------------------------------------------ requests
-    def request(self, mtype: str, timeout: Optional[float] = None, **fields) -> dict:
+    def request(self, mtype: str, timeout: Optional[float] = None, *,
+                on_reply: Optional[Callable[[dict], None]] = None, **fields) -> dict:
         """Send one request and wait for its answer; returns the result object.
-        Raises RefusedError when refused, ConnectionLost/LinkError otherwise."""
+        Raises RefusedError when refused, ConnectionLost/LinkError otherwise.
+        ``on_reply(result)``, when given, is called on the reader thread as the
+        result is read: in the order of the stream, before any notification
+        that came after it (the caller's own thread may wake after those)."""
         if self._closed:
             raise ConnectionLost(f"the connection is closed ({self.close_reason})")
         with self._lock:
             mid = next(self._ids)
-            slot = self._pending[mid] = _Pending()
+            slot = self._pending[mid] = _Pending(on_reply=on_reply)
         msg = {"type": mtype, "id": mid, **fields}
         try:
             frame = protocol.encode_frame(msg, self.max_frame)
@@ -528,6 +534,12 @@ class Client:
             slot = self._pending.pop(mid, None) if isinstance(mid, int) else None
         if slot is not None:
             slot.reply = msg
+            if slot.on_reply is not None and msg.get("type") == "result":
+                result = msg.get("result")
+                try:
+                    slot.on_reply(result if isinstance(result, dict) else {})
+                except Exception:  # noqa: BLE001 - a callback bug must not stop the reader
+                    traceback.print_exc(file=sys.stderr)
             slot.done.set()
 
     def on_result(self, msg: dict) -> None:

@@ -8,7 +8,7 @@ from PySide6.QtCore import Qt
 
 from plcbuilder.ide.actions import Act
 
-from tests.ide._debug import HOME_LINE, click_margin
+from tests.ide._debug import HOME_LINE, click_margin, halt_m80_at_home
 
 WAIT = 30_000
 
@@ -85,19 +85,9 @@ def test_every_action_while_halted_is_recorded_so_step_back_works(live_example, 
     the home-switch line, Step Back (Shift+F10) goes back one statement, to where
     they were done (before: "running the session again did not reach M80")."""
     w, root = live_example
-    assert w.open_project(root)
-    with qtbot.waitSignal(w.sig_build_finished, timeout=WAIT):
-        assert w.build_all()
-    c = w.connection
-    qtbot.waitUntil(lambda: c.connected and w.debug.connected(), timeout=WAIT)
-    qtbot.waitUntil(lambda: c.last_state.image_crc32 is not None, timeout=WAIT)
-    panels = w.ensure_run_panels()
-    ed = w.open_file(root / "hardware" / "M80.plc")
-    click_margin(qtbot, ed, HOME_LINE)
-    bp = w.debug.store.at(ed.path, HOME_LINE)
-    qtbot.waitUntil(lambda: bp.verified is True, timeout=WAIT)
-    assert w.start_procedure("M80", 0)
-    qtbot.waitUntil(lambda: _halted(w, HOME_LINE, "breakpoint"), timeout=WAIT)
+    halt_m80_at_home(w, root, qtbot, WAIT)
+    assert _halted(w, HOME_LINE, "breakpoint")
+    c, panels = w.connection, w.ensure_run_panels()
     w.action(Act.START).trigger()                    # on to the next tick's hit
     first = w.debug.halted["t_ms"]
     qtbot.waitUntil(lambda: _halted(w, HOME_LINE, "breakpoint")

@@ -169,3 +169,37 @@ def test_steps_need_a_halt_and_a_known_kind(served):
         c.debug_step("sideways")
     with pytest.raises(RefusedError, match="not halted"):
         c.debug_continue()
+
+
+def test_a_reply_callback_runs_in_stream_order_before_a_later_notification():
+    """A request's ``on_reply`` is called on the reader thread as its answer is
+    read, before the ``halted`` notification that follows it in the stream is
+    passed on, however late the requesting thread wakes (the IDE posts the
+    halted state this way: posted after the wake, a stale "not halted" hid a
+    newer halt)."""
+    import socket
+    import threading
+
+    from plcbuilder.link import protocol
+    ours, theirs = socket.socketpair()
+    client = Client(ours, timeout=5.0)
+    order: list[str] = []
+    client.notification_callback = lambda msg: order.append(msg["type"])
+    client._reader = threading.Thread(target=client._read_loop, daemon=True)
+    client._reader.start()
+
+    def server():
+        req = protocol.recv_msg(theirs)
+        protocol.send_msg(theirs, {"type": "result", "id": req["id"],
+                                   "result": {"t_ms": 5, "halted": None}})
+        protocol.send_msg(theirs, {"type": "halted", "state": {"line": 31}})
+    threading.Thread(target=server, daemon=True).start()
+    got = client.request("debug_state",
+                         on_reply=lambda r: order.append(f"reply {r['halted']}"))
+    deadline = time.monotonic() + 5
+    while len(order) < 2 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert got == {"t_ms": 5, "halted": None}
+    assert order == ["reply None", "halted"]
+    client.close()
+    theirs.close()
