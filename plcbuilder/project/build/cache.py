@@ -142,7 +142,8 @@ class Cache:
         self.procs: dict[str, dict] = {}
         self.files: dict[str, list] = {}
         self.image: dict = {}
-        self.found: dict[tuple, Optional[Path]] = {}   # include resolutions, this build
+        self.found: dict[tuple, Optional[str]] = {}    # include resolutions, this build
+        self.include_parts: dict[tuple, Optional[bytes]] = {}   # see _includes
 
     # ------------------------------------------------------------ files
     def info(self, path: Path) -> Optional[tuple[str, list]]:
@@ -175,58 +176,74 @@ class Cache:
         rec = self.files.get(str(proc.path))
         return rec[3] if rec is not None else None
 
-    def _resolve(self, target: str, folder: Optional[Path], dirs: list[Path]) -> Optional[Path]:
+    def _resolve(self, target: str, folder: Optional[str], dirs: tuple[str, ...]) -> Optional[str]:
         """The header #include target names from folder (None: a built-in one)."""
-        memo = (target, folder, tuple(dirs))
-        if memo not in self.found:
-            self.found[memo] = next((d / target for d in ([folder] if folder else []) + dirs
-                                     if (d / target).is_file()), None)
-        return self.found[memo]
+        memo = (target, folder, dirs)
+        found = self.found.get(memo, self)
+        if found is self:
+            path = next((p for p in (Path(d) / target for d in
+                                     ((folder,) if folder is not None else ()) + dirs)
+                         if p.is_file()), None)
+            found = self.found[memo] = str(path) if path is not None else None
+        return found
 
     def key(self, proc: Procedure, options: CompileOptions) -> Optional[str]:
         """The SHA-256 that decides whether a cached build is still good, or None
         when the sources cannot be read (then the compiler reports why)."""
-        h = hashlib.sha256()
-
-        def put(*parts) -> None:
-            for part in parts:
-                b = part if isinstance(part, bytes) else str(part).encode("utf-8", "surrogatepass")
-                h.update(len(b).to_bytes(8, "little") + b)
-
         source = self.info(proc.path)
         if source is None:
             return None
-        put(CACHE_VERSION, self.fingerprint, proc.kind.label, options.strict, options.target,
-            options.limit, str(proc.path), self.cwd, source[0], str(options.root))
-        dirs = [Path(d) for d in options.include_dirs]
-        put(len(dirs), *[str(d) for d in dirs])
-        # Resolve includes as the preprocessor does: the including file's folder,
-        # then the include folders, then the built-in headers.
-        todo = [(t, proc.path.parent) for t in source[1]]
-        seen: set[tuple[str, str]] = set()
+        dirs = tuple(str(Path(d)) for d in options.include_dirs)
+        includes = self._includes(tuple(source[1]), str(proc.path.parent), dirs)
+        if includes is None:
+            return None
+        head = _framed((CACHE_VERSION, self.fingerprint, proc.kind.label, options.strict,
+                        options.target, options.limit, str(proc.path), self.cwd, source[0],
+                        str(options.root), len(dirs)) + dirs)
+        return hashlib.sha256(head + includes).hexdigest()
+
+    def _includes(self, targets: tuple[str, ...], folder: str,
+                  dirs: tuple[str, ...]) -> Optional[bytes]:
+        """The part of a key that follows a source's #include targets (named
+        from ``folder``), framed as _framed frames it; None when a header
+        cannot be read or there are too many. Resolved as the preprocessor
+        does: the including file's folder, then the include folders, then the
+        built-in headers. The same targets from the same folder give the same
+        part within a build (its files are read at most once), so it is made
+        once a build, not once a procedure."""
+        memo = (targets, folder, dirs)
+        if memo in self.include_parts:
+            return self.include_parts[memo]
+        parts: list = []
+        todo = [(t, folder) for t in targets]
+        seen: set[tuple[str, Optional[str]]] = set()
+        done: Optional[bytes] = None
         while todo:
-            target, folder = todo.pop(0)
-            if (target, str(folder)) in seen:
+            target, where = todo.pop(0)
+            if (target, where) in seen:
                 continue
-            seen.add((target, str(folder)))
+            seen.add((target, where))
             if len(seen) > _MAX_DEPS:
-                return None
-            put("include", target, str(folder))
-            found = self._resolve(target, folder, dirs)
+                break
+            parts += ("include", target, str(where))
+            found = self._resolve(target, where, dirs)
             if found is not None:
-                header = self.info(found)
+                header = self.info(Path(found))
                 if header is None:
-                    return None
-                put("file", str(found), header[0])
-                todo.extend((t, found.parent) for t in header[1])
+                    break
+                parts += ("file", found, header[0])
+                todo.extend((t, str(Path(found).parent)) for t in header[1])
                 continue
             builtin = _builtin_info(target)
             if builtin is not None:
-                put("builtin", builtin[0])
+                parts += ("builtin", builtin[0])
                 todo.extend((t, None) for t in builtin[1])
             else:
-                put("missing")
-        return h.hexdigest()
+                parts.append("missing")
+        else:
+            done = _framed(parts)
+        self.include_parts[memo] = done
+        return done
 
     # ------------------------------------------------------- procedures
     def lookup(self, proc: Procedure, options: CompileOptions,
@@ -407,6 +424,16 @@ def _include_targets(text: str) -> list[str]:
         if mm:
             out.append(next(g for g in mm.groups() if g))
     return out
+
+
+def _framed(parts) -> bytes:
+    """Each part as its UTF-8 bytes (a str of it) after their length, 8 bytes
+    little-endian: the text a key's SHA-256 is taken of."""
+    out = []
+    for part in parts:
+        b = part if type(part) is bytes else str(part).encode("utf-8", "surrogatepass")
+        out += (len(b).to_bytes(8, "little"), b)
+    return b"".join(out)
 
 
 def _stat(path) -> Optional[list]:
