@@ -100,6 +100,11 @@ class Diagnostic:
         """The diagnostic :meth:`to_dict` made ``v`` from; ValueError when ``v``
         is not such a dict."""
         Diagnostic.check_dict(v)
+        return cls.from_checked_dict(v)
+
+    @classmethod
+    def from_checked_dict(cls, v) -> "Diagnostic":
+        """:meth:`from_dict` of a dict :meth:`check_dict` has passed already."""
         return cls(Severity(v["severity"]), v["code"], v["message"], _span_from_list(v["span"]),
                    tuple(v["hints"]),
                    tuple(Related(_span_from_list(s), m) for s, m in v["related"]))
@@ -109,12 +114,16 @@ class Diagnostic:
         """Raise ValueError unless ``v`` is a dict as :meth:`to_dict` makes it,
         without making the objects (a cache checks what it read this way)."""
         if type(v) is not dict or v.get("severity") not in _SEVERITIES \
-                or type(v.get("code")) is not str or type(v.get("message")) is not str \
-                or type(v.get("hints")) is not list or type(v.get("related")) is not list \
-                or not all(type(h) is str for h in v["hints"]):
+                or type(v.get("code")) is not str or type(v.get("message")) is not str:
             raise ValueError("bad diagnostic")
+        hints, related = v.get("hints"), v.get("related")
+        if type(hints) is not list or type(related) is not list:
+            raise ValueError("bad diagnostic")
+        for h in hints:
+            if type(h) is not str:
+                raise ValueError("bad diagnostic")
         _check_span(v.get("span"))
-        for rel in v["related"]:
+        for rel in related:
             if type(rel) is not list or len(rel) != 2 or type(rel[1]) is not str:
                 raise ValueError("bad diagnostic")
             _check_span(rel[0])
@@ -133,7 +142,8 @@ def _span_from_list(v) -> Optional[Span]:
 
 def _check_span(v) -> None:
     if v is not None and (type(v) is not list or len(v) != 5 or type(v[0]) is not str
-                          or not all(type(x) is int for x in v[1:])):
+                          or type(v[1]) is not int or type(v[2]) is not int
+                          or type(v[3]) is not int or type(v[4]) is not int):
         raise ValueError("bad span")
 
 

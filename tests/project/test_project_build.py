@@ -252,6 +252,24 @@ def test_a_source_linked_out_of_the_project_is_refused_unread(tmp_path):
     assert r.get("M03").ok
 
 
+def test_a_source_folder_linked_out_of_the_project_is_refused_and_one_linked_inside_is_not(tmp_path):
+    """A whole software/ that is a link out of the project: each of its
+    procedures is refused unread; a link to a folder inside the project builds."""
+    root, other = _linked_project(tmp_path)
+    (other / "P1.plc").write_text("main(){ exit(99); };\n")
+    (root / "software").symlink_to(other, target_is_directory=True)
+    r = build_project(Project.open(root))
+    assert not r.ok
+    (d,) = r.get("P1").diagnostics
+    assert d.code == "source-outside-project" and str(other / "P1.plc") in d.message
+    (root / "software").unlink()
+    (root / "lib").mkdir()
+    (root / "lib" / "P1.plc").write_text("main(){ exit(99); };\n")
+    (root / "software").symlink_to(root / "lib", target_is_directory=True)
+    r = build_project(Project.open(root))
+    assert r.ok and r.get("P1").ok and r.get("M03").ok
+
+
 def test_a_build_folder_linked_out_of_the_project_is_refused(tmp_path):
     root, other = _linked_project(tmp_path)
     (root / "build").symlink_to(other, target_is_directory=True)

@@ -8,6 +8,7 @@ leads out of it. Each is a diagnostic; a procedure with one is not compiled
 from __future__ import annotations
 
 import os
+import stat
 from functools import lru_cache
 from pathlib import Path
 from typing import Optional
@@ -59,28 +60,31 @@ def build_dir_problem(project: Project) -> Optional[Diagnostic]:
 
 
 @lru_cache(maxsize=64)
-def _real_folder(folder: Path, root: Path, stamp) -> Path:
-    """A folder's real path (``root``, the project's, and ``stamp``, the
-    folder's identity, in the key: either changed, it is resolved again)."""
-    return real(folder)
+def _folder_inside(folder: str, root: Path, stamp) -> bool:
+    """Whether a folder really lies in the project (``root``, its real path,
+    and ``stamp``, the folder's identity, in the key: either changed, it is
+    resolved again)."""
+    return real(Path(folder)).is_relative_to(root)
 
 
 def _outside_problem(proc: Procedure, root: Path) -> Optional[Diagnostic]:
     """A source file that is a link out of the project: an error, and it is not
     read (its lines would be echoed in diagnostics)."""
-    path = proc.path
+    path = str(proc.path)
     try:
-        # a file that is no link lies where its folder really is: one lstat,
-        # not a walk of every folder of its path (a thousand procedures)
-        folder = path.parent
+        # a file that is no link lies where its folder really is: one lstat of
+        # each, not a walk of every folder of its path (a thousand procedures)
+        folder = os.path.dirname(path)
         st = os.lstat(folder)
-        if os.path.islink(path) or os.path.islink(folder):
+        if stat.S_ISLNK(st.st_mode) or stat.S_ISLNK(os.lstat(path).st_mode):
             raise OSError
-        where = _real_folder(folder, root, (st.st_ino, st.st_dev, st.st_mtime_ns)) / path.name
+        if _folder_inside(folder, root, (st.st_ino, st.st_dev, st.st_mtime_ns)):
+            return None
+        where = real(Path(folder)) / proc.path.name
     except OSError:
-        where = real(path)
-    if where.is_relative_to(root):
-        return None
+        where = real(proc.path)
+        if where.is_relative_to(root):
+            return None
     return error("source-outside-project",
                  f"{proc.path} is a link to {where}, outside the project; Build All compiles "
                  "only files inside the project", None,     # no span: its lines are not shown

@@ -61,7 +61,10 @@ class ProcedureBuild:
 
     @property
     def diagnostics(self) -> list[Diagnostic]:
-        return [Diagnostic.from_dict(d) for d in _unpack(self._packed)[0]]
+        rows = _unpack(self._packed)[0]
+        if rows is self._packed:        # the cache's rows: checked when it was read (cached)
+            return [Diagnostic.from_checked_dict(d) for d in rows]
+        return [Diagnostic.from_dict(d) for d in rows]
 
     @property
     def lines(self) -> dict:
@@ -210,7 +213,8 @@ def pack(rows_json: str, errors: int, warnings: int, lines=None) -> Packed:
 
 
 def cached(rows: list) -> Packed:
-    """Diagnostics rows as the cache file holds them (checked by the caller)."""
+    """Diagnostics rows as the cache file holds them, each checked by the caller
+    with Diagnostic.check_dict (and not checked again when they are read)."""
     return Packed((rows if rows else b"", *counts(rows)))
 
 
