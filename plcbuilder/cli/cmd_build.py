@@ -109,8 +109,13 @@ def report(result, out: term.Out, quiet: bool = False) -> None:
     """Print a BuildResult the way `plcbuilder build` does."""
     colorize = out.colorize()
     for pb in result.procedures:
-        for d in pb.diagnostics:
-            out.print(api.render_text(d, pb.source_line, colorize))
+        if colorize is None:            # as the compiler rendered them (or the cache kept them)
+            shown = pb.shown()
+            if shown:
+                out.print(shown)
+        else:
+            for d in pb.diagnostics:
+                out.print(api.render_text(d, pb.source_line, colorize))
         if not quiet:
             out.print(_procedure_line(pb, out))
     for d in result.diagnostics:

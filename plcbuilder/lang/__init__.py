@@ -3,6 +3,6 @@
 Its output format, the diagnostics, is re-exported here for the stages that
 consume them (project, lsp)."""
 
-from plcbuilder.diagnostics import Diagnostic, Related, Severity, Span, error
+from plcbuilder.diagnostics import Diagnostic, Related, Severity, Span, error, render_text
 
-__all__ = ["Diagnostic", "Related", "Severity", "Span", "error"]
+__all__ = ["Diagnostic", "Related", "Severity", "Span", "error", "render_text"]

@@ -23,7 +23,7 @@ def test_the_cache_file_is_the_documented_format(tmp_path):
     assert doc["version"] == CACHE_VERSION and doc["compiler"] == cache.compiler_fingerprint()
     assert set(doc["procedures"]) == {f"{p.kind.label}/{p.name}" for p in r.procedures}
     for entry in doc["procedures"].values():
-        assert set(entry) == {"key", "diagnostics", "bin", "bin_stat", "crc32", "size"}
+        assert set(entry) == {"key", "diagnostics", "bin", "bin_stat", "crc32", "shown", "size"}
         for row in entry["diagnostics"]:
             Diagnostic.check_dict(row)
         assert len(entry["bin_stat"]) == 3
@@ -39,7 +39,7 @@ def test_the_cache_file_is_the_documented_format(tmp_path):
 def test_the_docstring_names_every_field():
     described = cache.__doc__
     for key in ("version", "compiler", "procedures", "files", "image", "key", "diagnostics",
-                "bin", "bin_stat", "crc32", "size", "stat"):
+                "bin", "bin_stat", "crc32", "shown", "size", "stat"):
         assert f'"{key}"' in described, key
     assert "[size, mtime_ns, inode]" in described and "trusted" in described
 

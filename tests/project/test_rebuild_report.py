@@ -56,3 +56,44 @@ def test_an_unchanged_rebuild_reads_each_file_once_for_its_report(tmp_path, monk
     assert n_diags == 3 * 24 and "hint:" in text
     assert len(reads) <= 3, reads                 # one read a file, not one a diagnostic
     assert len(decodes) <= n_diags + 3 * 24       # decoded to print, not three times over
+
+
+def test_an_unchanged_rebuild_prints_the_diagnostics_as_the_compiler_rendered_them(
+        tmp_path, monkeypatch):
+    """The cache keeps each procedure's diagnostics as the report printed them
+    (``shown``): an unchanged rebuild prints that text without reading a source
+    or decoding a diagnostic, and it is what the cold build printed; a report
+    in colour renders them again; a damaged ``shown`` compiles that procedure
+    again."""
+    import json
+
+    from plcbuilder.project.build import CACHE_FILE
+    project = _project(tmp_path / "p")
+    cold_text = _report(build_project(project))
+    again = build_project(project)
+    reads, decodes = [], []
+    monkeypatch.setattr(results, "source_text", lambda *a, **k: reads.append(a))
+    monkeypatch.setattr(Diagnostic, "from_checked_dict", lambda v: decodes.append(v))
+    monkeypatch.setattr(Diagnostic, "from_dict", lambda v: decodes.append(v))
+    text = _report(again)
+    assert reads == [] and decodes == []
+    assert text.replace(" (unchanged)", "").splitlines()[:-3] == cold_text.splitlines()[:-3]
+    monkeypatch.undo()
+
+    doc = json.loads((project.build_dir / CACHE_FILE).read_text())
+    shown = doc["procedures"]["hardware/M11"]["shown"]
+    assert shown.count(": warning: ") == 24 and shown in cold_text
+    colour = term.Out("always")
+    colour.stdout = io.StringIO()
+    cmd_build.report(build_project(project), colour)
+    painted = colour.stdout.getvalue()
+    assert "\x1b[" in painted
+    import re
+    assert shown in re.sub(r"\x1b\[[0-9;]*m", "", painted)
+
+    doc["procedures"]["hardware/M11"]["shown"] = 5
+    (project.build_dir / CACHE_FILE).write_text(json.dumps(doc))
+    r = build_project(project)
+    assert (r.compiled, r.reused) == (1, 2) and not r.get("M11").cached
+    assert _report(r).replace(" (unchanged)", "").splitlines()[:-3] == \
+        cold_text.splitlines()[:-3]

@@ -4,11 +4,12 @@ compiled, from what, so the next one compiles only what changed.
 The format (this is its one description). One JSON object, written as
 ``json.dumps(doc, sort_keys=True, separators=(",", ":"))`` plus a newline::
 
-    {"version": 2,                        CACHE_VERSION
+    {"version": 3,                        CACHE_VERSION
      "compiler": "<hex>",                 compiler_fingerprint(): its version and sources
      "procedures": {"<kind>/<name>": {    kind "hardware" or "software"
          "key": "<hex>",                  the procedure's key (below)
          "diagnostics": [row, ...],       Diagnostic.to_dict() rows
+         "shown": "<text>" | null,        those rows as the report shows them
          "bin": "<name>.bin" | null,      the binary in build/ (null: it did not compile)
          "bin_stat": stat | null,         that binary's stat when it was written
          "crc32": int | null,             its CRC-32
@@ -41,7 +42,11 @@ limits and every procedure's (name, kind, CRC, size).
 
 A procedure whose key is unchanged and whose binary is still there, unchanged
 (same stat, or else same CRC), is not compiled; its diagnostics are reported
-from the cache. An image whose key and stat are unchanged is not made again.
+from the cache. Its ``"shown"`` is what ``plcbuilder build`` printed for them
+without colour (each ``render_text`` with the source lines, joined by
+newlines; null when the compiler did not render them): the key covers every
+file those lines come from, and the compiler fingerprint covers the renderer,
+so it is printed as it is. An image whose key and stat are unchanged is not made again.
 A cache of another version or compiler is used only to remove the binaries it
 names; one larger than :data:`MAX_CACHE_BYTES` or not a JSON object is
 ignored, as is any entry of the wrong shape. The outputs are the same either
@@ -81,7 +86,7 @@ from plcbuilder.project.model import Procedure
 
 CACHE_FILE = ".cache.json"
 MAX_CACHE_BYTES = 64 << 20      # a larger build/.cache.json is not ours: it is ignored
-CACHE_VERSION = 2
+CACHE_VERSION = 3
 #: A file modified less than this before a build is read again by the next one.
 RACY_NS = 2_000_000_000
 _MAX_DEPS = 256
@@ -89,11 +94,16 @@ _MAX_DEPS = 256
 
 @lru_cache(maxsize=1)
 def compiler_fingerprint() -> str:
-    """A hash of the compiler (its version and its own source files), so that a
-    changed compiler never reuses a cached build."""
+    """A hash of the compiler (its version and its own source files, and the
+    diagnostics' renderer), so that a changed compiler never reuses a cached build."""
     h = hashlib.sha256()
     h.update(f"plcbuilder {plcbuilder.__version__} compiler {_compiler.COMPILER_VERSION}".encode())
     pkg = Path(plcbuilder.__file__).parent
+    # the renderer too: the cache keeps the diagnostics as rendered ("shown")
+    try:
+        h.update(b"diagnostics.py\0" + (pkg / "diagnostics.py").read_bytes() + b"\0")
+    except OSError:
+        pass
     for sub in ("lang", "bytecode"):
         folder = pkg / sub
         try:
@@ -282,12 +292,15 @@ class Cache:
                 size = crc = None
             else:
                 return None
+            shown = entry["shown"]
+            if shown is not None and type(shown) is not str:
+                return None
         except (OSError, KeyError, TypeError, ValueError):
             return None
         self.procs[cache_id] = entry
         # only name, size and CRC are kept: the bytes are read from build/ when needed
         return ProcedureBuild(proc, cached(rows), size, options.limit, crc, True, None, None,
-                              path)
+                              path, shown=shown)
 
     def compiled(self, pb: ProcedureBuild, key: Optional[str], rows_json: str) -> None:
         """A procedure compiled now: write its binary and remember it. Once
@@ -308,7 +321,7 @@ class Cache:
             "bin_stat": _stat(path) if binary is not None else None,
             "crc32": pb.crc32 if binary is not None else None,
         })
-        last = dumps({"key": key, "size": pb.size})
+        last = dumps({"key": key, "shown": pb.shown_if_rendered(), "size": pb.size})
         # the text dumps would give for the whole entry (keys sorted), packed
         self.procs[f"{pb.kind.label}/{pb.name}"] = RawJSON.packed(
             first[:-1] + ',"diagnostics":' + rows_json + "," + last[1:])

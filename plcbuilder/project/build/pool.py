@@ -9,7 +9,8 @@ the same order.
 A job is (source path, CompileOptions, the source's SHA-256 as its cache key
 saw it); its outcome is small, flat and picklable, so the parent builds no
 objects from it: (the diagnostics' JSON text, errors, warnings, the source
-lines they point at, code size, binary, the SHA-256 of the source compiled).
+lines they point at, code size, binary, the SHA-256 of the source compiled,
+the diagnostics as the report shows them without colour, or None).
 The compiler reads each source itself, so the parent never holds a project's
 sources.
 """
@@ -22,10 +23,10 @@ import threading
 from typing import Callable, Iterator, Optional
 
 from plcbuilder._support.files import read_bounded
-from plcbuilder.lang import Span, error
+from plcbuilder.lang import Span, error, render_text
 from plcbuilder.lang.pipeline import CompileOptions, compile_file, compile_source
 from plcbuilder.lang.source import MAX_SOURCE_BYTES
-from plcbuilder.project.build.results import counts, dumps
+from plcbuilder.project.build.results import counts, disk_line, dumps
 
 #: Fewer procedures to compile than this: compiled in this process, one after another.
 PARALLEL_MIN = 48
@@ -70,7 +71,7 @@ def compile_job(job: Job) -> tuple:
     except Exception as exc:  # noqa: BLE001 - one procedure must not stop Build All
         diag = error("internal", f"internal compiler error: {type(exc).__name__}: {exc}",
                      Span.point(path, 1, 1))
-        return dumps([diag.to_dict()]), 1, 0, [], None, None, read
+        return dumps([diag.to_dict()]), 1, 0, [], None, None, read, None
     binary = r.program.to_bytes() if r.ok and r.program is not None else None
     lines: dict = {}
     for d in r.diagnostics:
@@ -79,8 +80,13 @@ def compile_job(job: Job) -> tuple:
             if text is not None:
                 lines[(d.span.file, d.span.line)] = text
     rows = [d.to_dict() for d in r.diagnostics]
+
+    def source_line(file: str, line: int):         # as ProcedureBuild.source_line finds it
+        text = lines.get((file, line))
+        return text if text is not None else disk_line(file, line)
+    shown = "\n".join(render_text(d, source_line) for d in r.diagnostics)
     return (dumps(rows), *counts(rows), [[f, n, t] for (f, n), t in lines.items()],
-            (r.size if binary is not None else None), binary, read)
+            (r.size if binary is not None else None), binary, read, shown)
 
 
 def _warm() -> None:

@@ -24,7 +24,7 @@ from plcbuilder._support.files import read_bounded
 from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode.program import MAX_FILE_SIZE, Kind, Program
 from plcbuilder.image.manifest import Limits
-from plcbuilder.lang import Diagnostic, Severity
+from plcbuilder.lang import Diagnostic, Severity, render_text
 from plcbuilder.lang.builtin_headers import source_text
 from plcbuilder.project.model import Procedure, Project
 
@@ -41,11 +41,12 @@ class ProcedureBuild:
     at) are held packed, as zlib-compressed JSON, and decoded when asked for."""
 
     __slots__ = ("procedure", "size", "limit", "crc32", "cached", "errors", "warnings",
-                 "_packed", "_binary", "_bin_path")
+                 "_packed", "_binary", "_bin_path", "_shown")
 
     def __init__(self, procedure: Procedure, diagnostics, size: Optional[int], limit: int,
                  crc32: Optional[int] = None, cached: bool = False, lines: Optional[dict] = None,
-                 binary: Optional[bytes] = None, bin_path: Optional[Path] = None):
+                 binary: Optional[bytes] = None, bin_path: Optional[Path] = None,
+                 shown: Optional[str] = None):
         self.procedure = procedure
         self.size = size                    # code bytes, None when it did not compile
         self.limit = limit
@@ -53,6 +54,9 @@ class ProcedureBuild:
         self.cached = cached                # reused from build/.cache.json
         self._binary = binary
         self._bin_path = bin_path           # a binary written to (or reused from) build/
+        #: the diagnostics rendered as the report shows them without colour (None:
+        #: not rendered yet), zlib-compressed unless it is the cache's own string
+        self._shown = zlib.compress(shown.encode("utf-8"), 1) if shown and not cached else shown
         if isinstance(diagnostics, Packed):
             self._packed, self.errors, self.warnings = diagnostics
         else:
@@ -70,6 +74,21 @@ class ProcedureBuild:
     def lines(self) -> dict:
         """(file, line) -> text of the source lines the diagnostics point at."""
         return {(f, n): text for f, n, text in _unpack(self._packed)[1]}
+
+    def shown(self) -> str:
+        """The diagnostics as ``plcbuilder build`` shows them without colour:
+        each :func:`render_text` with :meth:`source_line`, one after another.
+        Rendered by the worker that compiled the procedure (or kept in the
+        cache with it: its key covers the sources the lines come from), or
+        here, once, when neither did."""
+        if self._shown is None:
+            self._shown = "\n".join(render_text(d, self.source_line) for d in self.diagnostics)
+        return self._shown if type(self._shown) is str else \
+            zlib.decompress(self._shown).decode("utf-8")
+
+    def shown_if_rendered(self) -> Optional[str]:
+        """:meth:`shown` when it is at hand (None: it would be rendered now)."""
+        return None if self._shown is None else self.shown()
 
     def diagnostics_json(self) -> str:
         """The diagnostics as the cache stores them (compact JSON text)."""
@@ -133,12 +152,12 @@ class ProcedureBuild:
             kept = self.lines
             _kept_lines = (self._packed, kept)
         text = kept.get((file, line))
-        return text if text is not None else _disk_line(file, line)
+        return text if text is not None else disk_line(file, line)
 
 
 #: (the packed diagnostics, their lines) of the procedure source_line last served
 _kept_lines: tuple = (None, {})
-#: (file, its size and time stamps, its lines) of the file _disk_line last read
+#: (file, its size and time stamps, its lines) of the file disk_line last read
 _last_file: tuple = (None, None, None)
 
 
@@ -189,7 +208,7 @@ class BuildResult:
                 text = p.lines.get((file, line))
                 if text is not None:
                     return text
-        return _disk_line(file, line)
+        return disk_line(file, line)
 
 
 # ------------------------------------------------------ packed diagnostics
@@ -246,7 +265,7 @@ def _disk_lines(file: str) -> Optional[list[str]]:
     return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
 
 
-def _disk_line(file: str, line: int) -> Optional[str]:
+def disk_line(file: str, line: int) -> Optional[str]:
     """A line of a file as diagnostics name it (a path, or a built-in header)."""
     global _last_file
     try:

@@ -186,12 +186,12 @@ def _procedure_builds(project: Project, progress: Optional[Progress], strict: Op
 
     def compiled(k: int, outcome: tuple) -> None:
         i, options, key = pending[k]
-        rows_json, errors, warnings, lines, size, binary, read = outcome
+        rows_json, errors, warnings, lines, size, binary, read, shown = outcome
         if read != work[k][2]:
             key = None           # the source changed after its key was made: not cached
         pb = ProcedureBuild(procs[i], pack(rows_json, errors, warnings, lines), size,
                             options.limit, zlib.crc32(binary) if binary is not None else None,
-                            False, None, binary)
+                            False, None, binary, shown=shown)
         if cache is not None:
             cache.compiled(pb, key, rows_json)
         finished(i, pb)
