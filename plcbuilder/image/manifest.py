@@ -33,7 +33,7 @@ from __future__ import annotations
 import json
 import re
 import zlib
-from dataclasses import dataclass, field
+from plcbuilder._support.records import dataclass, field
 from typing import Callable, Iterable, Iterator, Mapping, Optional, Sequence, Union
 
 from plcbuilder._support.strictjson import strict_json_loads

@@ -39,7 +39,7 @@ raises :class:`ImageError` with the reason and the offset.
 from __future__ import annotations
 
 import struct
-from dataclasses import dataclass, field
+from plcbuilder._support.records import dataclass, field
 from typing import Callable, Iterator, Mapping, NoReturn, Optional, Union
 
 MAGIC = b"-rom1fs-"

@@ -1,4 +1,5 @@
-"""How a procedure is compiled (:class:`CompileOptions`).
+"""How a procedure is compiled (:class:`CompileOptions`), and by which
+compiler (:data:`COMPILER_VERSION`).
 
 Its own module, without the compiler's stages: a project (which says how its
 files are compiled) and the IDE's first paint do not load lark. The pipeline
@@ -16,7 +17,10 @@ TYPE_CHECKING = False               # (typing is not imported at run time: start
 if TYPE_CHECKING:
     from typing import Optional
 
-__all__ = ["CompileOptions"]
+__all__ = ["COMPILER_VERSION", "CompileOptions"]
+
+#: the compiler's own version (part of the build cache's compiler fingerprint)
+COMPILER_VERSION = "1"
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from plcbuilder.lang.checker import Checker, Symbols
 from plcbuilder.lang.codegen import ADDRESS_LIMIT, JUMP_LIMIT, generate
 from plcbuilder.lang.incremental import Incremental
 from plcbuilder.lang.macro_notes import add_macro_notes
-from plcbuilder.lang.options import CompileOptions
+from plcbuilder.lang.options import COMPILER_VERSION, CompileOptions  # noqa: F401 - re-exported
 from plcbuilder.lang.parser import parse_tokens
 from plcbuilder.lang.preprocess import BUILTIN_PREFIX, Preprocessed, Preprocessor
 from plcbuilder.lang.source import SourceSet, decode_source, read_source
@@ -34,7 +34,6 @@ TYPE_CHECKING = False               # (typing is not imported at run time: start
 if TYPE_CHECKING:
     from typing import Optional
 
-COMPILER_VERSION = "1"
 #: the most diagnostics of one code a compile reports (then one that says how many more)
 MAX_SAME = 100
 

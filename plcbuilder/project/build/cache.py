@@ -77,9 +77,8 @@ from plcbuilder.bytecode.program import MAX_FILE_SIZE
 from plcbuilder.image.manifest import VERSION as IMAGE_VERSION
 from plcbuilder.image.manifest import Limits
 from plcbuilder.lang import Diagnostic
-from plcbuilder.lang import pipeline as _compiler
-from plcbuilder.lang.pipeline import CompileOptions
-from plcbuilder.lang.preprocess import builtin_header
+from plcbuilder.lang.options import COMPILER_VERSION, CompileOptions
+from plcbuilder.lang.builtin_headers import builtin_header
 from plcbuilder.lang.source import MAX_SOURCE_BYTES
 from plcbuilder.project.build.results import BIN_SUFFIX, ProcedureBuild, cached, counts, dumps
 from plcbuilder.project.model import Procedure
@@ -97,7 +96,7 @@ def compiler_fingerprint() -> str:
     """A hash of the compiler (its version and its own source files, and the
     diagnostics' renderer), so that a changed compiler never reuses a cached build."""
     h = hashlib.sha256()
-    h.update(f"plcbuilder {plcbuilder.__version__} compiler {_compiler.COMPILER_VERSION}".encode())
+    h.update(f"plcbuilder {plcbuilder.__version__} compiler {COMPILER_VERSION}".encode())
     pkg = Path(plcbuilder.__file__).parent
     # the renderer too: the cache keeps the diagnostics as rendered ("shown")
     try:

@@ -24,7 +24,7 @@ from typing import Callable, Iterator, Optional
 
 from plcbuilder._support.files import read_bounded
 from plcbuilder.lang import Span, error, render_text
-from plcbuilder.lang.pipeline import CompileOptions, compile_file, compile_source
+from plcbuilder.lang.options import CompileOptions
 from plcbuilder.lang.source import MAX_SOURCE_BYTES
 from plcbuilder.project.build.results import counts, disk_line, dumps
 
@@ -60,6 +60,7 @@ def compile_many(work: list[Job], done: Callable[[int, tuple], None],
 def compile_job(job: Job) -> tuple:
     """Compile one procedure (in a worker process or here): its outcome (see
     the module docstring). The source is read here."""
+    from plcbuilder.lang.pipeline import compile_file     # (an unchanged rebuild: not loaded)
     path, options, _hash = job
     try:
         data = read_bounded(path, MAX_SOURCE_BYTES)
@@ -91,6 +92,7 @@ def compile_job(job: Job) -> tuple:
 
 def _warm() -> None:
     """A worker's start: build the parser (a forked worker has it already)."""
+    from plcbuilder.lang.pipeline import compile_source
     compile_source("main() { exit(99); };\n")
 
 

@@ -39,7 +39,7 @@ from plcbuilder._support.files import atomic_write, remove_temp_files
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.image.manifest import ImageError, iter_image, valid_name
 from plcbuilder.lang import error
-from plcbuilder.lang.pipeline import CompileOptions
+from plcbuilder.lang.options import CompileOptions
 from plcbuilder.project.build.cache import Cache, image_key
 from plcbuilder.project.build.pool import compile_many
 from plcbuilder.project.build.problems import (build_dir_problem, is_procedure_problem,
