@@ -100,11 +100,6 @@ class Diagnostic:
         """The diagnostic :meth:`to_dict` made ``v`` from; ValueError when ``v``
         is not such a dict."""
         Diagnostic.check_dict(v)
-        return cls.from_checked_dict(v)
-
-    @classmethod
-    def from_checked_dict(cls, v) -> "Diagnostic":
-        """:meth:`from_dict` of a dict :meth:`check_dict` has passed already."""
         return cls(Severity(v["severity"]), v["code"], v["message"], _span_from_list(v["span"]),
                    tuple(v["hints"]),
                    tuple(Related(_span_from_list(s), m) for s, m in v["related"]))

@@ -23,9 +23,15 @@ def test_the_cache_file_is_the_documented_format(tmp_path):
     assert doc["version"] == CACHE_VERSION and doc["compiler"] == cache.compiler_fingerprint()
     assert set(doc["procedures"]) == {f"{p.kind.label}/{p.name}" for p in r.procedures}
     for entry in doc["procedures"].values():
-        assert set(entry) == {"key", "diagnostics", "bin", "bin_stat", "crc32", "shown", "size"}
-        for row in entry["diagnostics"]:
+        assert set(entry) == {"key", "diagnostics", "errors", "warnings", "shown", "check",
+                              "bin", "bin_stat", "crc32", "size"}
+        rows = json.loads(entry["diagnostics"])
+        for row in rows:
             Diagnostic.check_dict(row)
+        assert entry["errors"] == sum(r["severity"] == 1 for r in rows)
+        assert entry["warnings"] == sum(r["severity"] == 2 for r in rows)
+        assert entry["check"] == cache._check(entry["diagnostics"], entry["errors"],
+                                              entry["warnings"], entry["shown"])
         assert len(entry["bin_stat"]) == 3
     assert doc["procedures"]["hardware/M05"]["diagnostics"]
     assert str(m05) in doc["files"] and str(project.include_dir / "pins.h") in doc["files"]
@@ -39,7 +45,8 @@ def test_the_cache_file_is_the_documented_format(tmp_path):
 def test_the_docstring_names_every_field():
     described = cache.__doc__
     for key in ("version", "compiler", "procedures", "files", "image", "key", "diagnostics",
-                "bin", "bin_stat", "crc32", "shown", "size", "stat"):
+                "errors", "warnings", "check", "bin", "bin_stat", "crc32", "shown", "size",
+                "stat"):
         assert f'"{key}"' in described, key
     assert "[size, mtime_ns, inode]" in described and "trusted" in described
 

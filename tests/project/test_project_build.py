@@ -494,11 +494,31 @@ def test_a_damaged_diagnostic_in_the_cache_compiles_again(example, row):
     when asked for): a damaged one makes that procedure compile again."""
     build_project(example)
     doc = json.loads((example.build_dir / CACHE_FILE).read_text())
-    doc["procedures"]["hardware/M08"]["diagnostics"] = [row]
-    (example.build_dir / CACHE_FILE).write_text(json.dumps(doc))
-    r = build_project(example)
-    assert (r.compiled, r.reused) == (1, 12) and not r.get("M08").cached
-    assert all(isinstance(pb.diagnostics, list) for pb in r.procedures)
+    for damaged in ([row], json.dumps([row])):       # not text; text its check does not match
+        doc["procedures"]["hardware/M08"]["diagnostics"] = damaged
+        (example.build_dir / CACHE_FILE).write_text(json.dumps(doc))
+        r = build_project(example)
+        assert (r.compiled, r.reused) == (1, 12) and not r.get("M08").cached
+        assert all(isinstance(pb.diagnostics, list) for pb in r.procedures)
+
+
+def test_diagnostics_text_that_passes_its_check_but_is_no_diagnostics_is_one_error(example):
+    """An entry made to pass its check (its CRC worked out again) with text that
+    does not decode to diagnostics: asking for them gives one error naming the
+    cache and what to do, never an exception."""
+    from plcbuilder.project.build import cache
+    build_project(example)
+    doc = json.loads((example.build_dir / CACHE_FILE).read_text())
+    for text in ('[{"severity": 2}]', "[" * 100_000, "{}", "not json"):
+        entry = doc["procedures"]["hardware/M08"]
+        entry["diagnostics"] = text
+        entry["check"] = cache._check(text, entry["errors"], entry["warnings"], entry["shown"])
+        (example.build_dir / CACHE_FILE).write_text(json.dumps(doc))
+        r = build_project(example)
+        assert r.get("M08").cached
+        (d,) = r.get("M08").diagnostics
+        assert d.code == "build-cache" and "build/.cache.json" in d.message \
+            and "--no-cache" in d.hints[0]
 
 
 def test_a_folder_that_is_not_a_project_is_not_built(tmp_path):

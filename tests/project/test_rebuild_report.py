@@ -73,7 +73,6 @@ def test_an_unchanged_rebuild_prints_the_diagnostics_as_the_compiler_rendered_th
     again = build_project(project)
     reads, decodes = [], []
     monkeypatch.setattr(results, "source_text", lambda *a, **k: reads.append(a))
-    monkeypatch.setattr(Diagnostic, "from_checked_dict", lambda v: decodes.append(v))
     monkeypatch.setattr(Diagnostic, "from_dict", lambda v: decodes.append(v))
     text = _report(again)
     assert reads == [] and decodes == []

@@ -8,8 +8,10 @@ The format (this is its one description). One JSON object, written as
      "compiler": "<hex>",                 compiler_fingerprint(): its version and sources
      "procedures": {"<kind>/<name>": {    kind "hardware" or "software"
          "key": "<hex>",                  the procedure's key (below)
-         "diagnostics": [row, ...],       Diagnostic.to_dict() rows
+         "diagnostics": "<JSON text>",    its Diagnostic.to_dict() rows, as compact JSON
+         "errors": int, "warnings": int,  how many of them are errors, warnings
          "shown": "<text>" | null,        those rows as the report shows them
+         "check": int,                    CRC-32 of diagnostics, errors, warnings, shown
          "bin": "<name>.bin" | null,      the binary in build/ (null: it did not compile)
          "bin_stat": stat | null,         that binary's stat when it was written
          "crc32": int | null,             its CRC-32
@@ -46,11 +48,14 @@ from the cache. Its ``"shown"`` is what ``plcbuilder build`` printed for them
 without colour (each ``render_text`` with the source lines, joined by
 newlines; null when the compiler did not render them): the key covers every
 file those lines come from, and the compiler fingerprint covers the renderer,
-so it is printed as it is. An image whose key and stat are unchanged is not made again.
-A cache of another version or compiler is used only to remove the binaries it
-names; one larger than :data:`MAX_CACHE_BYTES` or not a JSON object is
-ignored, as is any entry of the wrong shape. The outputs are the same either
-way.
+so it is printed as it is. The diagnostics stay text until something asks
+for them (the IDE's Problems, a report in colour); an entry whose ``"check"``
+does not match its text is compiled again, and text that does not decode to
+diagnostics then gives one ``build-cache`` error in their place. An image
+whose key and stat are unchanged is not made again. A cache of another version
+or compiler is used only to remove the binaries it names; one larger than
+:data:`MAX_CACHE_BYTES` or not a JSON object is ignored, as is any entry of
+the wrong shape. The outputs are the same either way.
 
 The file is read once at the start of a build and written at its end, only
 when it changed, atomically and flushed to the disk. An entry compiled in this
@@ -76,11 +81,10 @@ from plcbuilder._support.files import atomic_write, read_bounded
 from plcbuilder.bytecode.program import MAX_FILE_SIZE
 from plcbuilder.image.manifest import VERSION as IMAGE_VERSION
 from plcbuilder.image.manifest import Limits
-from plcbuilder.lang import Diagnostic
 from plcbuilder.lang.options import COMPILER_VERSION, CompileOptions
 from plcbuilder.lang.builtin_headers import builtin_header
 from plcbuilder.lang.source import MAX_SOURCE_BYTES
-from plcbuilder.project.build.results import BIN_SUFFIX, ProcedureBuild, cached, counts, dumps
+from plcbuilder.project.build.results import BIN_SUFFIX, ProcedureBuild, cached, dumps
 from plcbuilder.project.model import Procedure
 
 CACHE_FILE = ".cache.json"
@@ -263,11 +267,12 @@ class Cache:
         if not entry or entry.get("key") != key:
             return None
         try:
-            rows = entry["diagnostics"]
-            if type(rows) is not list:
+            rows, errors, warnings = entry["diagnostics"], entry["errors"], entry["warnings"]
+            shown = entry["shown"]
+            if type(rows) is not str or type(errors) is not int or type(warnings) is not int \
+                    or not (shown is None or type(shown) is str) \
+                    or entry["check"] != _check(rows, errors, warnings, shown):
                 return None
-            for row in rows:
-                Diagnostic.check_dict(row)
             size, crc = entry.get("size"), entry.get("crc32")
             path = None
             if entry.get("bin"):
@@ -287,19 +292,16 @@ class Cache:
                         return None
                     del data
                     entry = dict(entry, bin_stat=stat)
-            elif counts(rows)[0]:
+            elif errors:
                 size = crc = None
             else:
-                return None
-            shown = entry["shown"]
-            if shown is not None and type(shown) is not str:
                 return None
         except (OSError, KeyError, TypeError, ValueError):
             return None
         self.procs[cache_id] = entry
         # only name, size and CRC are kept: the bytes are read from build/ when needed
-        return ProcedureBuild(proc, cached(rows), size, options.limit, crc, True, None, None,
-                              path, shown=shown)
+        return ProcedureBuild(proc, cached(rows, errors, warnings), size, options.limit, crc,
+                              True, None, None, path, shown=shown)
 
     def compiled(self, pb: ProcedureBuild, key: Optional[str], rows_json: str) -> None:
         """A procedure compiled now: write its binary and remember it. Once
@@ -314,16 +316,15 @@ class Cache:
         if key is None:
             return
         # kept as its JSON text (written out as it is), the diagnostics as the
-        # compiler's JSON text (``rows_json``): never decoded here
-        first = dumps({
+        # compiler's JSON text (``rows_json``), a string in it: never decoded here
+        shown = pb.shown_if_rendered()
+        self.procs[f"{pb.kind.label}/{pb.name}"] = RawJSON.packed(dumps({
             "bin": pb.bin_name if binary is not None else None,
             "bin_stat": _stat(path) if binary is not None else None,
+            "check": _check(rows_json, pb.errors, pb.warnings, shown),
             "crc32": pb.crc32 if binary is not None else None,
-        })
-        last = dumps({"key": key, "shown": pb.shown_if_rendered(), "size": pb.size})
-        # the text dumps would give for the whole entry (keys sorted), packed
-        self.procs[f"{pb.kind.label}/{pb.name}"] = RawJSON.packed(
-            first[:-1] + ',"diagnostics":' + rows_json + "," + last[1:])
+            "diagnostics": rows_json, "errors": pb.errors, "key": key, "shown": shown,
+            "size": pb.size, "warnings": pb.warnings}))
 
     # ------------------------------------------------------------ image
     def unchanged_image(self, path: Path, key: str) -> Optional[int]:
@@ -436,6 +437,14 @@ def _include_targets(text: str) -> list[str]:
         if mm:
             out.append(next(g for g in mm.groups() if g))
     return out
+
+
+def _check(rows_json: str, errors: int, warnings: int, shown: Optional[str]) -> int:
+    """The CRC-32 an entry's ``"check"`` holds: of its diagnostics' text,
+    their counts and ``shown`` (a damaged entry is compiled again)."""
+    crc = zlib.crc32(f"{errors},{warnings},{shown is None:d}:".encode())
+    crc = zlib.crc32(rows_json.encode("utf-8", "surrogatepass"), crc)
+    return zlib.crc32((shown or "").encode("utf-8", "surrogatepass"), crc)
 
 
 def _framed(parts) -> bytes:

@@ -24,7 +24,7 @@ from plcbuilder._support.files import read_bounded
 from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode.program import MAX_FILE_SIZE, Kind, Program
 from plcbuilder.image.manifest import Limits
-from plcbuilder.lang import Diagnostic, Severity, render_text
+from plcbuilder.lang import Diagnostic, Severity, error, render_text
 from plcbuilder.lang.builtin_headers import source_text
 from plcbuilder.project.model import Procedure, Project
 
@@ -65,10 +65,17 @@ class ProcedureBuild:
 
     @property
     def diagnostics(self) -> list[Diagnostic]:
-        rows = _unpack(self._packed)[0]
-        if rows is self._packed:        # the cache's rows: checked when it was read (cached)
-            return [Diagnostic.from_checked_dict(d) for d in rows]
-        return [Diagnostic.from_dict(d) for d in rows]
+        if type(self._packed) is str:   # the cache's text: checked as it is decoded
+            try:
+                rows = json.loads(self._packed)
+                if type(rows) is not list:
+                    raise ValueError("not a list")
+                return [Diagnostic.from_dict(d) for d in rows]
+            except (ValueError, RecursionError):
+                return [error("build-cache", f"the diagnostics build/.cache.json keeps for "
+                                             f"{self.name} are damaged", None,
+                              "build again with --no-cache")]
+        return [Diagnostic.from_dict(d) for d in _unpack(self._packed)[0]]
 
     @property
     def lines(self) -> dict:
@@ -92,6 +99,8 @@ class ProcedureBuild:
 
     def diagnostics_json(self) -> str:
         """The diagnostics as the cache stores them (compact JSON text)."""
+        if type(self._packed) is str:
+            return self._packed
         return dumps(_unpack(self._packed)[0])
 
     def __repr__(self) -> str:
@@ -215,8 +224,9 @@ class BuildResult:
 
 class Packed(tuple):
     """(packed, errors, warnings): diagnostics already packed (by :func:`pack`),
-    or the rows of the cache file as it was read (:func:`cached`: that document
-    is in memory for the build anyway, so they are shared, not packed again)."""
+    or their JSON text as the cache file holds it (:func:`cached`: that document
+    is in memory for the build anyway, so it is shared, not packed again, and
+    decoded only when asked for)."""
 
 
 def pack(rows_json: str, errors: int, warnings: int, lines=None) -> Packed:
@@ -231,10 +241,10 @@ def pack(rows_json: str, errors: int, warnings: int, lines=None) -> Packed:
     return Packed((zlib.compress(text.encode("utf-8"), 1), errors, warnings))
 
 
-def cached(rows: list) -> Packed:
-    """Diagnostics rows as the cache file holds them, each checked by the caller
-    with Diagnostic.check_dict (and not checked again when they are read)."""
-    return Packed((rows if rows else b"", *counts(rows)))
+def cached(rows_json: str, errors: int, warnings: int) -> Packed:
+    """Diagnostics as the cache file holds them: the JSON text of their rows
+    (checked as it is decoded) and their counts."""
+    return Packed((rows_json if rows_json != "[]" else b"", errors, warnings))
 
 
 def counts(rows: list) -> tuple[int, int]:
@@ -244,8 +254,8 @@ def counts(rows: list) -> tuple[int, int]:
 
 
 def _unpack(packed) -> tuple[list, list]:
-    if isinstance(packed, list):                 # a cached procedure's rows (cached)
-        return packed, []
+    if type(packed) is str:                      # a cached procedure's text (cached)
+        return json.loads(packed), []
     if not packed:
         return [], []
     doc = json.loads(zlib.decompress(packed))
