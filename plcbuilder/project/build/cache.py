@@ -157,6 +157,7 @@ class Cache:
         self.image: dict = {}
         self.found: dict[tuple, Optional[str]] = {}    # include resolutions, this build
         self.include_parts: dict[tuple, Optional[bytes]] = {}   # see _includes
+        self.fixed: dict[tuple, tuple] = {}     # (kind, options) -> a key's fixed parts
 
     # ------------------------------------------------------------ files
     def info(self, path: Path) -> Optional[tuple[str, list]]:
@@ -206,14 +207,20 @@ class Cache:
         source = self.info(proc.path)
         if source is None:
             return None
-        dirs = tuple(str(Path(d)) for d in options.include_dirs)
+        fixed = self.fixed.get((proc.kind, id(options)))
+        if fixed is None or fixed[0] is not options:   # the parts the same for a folder
+            dirs = tuple(str(Path(d)) for d in options.include_dirs)
+            fixed = self.fixed[(proc.kind, id(options))] = (
+                options, dirs,
+                _framed((CACHE_VERSION, self.fingerprint, proc.kind.label, options.strict,
+                         options.target, options.limit)),
+                _framed((self.cwd,)), _framed((str(options.root), len(dirs)) + dirs))
+        _options, dirs, head, cwd, tail = fixed
         includes = self._includes(tuple(source[1]), str(proc.path.parent), dirs)
         if includes is None:
             return None
-        head = _framed((CACHE_VERSION, self.fingerprint, proc.kind.label, options.strict,
-                        options.target, options.limit, str(proc.path), self.cwd, source[0],
-                        str(options.root), len(dirs)) + dirs)
-        return hashlib.sha256(head + includes).hexdigest()
+        return hashlib.sha256(b"".join((head, _framed((str(proc.path),)), cwd,
+                                        _framed((source[0],)), tail, includes))).hexdigest()
 
     def _includes(self, targets: tuple[str, ...], folder: str,
                   dirs: tuple[str, ...]) -> Optional[bytes]:
