@@ -48,6 +48,7 @@ the line and the key.
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -487,14 +488,15 @@ class Project:
                 continue
             folder = self.dir_for(k)
             try:
-                entries = list(folder.iterdir())
+                with os.scandir(folder) as it:      # (a file's type without a stat a file)
+                    entries = [e for e in it if e.name.endswith(SOURCE_SUFFIX)
+                               and not e.name.startswith(".") and _is_file(e)]
             except (FileNotFoundError, NotADirectoryError):
                 continue
             except OSError as exc:
                 raise ProjectError(f"cannot list: {exc.strerror or exc}", folder) from None
-            for p in entries:
-                if p.suffix == SOURCE_SUFFIX and not p.name.startswith(".") and p.is_file():
-                    out.append(Procedure(p.stem, k, p))
+            for e in entries:
+                out.append(Procedure(e.name[:-len(SOURCE_SUFFIX)], k, folder / e.name))
         out.sort(key=lambda pr: (pr.kind, pr.name))
         return out
 
@@ -517,3 +519,12 @@ class Project:
 
     def with_settings(self, **changes) -> "Project":
         return Project(self.root, replace(self.settings, **changes), self.settings_found)
+
+
+def _is_file(entry: "os.DirEntry") -> bool:
+    """Path.is_file() of a folder entry (a link to a file is one; an entry
+    that cannot be examined is none)."""
+    try:
+        return entry.is_file()
+    except OSError:
+        return False

@@ -35,6 +35,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Iterator, Optional
 
+from plcbuilder._support import gcpause
 from plcbuilder._support.files import atomic_write, remove_temp_files
 from plcbuilder.bytecode.program import Kind
 from plcbuilder.image.manifest import ImageError, iter_image, valid_name
@@ -96,7 +97,10 @@ def build_project(project: Project, progress: Optional[Progress] = None, *,
                                 "the project")
         return result
     build_dir.mkdir(parents=True, exist_ok=True)
-    with _locked(build_dir / LOCK_FILE):
+    with _locked(build_dir / LOCK_FILE), gcpause.paused():
+        # (the cache's document and the builds are a few objects a diagnostic
+        # and a procedure, none in a cycle: the collector went through them
+        # again and again, a sixth of an unchanged rebuild)
         remove_temp_files(build_dir)
         return _build(project, progress, strict, use_cache, jobs)
 
