@@ -134,6 +134,7 @@ class Cache:
 
     def __init__(self, build_dir: Path, use: bool):
         self.build_dir = build_dir
+        self.build_dir_name = str(build_dir)
         self.fingerprint = compiler_fingerprint()
         self.start_ns = time.time_ns()
         try:
@@ -216,10 +217,11 @@ class Cache:
                          options.target, options.limit)),
                 _framed((self.cwd,)), _framed((str(options.root), len(dirs)) + dirs))
         _options, dirs, head, cwd, tail = fixed
-        includes = self._includes(tuple(source[1]), str(proc.path.parent), dirs)
+        path = str(proc.path)
+        includes = self._includes(tuple(source[1]), os.path.dirname(path), dirs)
         if includes is None:
             return None
-        return hashlib.sha256(b"".join((head, _framed((str(proc.path),)), cwd,
+        return hashlib.sha256(b"".join((head, _framed((path,)), cwd,
                                         _framed((source[0],)), tail, includes))).hexdigest()
 
     def _includes(self, targets: tuple[str, ...], folder: str,
@@ -286,7 +288,7 @@ class Cache:
                 if entry["bin"] != proc.name + BIN_SUFFIX or type(size) is not int \
                         or type(crc) is not int:
                     return None
-                path = self.build_dir / entry["bin"]
+                path = os.path.join(self.build_dir_name, entry["bin"])
                 stat = _stat(path)
                 if stat is None:
                     return None

@@ -45,7 +45,7 @@ class ProcedureBuild:
 
     def __init__(self, procedure: Procedure, diagnostics, size: Optional[int], limit: int,
                  crc32: Optional[int] = None, cached: bool = False, lines: Optional[dict] = None,
-                 binary: Optional[bytes] = None, bin_path: Optional[Path] = None,
+                 binary: Optional[bytes] = None, bin_path: Optional[str | Path] = None,
                  shown: Optional[str] = None):
         self.procedure = procedure
         self.size = size                    # code bytes, None when it did not compile
