@@ -457,6 +457,57 @@ win.show()
 app.exec()
 """
 
+#: A second floor: a window of the kinds of widgets the IDE's first paint
+#: shows, and none of PLC Builder's code: a Scintilla editor holding the file
+#: the IDE opens, a tree of the project's folder, five docks, seven menus of
+#: a few actions and a status bar (argv[1]: the file, argv[2]: the folder).
+#: What it costs over the bare window is what Qt, PySide6's enums and
+#: Scintilla cost any window like it.
+_KINDS_PROBE = r"""
+import sys, time
+from PySide6.QtCore import QEvent, QObject, Qt, QTimer
+from PySide6.QtGui import QAction
+from PySide6.QtWidgets import (QApplication, QDockWidget, QFileSystemModel, QLabel,
+                               QMainWindow, QTextEdit, QTreeView)
+from pyside6_scintilla import ScintillaEdit
+class FirstPaint(QObject):
+    def eventFilter(self, obj, ev):
+        if ev.type() == QEvent.Type.Paint and not getattr(self, "done", False):
+            self.done = True
+            QTimer.singleShot(0, lambda: (print("painted", time.monotonic(),
+                                                time.process_time(), flush=True),
+                                          app.quit()))
+        return False
+app = QApplication(sys.argv[:1])
+win = QMainWindow()
+win.resize(1360, 860)
+ed = ScintillaEdit()
+with open(sys.argv[1], encoding="utf-8") as f:
+    ed.setText(f.read())
+win.setCentralWidget(ed)
+model = QFileSystemModel()
+model.setRootPath(sys.argv[2])
+tree = QTreeView()
+tree.setModel(model)
+tree.setRootIndex(model.index(sys.argv[2]))
+for i, title in enumerate(("Project", "Outline", "Problems", "Build Output", "Watch")):
+    dock = QDockWidget(title, win)
+    dock.setObjectName(title)
+    dock.setWidget(tree if i == 0 else QTextEdit() if i > 2 else QLabel(title))
+    area = Qt.DockWidgetArea.LeftDockWidgetArea if i < 2 else \
+        Qt.DockWidgetArea.BottomDockWidgetArea if i < 4 else Qt.DockWidgetArea.RightDockWidgetArea
+    win.addDockWidget(area, dock)
+for name in ("File", "Edit", "View", "Build", "Run", "Debug", "Help"):
+    menu = win.menuBar().addMenu(name)
+    for k in range(8):
+        menu.addAction(QAction(f"{name} {k}", win))
+win.statusBar().showMessage("Ready")
+f = FirstPaint()
+win.installEventFilter(f)
+win.show()
+app.exec()
+"""
+
 #: The IDE as the user starts it (``plcbuilder [gui] --settings INI``: the last
 #: project comes back with its editors), watched from inside without changing
 #: what it does: an import hook wraps two methods when their modules load.
@@ -591,6 +642,7 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None,
         with XServer("display" if os.environ.get("PLCB_BENCH_X") == "display" else "own") as x:
             return startup_figures(runs, x, before)
     got: dict[str, list[float]] = {"bare": [], "painted": [], "live": [], "without": [],
+                                   "kinds": [], "kinds_bare": [], "kinds_ide": [],
                                    "b_painted": [], "b_live": [], "bare_cpu": [],
                                    "painted_cpu": [], "live_cpu": [], "b_painted_cpu": [],
                                    "b_live_cpu": []}
@@ -618,6 +670,7 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None,
             if before and not i % 2:
                 old = _launch(_IDE_PROBE, ["live", "--settings", ini], dict(env, PYTHONPATH=before))
             without = _launch(_IDE_PROBE, ["painted", "--settings", ini, "--no-controller"], env)
+            kinds = _launch(_KINDS_PROBE, [current, str(project)], env)
             bare2 = _launch(_BARE_PROBE, [], env)
             if "painted" in bare and "painted" in bare2:   # the floor on each side of the IDE
                 bare["painted"] = (bare["painted"] + bare2["painted"]) / 2
@@ -635,6 +688,12 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None,
                 errors.append(str(bare.get("error") or ide.get("error") or ide))
             if "painted" in without:
                 got["without"].append(without["painted"])
+            if "painted" in kinds and "painted" in ide and "painted" in bare:
+                got["kinds"].append(kinds["painted"])
+                got["kinds_bare"].append(kinds["painted"] / bare["painted"])
+                got["kinds_ide"].append(ide["painted"] / kinds["painted"])
+            elif "painted" not in kinds:
+                errors.append(str(kinds.get("error") or kinds))
             if "painted" in old and "live" in old and "painted" in bare:
                 got["b_painted"].append(old["painted"])
                 got["b_live"].append(old["live"])
@@ -660,6 +719,11 @@ def startup_figures(runs: int = 7, x: "XServer | None" = None,
     if "without" in med:
         out.append(f"  IDE without the controller (--no-controller), launch to painted: "
                    f"{med['without'] * 1000:.0f} ms")
+    if got["kinds"]:
+        k_bare, k_ide = med["kinds_bare"], med["kinds_ide"]
+        out.append(f"  a window of the same widget kinds and none of our code (Scintilla with the "
+                   f"file, the folder's tree, 5 docks, 7 menus): {med['kinds'] * 1000:.0f} ms = "
+                   f"{k_bare:.2f}x the bare window; the IDE = {k_ide:.2f}x it")
     m = len(got["b_painted"])
     if m:
         b_ratio = statistics.median(got["b_painted"][i] / got["bare"][i] for i in range(m))
