@@ -186,6 +186,9 @@ def _run_procedure(app, win, target: tuple[str, int], after_ms: int) -> bool:
     if c is None:
         _say("--run needs the controller (the run side of the IDE is not available)")
         return False
+    if win.project is None:             # (its controller starts with the project)
+        _say("--run needs a project: plcbuilder gui PROJECT --run NAME --screenshot FILE")
+        return False
     if not wait_until(app, lambda: bool(getattr(c, "connected", False)), 30):
         _say("the controller did not start")
         return False
@@ -228,7 +231,12 @@ def _run_procedure(app, win, target: tuple[str, int], after_ms: int) -> bool:
         c.set_speed("realtime")
         settle(app, after_ms)
         c.set_speed("pause")
-    ok = wait_until(app, lambda: (state_t() or 0) >= t0 + after_ms, 10)
-    if not ok:
+    debug = getattr(win, "debug", None)
+    halted = lambda: debug is not None and debug.is_halted()  # noqa: E731
+    ok = wait_until(app, lambda: (state_t() or 0) >= t0 + after_ms or halted(), 10)
+    if halted():                        # a breakpoint: the picture shows where
+        from plcbuilder.ide.debug.callstack import halted_text
+        _say(f"the simulation halted before t = {t0 + after_ms} ms: {halted_text(debug.halted)}")
+    elif not ok:
         _say(f"the simulation did not reach t = {t0 + after_ms} ms")
     return True

@@ -78,6 +78,41 @@ def test_screenshot_running_a_procedure_on_the_embedded_controller(tmp_path):
     assert QImage(str(out)).width() >= 1000
 
 
+def test_run_without_a_project_says_so(tmp_path):
+    """``--run`` with no project: it says a project is needed (it said "the
+    controller did not start": the controller starts with a project)."""
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
+    proc = subprocess.run(
+        [sys.executable, "-m", "plcbuilder", "gui", "--screenshot", str(tmp_path / "x.png"),
+         "--run", "M03", "--after", "100", "--settings", str(tmp_path / "s.ini")],
+        capture_output=True, text=True, cwd=ROOT, env=env, timeout=120)
+    assert proc.returncode == 1
+    assert "--run needs a project" in proc.stderr and "did not start" not in proc.stderr
+
+
+def test_run_that_halts_at_a_breakpoint_says_where(tmp_path):
+    """A saved breakpoint halts the procedure ``--run`` starts: the message says
+    where it halted (it said "the simulation did not reach t = ..."), and the
+    picture is written."""
+    from plcbuilder.ide.settings import Settings
+    from plcbuilder.project.new import create_project
+    project = create_project(tmp_path / "ex").root
+    st = Settings(str(tmp_path / "s.ini"))
+    st.save_breakpoints(project, [{"path": "hardware/M80.plc", "line": 31, "enabled": True,
+                                   "condition": "", "hit": None, "log": ""}])
+    st.sync()
+    out = tmp_path / "halt.png"
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
+    proc = subprocess.run(
+        [sys.executable, "-m", "plcbuilder", "gui", str(project), "--screenshot", str(out),
+         "--run", "M80", "--after", "3000", "--settings", str(tmp_path / "s.ini")],
+        capture_output=True, text=True, cwd=ROOT, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "halted before t = " in proc.stderr and "M80.plc:31" in proc.stderr, proc.stderr
+    assert "did not reach" not in proc.stderr
+    assert QImage(str(out)).width() >= 1000
+
+
 def test_trace_needs_the_screenshot_and_at_most_two(tmp_path, capsys):
     parse = build_parser().parse_args
     assert cmd_gui.run(parse(["gui", str(tmp_path), "--trace", "a.plctrace"])) == 2
