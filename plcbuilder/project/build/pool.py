@@ -26,7 +26,7 @@ from plcbuilder._support.files import read_bounded
 from plcbuilder.lang import Span, error, render_text
 from plcbuilder.lang.options import CompileOptions
 from plcbuilder.lang.source import MAX_SOURCE_BYTES
-from plcbuilder.project.build.results import counts, disk_line, dumps
+from plcbuilder.project.build.results import counts, dumps, kept_line
 
 #: Fewer procedures to compile than this: compiled in this process, one after another.
 PARALLEL_MIN = 48
@@ -81,11 +81,8 @@ def compile_job(job: Job) -> tuple:
             if text is not None:
                 lines[(d.span.file, d.span.line)] = text
     rows = [d.to_dict() for d in r.diagnostics]
-
-    def source_line(file: str, line: int):         # as ProcedureBuild.source_line finds it
-        text = lines.get((file, line))
-        return text if text is not None else disk_line(file, line)
-    shown = "\n".join(render_text(d, source_line) for d in r.diagnostics)
+    shown = "\n".join(render_text(d, lambda f, n: kept_line(lines, f, n))   # as the report
+                       for d in r.diagnostics)
     return (dumps(rows), *counts(rows), [[f, n, t] for (f, n), t in lines.items()],
             (r.size if binary is not None else None), binary, read, shown)
 

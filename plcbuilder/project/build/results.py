@@ -79,7 +79,10 @@ class ProcedureBuild:
 
     @property
     def lines(self) -> dict:
-        """(file, line) -> text of the source lines the diagnostics point at."""
+        """(file, line) -> text of the source lines the diagnostics point at
+        (none kept for a cached procedure: they are read from the disk)."""
+        if type(self._packed) is str:
+            return {}
         return {(f, n): text for f, n, text in _unpack(self._packed)[1]}
 
     def shown(self) -> str:
@@ -160,13 +163,20 @@ class ProcedureBuild:
         if packed is not self._packed:
             kept = self.lines
             _kept_lines = (self._packed, kept)
-        text = kept.get((file, line))
-        return text if text is not None else disk_line(file, line)
+        return kept_line(kept, file, line)
+
+
+def kept_line(kept: dict, file: str, line: int) -> Optional[str]:
+    """A source line for a diagnostic: as kept with it ({(file, line): text}),
+    else from the disk. (The worker that renders a procedure's diagnostics for
+    the report and ProcedureBuild.source_line find lines alike this way.)"""
+    text = kept.get((file, line))
+    return text if text is not None else _disk_line(file, line)
 
 
 #: (the packed diagnostics, their lines) of the procedure source_line last served
 _kept_lines: tuple = (None, {})
-#: (file, its size and time stamps, its lines) of the file disk_line last read
+#: (file, its size and time stamps, its lines) of the file _disk_line last read
 _last_file: tuple = (None, None, None)
 
 
@@ -217,7 +227,7 @@ class BuildResult:
                 text = p.lines.get((file, line))
                 if text is not None:
                     return text
-        return disk_line(file, line)
+        return _disk_line(file, line)
 
 
 # ------------------------------------------------------ packed diagnostics
@@ -253,9 +263,9 @@ def counts(rows: list) -> tuple[int, int]:
             sum(1 for r in rows if r["severity"] == Severity.WARNING))
 
 
-def _unpack(packed) -> tuple[list, list]:
-    if type(packed) is str:                      # a cached procedure's text (cached)
-        return json.loads(packed), []
+def _unpack(packed: bytes) -> tuple[list, list]:
+    """The rows and the lines :func:`pack` packed (a cached procedure's text is
+    decoded by ProcedureBuild.diagnostics, with its check)."""
     if not packed:
         return [], []
     doc = json.loads(zlib.decompress(packed))
@@ -275,7 +285,7 @@ def _disk_lines(file: str) -> Optional[list[str]]:
     return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
 
 
-def disk_line(file: str, line: int) -> Optional[str]:
+def _disk_line(file: str, line: int) -> Optional[str]:
     """A line of a file as diagnostics name it (a path, or a built-in header)."""
     global _last_file
     try:
