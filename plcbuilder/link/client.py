@@ -90,6 +90,12 @@ class _Pending:
     on_reply: Optional[Callable[[dict], None]] = None
 
 
+def _result_of(reply: dict) -> dict:
+    """A ``result`` reply's result object (one that is not an object: empty)."""
+    result = reply.get("result")
+    return result if isinstance(result, dict) else {}
+
+
 def parse_address(text: str) -> tuple[str, int]:
     """``HOST:PORT`` (``[::1]:PORT`` for IPv6) -> (host, port). Raises ValueError."""
     text = text.strip()
@@ -272,8 +278,7 @@ class Client:
             code = str(reply.get("code", "refused"))
             cls = AuthError if code in ("unauthorized", "version") else RefusedError
             raise cls(str(reply.get("reason", "refused")), code)
-        result = reply.get("result")
-        return result if isinstance(result, dict) else {}
+        return _result_of(reply)
 
     def upload(self, image: bytes, timeout: Optional[float] = None,
                target: Optional[dict] = None) -> dict:
@@ -535,9 +540,8 @@ class Client:
         if slot is not None:
             slot.reply = msg
             if slot.on_reply is not None and msg.get("type") == "result":
-                result = msg.get("result")
                 try:
-                    slot.on_reply(result if isinstance(result, dict) else {})
+                    slot.on_reply(_result_of(msg))
                 except Exception:  # noqa: BLE001 - a callback bug must not stop the reader
                     traceback.print_exc(file=sys.stderr)
             slot.done.set()
