@@ -435,8 +435,10 @@ def measure_fps(seconds: float = 5.0, points: int = 10000, show: bool = True) ->
 
 # ---------------------------------------------------------- start-up (point 5)
 
-#: The floor: a bare Qt main window, shown; "painted" after its first paint.
-_BARE_PROBE = r"""
+#: A window launched to its first paint: "painted" (its time and the
+#: process's processor time) is printed then and the program quits. The
+#: window is made between the head and the tail.
+_PAINT_HEAD = r"""
 import sys, time
 from PySide6.QtCore import QEvent, QObject, QTimer
 from PySide6.QtWidgets import QApplication, QMainWindow
@@ -451,11 +453,16 @@ class FirstPaint(QObject):
 app = QApplication(sys.argv[:1])
 win = QMainWindow()
 win.resize(1360, 860)
+"""
+_PAINT_TAIL = r"""
 f = FirstPaint()
 win.installEventFilter(f)
 win.show()
 app.exec()
 """
+
+#: The floor: a bare Qt main window, shown; "painted" after its first paint.
+_BARE_PROBE = _PAINT_HEAD + _PAINT_TAIL
 
 #: A second floor: a window of the kinds of widgets the IDE's first paint
 #: shows, and none of PLC Builder's code: a Scintilla editor holding the file
@@ -463,24 +470,11 @@ app.exec()
 #: a few actions and a status bar (argv[1]: the file, argv[2]: the folder).
 #: What it costs over the bare window is what Qt, PySide6's enums and
 #: Scintilla cost any window like it.
-_KINDS_PROBE = r"""
-import sys, time
-from PySide6.QtCore import QEvent, QObject, Qt, QTimer
+_KINDS_PROBE = _PAINT_HEAD + r"""
+from PySide6.QtCore import Qt
 from PySide6.QtGui import QAction
-from PySide6.QtWidgets import (QApplication, QDockWidget, QFileSystemModel, QLabel,
-                               QMainWindow, QTextEdit, QTreeView)
+from PySide6.QtWidgets import QDockWidget, QFileSystemModel, QLabel, QTextEdit, QTreeView
 from pyside6_scintilla import ScintillaEdit
-class FirstPaint(QObject):
-    def eventFilter(self, obj, ev):
-        if ev.type() == QEvent.Type.Paint and not getattr(self, "done", False):
-            self.done = True
-            QTimer.singleShot(0, lambda: (print("painted", time.monotonic(),
-                                                time.process_time(), flush=True),
-                                          app.quit()))
-        return False
-app = QApplication(sys.argv[:1])
-win = QMainWindow()
-win.resize(1360, 860)
 ed = ScintillaEdit()
 with open(sys.argv[1], encoding="utf-8") as f:
     ed.setText(f.read())
@@ -502,11 +496,7 @@ for name in ("File", "Edit", "View", "Build", "Run", "Debug", "Help"):
     for k in range(8):
         menu.addAction(QAction(f"{name} {k}", win))
 win.statusBar().showMessage("Ready")
-f = FirstPaint()
-win.installEventFilter(f)
-win.show()
-app.exec()
-"""
+""" + _PAINT_TAIL
 
 #: The IDE as the user starts it (``plcbuilder [gui] --settings INI``: the last
 #: project comes back with its editors), watched from inside without changing
