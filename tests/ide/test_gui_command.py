@@ -27,6 +27,13 @@ def make_project(root: Path) -> Path:
     return root
 
 
+def gui(*args) -> subprocess.CompletedProcess:
+    """``plcbuilder gui ARGS`` in a child process, offscreen, its output captured."""
+    return subprocess.run([sys.executable, "-m", "plcbuilder", "gui", *map(str, args)],
+                          capture_output=True, text=True, cwd=ROOT,
+                          env=dict(os.environ, QT_QPA_PLATFORM="offscreen"), timeout=120)
+
+
 def test_parser_and_bad_usage(tmp_path, capsys):
     args = build_parser().parse_args(["gui", str(tmp_path), "--screenshot", "x.png", "--run",
                                       "M03:5", "--after", "250"])
@@ -68,11 +75,8 @@ def test_screenshot_without_a_controller(qtbot, tmp_path):
 def test_screenshot_running_a_procedure_on_the_embedded_controller(tmp_path):
     project = make_project(tmp_path / "proj")
     out = tmp_path / "run.png"
-    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
-    proc = subprocess.run(
-        [sys.executable, "-m", "plcbuilder", "gui", str(project), "--screenshot", str(out),
-         "--run", "M03:1000", "--after", "300", "--settings", str(tmp_path / "s.ini")],
-        capture_output=True, text=True, cwd=ROOT, env=env, timeout=120)
+    proc = gui(project, "--screenshot", out, "--run", "M03:1000", "--after", "300",
+               "--settings", tmp_path / "s.ini")
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "wrote" in proc.stdout
     assert QImage(str(out)).width() >= 1000
@@ -81,11 +85,8 @@ def test_screenshot_running_a_procedure_on_the_embedded_controller(tmp_path):
 def test_run_without_a_project_says_so(tmp_path):
     """``--run`` with no project: it says a project is needed (it said "the
     controller did not start": the controller starts with a project)."""
-    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
-    proc = subprocess.run(
-        [sys.executable, "-m", "plcbuilder", "gui", "--screenshot", str(tmp_path / "x.png"),
-         "--run", "M03", "--after", "100", "--settings", str(tmp_path / "s.ini")],
-        capture_output=True, text=True, cwd=ROOT, env=env, timeout=120)
+    proc = gui("--screenshot", tmp_path / "x.png", "--run", "M03", "--after", "100",
+               "--settings", tmp_path / "s.ini")
     assert proc.returncode == 1
     assert "--run needs a project" in proc.stderr and "did not start" not in proc.stderr
 
@@ -102,11 +103,8 @@ def test_run_that_halts_at_a_breakpoint_says_where(tmp_path):
                                    "condition": "", "hit": None, "log": ""}])
     st.sync()
     out = tmp_path / "halt.png"
-    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
-    proc = subprocess.run(
-        [sys.executable, "-m", "plcbuilder", "gui", str(project), "--screenshot", str(out),
-         "--run", "M80", "--after", "3000", "--settings", str(tmp_path / "s.ini")],
-        capture_output=True, text=True, cwd=ROOT, env=env, timeout=120)
+    proc = gui(project, "--screenshot", out, "--run", "M80", "--after", "3000",
+               "--settings", tmp_path / "s.ini")
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "halted before t = " in proc.stderr and "M80.plc:31" in proc.stderr, proc.stderr
     assert "did not reach" not in proc.stderr
@@ -130,16 +128,13 @@ def test_screenshot_of_two_traces_compared(tmp_path):
         api.save_trace(api.Trace(0, 99, {"out 3": ("bit", [(0, 0), (40, on)])}),
                        tmp_path / f"{name}.plctrace")
     (tmp_path / "bad.plctrace").write_text("no trace")
-    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
 
     def shot(*traces):
         out = tmp_path / "cmp.png"
-        args = [sys.executable, "-m", "plcbuilder", "gui", str(project), "--screenshot", str(out),
-                "--after", "50", "--settings", str(tmp_path / "s.ini")]
+        args = [project, "--screenshot", out, "--after", "50", "--settings", tmp_path / "s.ini"]
         for t in traces:
-            args += ["--trace", str(tmp_path / t)]
-        return subprocess.run(args, capture_output=True, text=True, cwd=ROOT, env=env,
-                              timeout=120), out
+            args += ["--trace", tmp_path / t]
+        return gui(*args), out
     proc, out = shot("a.plctrace", "b.plctrace")
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert QImage(str(out)).width() >= 1000
@@ -160,11 +155,8 @@ def test_screenshot_of_a_trace_with_a_watched_variable(tmp_path):
                                         "pre_ms": 40, "post_ms": 59, "mode": "single"}})
     api.save_trace(trace, tmp_path / "cap.plctrace")
     out = tmp_path / "watched.png"
-    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
-    proc = subprocess.run([sys.executable, "-m", "plcbuilder", "gui", str(project),
-                           "--screenshot", str(out), "--after", "50", "--settings",
-                           str(tmp_path / "s.ini"), "--trace", str(tmp_path / "cap.plctrace")],
-                          capture_output=True, text=True, cwd=ROOT, env=env, timeout=120)
+    proc = gui(project, "--screenshot", out, "--after", "50", "--settings", tmp_path / "s.ini",
+               "--trace", tmp_path / "cap.plctrace")
     assert proc.returncode == 0, proc.stderr[-2000:]
     image = QImage(str(out))
     lane = sum(image.pixelColor(x, y).name() == LIGHT_PLOTS.variable
