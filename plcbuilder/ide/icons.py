@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from functools import lru_cache
 
-from PySide6.QtCore import QByteArray, QRectF, Qt
+from PySide6.QtCore import QByteArray
 from PySide6.QtGui import QIcon, QImage, QPainter, QPixmap
 
 from plcbuilder._support.package_data import data_folder
@@ -71,6 +71,9 @@ def pixmap(name: str, size: int = 16) -> QPixmap:
 
 
 def _render(data: bytes, size: int) -> QPixmap:
+    # the Qt namespace here, not at import: its first use makes its 93 enum
+    # classes (35 ms), which the window's first frame does without
+    from PySide6.QtCore import QRectF, Qt
     from PySide6.QtSvg import QSvgRenderer
     renderer = QSvgRenderer(QByteArray(data))
     img = QImage(size, size, QImage.Format.Format_ARGB32_Premultiplied)

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from PySide6.QtCore import Qt
 from PySide6.QtGui import QColor, QFont, QFontDatabase, QImage, QPainter
 
 # indicators (0..7 belong to lexers; containers use 8 and up)
@@ -72,6 +71,9 @@ def default_font_family() -> str:
 
 
 def rgba_image(letter: str, colour: str, size: int = 14) -> bytes:
+    # the Qt namespace here, not at import (the settings import this module
+    # before the window's first frame, which does without its 35 ms of enums)
+    from PySide6.QtCore import Qt
     img = QImage(size, size, QImage.Format.Format_RGBA8888)
     img.fill(Qt.GlobalColor.transparent)
     p = QPainter(img)
