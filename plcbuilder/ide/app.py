@@ -93,7 +93,6 @@ def main(project: Optional[str] = None, *, screenshot: Optional[str] = None,
          start_controller: bool = True, traces: tuple = ()) -> int:
     """Run the IDE (``plcbuilder gui``); in screenshot mode save a PNG and exit."""
     app = create_application()
-    from plcbuilder.ide.main_window import MainWindow
     from plcbuilder.ide.settings import Settings
     settings = Settings(settings_path)
     apply_theme(app, settings.preferences().theme)
@@ -103,16 +102,69 @@ def main(project: Optional[str] = None, *, screenshot: Optional[str] = None,
         from plcbuilder.ide import screenshot as shot
         return shot.run(app, settings, project, screenshot, run, after_ms, start_controller,
                         traces=tuple(traces))
-    win = MainWindow(settings, start_controller=start_controller)
-    win.show()
+    folder, file = _what_to_open(project, settings)
+    opened: list = []                        # the main window, kept while the IDE runs
+    failed: list = []
+    if folder is not None and _first_frame_fits(app):
+        from plcbuilder.ide.first_frame import FirstFrame
+        prefs = settings.preferences()
+        frame = FirstFrame(settings, folder, front=file, font_family=prefs.font_family,
+                           font_size=prefs.font_size)
+
+        def make_window() -> None:
+            try:
+                opened.append(_open_window(app, settings, folder, file, start_controller, frame))
+            except BaseException as exc:     # (raised below, as without the frame)
+                failed.append(exc)
+                frame.close()
+                app.exit(1)
+        frame.after_paint(make_window)
+        frame.show()
+    else:
+        opened.append(_open_window(app, settings, folder, file, start_controller, None))
+    code = app.exec()
+    if failed:
+        raise failed[0]
+    return code
+
+
+def _what_to_open(project: Optional[str], settings) -> tuple[Optional[Path], Optional[Path]]:
+    """The project folder to open (None: none) and a file of it to open with it."""
     if project and Path(project).is_file():     # a file of a project (the desktop's "open")
-        folder, file = project_of(Path(project)), Path(project)
-        if win.open_project(folder) and file.name != "plcbuilder.toml":
-            win.open_file(file)
-    elif project:
-        win.open_project(project)
-    elif win.prefs.open_last_project:
+        file = Path(project)
+        return project_of(file), (file if file.name != "plcbuilder.toml" else None)
+    if project:
+        return Path(project), None
+    if settings.preferences().open_last_project:
         recent = [p for p in settings.recent_projects() if Path(p).is_dir()]
         if recent:
-            win.open_project(recent[0])
-    return app.exec()
+            return Path(recent[0]), None
+    return None, None
+
+
+def _first_frame_fits(app: QApplication) -> bool:
+    """Whether the first frame can stand where the window will be: not on
+    Wayland, where a program does not place its windows (the frame and the
+    window could show in two places)."""
+    return not app.platformName().startswith("wayland")
+
+
+def _open_window(app: QApplication, settings, folder: Optional[Path], file: Optional[Path],
+                 start_controller: bool, frame):
+    """Make the main window, open the project (and file) in it and show it;
+    with the first frame, in the frame's place once made (see first_frame)."""
+    from plcbuilder.ide.main_window import MainWindow
+    win = MainWindow(settings, start_controller=start_controller)
+    if frame is None:
+        win.show()
+    else:
+        win.first_paint_due = True           # shown once made: what waits for the paint waits
+    if folder is not None and win.open_project(folder) and file is not None:
+        win.open_file(file)
+    if frame is not None:
+        if frame.cancelled:                  # the frame was closed meanwhile: quit
+            win.close()
+            app.quit()
+        else:
+            frame.hand_over(win)
+    return win

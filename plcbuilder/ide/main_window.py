@@ -94,6 +94,9 @@ class MainWindow(QMainWindow):
         self._early_events: list = []
         self._pin_defines: Optional[dict] = None
         self._painted = False
+        #: the window is shown once made (the first frame's hand-over, app.py):
+        #: until its first paint, what waits for a visible window's paint waits
+        self.first_paint_due = False
         self._after_paint_done = False       # _after_first_paint ran
         self._overdue_waits = 0              # (_paint_overdue)
         self._controller_due = False         # started after the first paint
@@ -341,7 +344,7 @@ class MainWindow(QMainWindow):
         self.lint.clear()
         self.problems.set_root(project.root)
         # the files' descriptions in the tree come after the window's first paint
-        self.tree.descriptions_held = self.isVisible() and not self._painted
+        self.tree.descriptions_held = self._before_first_paint()
         self.tree.set_project(project)
         self.settings.add_recent_project(project.root)
         actions.fill_recent_menu(self)
@@ -364,7 +367,7 @@ class MainWindow(QMainWindow):
         files = [f for f in self.settings.open_files(project.root)
                  if f.startswith(BUILTIN_PREFIX) or Path(f).exists()]
         current = self.settings.current_file(project.root)
-        if self.isVisible() and not self._painted and current in files and len(files) > 1:
+        if self._before_first_paint() and current in files and len(files) > 1:
             self.open_file(current, focus=False)
             self._editors_due = (project.root, files, current)
             return
@@ -699,6 +702,10 @@ class MainWindow(QMainWindow):
             return
         self._after_first_paint()
 
+    def _before_first_paint(self) -> bool:
+        """The window is (or is about to be) on screen and has not painted yet."""
+        return (self.isVisible() or self.first_paint_due) and not self._painted
+
     def paintEvent(self, event) -> None:  # noqa: N802 - Qt override
         super().paintEvent(event)
         if not self._painted:
@@ -751,7 +758,7 @@ class MainWindow(QMainWindow):
         """Start (or restart) the project's controller; before the window's
         first paint only its process: the connection, which would compete with
         the window for the interpreter, waits for the paint."""
-        if self.isVisible() and not self._painted:
+        if self._before_first_paint():
             # its process starts now (its own Python start is the longest part,
             # on the other core); the connection to it after the paint
             self._controller_due = True
@@ -764,7 +771,7 @@ class MainWindow(QMainWindow):
         project's procedures in the background; before the window's first
         paint, only note that it is due (loading the compiler and compiling in
         a thread would compete with the window)."""
-        if self.isVisible() and not self._painted:
+        if self._before_first_paint():
             self._lint_due = True
         else:
             self.lint.refresh_header_defines()
@@ -916,10 +923,25 @@ class MainWindow(QMainWindow):
         self._save_session()
         self.debug.save()
         self.settings.save_window_state(self.saveGeometry(), self.saveState())
+        self.settings.save_frame_sketch(self._frame_sketch())
         self.settings.sync()
         self.shutdown()
         self.recovery.discard_all_own()
         event.accept()
+
+    def _frame_sketch(self) -> Optional[dict]:
+        """Where the project's tree and the editors are in the window, for the
+        next start's first frame (None: the tree is not docked on screen)."""
+        from plcbuilder.ide.docks import on_screen
+        dock = self.project_dock
+        if not on_screen(dock) or dock.isFloating() or not self.editor_stack.isVisible():
+            return None
+
+        def rect(w) -> tuple:
+            at = w.mapTo(self, w.rect().topLeft())
+            return (at.x(), at.y(), w.width(), w.height())
+        return {"size": (self.width(), self.height()), "tree": rect(self.tree),
+                "editor": rect(self.editor_stack)}
 
     def shutdown(self) -> None:
         """Stop the timers, threads and the controller (also for tests)."""

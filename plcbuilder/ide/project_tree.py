@@ -29,6 +29,7 @@ from PySide6.QtWidgets import (QAbstractItemView, QLabel, QMenu, QStyledItemDele
 from plcbuilder.api import Kind
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.editor import file_key
+from plcbuilder.ide.first_frame import TARGET_LABEL
 from plcbuilder.ide.icons import icon
 from plcbuilder.ide.looks import set_text_colour
 from plcbuilder._support.files import atomic_write
@@ -94,7 +95,6 @@ def target_outline(project: Project) -> list[tuple[str, str]]:
     return []
 
 
-TARGET_LABEL = {"huazhong": "Huazhong PLC", "tgmotion": "TG Motion PLC"}
 
 
 def header_template(name: str) -> str:

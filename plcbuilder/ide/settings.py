@@ -108,6 +108,29 @@ class Settings:
         self.qs.setValue("window/geometry", geometry)
         self.qs.setValue("window/state", state)
 
+    def frame_sketch(self) -> Optional[dict]:
+        """Where the window had its parts when it was last closed, for the
+        first frame (plcbuilder.ide.first_frame): ``{"size": (w, h), "tree":
+        (x, y, w, h), "editor": (x, y, w, h)}`` in the window's coordinates;
+        None when not kept or not readable."""
+        value = self.qs.value("window/sketch", None)
+        try:
+            parts = dict(p.split("=", 1) for p in str(value).split(";")) if value else {}
+            sketch = {k: tuple(int(v) for v in parts[k].split(",")) for k in ("size", "tree", "editor")}
+        except (KeyError, ValueError):
+            return None
+        shapes = {"size": 2, "tree": 4, "editor": 4}
+        if any(len(v) != shapes[k] or any(n < 0 for n in v[-2:]) for k, v in sketch.items()):
+            return None
+        return sketch
+
+    def save_frame_sketch(self, sketch: Optional[dict]) -> None:
+        if sketch is None:
+            self.qs.remove("window/sketch")
+        else:
+            self.qs.setValue("window/sketch", ";".join(
+                f"{k}={','.join(str(int(n)) for n in sketch[k])}" for k in ("size", "tree", "editor")))
+
     def splitter_sizes(self, name: str) -> Optional[list[int]]:
         """A panel's splitter sizes as the user left them (None: never moved)."""
         value = self.qs.value(f"window/splitters/{name}", None)

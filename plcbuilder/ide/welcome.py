@@ -9,10 +9,10 @@ from PySide6.QtWidgets import (QHBoxLayout, QLabel, QListWidget, QListWidgetItem
                                QVBoxLayout, QWidget)
 
 from plcbuilder.api import Kind
+from plcbuilder.ide.first_frame import APP_NAME
 from plcbuilder.ide.icons import icon
 from plcbuilder.ide.project_tree import TARGET_LABEL, target_outline
 
-APP_NAME = "PLC Builder"
 
 
 class WelcomePage(QWidget):

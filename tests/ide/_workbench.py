@@ -122,17 +122,20 @@ def answer_no(monkeypatch) -> None:
 def windows(qtbot, settings: Settings, size: tuple[int, int] | None):
     """make(**kw): a shown MainWindow of this size (None: as it comes) on these
     settings (or kw's "settings"), with no controller and a 20 ms debounce
-    unless kw says otherwise; every window made is shut down at the end."""
+    unless kw says otherwise (``show=False``: not shown); every window made is
+    shut down at the end."""
     made = []
 
     def make(**kw):
         kw.setdefault("start_controller", False)
         kw.setdefault("debounce_ms", 20)
+        show = kw.pop("show", True)
         w = MainWindow(kw.pop("settings", settings), **kw)
         qtbot.addWidget(w)
         if size is not None:
             w.resize(*size)
-        w.show()
+        if show:
+            w.show()
         made.append(w)
         return w
     yield make
