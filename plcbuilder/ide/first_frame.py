@@ -25,8 +25,8 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QTimer
-from PySide6.QtGui import QFont, QKeyEvent
-from PySide6.QtWidgets import (QApplication, QMainWindow, QPlainTextEdit, QSplitter, QTabBar,
+from PySide6.QtGui import QFont, QKeyEvent, QTextBlockFormat, QTextCursor
+from PySide6.QtWidgets import (QApplication, QMainWindow, QTextEdit, QSplitter, QTabBar,
                                QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget)
 
 from plcbuilder.ide.icons import icon
@@ -39,8 +39,9 @@ MENU_TITLES = ("&File", "&Edit", "&Go", "&View", "&Build", "&Run", "&Debug", "&H
 TARGET_LABEL = {"huazhong": "Huazhong PLC", "tgmotion": "TG Motion PLC"}
 #: the application's name in titles (also welcome.APP_NAME)
 APP_NAME = "PLC Builder"
-#: the largest front file the frame shows (a bigger one shows its start)
-MAX_TEXT = 256 * 1024
+#: the most of the front file the frame shows: its start (the editor opens at
+#: its top; the frame is read-only and goes within a second)
+MAX_TEXT, MAX_LINES = 64 * 1024, 400
 
 
 def frame_title(file: Optional[str], project: Optional[str]) -> str:
@@ -153,9 +154,9 @@ class FirstFrame(QMainWindow):
             self.tabs.addTab(Path(f).name)
         if self.current:
             self.tabs.setCurrentIndex(self.files.index(self.current))
-        self.text = QPlainTextEdit()
+        self.text = QTextEdit()
         self.text.setReadOnly(True)
-        self.text.setLineWrapMode(QPlainTextEdit.LineWrapMode.NoWrap)
+        self.text.setLineWrapMode(QTextEdit.LineWrapMode.NoWrap)
         font = QFont(font_family or "DejaVu Sans Mono")
         font.setPointSize(font_size)
         font.setStyleHint(QFont.StyleHint.Monospace)
@@ -171,6 +172,7 @@ class FirstFrame(QMainWindow):
         if sketch is not None and sketch["size"] == (self.width(), self.height()):
             # where the window had them: they stay put as the window takes over
             self.setCentralWidget(_Placed({self.tree: sketch["tree"], right: sketch["editor"]}))
+            self._like_the_editor(*sketch["text"])
         else:
             split = QSplitter()
             split.addWidget(self.tree)
@@ -213,6 +215,19 @@ class FirstFrame(QMainWindow):
             group.setExpanded(True)
         root.setExpanded(True)
 
+    def _like_the_editor(self, x: int, line_height: int) -> None:
+        """The text where the editor's will be: right of its margins, its
+        lines as high (0: not known)."""
+        doc = self.text.document()
+        if x > 0:
+            self.text.setViewportMargins(max(0, x - int(doc.documentMargin())), 0, 0, 0)
+        if line_height > 0:
+            fmt = QTextBlockFormat()
+            fmt.setLineHeight(line_height, QTextBlockFormat.LineHeightTypes.FixedHeight.value)
+            cursor = QTextCursor(doc)
+            cursor.select(QTextCursor.SelectionType.Document)
+            cursor.mergeBlockFormat(fmt)
+
     def _front_text(self) -> str:
         if not self.current or not os.path.isfile(self.current):
             return ""
@@ -221,7 +236,8 @@ class FirstFrame(QMainWindow):
                 data = f.read(MAX_TEXT + 1)
         except OSError:
             return ""
-        return data[:MAX_TEXT].decode("utf-8", errors="replace")
+        text = data[:MAX_TEXT].decode("utf-8", errors="replace")
+        return "\n".join(text.split("\n", MAX_LINES)[:MAX_LINES])
 
     # ------------------------------------------------------------ hand-over
     def after_paint(self, then: Callable[[], None]) -> None:

@@ -940,8 +940,13 @@ class MainWindow(QMainWindow):
         def rect(w) -> tuple:
             at = w.mapTo(self, w.rect().topLeft())
             return (at.x(), at.y(), w.width(), w.height())
+        ed = self.current_editor()
+        # where its text starts (after the line numbers, markers and folding)
+        # and the height of its lines
+        text = (sum(ed.marginWidthN(i) for i in range(5)) + ed.marginLeft(), ed.textHeight(0)) \
+            if ed is not None else (0, 0)
         return {"size": (self.width(), self.height()), "tree": rect(self.tree),
-                "editor": rect(self.editor_stack)}
+                "editor": rect(self.editor_stack), "text": text}
 
     def shutdown(self) -> None:
         """Stop the timers, threads and the controller (also for tests)."""

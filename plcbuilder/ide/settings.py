@@ -22,6 +22,8 @@ APPLICATION = "PLC Builder"
 SETTINGS_ENV = "PLCBUILDER_SETTINGS"
 RECOVERY_ENV = "PLCBUILDER_RECOVERY_DIR"
 MAX_RECENT = 10
+#: the parts of the window's sketch (Settings.frame_sketch) and their numbers
+SKETCH_SHAPES = {"size": 2, "tree": 4, "editor": 4, "text": 2}
 
 
 @dataclass(frozen=True)
@@ -111,17 +113,20 @@ class Settings:
     def frame_sketch(self) -> Optional[dict]:
         """Where the window had its parts when it was last closed, for the
         first frame (plcbuilder.ide.first_frame): ``{"size": (w, h), "tree":
-        (x, y, w, h), "editor": (x, y, w, h)}`` in the window's coordinates;
+        (x, y, w, h), "editor": (x, y, w, h), "text": (x, line height)}`` in
+        the window's coordinates (text: where the front editor's text starts,
+        after its margins, and the height of its lines; (0, 0) when unknown);
         None when not kept or not readable."""
         value = self.qs.value("window/sketch", None)
         try:
             parts = dict(p.split("=", 1) for p in str(value).split(";")) if value else {}
-            sketch = {k: tuple(int(v) for v in parts[k].split(",")) for k in ("size", "tree", "editor")}
+            sketch = {k: tuple(int(v) for v in parts[k].split(","))
+                      for k in SKETCH_SHAPES if k in parts or k != "text"}
         except (KeyError, ValueError):
             return None
-        shapes = {"size": 2, "tree": 4, "editor": 4}
-        if any(len(v) != shapes[k] or any(n < 0 for n in v[-2:]) for k, v in sketch.items()):
+        if any(len(v) != SKETCH_SHAPES[k] or any(n < 0 for n in v[-2:]) for k, v in sketch.items()):
             return None
+        sketch.setdefault("text", (0, 0))
         return sketch
 
     def save_frame_sketch(self, sketch: Optional[dict]) -> None:
@@ -129,7 +134,8 @@ class Settings:
             self.qs.remove("window/sketch")
         else:
             self.qs.setValue("window/sketch", ";".join(
-                f"{k}={','.join(str(int(n)) for n in sketch[k])}" for k in ("size", "tree", "editor")))
+                f"{k}={','.join(str(int(n)) for n in sketch[k])}" for k in SKETCH_SHAPES
+                if k in sketch))
 
     def splitter_sizes(self, name: str) -> Optional[list[int]]:
         """A panel's splitter sizes as the user left them (None: never moved)."""

@@ -141,8 +141,11 @@ def test_the_window_keeps_where_its_tree_and_editors_were_when_it_closes(qtbot, 
         w = make()
         w.open_project(root)
         qtbot.waitUntil(lambda: w.current_editor() is not None, timeout=WAIT)
+        ed = w.current_editor()
+        margins = sum(ed.marginWidthN(i) for i in range(5)) + ed.marginLeft()
         where = {"size": (w.width(), w.height()), "tree": _at(w.tree, w),
-                 "editor": _at(w.editor_stack, w)}
+                 "editor": _at(w.editor_stack, w), "text": (margins, ed.textHeight(0))}
+        assert margins > 20 and ed.textHeight(0) > 10
         w.close()
     assert Settings(st.qs.fileName()).frame_sketch() == where
     with windows(qtbot, st, (1300, 850)) as make:
@@ -154,12 +157,22 @@ def test_the_window_keeps_where_its_tree_and_editors_were_when_it_closes(qtbot, 
 
 def test_the_frame_puts_the_tree_and_editor_where_the_window_had_them(qtbot, example, frames):
     root, st = example
-    sketch = {"size": (1360, 860), "tree": (0, 70, 299, 289), "editor": (305, 54, 641, 514)}
+    sketch = {"size": (1360, 860), "tree": (0, 70, 299, 289), "editor": (305, 54, 641, 514),
+              "text": (69, 23)}
     st.save_frame_sketch(sketch)
     f = frames(st, root)                       # (no geometry kept: 1360x860)
     f.show()
     qtbot.waitExposed(f)
     assert _at(f.tree, f) == sketch["tree"] and _at(f.text.parentWidget(), f) == sketch["editor"]
+    # the text starts where the editor's will, its lines as high as the editor's
+    doc = f.text.document()
+    assert f.text.viewportMargins().left() + doc.documentMargin() == 69
+    block = doc.firstBlock()
+    while block.isValid():
+        assert block.blockFormat().lineHeight() == 23
+        block = block.next()
+    st.save_frame_sketch({k: v for k, v in sketch.items() if k != "text"})
+    assert st.frame_sketch()["text"] == (0, 0)          # (kept by an older version: not known)
 
 
 def test_without_a_sketch_of_that_size_the_frame_splits_itself(qtbot, example, frames):
@@ -171,7 +184,8 @@ def test_without_a_sketch_of_that_size_the_frame_splits_itself(qtbot, example, f
 
 
 @pytest.mark.parametrize("raw", ["size=1,2;tree=1,2,3;editor=1,2,3,4", "size=a,b;tree=1,2,3,4",
-                                 "nonsense", "size=1,2;tree=1,2,-3,4;editor=1,2,3,4"])
+                                 "nonsense", "size=1,2;tree=1,2,-3,4;editor=1,2,3,4",
+                                 "size=1,2;tree=1,2,3,4;editor=1,2,3,4;text=5"])
 def test_a_damaged_sketch_is_none(tmp_path, raw):
     st = Settings(str(tmp_path / "s.ini"))
     st.qs.setValue("window/sketch", raw)
@@ -391,3 +405,13 @@ def test_the_frame_paints_before_the_main_window_scintilla_or_the_qt_namespace(e
     assert r.returncode == 0, r.stderr
     seen = json.loads(r.stdout.splitlines()[-1])
     assert seen == {"seen": [], "qt": False, "text": True}, seen
+
+
+def test_a_long_front_file_shows_its_start(qtbot, example, frames):
+    from plcbuilder.ide import first_frame
+    root, st = example
+    m03 = root / "hardware" / "M03.plc"
+    m03.write_text("".join(f"// line {i}\n" for i in range(5000)), encoding="utf-8")
+    f = frames(st, root)
+    shown = f.text.toPlainText().split("\n")
+    assert len(shown) == first_frame.MAX_LINES and shown[0] == "// line 0"
