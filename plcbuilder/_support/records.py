@@ -6,7 +6,9 @@ compile of a small file: importing it loads ``inspect`` (and with it ``ast``,
 ``dis``, ``tokenize``), and each class gets three functions written and
 compiled from source (``__init__``, ``__repr__``, ``__eq__``). Here a class
 gets only its ``__init__``, and that compiled once per shape of fields (how
-many, which have defaults) and renamed for the class; ``__repr__``, ``__eq__``
+many, which have defaults), renamed for the class, and made when the class
+makes its first instance (a command loads many record classes and uses few);
+``__repr__``, ``__eq__``
 and ``__hash__`` are shared functions reading the class's field names. The result behaves as the
 standard one for what this project uses (the same constructor, repr, equality,
 hashing, ``frozen``, ``slots``, ``eq=False``, ``field(default_factory=…,
@@ -193,18 +195,10 @@ def _make(cls, frozen: bool, slots: bool, eq: bool, want_repr: bool):
             g[f"_d{i}"] = f.default
         else:
             kinds.append("-")
-    code = _init_code(tuple(kinds), frozen, hasattr(cls, "__post_init__"))
-    rename = {f"a{i}": name for i, name in enumerate(names)}
-    code = code.replace(
-        co_varnames=tuple(rename.get(v, v) for v in code.co_varnames),
-        co_names=tuple(rename.get(v, v) for v in code.co_names),
-        co_consts=tuple(rename.get(c, c) if type(c) is str else c for c in code.co_consts),
-        co_qualname=f"{cls.__qualname__}.__init__")
-    init = FunctionType(code, g, "__init__", tuple(defaults) or None)
-    init.__qualname__ = f"{cls.__qualname__}.__init__"
-    init.__module__ = cls.__module__
+    shape = (tuple(kinds), frozen, hasattr(cls, "__post_init__"), tuple(names), g,
+             tuple(defaults) or None)
 
-    extra = {"__init__": init, "__record_fields__": specs, "__record_types__": types,
+    extra = {"__record_fields__": specs, "__record_types__": types,
              "__record_repr__": tuple(n for n in names if specs[n].repr),
              "__record_compare__": tuple(n for n in names if specs[n].compare),
              "__dataclass_fields__": _DataclassFields(),
@@ -234,6 +228,7 @@ def _make(cls, frozen: bool, slots: bool, eq: bool, want_repr: bool):
         ns.update(extra)
         new = type(cls)(cls.__name__, cls.__bases__, ns)
         new.__qualname__ = cls.__qualname__
+        new.__init__ = _deferred_init(new, shape)
         return new
     for n in names:                                  # as dataclasses: a plain default stays
         if isinstance(cls.__dict__.get(n), Field):
@@ -243,7 +238,39 @@ def _make(cls, frozen: bool, slots: bool, eq: bool, want_repr: bool):
                 setattr(cls, n, specs[n].default)
     for k, v in extra.items():
         setattr(cls, k, v)
+    cls.__init__ = _deferred_init(cls, shape)
     return cls
+
+
+def _deferred_init(cls, shape):
+    """The class's ``__init__`` until it is first called: it then makes the
+    real one (:func:`_init_function`), puts it in the class and calls it. A
+    command loads many record classes and makes instances of few: the others'
+    ``__init__`` is never compiled."""
+    def __init__(self, *args, **kwargs):
+        init = _init_function(cls, *shape)
+        cls.__init__ = init
+        init(self, *args, **kwargs)
+    __init__.__qualname__ = f"{cls.__qualname__}.__init__"
+    __init__.__module__ = cls.__module__
+    return __init__
+
+
+def _init_function(cls, kinds: tuple, frozen: bool, post_init: bool, names: tuple, g: dict,
+                   defaults):
+    """The ``__init__`` of a record class: the code of its shape of fields
+    (:func:`_init_code`) with the fields' names."""
+    code = _init_code(kinds, frozen, post_init)
+    rename = {f"a{i}": name for i, name in enumerate(names)}
+    code = code.replace(
+        co_varnames=tuple(rename.get(v, v) for v in code.co_varnames),
+        co_names=tuple(rename.get(v, v) for v in code.co_names),
+        co_consts=tuple(rename.get(c, c) if type(c) is str else c for c in code.co_consts),
+        co_qualname=f"{cls.__qualname__}.__init__")
+    init = FunctionType(code, g, "__init__", defaults)
+    init.__qualname__ = f"{cls.__qualname__}.__init__"
+    init.__module__ = cls.__module__
+    return init
 
 
 def fields_of(obj) -> tuple[str, ...]:
