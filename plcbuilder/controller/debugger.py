@@ -23,8 +23,7 @@ Halting stops the whole controller: the PLC keeps the rest of the tick
 
 from __future__ import annotations
 
-import re
-
+from plcbuilder._support.lazy import Pattern
 from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import HAS_SLOT, Op, size_of, validate
@@ -40,7 +39,7 @@ REASONS = ("breakpoint", "step", "pause", "fault")
 HIT_MODES = ("eq", "ge", "every")
 STEP_KINDS = ("tick", "into", "over", "out")
 _CALL_SIZE = size_of(Op.CALL)
-_PLACEHOLDER = re.compile(r"\{([A-Za-z_][A-Za-z0-9_]*)\}")
+_PLACEHOLDER = Pattern(r"\{([A-Za-z_][A-Za-z0-9_]*)\}")
 #: The longest condition or log text a breakpoint takes (the compiler's limit for a
 #: condition, plcbuilder.project.conditions.MAX_CONDITION_CHARS, and the link's).
 MAX_TEXT = 1000
