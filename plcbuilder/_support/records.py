@@ -112,36 +112,78 @@ class _DataclassFields:
 
 #: compiled __init__ code by the shape of a class's fields (see _init_code)
 _TEMPLATES: dict = {}
+#: the shapes of the package's own record classes made so far (what
+#: ``scripts/record_inits.py`` writes out)
+_PACKAGE_SHAPES: set = set()
+#: the written-out templates (record_inits.SHAPES), loaded when first needed
+_written = None
 
 
 def _init_code(kinds: tuple, frozen: bool, post_init: bool):
     """The code of an ``__init__`` for fields of these kinds ('p' a parameter,
     'f' a parameter whose default is a factory's, 'd'/'F' not a parameter, set
     to a default/a factory's value, '-' not set), with the fields named a0,
-    a1, …: compiled once per shape and renamed for each class (compiling is
-    most of what making a class costs)."""
+    a1, …: made once per shape and renamed for each class. The shapes of the
+    package's record classes are written out in :mod:`record_inits` (loaded
+    from its bytecode cache: compiling is most of what making a record costs);
+    another shape is compiled here."""
+    global _written
     key = (kinds, frozen, post_init)
     code = _TEMPLATES.get(key)
     if code is None:
-        params, body = [], []
-        for i, k in enumerate(kinds):
-            if k == "-":
-                continue
-            if k in "pf":
-                params.append(f"a{i}")
-            if k == "f":
-                body.append(f"    if a{i} is MISSING: a{i} = _f{i}()")
-            value = {"p": f"a{i}", "f": f"a{i}", "d": f"_d{i}", "F": f"_f{i}()"}[k]
-            body.append(f"    __record_set(self, 'a{i}', {value})" if frozen
-                        else f"    self.a{i} = {value}")
-        if post_init:
-            body.append("    self.__post_init__()")
-        src = f"def __init__(self{''.join(', ' + p for p in params)}):\n" \
-            + ("\n".join(body) or "    pass") + "\n"
-        ns: dict = {}
-        exec(compile(src, "<record>", "exec"), {}, ns)       # noqa: S102 - our own source
-        code = _TEMPLATES[key] = ns["__init__"].__code__
+        if _written is None:
+            from . import record_inits
+            _written = record_inits.SHAPES
+        init = _written.get(key)
+        if init is None:
+            ns: dict = {}
+            exec(compile(_init_source(*key), "<record>", "exec"), {}, ns)  # noqa: S102 - our own
+            init = ns["__init__"]
+        code = _TEMPLATES[key] = init.__code__.replace(co_name="__init__")
     return code
+
+
+def _init_source(kinds: tuple, frozen: bool, post_init: bool, name: str = "__init__") -> str:
+    """The source of the ``__init__`` of a shape (see :func:`_init_code`)."""
+    params, body = [], []
+    for i, k in enumerate(kinds):
+        if k == "-":
+            continue
+        if k in "pf":
+            params.append(f"a{i}")
+        if k == "f":
+            body.append(f"    if a{i} is MISSING: a{i} = _f{i}()")
+        value = {"p": f"a{i}", "f": f"a{i}", "d": f"_d{i}", "F": f"_f{i}()"}[k]
+        body.append(f"    __record_set(self, 'a{i}', {value})" if frozen
+                    else f"    self.a{i} = {value}")
+    if post_init:
+        body.append("    self.__post_init__()")
+    return f"def {name}(self{''.join(', ' + p for p in params)}):\n" \
+        + ("\n".join(body) or "    pass") + "\n"
+
+
+def inits_source(shapes) -> str:
+    """The text of ``record_inits.py``: an ``__init__`` template for each shape."""
+    shapes = sorted(shapes)
+    out = ['"""The ``__init__`` templates of the shapes of the package\'s record classes',
+           "(:mod:`plcbuilder._support.records`), loaded from this module's bytecode",
+           "cache instead of compiled at every start. Written by",
+           "``scripts/record_inits.py``; tests/_support/test_records.py",
+           'checks it is current. The names each template uses are the globals the',
+           'records module gives the class\'s ``__init__``."""',
+           "# (generated: do not edit)", ""]
+    for n, key in enumerate(shapes):
+        out += ["", _init_source(*key, name=f"_init{n}")]
+    out += ["", "SHAPES = {"]
+    out += [f"    {key!r}: _init{n}," for n, key in enumerate(shapes)]
+    out += ["}", ""]
+    return "\n".join(out)
+
+
+def made_shapes() -> set:
+    """The shapes of the package's record classes made so far in this process
+    (``scripts/record_inits.py`` imports every module, then writes these out)."""
+    return set(_PACKAGE_SHAPES)
 
 
 def dataclass(cls=None, /, *, frozen: bool = False, slots: bool = False, eq: bool = True,
@@ -197,6 +239,8 @@ def _make(cls, frozen: bool, slots: bool, eq: bool, want_repr: bool):
             kinds.append("-")
     shape = (tuple(kinds), frozen, hasattr(cls, "__post_init__"), tuple(names), g,
              tuple(defaults) or None)
+    if cls.__module__.startswith("plcbuilder."):
+        _PACKAGE_SHAPES.add(shape[:3])
 
     extra = {"__record_fields__": specs, "__record_types__": types,
              "__record_repr__": tuple(n for n in names if specs[n].repr),

@@ -132,3 +132,39 @@ def test_init_is_made_when_the_class_makes_its_first_instance():
         class Bad:                           # the class's fields are still checked when it is made
             a: int = 0
             b: int
+
+
+def test_the_written_init_templates_are_current():
+    """The shapes of the package's record classes are written out in
+    ``_support/record_inits.py`` (loaded from the bytecode cache, not compiled
+    at every start): it must be what ``scripts/record_inits.py`` writes now."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    code = ("import sys; sys.path.insert(0, 'scripts'); import record_inits\n"
+            "sys.stdout.write(record_inits.source())")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=root)
+    assert r.returncode == 0, r.stderr
+    written = (root / "plcbuilder" / "_support" / "record_inits.py").read_text(encoding="utf-8")
+    assert written == r.stdout, "run `.venv/bin/python scripts/record_inits.py` and commit " \
+                                "plcbuilder/_support/record_inits.py"
+
+
+def test_a_written_template_makes_the_same_init_as_a_compiled_one():
+    from plcbuilder._support import record_inits, records
+
+    @dataclass
+    class Two:
+        a: int
+        b: int
+
+    assert (("p", "p"), False, False) in record_inits.SHAPES
+    with pytest.raises(TypeError, match=r"Two\.__init__\(\) missing 1 required positional "
+                                        r"argument: 'b'"):
+        Two(1)
+    t = Two(1, b=2)
+    assert (t.a, t.b) == (1, 2) and Two.__init__.__code__.co_varnames == ("self", "a", "b")
+    for key, init in record_inits.SHAPES.items():
+        ns: dict = {}
+        exec(records._init_source(*key), {}, ns)
+        assert init.__code__.co_code == ns["__init__"].__code__.co_code, key
