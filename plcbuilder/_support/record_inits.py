@@ -226,17 +226,7 @@ def _init23(self, a0, a1, a2, a3, a4, a5):
     __record_set(self, 'a5', a5)
 
 
-def _init24(self, a0, a1, a2, a3, a4, a5):
-    __record_set(self, 'a0', a0)
-    __record_set(self, 'a1', a1)
-    __record_set(self, 'a2', a2)
-    __record_set(self, 'a3', a3)
-    __record_set(self, 'a4', a4)
-    __record_set(self, 'a5', a5)
-    self.__post_init__()
-
-
-def _init25(self, a0, a1, a2, a3, a4, a5, a6):
+def _init24(self, a0, a1, a2, a3, a4, a5, a6):
     self.a0 = a0
     self.a1 = a1
     self.a2 = a2
@@ -246,7 +236,7 @@ def _init25(self, a0, a1, a2, a3, a4, a5, a6):
     self.a6 = a6
 
 
-def _init26(self, a0, a1, a2, a3, a4, a5, a6):
+def _init25(self, a0, a1, a2, a3, a4, a5, a6):
     __record_set(self, 'a0', a0)
     __record_set(self, 'a1', a1)
     __record_set(self, 'a2', a2)
@@ -256,7 +246,7 @@ def _init26(self, a0, a1, a2, a3, a4, a5, a6):
     __record_set(self, 'a6', a6)
 
 
-def _init27(self, a0, a1, a2, a3, a4, a5, a6, a7, a8):
+def _init26(self, a0, a1, a2, a3, a4, a5, a6, a7, a8):
     self.a0 = a0
     self.a1 = a1
     self.a2 = a2
@@ -269,7 +259,7 @@ def _init27(self, a0, a1, a2, a3, a4, a5, a6, a7, a8):
     self.a8 = a8
 
 
-def _init28(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13):
+def _init27(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13):
     __record_set(self, 'a0', a0)
     __record_set(self, 'a1', a1)
     __record_set(self, 'a2', a2)
@@ -287,7 +277,7 @@ def _init28(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13):
     __record_set(self, 'a13', a13)
 
 
-def _init29(self, a0, a1, a2, a3, a4, a5, a6, a7):
+def _init28(self, a0, a1, a2, a3, a4, a5, a6, a7):
     self.a0 = a0
     self.a1 = a1
     self.a2 = a2
@@ -298,7 +288,7 @@ def _init29(self, a0, a1, a2, a3, a4, a5, a6, a7):
     self.a7 = a7
 
 
-def _init30(self, a0, a1, a2, a3, a4, a5, a6, a7):
+def _init29(self, a0, a1, a2, a3, a4, a5, a6, a7):
     __record_set(self, 'a0', a0)
     __record_set(self, 'a1', a1)
     __record_set(self, 'a2', a2)
@@ -309,7 +299,7 @@ def _init30(self, a0, a1, a2, a3, a4, a5, a6, a7):
     __record_set(self, 'a7', a7)
 
 
-def _init31(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11):
+def _init30(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11):
     self.a0 = a0
     self.a1 = a1
     self.a2 = a2
@@ -326,7 +316,7 @@ def _init31(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11):
     self.a11 = a11
 
 
-def _init32(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10):
+def _init31(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10):
     self.a0 = a0
     self.a1 = a1
     self.a2 = a2
@@ -342,7 +332,7 @@ def _init32(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10):
     self.a10 = a10
 
 
-def _init33(self, a0, a1, a2, a3, a4, a5, a6, a7, a8):
+def _init32(self, a0, a1, a2, a3, a4, a5, a6, a7, a8):
     __record_set(self, 'a0', a0)
     __record_set(self, 'a1', a1)
     __record_set(self, 'a2', a2)
@@ -354,7 +344,7 @@ def _init33(self, a0, a1, a2, a3, a4, a5, a6, a7, a8):
     __record_set(self, 'a8', a8)
 
 
-def _init34(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10):
+def _init33(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10):
     self.a0 = a0
     self.a1 = a1
     self.a2 = a2
@@ -368,7 +358,7 @@ def _init34(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10):
     self.a10 = a10
 
 
-def _init35(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16):
+def _init34(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16):
     __record_set(self, 'a0', a0)
     __record_set(self, 'a1', a1)
     __record_set(self, 'a2', a2)
@@ -392,7 +382,7 @@ def _init35(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a1
     __record_set(self, 'a16', a16)
 
 
-def _init36(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11):
+def _init35(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11):
     self.a0 = a0
     self.a1 = a1
     self.a2 = a2
@@ -407,7 +397,7 @@ def _init36(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11):
     self.a11 = a11
 
 
-def _init37(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12):
+def _init36(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12):
     __record_set(self, 'a0', a0)
     __record_set(self, 'a1', a1)
     __record_set(self, 'a2', a2)
@@ -423,7 +413,7 @@ def _init37(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12):
     __record_set(self, 'a12', a12)
 
 
-def _init38(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14):
+def _init37(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14):
     __record_set(self, 'a0', a0)
     __record_set(self, 'a1', a1)
     __record_set(self, 'a2', a2)
@@ -441,7 +431,7 @@ def _init38(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a1
     __record_set(self, 'a14', a14)
 
 
-def _init39(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23, a24, a25):
+def _init38(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23, a24, a25):
     self.a0 = a0
     self.a1 = a1
     self.a2 = a2
@@ -495,20 +485,19 @@ SHAPES = {
     (('p', 'p', 'p', 'p', 'p', 'f', 'f', 'p'), False, False): _init21,
     (('p', 'p', 'p', 'p', 'p', 'p'), False, False): _init22,
     (('p', 'p', 'p', 'p', 'p', 'p'), True, False): _init23,
-    (('p', 'p', 'p', 'p', 'p', 'p', '-'), True, True): _init24,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p'), False, False): _init25,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init26,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'f', 'p'), False, False): _init27,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'f', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init28,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), False, False): _init29,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init30,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'f', 'f', 'p', 'p'), False, False): _init31,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'f', 'p', 'f'), False, False): _init32,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init33,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), False, False): _init34,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'f', 'p', 'p', 'f', 'f', 'f'), True, False): _init35,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), False, False): _init36,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init37,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init38,
-    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), False, False): _init39,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p'), False, False): _init24,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init25,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'f', 'p'), False, False): _init26,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'f', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init27,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), False, False): _init28,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init29,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'f', 'f', 'p', 'p'), False, False): _init30,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'f', 'p', 'f'), False, False): _init31,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init32,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), False, False): _init33,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'f', 'p', 'p', 'f', 'f', 'f'), True, False): _init34,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), False, False): _init35,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init36,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), True, False): _init37,
+    (('p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p', 'p'), False, False): _init38,
 }
