@@ -61,10 +61,10 @@ is where the speed is, read section by section (the ``# ---`` headings).
 
 from __future__ import annotations
 
-import re
 import zlib
 from collections import namedtuple
 
+from plcbuilder._support.lazy import Pattern
 from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi, semantics, softmc
 from plcbuilder.bytecode.opcodes import (BINARY, BUILTINS, COND_JUMPS, ENDS_TICK, HAS_CONST, HAS_JREL,
@@ -91,11 +91,11 @@ _JMP = HAS_JREL & NO_FALLTHROUGH
 #: Instructions that end a basic block.
 _TERMINATORS = HAS_JREL | {Op.YIELD, Op.CALL, Op.RET, Op.EXIT, Op.GVARGET}
 _MAX_NEST = 40            # deepest inline nesting before a block becomes a label
-_SIMPLE = re.compile(r"^(_?\w+|s\[\d+\]|\(-\d+\))$")
+_SIMPLE = Pattern(r"^(_?\w+|s\[\d+\]|\(-\d+\))$")
 _BITS_CAP = 62
 _DUP_MAX_INS = 12         # a join block this small is written at each predecessor
 _DUP_MAX_BLOCKS = 400
-_YIELD = re.compile(r"\byield\b")
+_YIELD = Pattern(r"\byield\b")
 #: Slots the controller reads at every tick end, never kept in locals.
 _UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT_VAR00,
                        abi.SLOT_VAR00 + 1})

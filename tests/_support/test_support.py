@@ -224,7 +224,7 @@ def test_modules_on_the_run_path_compile_no_pattern_at_import():
             "import plcbuilder._support.numbers, plcbuilder._support.toml_errors\n"
             "import plcbuilder.bytecode.softmc, plcbuilder.bytecode.targets\n"
             "import plcbuilder.controller.forces, plcbuilder.controller.scenario\n"
-            "import plcbuilder.controller.debugger\n"
+            "import plcbuilder.controller.debugger, plcbuilder.controller.fastvm\n"
             "print(len(made))")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.stdout.strip() == "0", r.stdout + r.stderr
