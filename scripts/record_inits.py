@@ -21,13 +21,21 @@ TARGET = ROOT / "plcbuilder" / "_support" / "record_inits.py"
 
 def package_shapes() -> set:
     """The shapes of the record classes of every module of the package but the
-    IDE's (the IDE makes its own when it starts)."""
+    IDE's (the IDE makes its own when it starts; its package is not imported)."""
     import plcbuilder
     from plcbuilder._support import records
-    for m in pkgutil.walk_packages(plcbuilder.__path__, "plcbuilder."):
-        if not m.name.startswith("plcbuilder.ide") and not m.name.endswith("__main__"):
-            importlib.import_module(m.name)
+    for name in _modules(plcbuilder.__path__, "plcbuilder."):
+        importlib.import_module(name)
     return records.made_shapes()
+
+
+def _modules(path, prefix: str):
+    for m in pkgutil.iter_modules(path, prefix):
+        if m.name == "plcbuilder.ide" or m.name.endswith(".__main__"):
+            continue
+        yield m.name
+        if m.ispkg:
+            yield from _modules(importlib.import_module(m.name).__path__, m.name + ".")
 
 
 def source() -> str:
