@@ -11,7 +11,8 @@ import sys
 NEVER = ("lark", "dataclasses", "inspect", "typing", "shutil", "importlib.resources",
          "zipfile", "json", "difflib", "logging", "plcbuilder.testing", "plcbuilder.trace",
          "plcbuilder.link", "plcbuilder.project.build", "plcbuilder.lang.syntax_errors",
-         "plcbuilder.controller.history", "plcbuilder.controller.trigger", "PySide6", "numpy")
+         "plcbuilder.controller.history", "plcbuilder.controller.trigger", "PySide6", "numpy",
+         "plcbuilder.lang.incremental")
 #: what only ``run`` needs
 RUN_ONLY = ("plcbuilder.controller", "tomllib", "random")
 
