@@ -59,7 +59,7 @@ def test_run_of_one_procedure_loads_the_controller_only(tmp_path):
     mods = loaded(tmp_path, "run", "SRC")
     assert "plcbuilder.controller.session" in mods
     # (random: only for a machine whose ADC channels have noise; the default has none)
-    assert heavy(mods, NEVER + ("tomllib", "random")) == []
+    assert heavy(mods, NEVER + ("tomllib", "random", "plcbuilder.controller.halted_state")) == []
 
 
 def test_the_program_freezes_what_starting_made_and_collects_as_usual_after(tmp_path):
