@@ -13,7 +13,7 @@ processor time of the child (user + system) moves less on a shared machine,
 so both are printed. Modules are compiled once first (as in an installed
 package: ``PYTHONDONTWRITEBYTECODE`` is dropped for the children).
 
-    python scripts/bench_startup.py [--rounds N] [--no-rebuild] [--tree DIR]
+    python scripts/bench_startup.py [--rounds N] [--no-rebuild] [--tree DIR] [--before DIR]
     python scripts/bench.py startup
 """
 
@@ -74,31 +74,55 @@ def commands(tmp: Path, tree: Path | None) -> dict[str, list[str]]:
             "run (one procedure)": cmd + ["run", str(src)]}
 
 
-def measure_startup(rounds: int = 9, tree: Path | None = None) -> dict:
+def measure_startup(rounds: int = 9, tree: Path | None = None,
+                    before: Path | None = None) -> dict:
+    """Each command's start against a bare Python start in the same round.
+    With ``before`` (another checkout's package), its commands run in every
+    round too, as ``NAME (before)``, the two trees taking turns at going first
+    (both started as ``python -m plcbuilder``)."""
+    if before is not None and tree is None:
+        tree = ROOT
     env = _env(tree)
     with tempfile.TemporaryDirectory(prefix="plc-startup-") as d:
         tmp = Path(d)
-        cmds = commands(tmp, tree)
+        cmds = {k: (v, env) for k, v in commands(tmp, tree).items()}
+        if before is not None:
+            old = {f"{k} (before)": (v, _env(before)) for k, v in commands(tmp, before).items()}
+        else:
+            old = {}
         bare = [sys.executable, "-c", "pass"]
-        for argv in [bare, *cmds.values()]:
-            timed(argv, env, tmp)                          # compiles the modules
+        for argv, e in [(bare, env), *cmds.values(), *old.values()]:
+            timed(argv, e, tmp)                            # compiles the modules
         base_w, base_c = [], []
-        walls = {k: [] for k in cmds}
-        ratios = {k: [] for k in cmds}
-        cpu_ratios = {k: [] for k in cmds}
-        for _ in range(rounds):
+        names = [*cmds, *old]
+        walls = {k: [] for k in names}
+        ratios = {k: [] for k in names}
+        cpu_ratios = {k: [] for k in names}
+        for i in range(rounds):
             bw, bc = timed(bare, env, tmp)
             base_w.append(bw)
             base_c.append(bc)
-            for name, argv in cmds.items():
-                w, c = timed(argv, env, tmp)
+            for name, (argv, e) in _turns(cmds, old, i):
+                w, c = timed(argv, e, tmp)
                 walls[name].append(w)
                 ratios[name].append(w / bw)
                 cpu_ratios[name].append(c / bc if bc > 0 else float("nan"))
     med = statistics.median
     return {"bare_ms": med(base_w) * 1000, "bare_cpu_ms": med(base_c) * 1000,
             "commands": {k: {"ms": med(walls[k]) * 1000, "ratio": med(ratios[k]),
-                             "cpu_ratio": med(cpu_ratios[k])} for k in cmds}}
+                             "cpu_ratio": med(cpu_ratios[k])} for k in names}}
+
+
+def _turns(cmds: dict, old: dict, i: int) -> list:
+    """One round's runs: each command of this tree beside the same command of
+    the tree before, this one first in even rounds, the other in odd ones."""
+    out = []
+    for name, item in cmds.items():
+        pair = [(name, item)]
+        if old:
+            pair.append((f"{name} (before)", old[f"{name} (before)"]))
+        out += pair if i % 2 == 0 else pair[::-1]
+    return out
 
 
 def measure_rebuild(rounds: int = 5, tree: Path | None = None) -> dict:
@@ -126,7 +150,7 @@ def measure_rebuild(rounds: int = 5, tree: Path | None = None) -> dict:
 def lines(s: dict, r: dict | None) -> list[str]:
     out = [f"bare `python -c pass`: {s['bare_ms']:.0f} ms ({s['bare_cpu_ms']:.0f} ms of processor)"]
     for name, c in s["commands"].items():
-        out.append(f"plcbuilder {name:<20} {c['ms']:6.0f} ms = {c['ratio']:.2f}x bare "
+        out.append(f"plcbuilder {name:<29} {c['ms']:6.0f} ms = {c['ratio']:.2f}x bare "
                    f"(processor {c['cpu_ratio']:.2f}x)   (goal <= {GOAL:g}x)")
     if r is not None:
         out.append(f"unchanged rebuild of 1,000 procedures, `plcbuilder build`: {r['again_ms']:.0f} ms "
@@ -146,8 +170,11 @@ def main(argv=None) -> int:
     ap.add_argument("--rounds", type=int, default=9)
     ap.add_argument("--no-rebuild", action="store_true")
     ap.add_argument("--tree", type=Path, help="run this checkout's code")
+    ap.add_argument("--before", type=Path, metavar="DIR",
+                    help="also run DIR's package (`git archive REV plcbuilder | tar -x -C DIR`) "
+                         "in every round, interleaved, for before/after figures")
     args = ap.parse_args(argv)
-    s = measure_startup(args.rounds, args.tree)
+    s = measure_startup(args.rounds, args.tree, args.before)
     r = None if args.no_rebuild else measure_rebuild(5, args.tree)
     print("\n".join(lines(s, r)))
     return 0

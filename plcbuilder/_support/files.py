@@ -114,8 +114,9 @@ def check_replaceable(path: Union[str, Path]) -> None:
                           errno.EISDIR if stat.S_ISDIR(st.st_mode) else errno.EINVAL)
 
 
-#: The name atomic_write gives its temporary file beside ``NAME``: ``.NAME.XXXXXXXX.tmp``.
-TEMP_NAME = re.compile(r"\..+\.[0-9a-f]{8}\.tmp\Z", re.DOTALL)
+#: The name atomic_write gives its temporary file beside ``NAME``: ``.NAME.XXXXXXXX.tmp``
+#: (a pattern for ``re.match``, compiled when first used: not at every start).
+TEMP_NAME = r"(?s)\..+\.[0-9a-f]{8}\.tmp\Z"
 
 
 def atomic_write(path: Union[str, Path], data: Union[bytes, str, Iterable[bytes]], *,
@@ -214,7 +215,7 @@ def remove_temp_files(folder: Union[str, Path]) -> list[str]:
         return removed
     for entry in entries:
         try:
-            if TEMP_NAME.match(entry.name) and entry.is_file(follow_symlinks=False):
+            if re.match(TEMP_NAME, entry.name) and entry.is_file(follow_symlinks=False):
                 os.unlink(entry.path)
                 removed.append(entry.name)
         except OSError:

@@ -23,3 +23,29 @@ def lazy_names(package: str, where: Mapping[str, str]) -> Callable[[str], object
         setattr(sys.modules[package], name, value)
         return value
     return __getattr__
+
+
+class Pattern:
+    """``re.compile(pattern, flags)``, compiled the first time it is used: a
+    module's patterns cost a command's start-up only when the command uses
+    them (compiling one is a few hundredths of a millisecond to half of one).
+    It answers what a compiled pattern answers (``match``, ``fullmatch``,
+    ``search``, ``sub``, ``groups``, …): each name is taken from the compiled
+    pattern when first asked for and kept, so later uses cost what the
+    compiled pattern's do."""
+
+    def __init__(self, pattern: str, flags: int = 0):
+        self._source = (pattern, flags)
+
+    def __getattr__(self, name: str):
+        d = self.__dict__
+        compiled = d.get("_compiled")
+        if compiled is None:
+            import re
+            compiled = d["_compiled"] = re.compile(*d["_source"])
+        value = getattr(compiled, name)
+        d[name] = value
+        return value
+
+    def __repr__(self) -> str:
+        return f"Pattern({self._source[0]!r}, {self._source[1]!r})"

@@ -6,7 +6,9 @@ compile of a small file: importing it loads ``inspect`` (and with it ``ast``,
 ``dis``, ``tokenize``), and each class gets three functions written and
 compiled from source (``__init__``, ``__repr__``, ``__eq__``). Here a class
 gets only its ``__init__``, and that compiled once per shape of fields (how
-many, which have defaults) and renamed for the class; ``__repr__``, ``__eq__``
+many, which have defaults), renamed for the class, and made when the class
+makes its first instance (a command loads many record classes and uses few);
+``__repr__``, ``__eq__``
 and ``__hash__`` are shared functions reading the class's field names. The result behaves as the
 standard one for what this project uses (the same constructor, repr, equality,
 hashing, ``frozen``, ``slots``, ``eq=False``, ``field(default_factory=…,
@@ -110,36 +112,78 @@ class _DataclassFields:
 
 #: compiled __init__ code by the shape of a class's fields (see _init_code)
 _TEMPLATES: dict = {}
+#: the shapes of the package's own record classes made so far (what
+#: ``scripts/record_inits.py`` writes out)
+_PACKAGE_SHAPES: set = set()
+#: the written-out templates (record_inits.SHAPES), loaded when first needed
+_written = None
 
 
 def _init_code(kinds: tuple, frozen: bool, post_init: bool):
     """The code of an ``__init__`` for fields of these kinds ('p' a parameter,
     'f' a parameter whose default is a factory's, 'd'/'F' not a parameter, set
     to a default/a factory's value, '-' not set), with the fields named a0,
-    a1, …: compiled once per shape and renamed for each class (compiling is
-    most of what making a class costs)."""
+    a1, …: made once per shape and renamed for each class. The shapes of the
+    package's record classes are written out in :mod:`record_inits` (loaded
+    from its bytecode cache: compiling is most of what making a record costs);
+    another shape is compiled here."""
+    global _written
     key = (kinds, frozen, post_init)
     code = _TEMPLATES.get(key)
     if code is None:
-        params, body = [], []
-        for i, k in enumerate(kinds):
-            if k == "-":
-                continue
-            if k in "pf":
-                params.append(f"a{i}")
-            if k == "f":
-                body.append(f"    if a{i} is MISSING: a{i} = _f{i}()")
-            value = {"p": f"a{i}", "f": f"a{i}", "d": f"_d{i}", "F": f"_f{i}()"}[k]
-            body.append(f"    __record_set(self, 'a{i}', {value})" if frozen
-                        else f"    self.a{i} = {value}")
-        if post_init:
-            body.append("    self.__post_init__()")
-        src = f"def __init__(self{''.join(', ' + p for p in params)}):\n" \
-            + ("\n".join(body) or "    pass") + "\n"
-        ns: dict = {}
-        exec(compile(src, "<record>", "exec"), {}, ns)       # noqa: S102 - our own source
-        code = _TEMPLATES[key] = ns["__init__"].__code__
+        if _written is None:
+            from . import record_inits
+            _written = record_inits.SHAPES
+        init = _written.get(key)
+        if init is None:
+            ns: dict = {}
+            exec(compile(_init_source(*key), "<record>", "exec"), {}, ns)  # noqa: S102 - our own
+            init = ns["__init__"]
+        code = _TEMPLATES[key] = init.__code__.replace(co_name="__init__")
     return code
+
+
+def _init_source(kinds: tuple, frozen: bool, post_init: bool, name: str = "__init__") -> str:
+    """The source of the ``__init__`` of a shape (see :func:`_init_code`)."""
+    params, body = [], []
+    for i, k in enumerate(kinds):
+        if k == "-":
+            continue
+        if k in "pf":
+            params.append(f"a{i}")
+        if k == "f":
+            body.append(f"    if a{i} is MISSING: a{i} = _f{i}()")
+        value = {"p": f"a{i}", "f": f"a{i}", "d": f"_d{i}", "F": f"_f{i}()"}[k]
+        body.append(f"    __record_set(self, 'a{i}', {value})" if frozen
+                    else f"    self.a{i} = {value}")
+    if post_init:
+        body.append("    self.__post_init__()")
+    return f"def {name}(self{''.join(', ' + p for p in params)}):\n" \
+        + ("\n".join(body) or "    pass") + "\n"
+
+
+def inits_source(shapes) -> str:
+    """The text of ``record_inits.py``: an ``__init__`` template for each shape."""
+    shapes = sorted(shapes)
+    out = ['"""The ``__init__`` templates of the shapes of the package\'s record classes',
+           "(:mod:`plcbuilder._support.records`), loaded from this module's bytecode",
+           "cache instead of compiled at every start. Written by",
+           "``scripts/record_inits.py``; tests/_support/test_records.py",
+           'checks it is current. The names each template uses are the globals the',
+           'records module gives the class\'s ``__init__``."""',
+           "# (generated: do not edit)", ""]
+    for n, key in enumerate(shapes):
+        out += ["", _init_source(*key, name=f"_init{n}")]
+    out += ["", "SHAPES = {"]
+    out += [f"    {key!r}: _init{n}," for n, key in enumerate(shapes)]
+    out += ["}", ""]
+    return "\n".join(out)
+
+
+def made_shapes() -> set:
+    """The shapes of the package's record classes made so far in this process
+    (``scripts/record_inits.py`` imports every module, then writes these out)."""
+    return set(_PACKAGE_SHAPES)
 
 
 def dataclass(cls=None, /, *, frozen: bool = False, slots: bool = False, eq: bool = True,
@@ -193,18 +237,12 @@ def _make(cls, frozen: bool, slots: bool, eq: bool, want_repr: bool):
             g[f"_d{i}"] = f.default
         else:
             kinds.append("-")
-    code = _init_code(tuple(kinds), frozen, hasattr(cls, "__post_init__"))
-    rename = {f"a{i}": name for i, name in enumerate(names)}
-    code = code.replace(
-        co_varnames=tuple(rename.get(v, v) for v in code.co_varnames),
-        co_names=tuple(rename.get(v, v) for v in code.co_names),
-        co_consts=tuple(rename.get(c, c) if type(c) is str else c for c in code.co_consts),
-        co_qualname=f"{cls.__qualname__}.__init__")
-    init = FunctionType(code, g, "__init__", tuple(defaults) or None)
-    init.__qualname__ = f"{cls.__qualname__}.__init__"
-    init.__module__ = cls.__module__
+    shape = (tuple(kinds), frozen, hasattr(cls, "__post_init__"), tuple(names), g,
+             tuple(defaults) or None)
+    if cls.__module__.startswith("plcbuilder."):
+        _PACKAGE_SHAPES.add(shape[:3])
 
-    extra = {"__init__": init, "__record_fields__": specs, "__record_types__": types,
+    extra = {"__record_fields__": specs, "__record_types__": types,
              "__record_repr__": tuple(n for n in names if specs[n].repr),
              "__record_compare__": tuple(n for n in names if specs[n].compare),
              "__dataclass_fields__": _DataclassFields(),
@@ -234,6 +272,7 @@ def _make(cls, frozen: bool, slots: bool, eq: bool, want_repr: bool):
         ns.update(extra)
         new = type(cls)(cls.__name__, cls.__bases__, ns)
         new.__qualname__ = cls.__qualname__
+        new.__init__ = _deferred_init(new, shape)
         return new
     for n in names:                                  # as dataclasses: a plain default stays
         if isinstance(cls.__dict__.get(n), Field):
@@ -243,7 +282,39 @@ def _make(cls, frozen: bool, slots: bool, eq: bool, want_repr: bool):
                 setattr(cls, n, specs[n].default)
     for k, v in extra.items():
         setattr(cls, k, v)
+    cls.__init__ = _deferred_init(cls, shape)
     return cls
+
+
+def _deferred_init(cls, shape):
+    """The class's ``__init__`` until it is first called: it then makes the
+    real one (:func:`_init_function`), puts it in the class and calls it. A
+    command loads many record classes and makes instances of few: the others'
+    ``__init__`` is never compiled."""
+    def __init__(self, *args, **kwargs):
+        init = _init_function(cls, *shape)
+        cls.__init__ = init
+        init(self, *args, **kwargs)
+    __init__.__qualname__ = f"{cls.__qualname__}.__init__"
+    __init__.__module__ = cls.__module__
+    return __init__
+
+
+def _init_function(cls, kinds: tuple, frozen: bool, post_init: bool, names: tuple, g: dict,
+                   defaults):
+    """The ``__init__`` of a record class: the code of its shape of fields
+    (:func:`_init_code`) with the fields' names."""
+    code = _init_code(kinds, frozen, post_init)
+    rename = {f"a{i}": name for i, name in enumerate(names)}
+    code = code.replace(
+        co_varnames=tuple(rename.get(v, v) for v in code.co_varnames),
+        co_names=tuple(rename.get(v, v) for v in code.co_names),
+        co_consts=tuple(rename.get(c, c) if type(c) is str else c for c in code.co_consts),
+        co_qualname=f"{cls.__qualname__}.__init__")
+    init = FunctionType(code, g, "__init__", defaults)
+    init.__qualname__ = f"{cls.__qualname__}.__init__"
+    init.__module__ = cls.__module__
+    return init
 
 
 def fields_of(obj) -> tuple[str, ...]:

@@ -13,9 +13,10 @@ if TYPE_CHECKING:
 if TYPE_CHECKING:
     import tomllib
 
-_AT = re.compile(r"\s*\(at line (\d+), column \d+\)")
+#: (patterns compiled when first used, in the re module's cache: not at every start)
+_AT = r"\s*\(at line (\d+), column \d+\)"
 _END = " (at end of document)"
-_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+_HEADER = r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$"
 
 
 def loads(text: str) -> dict:
@@ -33,9 +34,9 @@ def decode_error(exc: tomllib.TOMLDecodeError, text: str) -> tuple[str, Optional
     """(the message without its position, the line) of a TOML parse error; an
     error at the end of the document is on its last line."""
     msg = str(exc)
-    m = _AT.search(msg)
+    m = re.search(_AT, msg)
     if m:
-        return _AT.sub("", msg), int(m.group(1))
+        return re.sub(_AT, "", msg), int(m.group(1))
     if _END in msg:
         return msg.replace(_END, ""), max(1, len(text.splitlines()))
     return msg, None
@@ -64,7 +65,7 @@ class TomlLocator:
         self.headers: list[tuple[int, tuple]] = [(0, ())]
         counts: dict[tuple, int] = {}
         for n, line in enumerate(self.lines, 1):
-            m = _HEADER.match(line)
+            m = re.match(_HEADER, line)
             if not m:
                 continue
             path = split_key(m.group(2))

@@ -24,8 +24,9 @@ it generates, filling in its own operand expressions.
 from __future__ import annotations
 
 import enum
+from functools import cached_property
 
-from plcbuilder._support.records import dataclass, field
+from plcbuilder._support.records import dataclass
 from plcbuilder.bytecode.opcodes import BINARY as BINARY_OPS, UNARY as UNARY_OPS, Op
 
 TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
@@ -65,11 +66,12 @@ class Operator:
     #: DIV and MOD: the source for a divisor known to be positive (simpler; its
     #: value always is a 32-bit value)
     positive_divisor: Optional[str] = None
-    #: the reference function, compiled from the source
-    fn: Callable = field(init=False, repr=False, compare=False)
 
-    def __post_init__(self):
-        object.__setattr__(self, "fn", _compile(self))
+    @cached_property
+    def fn(self) -> Callable:
+        """The reference function, compiled from the source when first used
+        (a command uses few of the twenty: not at every start)."""
+        return _compile(self)
 
     @property
     def divides(self) -> bool:

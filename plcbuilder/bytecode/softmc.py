@@ -35,7 +35,7 @@ read-only), POSITION 100 + i - 1 (position i, 0.01 mm).
 
 from __future__ import annotations
 
-import re
+from plcbuilder._support.lazy import Pattern
 
 TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
 if TYPE_CHECKING:
@@ -114,7 +114,7 @@ def pls_field(addr: int) -> Optional[tuple[int, int]]:
     return None
 
 
-_DYNAMIC = re.compile(r"PLS([1-9][0-9]*)_([A-Z]+)")
+_DYNAMIC = Pattern(r"PLS([1-9][0-9]*)_([A-Z]+)")
 
 
 def dynamic_name(name: str) -> Optional[int]:

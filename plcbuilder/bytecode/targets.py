@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import re
 
+from plcbuilder._support.lazy import Pattern
 from plcbuilder._support.records import dataclass
 
 TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
@@ -233,8 +234,8 @@ INDIRECT_STORE = {b.store: b for b in BANKS.values()}
 # ---------------------------------------------------- the oscilloscope's signals
 #: what the oscilloscope samples when the project picks nothing
 DEFAULT_SIGNALS = ("gvar 7180", "gvar 7184")      # input word 0, output word 0
-_PIN = re.compile(r"^\s*(in|out|adc|pwm|dac|gvar)\s+(0[xX][0-9a-fA-F]+|-?[0-9]+)\s*$", re.I)
-_VAR = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\.([A-Za-z_][A-Za-z0-9_]*)\s*$")
+_PIN = Pattern(r"^\s*(in|out|adc|pwm|dac|gvar)\s+(0[xX][0-9a-fA-F]+|-?[0-9]+)\s*$", re.I)
+_VAR = Pattern(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\.([A-Za-z_][A-Za-z0-9_]*)\s*$")
 _LIMITS = {"in": 255, "out": 255, "adc": 7, "pwm": 7, "dac": 7}
 
 

@@ -23,13 +23,12 @@ Halting stops the whole controller: the PLC keeps the rest of the tick
 
 from __future__ import annotations
 
-import re
-
+from plcbuilder._support.lazy import Pattern
 from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi
 from plcbuilder.bytecode.opcodes import HAS_SLOT, Op, size_of, validate
 from plcbuilder.bytecode.program import LoadError, Program
-from plcbuilder.controller import halted_state, vm
+from plcbuilder.controller import vm
 from plcbuilder.controller.events import Halted, Log, Resumed
 
 TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
@@ -40,7 +39,7 @@ REASONS = ("breakpoint", "step", "pause", "fault")
 HIT_MODES = ("eq", "ge", "every")
 STEP_KINDS = ("tick", "into", "over", "out")
 _CALL_SIZE = size_of(Op.CALL)
-_PLACEHOLDER = re.compile(r"\{([A-Za-z_][A-Za-z0-9_]*)\}")
+_PLACEHOLDER = Pattern(r"\{([A-Za-z_][A-Za-z0-9_]*)\}")
 #: The longest condition or log text a breakpoint takes (the compiler's limit for a
 #: condition, plcbuilder.project.conditions.MAX_CONDITION_CHARS, and the link's).
 MAX_TEXT = 1000
@@ -651,12 +650,16 @@ class Debugger:
         raise DebugError("the expression did not end")       # pragma: no cover
 
     # ------------------------------------------------------- halted state
+    # (controller/halted_state.py is loaded when first asked: a run that never
+    # steps or halts does not need it)
     def _position(self, p) -> tuple[Optional[int], tuple, bool]:
-        return halted_state.position(self, p)
+        from plcbuilder.controller.halted_state import position
+        return position(self, p)
 
     def halted_state(self) -> Optional[dict]:
         """The halted state (docs/debugging.md), or None while running."""
-        return halted_state.state_of(self)
+        from plcbuilder.controller.halted_state import state_of
+        return state_of(self)
 
 
 def _base(f: str) -> str:

@@ -61,10 +61,10 @@ is where the speed is, read section by section (the ``# ---`` headings).
 
 from __future__ import annotations
 
-import re
 import zlib
 from collections import namedtuple
 
+from plcbuilder._support.lazy import Pattern
 from plcbuilder._support.records import dataclass, field
 from plcbuilder.bytecode import abi, semantics, softmc
 from plcbuilder.bytecode.opcodes import (BINARY, BUILTINS, COND_JUMPS, ENDS_TICK, HAS_CONST, HAS_JREL,
@@ -91,11 +91,11 @@ _JMP = HAS_JREL & NO_FALLTHROUGH
 #: Instructions that end a basic block.
 _TERMINATORS = HAS_JREL | {Op.YIELD, Op.CALL, Op.RET, Op.EXIT, Op.GVARGET}
 _MAX_NEST = 40            # deepest inline nesting before a block becomes a label
-_SIMPLE = re.compile(r"^(_?\w+|s\[\d+\]|\(-\d+\))$")
+_SIMPLE = Pattern(r"^(_?\w+|s\[\d+\]|\(-\d+\))$")
 _BITS_CAP = 62
 _DUP_MAX_INS = 12         # a join block this small is written at each predecessor
 _DUP_MAX_BLOCKS = 400
-_YIELD = re.compile(r"\byield\b")
+_YIELD = Pattern(r"\byield\b")
 #: Slots the controller reads at every tick end, never kept in locals.
 _UNCACHED = frozenset({abi.SLOT_MESSAGE, abi.SLOT_PROC, abi.SLOT_VEXIT, abi.SLOT_VAR00,
                        abi.SLOT_VAR00 + 1})
@@ -1363,12 +1363,31 @@ def factory(program: Program, latency: bool = False,
         _CACHE[key] = _Translated(program.code, None, str(exc), False)
         return None
     ns = dict(_NAMESPACE)
-    filename = f"<plc {program.name} {key[0]:08x}>"
-    exec(compile(src, filename, "exec"), ns)
+    _run_source(src, f"<plc {program.name} {key[0]:08x}>", ns)
     if len(_CACHE) > 256:
         _CACHE.clear()
     _CACHE[key] = _Translated(program.code, ns["make"], "", _SYNC_WAIT in src)
     return ns["make"]
+
+
+def _run_source(src: str, filename: str, ns: dict) -> None:
+    """Run a translation's source in ``ns``, its code named ``filename`` (what
+    a traceback through it shows). ``exec`` of the text, not of
+    ``compile(src, filename)``: the first ``compile()`` of a process makes the
+    ast module's node types (9 M instructions, a twentieth of ``plcbuilder
+    run``'s start); the name is put on the code objects after."""
+    exec(src, ns)                                   # noqa: S102 - our own translation
+    for name, value in ns.items():
+        code = getattr(value, "__code__", None)
+        if code is not None and code.co_filename == "<string>":
+            value.__code__ = _renamed(code, filename)
+
+
+def _renamed(code, filename: str):
+    """``code`` and the code objects in it (nested functions) named ``filename``."""
+    consts = tuple(_renamed(c, filename) if hasattr(c, "co_filename") else c
+                   for c in code.co_consts)
+    return code.replace(co_filename=filename, co_consts=consts)
 
 
 def unsupported_reason(program: Program, latency: bool = False) -> Optional[str]:

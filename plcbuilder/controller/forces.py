@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import re
 
+from plcbuilder._support.lazy import Pattern
 from plcbuilder._support.records import dataclass
 from plcbuilder._support.numbers import WORD32, to_int32
 from plcbuilder.bytecode import abi
@@ -52,8 +53,8 @@ __all__ = ["ForceError", "ForcedSlots", "Forces", "Target", "parse_target", "par
 
 MODES = ("keep", "restore")
 _CHANNELS = 8
-_PIN = re.compile(r"^\s*(in|out|adc|pwm|dac|gvar)\s*(-?(?:0x[0-9a-f]+|\d+))\s*$", re.I)
-_VAR = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\.([A-Za-z_][A-Za-z0-9_]*)\s*$")
+_PIN = Pattern(r"^\s*(in|out|adc|pwm|dac|gvar)\s*(-?(?:0x[0-9a-f]+|\d+))\s*$", re.I)
+_VAR = Pattern(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\.([A-Za-z_][A-Za-z0-9_]*)\s*$")
 _USAGE = "PROC.var, in N, out N, adc N, pwm N, dac N or gvar N"
 
 

@@ -45,6 +45,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+from plcbuilder._support.lazy import Pattern
 from plcbuilder._support.records import dataclass, field, replace
 from plcbuilder._support.files import read_bounded
 from plcbuilder._support.numbers import INT32, WORD32, parse_int_in, to_int32
@@ -355,9 +356,9 @@ def parse_move(text: str) -> Action:
     return Action(t, "move", m.group(1).upper(), round(float(m.group(2)) * 100))
 
 
-_AT = re.compile(r"\s+at\s+(\S+?)\s*:\s*(\S+)(?:\s+returns\s+(\S+(?:\s*,\s*\S+)*))?\s*$",
+_AT = Pattern(r"\s+at\s+(\S+?)\s*:\s*(\S+)(?:\s+returns\s+(\S+(?:\s*,\s*\S+)*))?\s*$",
                  re.IGNORECASE)
-_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_NAME = Pattern(r"[A-Za-z_][A-Za-z0-9_]*")
 #: the most code offsets a position names (a procedure's code is at most 64 KiB;
 #: calls nest at most 16 deep)
 MAX_OFFSET = 0xFFFF

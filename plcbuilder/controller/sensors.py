@@ -15,8 +15,6 @@ The machine combines it with manual overrides (which win).
 
 from __future__ import annotations
 
-import random
-
 from plcbuilder.bytecode.abi import AXES
 
 from .machine_config import ADC_CHANNELS, AdcConfig, MachineConfig
@@ -50,17 +48,26 @@ class PositionInput:
         return (self.lo is None or p >= self.lo) and (self.hi is None or p <= self.hi)
 
 
+def _noise(cfg: AdcConfig):
+    """A channel's noise generator, seeded (None for a channel without noise:
+    ``random`` is imported only for a machine that has some)."""
+    if not cfg.noise:
+        return None
+    import random
+    return random.Random(cfg.seed)
+
+
 class AdcSource:
     __slots__ = ("cfg", "axis", "rng", "dynamic")
 
     def __init__(self, cfg: AdcConfig):
         self.cfg = cfg
         self.axis = AXES.index(cfg.axis) if cfg.axis else None
-        self.rng = random.Random(cfg.seed)
+        self.rng = _noise(cfg)
         self.dynamic = cfg.source == "ramp" or cfg.noise > 0
 
     def reset(self) -> None:
-        self.rng = random.Random(self.cfg.seed)
+        self.rng = _noise(self.cfg)
 
     def value(self, t_ms: int, ipos: list[int]) -> int:
         c = self.cfg

@@ -22,7 +22,6 @@ from plcbuilder.diagnostics import Diagnostic, Span, error
 from plcbuilder.lang import ast as A
 from plcbuilder.lang.checker import Checker, Symbols
 from plcbuilder.lang.codegen import ADDRESS_LIMIT, JUMP_LIMIT, generate
-from plcbuilder.lang.incremental import Incremental
 from plcbuilder.lang.macro_notes import add_macro_notes
 from plcbuilder.lang.options import COMPILER_VERSION, CompileOptions  # noqa: F401 - re-exported
 from plcbuilder.lang.parser import parse_tokens
@@ -33,6 +32,8 @@ from plcbuilder.lang.targets import lower as lower_target
 TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
 if TYPE_CHECKING:
     from typing import Optional
+
+    from plcbuilder.lang.incremental import Incremental   # (the language server's and the IDE's)
 
 #: the most diagnostics of one code a compile reports (then one that says how many more)
 MAX_SAME = 100

@@ -101,3 +101,70 @@ def test_making_records_does_not_load_dataclasses():
             "print('dataclasses' in sys.modules, 'inspect' in sys.modules)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.stdout.split() == ["False", "False"], r.stdout + r.stderr
+
+
+def test_init_is_made_when_the_class_makes_its_first_instance():
+    """Issue 26.1: a command loads many record classes and makes instances of
+    few; an ``__init__`` is compiled only for a class that is used."""
+    @dataclass(slots=True)
+    class Lazy:
+        x: int
+        y: list = field(default_factory=list)
+
+    class Sub(Lazy):                         # a plain subclass calling the record's __init__
+        __slots__ = ("z",)
+
+        def __init__(self, x, z):
+            super().__init__(x)
+            self.z = z
+
+    made = Lazy.__dict__["__init__"]
+    assert made.__code__.co_varnames[:1] == ("self",) and "x" not in made.__code__.co_varnames
+    s = Sub(1, 2)                            # the first instance makes the real one
+    real = Lazy.__dict__["__init__"]
+    assert real is not made and real.__code__.co_varnames[:3] == ("self", "x", "y")
+    assert (s.x, s.y, s.z) == (1, [], 2) and Lazy(3, [4]).y == [4]
+    assert Lazy.__init__.__qualname__.endswith("Lazy.__init__")
+    with pytest.raises(TypeError, match="missing 1 required positional argument: 'x'"):
+        Lazy()
+    with pytest.raises(TypeError, match="non-default argument 'b' follows default argument"):
+        @dataclass
+        class Bad:                           # the class's fields are still checked when it is made
+            a: int = 0
+            b: int
+
+
+def test_the_written_init_templates_are_current():
+    """The shapes of the package's record classes are written out in
+    ``_support/record_inits.py`` (loaded from the bytecode cache, not compiled
+    at every start): it must be what ``scripts/record_inits.py`` writes now."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    code = ("import sys; sys.path.insert(0, 'scripts'); import record_inits\n"
+            "sys.stdout.write(record_inits.source())")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=root)
+    assert r.returncode == 0, r.stderr
+    written = (root / "plcbuilder" / "_support" / "record_inits.py").read_text(encoding="utf-8")
+    assert written == r.stdout, "run `.venv/bin/python scripts/record_inits.py` and commit " \
+                                "plcbuilder/_support/record_inits.py"
+
+
+def test_a_written_template_makes_the_same_init_as_a_compiled_one():
+    from plcbuilder._support import record_inits, records
+
+    @dataclass
+    class Two:
+        a: int
+        b: int
+
+    assert (("p", "p"), False, False) in record_inits.SHAPES
+    with pytest.raises(TypeError, match=r"Two\.__init__\(\) missing 1 required positional "
+                                        r"argument: 'b'"):
+        Two(1)
+    t = Two(1, b=2)
+    assert (t.a, t.b) == (1, 2) and Two.__init__.__code__.co_varnames == ("self", "a", "b")
+    for key, init in record_inits.SHAPES.items():
+        ns: dict = {}
+        exec(records._init_source(*key), {}, ns)
+        assert init.__code__.co_code == ns["__init__"].__code__.co_code, key

@@ -189,3 +189,42 @@ def test_atomic_write_of_chunks_that_fail_leaves_the_old_file(tmp_path):
     with pytest.raises(ValueError):
         atomic_write(f, chunks())
     assert f.read_bytes() == b"old" and os.listdir(tmp_path) == ["eeprom.rom"]
+
+
+def test_lazy_pattern_compiles_when_first_used():
+    """Issue 26.1: a module's patterns are compiled when a command uses them,
+    not at every start; used, one answers as the compiled pattern does."""
+    import re
+
+    from plcbuilder._support.lazy import Pattern
+
+    p = Pattern(r"(in|out)\s*(\d+)", re.I)
+    assert "_compiled" not in vars(p)
+    compiled = re.compile(r"(in|out)\s*(\d+)", re.I)
+    assert p.fullmatch("OUT 7").groups() == compiled.fullmatch("OUT 7").groups() == ("OUT", "7")
+    assert vars(p)["_compiled"] is compiled                  # (the re module's cache)
+    assert p.match("x") is None and p.sub("-", "in 3, out 4") == "-, -"
+    assert (p.groups, p.pattern, p.flags) == (compiled.groups, compiled.pattern, compiled.flags)
+    assert "fullmatch" in vars(p)                            # kept: a later use is direct
+
+
+def test_modules_on_the_run_path_compile_no_pattern_at_import():
+    """The controller's, the scenario's and the targets' patterns are not
+    compiled when their modules load (``plcbuilder run`` of a procedure uses
+    none of them)."""
+    import subprocess
+
+    code = ("import re, sys\n"
+            "made = []\n"
+            "real = re._compile\n"
+            "def spy(pattern, flags):\n"
+            "    made.append(pattern)\n"
+            "    return real(pattern, flags)\n"
+            "re._compile = spy\n"
+            "import plcbuilder._support.numbers, plcbuilder._support.toml_errors\n"
+            "import plcbuilder.bytecode.softmc, plcbuilder.bytecode.targets\n"
+            "import plcbuilder.controller.forces, plcbuilder.controller.scenario\n"
+            "import plcbuilder.controller.debugger, plcbuilder.controller.fastvm\n"
+            "print(len(made))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.stdout.strip() == "0", r.stdout + r.stderr

@@ -186,3 +186,15 @@ def test_what_the_fast_backend_relies_on_holds():
         if o.modular:
             for a, d in itertools.product(EDGES, offsets):
                 assert wrap(eval(o.text(f"({a + d})"))) == o.fn(a)
+
+
+def test_the_reference_functions_are_compiled_when_first_used():
+    """Issue 26.1: importing the table compiles only what it uses itself
+    (c_div, c_mod): a command that uses three operators compiles three."""
+    import subprocess
+    import sys
+    code = ("from plcbuilder.bytecode import semantics as s\n"
+            "ops = [*s.BINARY.values(), *s.UNARY.values()]\n"
+            "print(len(ops), sum('fn' in vars(o) for o in ops))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.stdout.split() == ["20", "2"], r.stdout + r.stderr

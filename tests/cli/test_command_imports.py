@@ -11,7 +11,8 @@ import sys
 NEVER = ("lark", "dataclasses", "inspect", "typing", "shutil", "importlib.resources",
          "zipfile", "json", "difflib", "logging", "plcbuilder.testing", "plcbuilder.trace",
          "plcbuilder.link", "plcbuilder.project.build", "plcbuilder.lang.syntax_errors",
-         "plcbuilder.controller.history", "plcbuilder.controller.trigger", "PySide6", "numpy")
+         "plcbuilder.controller.history", "plcbuilder.controller.trigger", "PySide6", "numpy",
+         "plcbuilder.lang.incremental")
 #: what only ``run`` needs
 RUN_ONLY = ("plcbuilder.controller", "tomllib", "random")
 
@@ -57,4 +58,25 @@ def test_check_and_compile_load_the_compiler_only(tmp_path):
 def test_run_of_one_procedure_loads_the_controller_only(tmp_path):
     mods = loaded(tmp_path, "run", "SRC")
     assert "plcbuilder.controller.session" in mods
-    assert heavy(mods, NEVER + ("tomllib",)) == []
+    # (random: only for a machine whose ADC channels have noise; the default has none)
+    assert heavy(mods, NEVER + ("tomllib", "random", "plcbuilder.controller.halted_state")) == []
+
+
+def test_the_program_freezes_what_starting_made_and_collects_as_usual_after(tmp_path):
+    """Run as the program, the command line pauses the collector while it
+    starts and freezes what starting made; called with arguments (as the
+    tests and other code call it) it leaves the collector alone."""
+    src = tmp_path / "M90.plc"
+    src.write_text("main()\n{\n  exit(99);\n};\n")
+    code = ("import gc, io, sys, contextlib\n"
+            "from plcbuilder.cli.main import main\n"
+            "gc.collect()\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            f"    rc = main(['check', {str(src)!r}])\n"
+            "called = (rc, gc.get_freeze_count(), gc.isenabled())\n"
+            f"sys.argv = ['plcbuilder', 'check', {str(src)!r}]\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            "    rc = main()\n"
+            "print(called, (rc, gc.get_freeze_count() > 1000, gc.isenabled()))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.stdout.split("\n")[0] == "(0, 0, True) (0, True, True)", r.stdout + r.stderr

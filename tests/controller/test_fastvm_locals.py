@@ -87,3 +87,34 @@ def test_a_value_written_to_the_slots_after_a_sync_is_seen_by_the_next_tick():
         c.run_until_idle(100)
         e = ended(c.drain_events(), "M10")
         assert (e.t_ms, e.exit_code) == (10 + 10, 99), b
+
+
+def test_a_translation_runs_without_compile_and_keeps_its_name(monkeypatch):
+    """Issue 26.1: the translation is run with ``exec`` of its text (the first
+    ``compile()`` of a process builds the ast module's types: a twentieth of
+    ``plcbuilder run``'s start), and its code still carries the name a
+    traceback shows, nested functions included."""
+    import builtins
+
+    def no_compile(*a, **k):
+        raise AssertionError("compile() called")
+
+    program = compile_proc(CALLS.replace("k<5", "k<6"), "M71")   # (not in the cache yet)
+    with monkeypatch.context() as m:
+        m.setattr(builtins, "compile", no_compile)
+        make = fastvm.factory(program)
+    assert make is not None
+
+    def codes(code):
+        yield code
+        for c in code.co_consts:
+            if hasattr(c, "co_filename"):
+                yield from codes(c)
+
+    names = {c.co_filename for c in codes(make.__code__)}
+    assert len(list(codes(make.__code__))) > 1
+    assert len(names) == 1 and names.pop().startswith("<plc M71 ")
+    c = controller(program)
+    c.start("M71")
+    c.run_until_idle(1000)
+    assert ended(c.drain_events(), "M71").exit_code == 99
