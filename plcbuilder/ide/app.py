@@ -95,8 +95,10 @@ def main(project: Optional[str] = None, *, screenshot: Optional[str] = None,
     app = create_application()
     from plcbuilder.ide.settings import Settings
     settings = Settings(settings_path)
-    apply_theme(app, settings.preferences().theme)
+    prefs = settings.preferences()
+    theme = prefs.theme
     if screenshot:
+        apply_theme(app, theme)
         if project and Path(project).is_file():
             project = str(project_of(Path(project)))
         from plcbuilder.ide import screenshot as shot
@@ -106,13 +108,18 @@ def main(project: Optional[str] = None, *, screenshot: Optional[str] = None,
     opened: list = []                        # the main window, kept while the IDE runs
     failed: list = []
     if folder is not None and _first_frame_fits(app):
+        # the light theme is the style's own palette: asking the style for it
+        # makes the QStyle type's 540 enum members, after the frame's paint
+        if theme != "light":
+            apply_theme(app, theme)
         from plcbuilder.ide.first_frame import FirstFrame
-        prefs = settings.preferences()
         frame = FirstFrame(settings, folder, front=file, font_family=prefs.font_family,
                            font_size=prefs.font_size)
 
         def make_window() -> None:
             try:
+                if theme == "light":
+                    apply_theme(app, theme)
                 opened.append(_open_window(app, settings, folder, file, start_controller, frame))
             except BaseException as exc:     # (raised below, as without the frame)
                 failed.append(exc)
@@ -121,6 +128,7 @@ def main(project: Optional[str] = None, *, screenshot: Optional[str] = None,
         frame.after_paint(make_window)
         frame.show()
     else:
+        apply_theme(app, theme)
         opened.append(_open_window(app, settings, folder, file, start_controller, None))
     code = app.exec()
     if failed:

@@ -20,12 +20,13 @@ classes, 35 ms): every name it uses is of a class it already loads.
 
 from __future__ import annotations
 
+import html
 import os
 from pathlib import Path
 from typing import Callable, Optional
 
 from PySide6.QtCore import QEvent, QObject, QPoint, QRect, QTimer
-from PySide6.QtGui import QFont, QKeyEvent, QTextBlockFormat, QTextCursor
+from PySide6.QtGui import QKeyEvent
 from PySide6.QtWidgets import (QApplication, QMainWindow, QTextEdit, QSplitter, QTabBar,
                                QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget)
 
@@ -39,6 +40,8 @@ MENU_TITLES = ("&File", "&Edit", "&Go", "&View", "&Build", "&Run", "&Debug", "&H
 TARGET_LABEL = {"huazhong": "Huazhong PLC", "tgmotion": "TG Motion PLC"}
 #: the application's name in titles (also welcome.APP_NAME)
 APP_NAME = "PLC Builder"
+#: where a QTextDocument's text starts in its widget (its default margin)
+DOCUMENT_MARGIN = 4
 #: the most of the front file the frame shows: its start (the editor opens at
 #: its top; the frame is read-only and goes within a second)
 MAX_TEXT, MAX_LINES = 64 * 1024, 400
@@ -154,25 +157,22 @@ class FirstFrame(QMainWindow):
             self.tabs.addTab(Path(f).name)
         if self.current:
             self.tabs.setCurrentIndex(self.files.index(self.current))
+        sketch = settings.frame_sketch()
+        placed = sketch is not None and sketch["size"] == (self.width(), self.height())
         self.text = QTextEdit()
         self.text.setReadOnly(True)
         self.text.setLineWrapMode(QTextEdit.LineWrapMode.NoWrap)
-        font = QFont(font_family or "DejaVu Sans Mono")
-        font.setPointSize(font_size)
-        font.setStyleHint(QFont.StyleHint.Monospace)
-        self.text.setFont(font)
-        self.text.setPlainText(self._front_text())
+        self._show_text(self._front_text(), font_family, font_size,
+                        sketch["text"] if placed else (0, 0))
         right = QWidget()
         lay = QVBoxLayout(right)
         lay.setContentsMargins(0, 0, 0, 0)
         lay.setSpacing(0)
         lay.addWidget(self.tabs)
         lay.addWidget(self.text)
-        sketch = settings.frame_sketch()
-        if sketch is not None and sketch["size"] == (self.width(), self.height()):
+        if placed:
             # where the window had them: they stay put as the window takes over
             self.setCentralWidget(_Placed({self.tree: sketch["tree"], right: sketch["editor"]}))
-            self._like_the_editor(*sketch["text"])
         else:
             split = QSplitter()
             split.addWidget(self.tree)
@@ -215,18 +215,21 @@ class FirstFrame(QMainWindow):
             group.setExpanded(True)
         root.setExpanded(True)
 
-    def _like_the_editor(self, x: int, line_height: int) -> None:
-        """The text where the editor's will be: right of its margins, its
-        lines as high (0: not known)."""
-        doc = self.text.document()
-        if x > 0:
-            self.text.setViewportMargins(max(0, x - int(doc.documentMargin())), 0, 0, 0)
-        if line_height > 0:
-            fmt = QTextBlockFormat()
-            fmt.setLineHeight(line_height, QTextBlockFormat.LineHeightTypes.FixedHeight.value)
-            cursor = QTextCursor(doc)
-            cursor.select(QTextCursor.SelectionType.Document)
-            cursor.mergeBlockFormat(fmt)
+    def _show_text(self, text: str, family: str, size: int, where: tuple) -> None:
+        """The file's text in the editor's font (a monospace one when none is
+        set, as the editor's) and, with ``where`` = (x, line height) from the
+        window's sketch, where the editor's text will be: right of its margins,
+        its lines as high (0: not known). Given as HTML: the font, size and
+        line height without the Python types of QFont and the text formats
+        (each first use makes their enum classes)."""
+        x, line_height = where
+        if x > DOCUMENT_MARGIN:
+            self.text.setViewportMargins(x - DOCUMENT_MARGIN, 0, 0, 0)
+        family = family.replace("'", "").replace('"', "")
+        face = f"'{family}', monospace" if family else "monospace"
+        style = f"margin:0; font-family:{face}; font-size:{int(size)}pt" + \
+            (f"; line-height:{int(line_height)}px" if line_height > 0 else "")
+        self.text.setHtml(f'<pre style="{style}">{html.escape(text, quote=False)}</pre>')
 
     def _front_text(self) -> str:
         if not self.current or not os.path.isfile(self.current):
@@ -277,8 +280,8 @@ class FirstFrame(QMainWindow):
         self.keys.unwatch()
         kept, self.keys.kept = self.keys.kept, []
         self.hide()
-        win.raise_()
-        win.activateWindow()
+        if not win.isActiveWindow():
+            win.activateWindow()
         # keys with Ctrl, Alt or Meta are commands (shortcuts): typed into the
         # frame, they are not run on a window that was not there yet; the
         # others go to its editor

@@ -4,9 +4,12 @@ loaded once each. An unknown name gives an empty icon, never an error."""
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
-from PySide6.QtCore import QByteArray
-from PySide6.QtGui import QIcon, QImage, QPainter, QPixmap
+from PySide6.QtGui import QIcon
+
+if TYPE_CHECKING:
+    from PySide6.QtGui import QPixmap
 
 from plcbuilder._support.package_data import data_folder
 
@@ -66,14 +69,17 @@ def icon(name: str) -> QIcon:
 
 
 def pixmap(name: str, size: int = 16) -> QPixmap:
+    from PySide6.QtGui import QPixmap
     data = svg_data(name)
     return _render(data, size) if data else QPixmap()
 
 
 def _render(data: bytes, size: int) -> QPixmap:
-    # the Qt namespace here, not at import: its first use makes its 93 enum
-    # classes (35 ms), which the window's first frame does without
-    from PySide6.QtCore import QRectF, Qt
+    # these here, not at import: a Qt class first used from Python makes its
+    # enum classes (the Qt namespace's 93 take 35 ms), which the window's
+    # first frame does without
+    from PySide6.QtCore import QByteArray, QRectF, Qt
+    from PySide6.QtGui import QImage, QPainter, QPixmap
     from PySide6.QtSvg import QSvgRenderer
     renderer = QSvgRenderer(QByteArray(data))
     img = QImage(size, size, QImage.Format.Format_ARGB32_Premultiplied)

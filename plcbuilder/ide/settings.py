@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Optional
 
-from PySide6.QtCore import QByteArray, QSettings, QStandardPaths
+from PySide6.QtCore import QByteArray, QSettings
 
 from plcbuilder.ide.editor import EditorPrefs
 
@@ -235,6 +235,7 @@ class Settings:
 def data_dir() -> Path:
     """The IDE's data folder: ``~/.local/share/PLC Builder`` on Linux (the
     application's name once, not the organisation's and the application's)."""
+    from PySide6.QtCore import QStandardPaths      # (its enums: only when asked)
     base = QStandardPaths.writableLocation(QStandardPaths.StandardLocation.GenericDataLocation)
     return Path(base or Path.home() / ".local" / "share") / APPLICATION
 

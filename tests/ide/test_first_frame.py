@@ -83,7 +83,9 @@ def test_the_frame_shows_the_projects_tree_tabs_and_front_file_read_only(qtbot, 
     assert f.tree.currentItem().text(0) == "M03"           # the front file's procedure
     assert [f.tabs.tabText(i) for i in range(f.tabs.count())] == ["M03.plc", "LUBE.plc"]
     assert f.tabs.currentIndex() == 0
-    assert f.text.toPlainText() == (root / "hardware" / "M03.plc").read_text(encoding="utf-8")
+    # (every line of the file: the text is HTML's <pre>, which has no last empty line)
+    assert f.text.toPlainText() == \
+        (root / "hardware" / "M03.plc").read_text(encoding="utf-8").removesuffix("\n")
     assert f.text.isReadOnly()
     assert f.windowTitle() == "M03.plc[*] — ex — PLC Builder"
     assert f.statusBar().currentMessage() == "Opening ex…"
@@ -105,7 +107,8 @@ def test_a_file_given_on_the_command_line_is_the_frames_front_file(qtbot, exampl
     root, st = example
     m05 = root / "hardware" / "M05.plc"
     f = frames(st, root, front=m05)
-    assert f.current == str(m05) and f.text.toPlainText() == m05.read_text(encoding="utf-8")
+    assert f.current == str(m05)
+    assert f.text.toPlainText() == m05.read_text(encoding="utf-8").removesuffix("\n")
     assert f.tabs.tabText(f.tabs.currentIndex()) == "M05.plc"
 
 
@@ -415,3 +418,11 @@ def test_a_long_front_file_shows_its_start(qtbot, example, frames):
     f = frames(st, root)
     shown = f.text.toPlainText().split("\n")
     assert len(shown) == first_frame.MAX_LINES and shown[0] == "// line 0"
+
+
+def test_the_front_files_text_is_shown_as_it_is(qtbot, example, frames):
+    root, st = example
+    text = "main()\n{\n  if (a < b && c > d) {x=1;}; // <b>not bold</b> &amp;\n\ttab\n};\n"
+    (root / "hardware" / "M03.plc").write_text(text, encoding="utf-8")
+    f = frames(st, root)
+    assert f.text.toPlainText() == text.removesuffix("\n")

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from PySide6.QtGui import QColor, QFont, QFontDatabase, QImage, QPainter
 
 # indicators (0..7 belong to lexers; containers use 8 and up)
 IND_ERROR = 8
@@ -66,14 +65,17 @@ class EditorPrefs:
 
 
 def default_font_family() -> str:
+    from PySide6.QtGui import QFontDatabase
     family = QFontDatabase.systemFont(QFontDatabase.SystemFont.FixedFont).family()
     return family or "DejaVu Sans Mono"
 
 
 def rgba_image(letter: str, colour: str, size: int = 14) -> bytes:
-    # the Qt namespace here, not at import (the settings import this module
-    # before the window's first frame, which does without its 35 ms of enums)
+    # these here, not at import: the settings import this module before the
+    # window's first frame, which does without their enum classes (a Qt
+    # class first used from Python makes them; the Qt namespace's take 35 ms)
     from PySide6.QtCore import Qt
+    from PySide6.QtGui import QColor, QFont, QImage, QPainter
     img = QImage(size, size, QImage.Format.Format_RGBA8888)
     img.fill(Qt.GlobalColor.transparent)
     p = QPainter(img)
