@@ -107,7 +107,7 @@ def main(project: Optional[str] = None, *, screenshot: Optional[str] = None,
     folder, file = _what_to_open(project, settings)
     opened: list = []                        # the main window, kept while the IDE runs
     failed: list = []
-    if folder is not None and _first_frame_fits(app):
+    if folder is not None and prefs.first_frame and _first_frame_fits(app):
         # the light theme is the style's own palette: asking the style for it
         # makes the QStyle type's 540 enum members, after the frame's paint
         if theme != "light":

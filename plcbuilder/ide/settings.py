@@ -34,6 +34,7 @@ class Preferences(EditorPrefs):
     reload_unmodified: bool = True      # reload files changed on disk when not edited
     build_before_upload: bool = True
     open_last_project: bool = True
+    first_frame: bool = True            # show the project at once while the window is made
 
     def editor_prefs(self) -> EditorPrefs:
         names = {f.name for f in fields(EditorPrefs)}

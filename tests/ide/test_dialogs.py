@@ -308,11 +308,13 @@ def test_preferences_dialog(win, monkeypatch):
         d.autosave_spin.setValue(9)
         d.reload_box.setChecked(False)
         d.ac_box.setChecked(False)
+        d.first_frame_box.setChecked(False)
     driving(monkeypatch, dialogs.PreferencesDialog, fill)
     win.action(Act.PREFERENCES).trigger()
     p = win.prefs
     assert (p.font_size, p.tab_width, p.theme, p.show_whitespace, p.autosave_seconds,
-            p.reload_unmodified, p.autocomplete) == (16, 8, "dark", True, 9, False, False)
+            p.reload_unmodified, p.autocomplete, p.first_frame) == \
+        (16, 8, "dark", True, 9, False, False, False)
     assert ed.tabWidth() == 8 and ed.viewWS() == 1
     assert win.recovery.timer.interval() == 9000
     assert win.settings.preferences() == p

@@ -296,15 +296,26 @@ def test_the_command_starts_with_the_frame_and_the_window_takes_its_place(exampl
     assert seen["title"] == "M03.plc[*] — ex — PLC Builder"
 
 
+def test_with_the_preference_off_the_window_opens_without_the_frame(example, tmp_path):
+    root, st = example
+    st.save_preferences(st.preferences().with_changes(first_frame=False))
+    st.sync()
+    r = _closing(st, tmp_path, "count-frames")
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout.splitlines()[-1]) == {"status": 0, "shown": [True], "made": True,
+                                                     "frames": 0}
+
+
 #: ``plcbuilder gui --settings INI --no-controller`` (argv 1: INI) with the
 #: frame closed by the user (argv 2: "at-paint", before the main window is
 #: made; "while-made", while it opens the project) or the main window failing
-#: to be made ("broken"); prints the command's status and whether the main
-#: window was shown as JSON (an exception ends the process as it would).
+#: to be made ("broken"), or the frames made counted ("count-frames"); prints
+#: the command's status and whether the main window was shown as JSON (an
+#: exception ends the process as it would).
 _CLOSING = r"""
 import json, sys
 from plcbuilder.ide import app as ide_app, first_frame
-mode, shown = sys.argv[2], []
+mode, shown, frames = sys.argv[2], [], []
 if mode == "at-paint":
     painted_now = first_frame.FirstFrame._painted_now
     def close_first(self):
@@ -324,6 +335,20 @@ elif mode == "while-made":
         shown.append(win.isVisible())
         return win
     ide_app._open_window = closing
+elif mode == "count-frames":
+    from PySide6.QtCore import QTimer
+    open_window = ide_app._open_window
+    def counting(app, settings, folder, file, start_controller, frame):
+        win = open_window(app, settings, folder, file, start_controller, frame)
+        shown.append(win.isVisible())
+        QTimer.singleShot(0, win.close)
+        return win
+    ide_app._open_window = counting
+    made = first_frame.FirstFrame.__init__
+    def init(self, *a, **k):
+        frames.append(1)
+        made(self, *a, **k)
+    first_frame.FirstFrame.__init__ = init
 else:
     def broken(*args):
         raise RuntimeError("no window today")
@@ -332,7 +357,8 @@ from plcbuilder.cli.main import main
 sys.argv[0] = "plcbuilder"
 status = main(["gui", "--settings", sys.argv[1], "--no-controller"])
 print(json.dumps({"status": status, "shown": shown,
-                  "made": "plcbuilder.ide.main_window" in sys.modules}))
+                  "made": "plcbuilder.ide.main_window" in sys.modules,
+                  **({"frames": len(frames)} if mode == "count-frames" else {})}))
 """
 
 

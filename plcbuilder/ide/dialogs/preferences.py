@@ -82,11 +82,18 @@ class PreferencesDialog(QDialog):
         self.build_upload_box.setChecked(prefs.build_before_upload)
         self.reopen_box = QCheckBox("Open the last project on start", fb)
         self.reopen_box.setChecked(prefs.open_last_project)
+        self.first_frame_box = QCheckBox("Show the project at once while the IDE opens", fb)
+        self.first_frame_box.setToolTip(
+            "On: a plain window shows the project's tree and file (read-only) while the IDE's "
+            "window is made, then gives way to it. Off: nothing shows until the IDE's window "
+            "is made, which is then ready a little sooner")
+        self.first_frame_box.setChecked(prefs.first_frame)
         g.addRow("Recovery autosave every:", self.autosave_spin)
         g.addRow("", self.reload_box)
         g.addRow("", self.save_build_box)
         g.addRow("", self.build_upload_box)
         g.addRow("", self.reopen_box)
+        g.addRow("", self.first_frame_box)
         tabs.addTab(fb, "Files && Build")
         self.buttons = ok_cancel(self, lay)
         self.setMinimumWidth(460)
@@ -102,7 +109,8 @@ class PreferencesDialog(QDialog):
             reload_unmodified=self.reload_box.isChecked(),
             save_before_build=self.save_build_box.isChecked(),
             build_before_upload=self.build_upload_box.isChecked(),
-            open_last_project=self.reopen_box.isChecked())
+            open_last_project=self.reopen_box.isChecked(),
+            first_frame=self.first_frame_box.isChecked())
 
     @classmethod
     def get_preferences(cls, parent=None, prefs: Preferences = Preferences()) -> Optional[Preferences]:
