@@ -12,10 +12,15 @@ while it shows, takes its place at the same geometry, and the frame goes.
 
 Nothing is lost meanwhile: keys typed into the frame are kept and given, in
 order, to the editor that shows the same file once it is there (or to the
-window's focus). Closing the frame quits before the IDE's window is shown.
+window's focus); a shortcut (a key with Ctrl, Alt or Meta) is not run on a
+window that was not there, and the window's status bar names it. Closing the
+frame quits before the IDE's window is shown. The preference
+``first_frame`` (Preferences › Files & Build) turns it off.
 
-The frame does without the ``Qt`` namespace (its first use makes 93 enum
-classes, 35 ms): every name it uses is of a class it already loads.
+Before its paint the frame does without the Python types whose first use
+makes big enum classes: the ``Qt`` namespace (93 classes, 35 ms), QStyle (the
+light theme's palette comes after the paint), QFont and the text formats (the
+text, its font and line height are given as HTML).
 """
 
 from __future__ import annotations
@@ -282,9 +287,14 @@ class FirstFrame(QMainWindow):
         self.hide()
         if not win.isActiveWindow():
             win.activateWindow()
-        # keys with Ctrl, Alt or Meta are commands (shortcuts): typed into the
-        # frame, they are not run on a window that was not there yet; the
-        # others go to its editor
+        if kept:
+            self._give_keys(win, kept)
+        self.deleteLater()
+
+    def _give_keys(self, win, kept: list) -> None:
+        """The keys typed into the frame, to ``win``: keys with Ctrl, Alt or
+        Meta are commands (shortcuts), not run on a window that was not there
+        yet, and named in its status bar; the others go to its editor."""
         from PySide6.QtCore import Qt
         from PySide6.QtGui import QKeySequence
         mod = Qt.KeyboardModifier
@@ -302,7 +312,6 @@ class FirstFrame(QMainWindow):
         if commands:
             win.statusBar().showMessage(
                 "Not run (typed while the window opened): " + ", ".join(commands), 10000)
-        self.deleteLater()
 
     def _key_target(self, win):
         """The editor of the frame's front file (else the window's focus)."""
