@@ -37,10 +37,15 @@ from PySide6.QtWidgets import (QApplication, QMainWindow, QTextEdit, QSplitter, 
 
 from plcbuilder.ide.icons import icon
 
-__all__ = ["FirstFrame", "MENU_TITLES", "TARGET_LABEL", "frame_title", "session_files"]
+__all__ = ["FirstFrame", "HARDWARE_GROUP", "HEADERS_GROUP", "MENU_TITLES", "SOFTWARE_GROUP",
+           "TARGET_LABEL", "frame_title", "procedure_icon", "session_files"]
 
 #: the main window's menus, left to right (actions.build_menus, debug/actions.py)
 MENU_TITLES = ("&File", "&Edit", "&Go", "&View", "&Build", "&Run", "&Debug", "&Help")
+#: the project tree's groups, (label, icon) (plcbuilder.ide.project_tree's too)
+HARDWARE_GROUP = ("Hardware PLC", "folder-hw")
+SOFTWARE_GROUP = ("Software PLC", "folder-sw")
+HEADERS_GROUP = ("Headers", "folder")
 #: the tree's label of the hardware procedures for a target other than myCNC
 TARGET_LABEL = {"huazhong": "Huazhong PLC", "tgmotion": "TG Motion PLC"}
 #: the application's name in titles (also welcome.APP_NAME)
@@ -53,16 +58,22 @@ MAX_TEXT, MAX_LINES = 64 * 1024, 400
 
 
 def frame_title(file: Optional[str], project: Optional[str]) -> str:
-    """The window title for the front file and project (the main window's)."""
+    """The window title for the front file and project (the main window's too)."""
     parts = [Path(file).name + "[*]"] if file else []
     if project:
         parts.append(project)
     return " — ".join(parts + [APP_NAME])
 
 
+def procedure_icon(hardware: bool, system: bool) -> str:
+    """The project tree's icon of a procedure (system: a software __NAME one)."""
+    return "file-plc" if hardware else "file-plc-sys" if system else "file-plc-sw"
+
+
 def session_files(settings, folder: Path) -> tuple[list[str], str]:
     """The last session's editors of the project at ``folder`` that still
-    exist, and the one in front ('' when none)."""
+    exist, and the one in front ('' when none): what the frame shows and the
+    main window opens."""
     from plcbuilder.lang.builtin_headers import BUILTIN_PREFIX
     files = [f for f in settings.open_files(folder)
              if f.startswith(BUILTIN_PREFIX) or os.path.exists(f)]
@@ -103,17 +114,19 @@ class _Keys(QObject):
         self.kept: list[tuple] = []
         self.watching = False
 
-    def watch(self) -> None:
-        """Keep the keys from now on: those of the frame's widgets that can
-        have the keyboard, and of the frame."""
+    def _widgets(self) -> tuple:
+        """The frame's widgets that can have the keyboard, and the frame."""
         f = self.frame
-        for w in (f, f.tree, f.text, f.tabs, f.menuBar()):
+        return (f, f.tree, f.text, f.tabs, f.menuBar())
+
+    def watch(self) -> None:
+        """Keep the keys from now on."""
+        for w in self._widgets():
             w.installEventFilter(self)
         self.watching = True
 
     def unwatch(self) -> None:
-        f = self.frame
-        for w in (f, f.tree, f.text, f.tabs, f.menuBar()):
+        for w in self._widgets():
             w.removeEventFilter(self)
         self.watching = False
 
@@ -198,9 +211,8 @@ class FirstFrame(QMainWindow):
         f = root.font(0)
         f.setBold(True)
         root.setFont(0, f)
-        groups = ((TARGET_LABEL.get(target, "Hardware PLC"), "folder-hw", "hardware", ".plc"),
-                  ("Software PLC", "folder-sw", "software", ".plc"),
-                  ("Headers", "folder", "include", ".h"))
+        groups = ((TARGET_LABEL.get(target, HARDWARE_GROUP[0]), HARDWARE_GROUP[1], "hardware",
+                   ".plc"), (*SOFTWARE_GROUP, "software", ".plc"), (*HEADERS_GROUP, "include", ".h"))
         for label, ic, sub, suffix in groups:
             names = _names(self.folder / sub, suffix)
             if sub == "software" and target != "mycnc" and not names:
@@ -210,8 +222,8 @@ class FirstFrame(QMainWindow):
             for fname, path in names:
                 stem = fname[:-len(suffix)]
                 shown = fname if suffix == ".h" else stem
-                kind = "file-header" if suffix == ".h" else "file-plc" if sub == "hardware" \
-                    else "file-plc-sys" if stem.startswith("__") else "file-plc-sw"
+                kind = "file-header" if suffix == ".h" else \
+                    procedure_icon(sub == "hardware", stem.startswith("__"))
                 item = QTreeWidgetItem(group, [shown])
                 item.setIcon(0, icon(kind))
                 item.setToolTip(0, path)

@@ -39,6 +39,7 @@ from plcbuilder.ide.link_reasons import CLOSED_BY_IDE
 from plcbuilder.ide.dialogs.not_a_project import project_or_offer
 from plcbuilder.ide.editor import file_key
 from plcbuilder.ide.editor_stack import EditorStack
+from plcbuilder.ide.first_frame import frame_title, session_files
 from plcbuilder.ide.icons import icon
 from plcbuilder.ide.lint import Lint
 from plcbuilder.ide.problems import ProblemsPanel
@@ -47,7 +48,6 @@ from plcbuilder.ide.run_actions import SPEEDS, RunActions
 from plcbuilder.ide.settings import Preferences, Settings
 from plcbuilder.ide.status_bar import StatusBar
 from plcbuilder.ide.welcome import APP_NAME
-from plcbuilder.lang.builtin_headers import BUILTIN_PREFIX
 from plcbuilder.project.model import Project, ProjectError
 
 if TYPE_CHECKING:
@@ -364,10 +364,8 @@ class MainWindow(QMainWindow):
         """The project's editors of the last session, its current one in
         front. Before the window's first paint only the current one is made
         (the paint shows it); the others follow the paint, in their places."""
-        files = [f for f in self.settings.open_files(project.root)
-                 if f.startswith(BUILTIN_PREFIX) or Path(f).exists()]
-        current = self.settings.current_file(project.root)
-        if self._before_first_paint() and current in files and len(files) > 1:
+        files, current = session_files(self.settings, project.root)
+        if self._before_first_paint() and current and len(files) > 1:
             self.open_file(current, focus=False)
             self._editors_due = (project.root, files, current)
             return
@@ -884,16 +882,9 @@ class MainWindow(QMainWindow):
 
     def _update_title(self) -> None:
         ed = self.current_editor()
-        parts = []
-        if ed is not None:
-            parts.append(Path(ed.path).name + "[*]")
-            self.setWindowModified(self.is_modified(ed))
-        else:
-            self.setWindowModified(False)
-        if self.project is not None:
-            parts.append(self.project.name)
-        parts.append(APP_NAME)
-        self.setWindowTitle(" — ".join(parts))
+        self.setWindowModified(ed is not None and self.is_modified(ed))
+        self.setWindowTitle(frame_title(ed.path if ed is not None else None,
+                                        self.project.name if self.project is not None else None))
 
     # ---------------------------------------------------------- drag & drop
     def dragEnterEvent(self, event) -> None:  # noqa: N802 - Qt override

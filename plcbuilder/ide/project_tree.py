@@ -29,7 +29,8 @@ from PySide6.QtWidgets import (QAbstractItemView, QLabel, QMenu, QStyledItemDele
 from plcbuilder.api import Kind
 from plcbuilder.ide import dialogs
 from plcbuilder.ide.editor import file_key
-from plcbuilder.ide.first_frame import TARGET_LABEL
+from plcbuilder.ide.first_frame import (HARDWARE_GROUP, HEADERS_GROUP, SOFTWARE_GROUP,
+                                        TARGET_LABEL, procedure_icon)
 from plcbuilder.ide.icons import icon
 from plcbuilder.ide.looks import set_text_colour
 from plcbuilder._support.files import atomic_write
@@ -199,12 +200,12 @@ class ProjectTree(QWidget):
         f.setBold(True)
         root.setFont(0, f)
         target = p.settings.target
-        hw = self._item(root, TARGET_LABEL.get(target, "Hardware PLC"), "folder-hw", W_HW_FOLDER,
-                        str(p.hardware_dir))
+        hw = self._item(root, TARGET_LABEL.get(target, HARDWARE_GROUP[0]), HARDWARE_GROUP[1],
+                        W_HW_FOLDER, str(p.hardware_dir))
         hw.setToolTip(0, "hardware/: procedures run by the controller's PLC core, 1 ms ticks; "
                          "an M-code starts the procedure of its name" if target == "mycnc" else
                       f"hardware/: the {target} target's one program (docs/targets.md)")
-        sw = self._item(root, "Software PLC", "folder-sw", W_SW_FOLDER, str(p.software_dir))
+        sw = self._item(root, *SOFTWARE_GROUP, W_SW_FOLDER, str(p.software_dir))
         sw.setToolTip(0, "software/: procedures run by the host side by side, 100 ms ticks; "
                          "__HANDLER_* ones start on events")
         sw.setHidden(target != "mycnc" and not any(pr.kind is Kind.SOFTWARE
@@ -212,14 +213,13 @@ class ProjectTree(QWidget):
         outline = target_outline(p)
         for proc in p.procedures():
             parent = hw if proc.kind is Kind.HARDWARE else sw
-            ic = "file-plc" if proc.kind is Kind.HARDWARE else \
-                ("file-plc-sys" if proc.system else "file-plc-sw")
+            ic = procedure_icon(proc.kind is Kind.HARDWARE, proc.system)
             it = self._item(parent, proc.name, ic, W_PROCEDURE, str(proc.path))
             it.setToolTip(0, str(proc.path))
             self._undescribed.append((it, proc.path, proc.name))
             if outline and proc.kind is Kind.HARDWARE:
                 self._target_procedures(it, proc.path, outline)
-        headers = self._item(root, "Headers", "folder", W_HEADERS, str(p.include_dir))
+        headers = self._item(root, *HEADERS_GROUP, W_HEADERS, str(p.include_dir))
         headers.setToolTip(0, "include/: searched by #include after the procedure's own folder")
         names = set()
         for h in self._headers():
