@@ -19,6 +19,8 @@ from collections.abc import Iterable as _Iterable
 from contextlib import contextmanager
 from pathlib import Path
 
+from .lazy import Pattern
+
 TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
 if TYPE_CHECKING:
     from typing import BinaryIO, Iterable, Iterator, Optional, Union
@@ -115,8 +117,8 @@ def check_replaceable(path: Union[str, Path]) -> None:
 
 
 #: The name atomic_write gives its temporary file beside ``NAME``: ``.NAME.XXXXXXXX.tmp``
-#: (a pattern for ``re.match``, compiled when first used: not at every start).
-TEMP_NAME = r"(?s)\..+\.[0-9a-f]{8}\.tmp\Z"
+#: (compiled when first used: not at every start).
+TEMP_NAME = Pattern(r"\..+\.[0-9a-f]{8}\.tmp\Z", re.DOTALL)
 
 
 def atomic_write(path: Union[str, Path], data: Union[bytes, str, Iterable[bytes]], *,
@@ -215,7 +217,7 @@ def remove_temp_files(folder: Union[str, Path]) -> list[str]:
         return removed
     for entry in entries:
         try:
-            if re.match(TEMP_NAME, entry.name) and entry.is_file(follow_symlinks=False):
+            if TEMP_NAME.match(entry.name) and entry.is_file(follow_symlinks=False):
                 os.unlink(entry.path)
                 removed.append(entry.name)
         except OSError:

@@ -9,13 +9,13 @@ outside their range instead of wrapping.
 
 from __future__ import annotations
 
-import re
+from .lazy import Pattern
 
 INT32 = (-(1 << 31), (1 << 31) - 1)
 WORD32 = (-(1 << 31), (1 << 32) - 1)
 
-#: (compiled when first used, in the re module's cache: not at every start)
-_NUM = r"([-+]?)(?:0[xX]([0-9a-fA-F]+)|(\d+))"
+#: (compiled when first used: not at every start)
+_NUM = Pattern(r"([-+]?)(?:0[xX]([0-9a-fA-F]+)|(\d+))")
 _MAX_DIGITS = 100        # longer is certainly not a number we take
 
 
@@ -30,7 +30,7 @@ def parse_int_in(text: str, lo: int, hi: int, what: str) -> int:
     or ``WHAT must be from LO to HI, not TEXT``."""
     what = f"{what} " if what else ""
     t = str(text).strip()
-    m = re.fullmatch(_NUM, t) if len(t) <= _MAX_DIGITS else None
+    m = _NUM.fullmatch(t) if len(t) <= _MAX_DIGITS else None
     if m is None:
         raise ValueError(f"{what}must be a whole number (decimal or 0x hex), "
                          f"not {str(text)[:40]!r}")

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import re
 
+from .lazy import Pattern
+
 TYPE_CHECKING = False               # (typing is not imported at run time: start-up)
 if TYPE_CHECKING:
     from typing import Optional
@@ -13,10 +15,10 @@ if TYPE_CHECKING:
 if TYPE_CHECKING:
     import tomllib
 
-#: (patterns compiled when first used, in the re module's cache: not at every start)
-_AT = r"\s*\(at line (\d+), column \d+\)"
+#: (patterns compiled when first used: not at every start)
+_AT = Pattern(r"\s*\(at line (\d+), column \d+\)")
 _END = " (at end of document)"
-_HEADER = r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$"
+_HEADER = Pattern(r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
 
 
 def loads(text: str) -> dict:
@@ -34,9 +36,9 @@ def decode_error(exc: tomllib.TOMLDecodeError, text: str) -> tuple[str, Optional
     """(the message without its position, the line) of a TOML parse error; an
     error at the end of the document is on its last line."""
     msg = str(exc)
-    m = re.search(_AT, msg)
+    m = _AT.search(msg)
     if m:
-        return re.sub(_AT, "", msg), int(m.group(1))
+        return _AT.sub("", msg), int(m.group(1))
     if _END in msg:
         return msg.replace(_END, ""), max(1, len(text.splitlines()))
     return msg, None
@@ -65,7 +67,7 @@ class TomlLocator:
         self.headers: list[tuple[int, tuple]] = [(0, ())]
         counts: dict[tuple, int] = {}
         for n, line in enumerate(self.lines, 1):
-            m = re.match(_HEADER, line)
+            m = _HEADER.match(line)
             if not m:
                 continue
             path = split_key(m.group(2))

@@ -357,7 +357,7 @@ def parse_move(text: str) -> Action:
 
 
 _AT = Pattern(r"\s+at\s+(\S+?)\s*:\s*(\S+)(?:\s+returns\s+(\S+(?:\s*,\s*\S+)*))?\s*$",
-                 re.IGNORECASE)
+              re.IGNORECASE)
 _NAME = Pattern(r"[A-Za-z_][A-Za-z0-9_]*")
 #: the most code offsets a position names (a procedure's code is at most 64 KiB;
 #: calls nest at most 16 deep)
