@@ -166,7 +166,7 @@ def _open_window(app: QApplication, settings, folder: Optional[Path], file: Opti
     if frame is None:
         win.show()
     else:
-        win.first_paint_due = True           # shown once made: what waits for the paint waits
+        win.show_when_made()                 # what waits for the paint waits
     if folder is not None and win.open_project(folder) and file is not None:
         win.open_file(file)
     if frame is not None:

@@ -57,6 +57,9 @@ if TYPE_CHECKING:
 __all__ = ["APP_NAME", "Act", "MainWindow", "SPEEDS"]
 
 SOURCE_SUFFIXES = (".plc", ".h")
+#: at the start, the checks and the session's other editors wait for the run
+#: panels' first telemetry this long at most (MainWindow._once_live)
+LIVE_WAIT_MS = 500
 #: telemetry kept for the run panels until they are made (samples, events), at most
 EARLY_SAMPLES, EARLY_EVENTS = 30000, 5000
 TEXT_SUFFIXES = (".plc", ".h", ".toml", ".xml", ".md", ".txt")
@@ -94,8 +97,7 @@ class MainWindow(QMainWindow):
         self._early_events: list = []
         self._pin_defines: Optional[dict] = None
         self._painted = False
-        #: the window is shown once made (the first frame's hand-over, app.py):
-        #: until its first paint, what waits for a visible window's paint waits
+        #: the window is shown once made (:meth:`show_when_made`)
         self.first_paint_due = False
         self._after_paint_done = False       # _after_first_paint ran
         self._overdue_waits = 0              # (_paint_overdue)
@@ -669,14 +671,25 @@ class MainWindow(QMainWindow):
     def reset_layout(self) -> None:
         docks.reset_layout(self)
 
+    def show_when_made(self) -> None:
+        """The window is shown once made (the first frame's hand-over, app.py):
+        from now until its first paint, what waits for a visible window's
+        paint waits (opening the project before it shows included)."""
+        self.first_paint_due = True
+        self._hold_until_painted()
+
+    def _hold_until_painted(self) -> None:
+        # until the first paint: no compile in the background (the diagnostics
+        # thread would take the interpreter from the window), no outline
+        if not self._painted:
+            self.lint.hold(True)
+            self.workbench.outline.held = True
+
     def showEvent(self, event) -> None:  # noqa: N802 - Qt override
         super().showEvent(event)
         if not self._shown_once:
             self._shown_once = True
-            # until the first paint: no compile in the background (the diagnostics
-            # thread would take the interpreter from the window), no outline
-            self.lint.hold(True)
-            self.workbench.outline.held = True
+            self._hold_until_painted()
             if not self.layout_restored:
                 QTimer.singleShot(0, lambda: docks.default_dock_sizes(self))
             # the controller and the run panels come after the first paint;
@@ -738,8 +751,26 @@ class MainWindow(QMainWindow):
     def _after_run_panels(self) -> None:
         """The rest of the start: the docks shown meanwhile get their panels,
         one per turn of the event loop (the window answers between them);
-        then the checks and the other editors."""
-        self.dock_table.release(then=self._after_panels)
+        then, once the panels are live, the checks and the other editors."""
+        self.dock_table.release(then=lambda: self._once_live(self._after_panels))
+
+    def _once_live(self, then) -> None:
+        """``then`` once the run panels have drawn the controller's first
+        telemetry (the last thing the start is waited for: nothing else
+        competes with it), at most :data:`LIVE_WAIT_MS` from now; at once
+        without the panels or a controller of the IDE's own."""
+        rp = self.run_panels
+        if rp is None or rp.live or not getattr(self.connection, "embedded", False):
+            then()
+            return
+        done = []
+
+        def once() -> None:
+            if not done and not self._closing:
+                done.append(True)
+                QTimer.singleShot(0, self, then)     # after that redraw's paint
+        rp.sig_live.connect(once)
+        QTimer.singleShot(LIVE_WAIT_MS, self, once)
 
     def _after_panels(self) -> None:
         self.workbench.outline.release()         # (each of these once: then no-ops)

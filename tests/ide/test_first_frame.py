@@ -210,7 +210,7 @@ def test_keys_typed_into_the_frame_go_to_the_editor_of_its_front_file(qtbot, exa
     on_disk = m03.read_text(encoding="utf-8")
     with windows(qtbot, st, (1300, 850)) as make:
         w = make(show=False)
-        w.first_paint_due = True
+        w.show_when_made()
         w.open_project(root)
         f.hand_over(w)
         qtbot.waitUntil(lambda: not isValid(f) and w.isVisible(), timeout=WAIT)
@@ -232,12 +232,18 @@ def test_a_window_shown_after_it_is_made_waits_for_its_paint_like_a_visible_one(
     root, st = example
     with windows(qtbot, st, (1300, 850)) as make:
         w = make(show=False)
-        w.first_paint_due = True
+        w.show_when_made()
         w.open_project(root)
         assert w._lint_due and w._editors_due is not None and w.tree.descriptions_held
-        assert [e.path for e in w.editors()] == [str(root / "hardware" / "M03.plc")]
+        m03 = str(root / "hardware" / "M03.plc")
+        assert [e.path for e in w.editors()] == [m03]
+        # the open editor's own check waits too (a compile on the diagnostics
+        # thread would take the interpreter from the window being made)
+        qtbot.wait(400)
+        assert w.lint.size_of(m03)[0] is None
         w.show()
         qtbot.waitUntil(lambda: len(w.editors()) == 2 and not w._lint_due, timeout=WAIT)
+        qtbot.waitUntil(lambda: w.lint.size_of(m03)[0] is not None, timeout=WAIT)
 
 
 #: ``plcbuilder gui --settings INI --no-controller`` (argv 1: INI), watched:

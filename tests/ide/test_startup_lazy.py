@@ -308,6 +308,41 @@ def test_the_first_editor_paints_without_the_compilers_symbols(qtbot, make_windo
     assert w._painted
 
 
+def test_the_checks_and_the_other_editors_wait_until_the_run_panels_are_live(
+        qtbot, make_window, tmp_path):
+    """Issue 26.5: once the run panels are made, the project's check (on the
+    diagnostics thread, which takes the interpreter from the window) and the
+    session's other editors wait until the panels have drawn the controller's
+    first telemetry, the last thing the start is waited for; at most
+    LIVE_WAIT_MS when none comes."""
+    from plcbuilder.controller import events as ev
+    from plcbuilder.ide.main_window import LIVE_WAIT_MS
+    conn = _workbench.FakeConnection()             # (an embedded controller's)
+    w = make_window(connection=conn, start_controller=True)
+    rest = w._after_panels
+    rested = []
+    w._after_panels = lambda: (rested.append(w.run_panels.live), rest())
+    w.open_project(create_project(tmp_path / "example").root)
+    qtbot.waitUntil(lambda: w.run_panels is not None and not w.dock_table.held, timeout=10000)
+    qtbot.wait(LIVE_WAIT_MS // 2)
+    assert rested == [] and w._lint_due
+    zeros = (0,) * 8
+    conn.sig_samples.emit([ev.Sample(t_ms=1, running="", proc=0, message=0, inputs=zeros,
+                                     outputs=zeros, pwm=zeros, dac=zeros, adc=zeros,
+                                     axes=(0,) * 9, velocities=(0,) * 9)])
+    qtbot.waitUntil(lambda: rested == [True], timeout=LIVE_WAIT_MS // 2)
+    qtbot.waitUntil(lambda: not w._lint_due, timeout=5000)
+    # no telemetry: the rest comes LIVE_WAIT_MS after the panels
+    w2 = make_window(connection=_workbench.FakeConnection(), start_controller=True)
+    rest2 = w2._after_panels
+    rested2 = []
+    w2._after_panels = lambda: (rested2.append(w2.run_panels.live), rest2())
+    w2.open_project(create_project(tmp_path / "other").root)
+    qtbot.waitUntil(lambda: w2.run_panels is not None and not w2.dock_table.held,
+                    timeout=10000)
+    qtbot.waitUntil(lambda: rested2 == [False], timeout=LIVE_WAIT_MS * 3)
+
+
 def test_the_run_panels_make_the_docks_on_screen_one_per_turn_and_the_others_when_shown(
         qtbot, make_window, tmp_path):
     """Issue 26.5: after the paint only the run docks on screen get their
@@ -338,6 +373,8 @@ def test_the_run_panels_make_the_docks_on_screen_one_per_turn_and_the_others_whe
     qtbot.waitUntil(lambda: w._painted and w.run_panels is not None, timeout=10000)
     _workbench.settle(qtbot, w)
     qtbot.wait(700)                         # (past the fallback for a window never painted)
+    # (no telemetry: the rest comes at most LIVE_WAIT_MS after the panels)
+    qtbot.waitUntil(lambda: bool(rested), timeout=5000)
     ticker.stop()
     panels = w.run_panels
     shown = {k for k, d in w.run_docks.items() if on_screen(d)}

@@ -78,6 +78,10 @@ class RunPanels(QtCore.QObject):
     sig_comparison = Signal(object)
     """A second trace is drawn over the one on show (its name), or no more (None)."""
 
+    sig_live = Signal()
+    """The panels redrew with the controller's telemetry for the first time
+    (once; :attr:`live` says whether they have)."""
+
     DOCKS = RUN_DOCKS
 
     def __init__(self, main_window: Optional[QtWidgets.QWidget], connection,
@@ -126,6 +130,7 @@ class RunPanels(QtCore.QObject):
         self._final_poll = 0          # polls still due after something ended
         self._busy_until = 0.0        # monotonic time the plots may move until
         self.ticks = 0                # redraw timer ticks (tests count them)
+        self.live = False             # redrawn with telemetry (sig_live)
         self._inputs_shown = None     # the inputs and ADC values the inputs panel shows
         self.recorded: Optional[str] = None   # the test run shown instead of live telemetry
         self.failing_ms: Optional[int] = None
@@ -585,6 +590,9 @@ class RunPanels(QtCore.QObject):
                 inputs.refresh()
         else:
             pending = False
+        if not self.live and len(self.model):
+            self.live = True
+            self.sig_live.emit()
         if self._stopped:
             return
         # what arrives next (samples, events, a view change) wakes the timer
