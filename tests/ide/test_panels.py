@@ -401,6 +401,31 @@ def test_inputs_panel_sends_and_shows(qtbot, panels, fake):
     assert "Disconnected" in panels.proc.status.text()
 
 
+def test_a_pin_toggle_made_when_first_shown_shows_the_pin_as_it_is(qtbot, panels, fake):
+    """A pin's toggle is made when it is first shown (64 of them, most never
+    shown, took a tenth of the panel's making); one made later shows the
+    newest sample and the pin's force all the same."""
+    panels.set_pin_names({3: "INPUT_PROBE"}, {})
+    inputs = panels.inputs
+    assert 3 in inputs.buttons and len(inputs.buttons) < 64
+    on = sample(1)                          # pins 40 and 41 on (bits 8 and 9 of word 1)
+    fake.sig_samples.emit([ev.Sample(**{**on.__dict__, "inputs": (0, 0x300) + (0,) * 6})])
+    panels.tick()
+    panels.set_forces([{"target": "in 41", "value": 0}])
+    inputs.filter.setText("input 4")
+    inputs.show_all.setChecked(True)
+    assert inputs.shown_pins() == [4] + list(range(40, 50))
+    panels.tick()
+    assert inputs.button(40).isChecked() and inputs.button(40).isVisible()
+    # forced off: what the program reads, with the force's mark
+    assert not inputs.button(41).isChecked() and inputs.button(41).property("forced") == "true"
+    assert not inputs.button(42).isChecked()
+    never_shown = set(range(64)) - set(default_pin_names()[0]) - {3, 4} - set(range(40, 50))
+    assert never_shown and not never_shown & set(inputs.buttons)
+    with pytest.raises(KeyError):
+        inputs.button(64)
+
+
 @pytest.mark.parametrize("target", ["huazhong", "mycnc"])
 @pytest.mark.parametrize("width", [420, 300])
 def test_the_inputs_grid_fits_its_dock_with_long_pin_names(qtbot, panels, target, width):

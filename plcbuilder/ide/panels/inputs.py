@@ -109,13 +109,16 @@ class InputsPanel(QtWidgets.QWidget):
 
     COLUMNS = 2
 
-    def __init__(self, model: RunModel, pins: int = 64, adc_channels: int = 8, parent=None):
+    def __init__(self, model: RunModel, pins: int = 64, adc_channels: int = 8, parent=None,
+                 names: dict[int, str] | None = None, bank: str | None = None):
         super().__init__(parent)
         self.model = model
         self.pins = pins
-        self.names: dict[int, str] = {}
+        self.names: dict[int, str] = dict(names or {})    # (see set_pin_names)
         #: the bank whose bits the pins are (Huazhong: "X", pin 8n+b is X<n>.<b>), or None
-        self.bank: str | None = None
+        self.bank: str | None = bank
+        #: the pins' toggles made so far: a pin's is made when it is first
+        #: shown or asked for (:meth:`button`); most pins are never shown
         self.buttons: dict[int, PinToggle] = {}
         self._pending: dict[int, tuple[int, float]] = {}
         self._adc_pending: dict[int, tuple[int, float]] = {}   # ADC values asked, not yet read
@@ -135,23 +138,13 @@ class InputsPanel(QtWidgets.QWidget):
         self.filter.textChanged.connect(self._relayout)
         top.addWidget(self.filter, 1)
         top.addWidget(self.show_all)
+        self.show_all.setVisible(bank is None)
 
         self.grid_host = QtWidgets.QWidget()
         self.grid = QtWidgets.QGridLayout(self.grid_host)
         self.grid.setContentsMargins(4, 4, 4, 4)
         self.grid.setSpacing(3)
         self.grid_host.setStyleSheet(_TOGGLE_STYLE)
-        for pin in range(pins):
-            b = PinToggle()
-            b.setCheckable(True)
-            b.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding,
-                            QtWidgets.QSizePolicy.Policy.Fixed)
-            b.clicked.connect(lambda checked, p=pin: self._clicked(p, checked))
-            b.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextBesideIcon)
-            b.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
-            b.customContextMenuRequested.connect(
-                lambda pos, p=pin, btn=b: self.pin_menu(p).exec(btn.mapToGlobal(pos)))
-            self.buttons[pin] = b
         pins_box = QtWidgets.QGroupBox("Input pins")
         pl = QtWidgets.QVBoxLayout(pins_box)
         pl.setContentsMargins(2, 2, 2, 2)
@@ -238,7 +231,37 @@ class InputsPanel(QtWidgets.QWidget):
         return pins
 
     def button(self, pin: int) -> PinToggle:
-        return self.buttons[pin]
+        """Pin ``pin``'s toggle (made now if it was not)."""
+        b = self.buttons.get(pin)
+        if b is None:
+            if not 0 <= pin < self.pins:
+                raise KeyError(pin)
+            b = self.buttons[pin] = self._make_button(pin)
+        return b
+
+    def _make_button(self, pin: int) -> PinToggle:
+        b = PinToggle(self.grid_host)
+        b.hide()
+        b.setCheckable(True)
+        b.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding,
+                        QtWidgets.QSizePolicy.Policy.Fixed)
+        b.clicked.connect(lambda checked: self._clicked(pin, checked))
+        b.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextBesideIcon)
+        b.setContextMenuPolicy(Qt.ContextMenuPolicy.CustomContextMenu)
+        b.customContextMenuRequested.connect(
+            lambda pos: self.pin_menu(pin).exec(b.mapToGlobal(pos)))
+        if pin in self.forced_pins:
+            self._mark_forced(b, True)
+        self._drawn = -1                    # (its state: the next refresh)
+        return b
+
+    @staticmethod
+    def _mark_forced(b: PinToggle, forced: bool) -> None:
+        from plcbuilder.ide.icons import icon
+        b.setProperty("forced", "true" if forced else "false")
+        b.setIcon(icon("debug-force") if forced else QtGui.QIcon())
+        b.style().unpolish(b)
+        b.style().polish(b)
 
     def set_forces(self, forces: list) -> None:
         """What is forced (``[{target, value}]``): forced pins and channels are marked."""
@@ -248,14 +271,10 @@ class InputsPanel(QtWidgets.QWidget):
             if n.isdigit() and kind in ("in", "adc"):
                 (pins if kind == "in" else adc)[int(n)] = int(f.get("value") or 0)
         self.forced_pins, self.forced_adc = pins, adc
-        from plcbuilder.ide.icons import icon
         for pin, b in self.buttons.items():
             forced = pin in pins
             if (b.property("forced") == "true") != forced:
-                b.setProperty("forced", "true" if forced else "false")
-                b.setIcon(icon("debug-force") if forced else QtGui.QIcon())
-                b.style().unpolish(b)
-                b.style().polish(b)
+                self._mark_forced(b, forced)
         for ch, lab in enumerate(self.readings):
             lab.setStyleSheet(FORCED_STYLE if ch in adc else "")
             lab.setToolTip(f"ADC{ch} is forced at {adc[ch]} (right-click to release)"
@@ -372,8 +391,9 @@ class InputsPanel(QtWidgets.QWidget):
             w = item.widget()
             if w is not None:
                 w.hide()
+        made = len(self.buttons)
         for i, pin in enumerate(self.shown_pins()):
-            b = self.buttons[pin]
+            b = self.button(pin)
             b.set_label(*self._label(pin))
             b.setToolTip(self._tooltip(pin)
                          + (": click to force it (right-click to release it)"
@@ -381,6 +401,8 @@ class InputsPanel(QtWidgets.QWidget):
                             ": click to set it by hand (overrides the machine's wiring)"))
             self.grid.addWidget(b, i // self.COLUMNS, i % self.COLUMNS)
             b.show()
+        if len(self.buttons) != made:
+            self.refresh()                  # the toggles just made show their pins
 
     def _clicked(self, pin: int, checked: bool) -> None:
         value = 1 if checked else 0

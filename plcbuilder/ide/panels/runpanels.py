@@ -227,7 +227,8 @@ class RunPanels(QtCore.QObject):
         force = hasattr(c, "force")          # the debugger's write/force/release
         debugger = bool(getattr(c, "debugger", False)) and self._connected_to is not None
         if key == "inputs":
-            inputs = InputsPanel(self.model)
+            inputs = InputsPanel(self.model, names=self._pin_names[0],
+                                 bank="X" if self.target == "huazhong" else None)
             inputs.sig_set_input.connect(lambda pin, v: self.connection.set_input(pin, v))
             inputs.sig_set_input.connect(self.wake)
             inputs.sig_set_adc.connect(lambda ch, v: self.connection.set_adc(ch, v))
@@ -237,8 +238,6 @@ class RunPanels(QtCore.QObject):
                 inputs.sig_release.connect(lambda t, m: c.release(t, m))
             inputs.set_enabled(self._connected_to is not None)
             inputs.force_by_hand = debugger
-            own = self._pin_names[0]
-            inputs.set_pin_names(own, "X" if self.target == "huazhong" else None)
             inputs.set_forces(self.forces)
             self._inputs_shown = None
             return inputs
