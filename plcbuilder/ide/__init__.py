@@ -11,9 +11,12 @@ cyclic garbage collector walks them some eighty times before the window first
 paints, which cost several percent of the start-up. Until the main window has
 painted (:func:`startup_done`), the youngest generation is collected less
 often; then the usual thresholds come back.
+
+numpy's linear algebra runs on one thread (below).
 """
 
 import gc as _gc
+import os as _os
 
 import PySide6 as _PySide6  # noqa: F401 - loads PySide's import hook, made quicker here
 
@@ -22,6 +25,12 @@ from plcbuilder.ide.pyside_imports import quick_source_check as _quick_source_ch
 
 _quick_source_check()
 _pyqtgraph_on_demand()          # pyqtgraph's copy of Qt's names, made as it asks for them
+
+# numpy (pyqtgraph's) starts OpenBLAS's threads at its import, one a core,
+# which then spin for a while: the IDE does no linear algebra, and on a
+# two-core machine they took a tenth of a second of the other core from the
+# controller and the X server as the IDE started (a user's setting wins)
+_os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 _THRESHOLDS = _gc.get_threshold()
 _STARTUP_THRESHOLDS = (max(_THRESHOLDS[0], 50_000),) + tuple(_THRESHOLDS[1:])
