@@ -450,3 +450,24 @@ def _last_session(tmp_path):
     st.save_session(project, files, files[1])
     st.sync()
     return project, files, st
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="counts threads in /proc")
+@pytest.mark.parametrize("setting", [None, "2"])
+def test_numpy_in_the_ide_starts_no_threads_of_its_own_unless_the_user_asks(setting):
+    """OpenBLAS (numpy's) started a spinning thread a core at numpy's import,
+    taking the other core from the controller and the X server as the IDE
+    started; the IDE does no linear algebra. A user's own setting wins."""
+    import os
+    code = ("import os, plcbuilder.ide, numpy\n"
+            "print(os.environ['OPENBLAS_NUM_THREADS'], len(os.listdir('/proc/self/task')))")
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if setting is not None:
+        env["OPENBLAS_NUM_THREADS"] = setting
+    env["QT_QPA_PLATFORM"] = "offscreen"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=env, timeout=60, check=True).stdout.split()
+    if setting is None:
+        assert out == ["1", "1"]
+    else:
+        assert out[0] == setting            # (its threads: as many as OpenBLAS then makes)
