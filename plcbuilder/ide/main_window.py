@@ -368,13 +368,15 @@ class MainWindow(QMainWindow):
         (the paint shows it); the others follow the paint, in their places."""
         files, current = session_files(self.settings, project.root)
         if self._before_first_paint() and current and len(files) > 1:
-            self.open_file(current, focus=False)
+            self.open_file(current)          # (with the keyboard, as below)
             self._editors_due = (project.root, files, current)
             return
         for f in files:
             self.open_file(f, focus=False)
-        if current and self.editor_for(current) is not None:
-            self.tabs.setCurrentWidget(self.editor_for(current))
+        front = self.editor_for(current) if current else None
+        if front is not None:
+            self.tabs.setCurrentWidget(front)
+            front.take_focus()               # what is typed next goes to it
 
     def _open_due_editors(self) -> None:
         """The last session's other editors, after the first paint (see
@@ -384,6 +386,7 @@ class MainWindow(QMainWindow):
             return
         _root, files, current = due
         front = self.current_editor()
+        typing = front is not None and self.focusWidget() is front
         for f in files:
             self.open_file(f, focus=False)
         bar = self.tabs.tabBar()
@@ -394,6 +397,8 @@ class MainWindow(QMainWindow):
                 bar.moveTab(at, i)
         if front is not None and self.tabs.indexOf(front) >= 0:
             self.tabs.setCurrentWidget(front)
+            if typing:
+                front.take_focus()
 
     def close_project(self) -> bool:
         if not self.editor_stack.confirm_discard_all("Close Project"):

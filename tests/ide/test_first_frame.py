@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QSplitter
+from PySide6.QtWidgets import QApplication, QSplitter
 from shiboken6 import isValid
 
 from plcbuilder.ide import app as ide_app
@@ -244,6 +244,33 @@ def test_a_window_shown_after_it_is_made_waits_for_its_paint_like_a_visible_one(
         w.show()
         qtbot.waitUntil(lambda: len(w.editors()) == 2 and not w._lint_due, timeout=WAIT)
         qtbot.waitUntil(lambda: w.lint.size_of(m03)[0] is not None, timeout=WAIT)
+        # the session's front editor has the keyboard, its other editors opened behind it
+        assert w.current_editor() is w.editor_for(m03) and w.focusWidget() is w.editor_for(m03)
+
+
+@pytest.mark.parametrize("frame", [False, True])
+def test_the_front_editor_of_the_last_session_has_the_keyboard(qtbot, example, frame):
+    """What the user types once the IDE is up goes to the file in front (it
+    went nowhere until they clicked into it), with or without the first frame."""
+    from tests.ide._workbench import windows
+    root, st = example
+    m03 = str(root / "hardware" / "M03.plc")
+    with windows(qtbot, st, (1300, 850)) as make:
+        w = make(show=not frame)
+        if frame:
+            w.show_when_made()
+        w.open_project(root)
+        if frame:
+            w.show()
+        qtbot.waitUntil(lambda: len(w.editors()) == 2 and w._editors_due is None, timeout=WAIT)
+        w.activateWindow()
+        qtbot.waitUntil(lambda: w.isActiveWindow(), timeout=WAIT)
+        ed = w.editor_for(m03)
+        assert w.current_editor() is ed and QApplication.focusWidget() is ed
+        qtbot.keyClicks(QApplication.focusWidget(), "q")
+        assert ed.text().startswith("q// M03")
+        ed.undo()                           # (nothing to save at the end)
+        assert not w.is_modified(ed)
 
 
 #: ``plcbuilder gui --settings INI --no-controller`` (argv 1: INI), watched:
