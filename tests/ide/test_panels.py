@@ -401,6 +401,29 @@ def test_inputs_panel_sends_and_shows(qtbot, panels, fake):
     assert "Disconnected" in panels.proc.status.text()
 
 
+def test_typing_into_the_pin_filter_lays_the_grid_out_once(qtbot, panels, monkeypatch):
+    """A key typed into the inputs' filter with every pin shown took a
+    quarter of a second: each toggle shown into the working grid made it ask
+    every other toggle for its size (64 x 64). The grid is laid out once."""
+    from plcbuilder.ide.panels.inputs import PinToggle
+    inputs = panels.inputs
+    panels.dock("inputs").raise_()
+    inputs.show_all.setChecked(True)
+    qtbot.waitUntil(lambda: inputs.button(63).isVisible())
+    asked = []                      # (its size hint and its paint measure its chrome)
+    chrome = PinToggle._chrome
+    monkeypatch.setattr(PinToggle, "_chrome", lambda self: (asked.append(self), chrome(self))[1])
+    for text in ("i", "in", ""):
+        asked.clear()
+        inputs.filter.setText(text)
+        QtWidgets.QApplication.processEvents()
+        assert len(inputs.shown_pins()) == 64
+        assert len(asked) <= 8 * 64, (text, len(asked))     # (was 64 x 64 x 2)
+    assert all(inputs.button(p).isVisible() for p in range(64))
+    rows = sorted({inputs.button(p).y() for p in range(64)})
+    assert len(rows) == 32                      # two columns, laid out
+
+
 def test_a_pin_toggle_made_when_first_shown_shows_the_pin_as_it_is(qtbot, panels, fake):
     """A pin's toggle is made when it is first shown (64 of them, most never
     shown, took a tenth of the panel's making); one made later shows the

@@ -386,6 +386,18 @@ class InputsPanel(QtWidgets.QWidget):
         return f"Input {pin}" + (f" ({name})" if pin in self.names else "")
 
     def _relayout(self, *args) -> None:
+        # the grid lays out once, at the end: shown one by one into a working
+        # grid, each toggle made it ask every other for its size (a key typed
+        # into the filter took a quarter of a second with the 64 pins shown)
+        self.grid.setEnabled(False)
+        try:
+            self._fill_grid()
+        finally:
+            self.grid.setEnabled(True)
+            self.grid.invalidate()
+            self.grid.activate()
+
+    def _fill_grid(self) -> None:
         while self.grid.count():
             item = self.grid.takeAt(0)
             w = item.widget()
