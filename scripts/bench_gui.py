@@ -37,6 +37,11 @@ import tempfile
 import time
 from pathlib import Path
 
+#: the environment the benchmark was started in, for the processes it starts:
+#: importing plcbuilder.ide sets variables of the IDE's own in os.environ (its
+#: OpenBLAS threads), which would pass to the "before" copy measured beside it
+_STARTED_ENV = dict(os.environ)
+
 from plcbuilder import api
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
@@ -84,7 +89,7 @@ class XServer:
         self._procs.clear()
 
     def env(self, **extra) -> dict:
-        env = dict(os.environ, **extra)
+        env = dict(_STARTED_ENV, **extra)
         if self.display is not None:
             env.update(DISPLAY=self.display, QT_QPA_PLATFORM="xcb")
         else:
