@@ -362,6 +362,32 @@ def test_fault_without_file_names_the_procedure():
     assert event_row(object()) is None
 
 
+def test_searching_a_long_log_waits_for_a_pause_in_typing(qtbot, panels, fake):
+    """Each key typed into the search of a long log filtered every row (60-120
+    ms a key at 20,000 rows): past SEARCH_AT_ONCE_ROWS the search runs once
+    typing pauses (or at Enter); a short log is searched at each key."""
+    from plcbuilder.ide.panels.log import SEARCH_AT_ONCE_ROWS, SEARCH_PAUSE_MS
+    log = panels.log
+    runs = []
+    refilter = log._refilter
+    log._refilter = lambda change: (runs.append(1), refilter(change))
+    fake.sig_events.emit([ev.Print(t, 20000, t, "SW") for t in range(SEARCH_AT_ONCE_ROWS + 500)])
+    panels.tick()
+    n = log.proxy.rowCount()
+    assert n == SEARCH_AT_ONCE_ROWS + 500
+    for text in ("1", "12", "123"):
+        log.search.setText(text)
+    assert runs == [] and log.proxy.rowCount() == n          # typing: nothing filtered yet
+    qtbot.waitUntil(lambda: runs == [1], timeout=SEARCH_PAUSE_MS * 10)
+    assert log.proxy.rowCount() == sum("123" in f"register 20000 = {t}"
+                                       for t in range(SEARCH_AT_ONCE_ROWS + 500))
+    log.search.setText("1234")
+    qtbot.keyClick(log.search, Qt.Key.Key_Return)            # Enter: at once
+    assert runs == [1, 1] and log.proxy.rowCount() == 1      # (register 20000 = 1234)
+    qtbot.wait(SEARCH_PAUSE_MS * 2)
+    assert runs == [1, 1]                                    # (and not again after the pause)
+
+
 def test_log_is_bounded(qtbot, panels, fake):
     panels.log.rows.limit = 1000
     fake.sig_events.emit([ev.Print(t, 20000, t, "SW") for t in range(2500)])
