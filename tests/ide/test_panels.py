@@ -388,6 +388,23 @@ def test_searching_a_long_log_waits_for_a_pause_in_typing(qtbot, panels, fake):
     assert runs == [1, 1]                                    # (and not again after the pause)
 
 
+def test_the_first_telemetry_is_drawn_at_once_and_said_once(qtbot, panels, fake):
+    """The panels' first telemetry is drawn at the event loop's next turn, not
+    a frame later (the start waits for it: issue 26.5), and sig_live says so
+    once; later samples wait for the redraw timer's frame as before."""
+    said = []
+    panels.sig_live.connect(lambda: said.append(True))
+    assert not panels.live
+    fake.sig_samples.emit([sample(1, outputs=1)])
+    assert panels.timer.isActive() and panels.timer.interval() == 0
+    qtbot.waitUntil(lambda: panels.live, timeout=1000)
+    assert said == [True]
+    fake.sig_samples.emit([sample(2, outputs=3)])
+    assert panels.timer.interval() == panels.frame_ms
+    qtbot.wait(3 * panels.frame_ms)
+    assert said == [True]
+
+
 def test_log_is_bounded(qtbot, panels, fake):
     panels.log.rows.limit = 1000
     fake.sig_events.emit([ev.Print(t, 20000, t, "SW") for t in range(2500)])

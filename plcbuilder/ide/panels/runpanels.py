@@ -546,7 +546,9 @@ class RunPanels(QtCore.QObject):
         A timer waiting longer for a put-off move comes back at once."""
         if self._stopped:
             return
-        if not self.timer.isActive() or self.timer.remainingTime() > self.frame_ms:
+        if not self.live and len(self.model):
+            self.timer.start(0)             # the first telemetry: at once, not a frame later
+        elif not self.timer.isActive() or self.timer.remainingTime() > self.frame_ms:
             self.timer.start(self.frame_ms)
 
     def busy(self) -> bool:
