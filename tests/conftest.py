@@ -1,7 +1,17 @@
+import json
 import os
+import tempfile
 
-# CI has no display: every test (and every Qt import) runs offscreen.
-os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+# CI has no display: every test (and every Qt import) runs offscreen, on a
+# screen of a desktop's size (Qt's offscreen screen is 800 x 800 unless told:
+# smaller than the windows the tests make, which a window fitted on its screen
+# would then shrink)
+if "QT_QPA_PLATFORM" not in os.environ:
+    _screen = os.path.join(tempfile.mkdtemp(prefix="plcb-tests-"), "screen.json")
+    with open(_screen, "w", encoding="utf-8") as _f:
+        json.dump({"screens": [{"name": "screen", "x": 0, "y": 0, "width": 1920,
+                                "height": 1200, "logicalDpi": 96, "dpr": 1}]}, _f)
+    os.environ["QT_QPA_PLATFORM"] = f"offscreen:configfile={_screen}"
 os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
 
 

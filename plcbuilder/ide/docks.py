@@ -237,28 +237,24 @@ def build(win, *, run: bool) -> DockTable:
     return table
 
 
-def place(win, table: DockTable) -> None:
-    """The default layout of the table's docks: each added to its area, split
-    under or tabbed with the dock its row names (added to its area when the
-    window has no such dock); those not shown hidden; the front tabs raised."""
+def place(win, table: DockTable, specs: Optional[Iterable[DockSpec]] = None) -> None:
+    """The default layout of the table's docks (``specs``: of these only): each
+    added to its area, split under or tabbed with the dock its row names (added
+    to its area when the window has no such dock); those not shown hidden; the
+    front tabs raised."""
+    placing = list(table.specs.values() if specs is None else specs)
     # the splits first: Qt tabs a dock split from one already in a tab group
     # into that group instead
-    specs = sorted(table.specs.values(), key=lambda s: s.place.startswith("tab:"))
-    for spec in specs:
-        dock = table.docks[spec.key]
-        how, _, other_name = spec.place.partition(":")
-        other = table.by_name(other_name) if other_name else None
-        win.addDockWidget(_AREAS[spec.area], dock)
-        if other is not None and how == "below":
-            win.splitDockWidget(other, dock, Qt.Orientation.Vertical)
-        elif other is not None:
-            win.tabifyDockWidget(other, dock)
-    for spec in table.specs.values():
+    for spec in sorted(placing, key=lambda s: s.place.startswith("tab:")):
+        _put(win, table, spec)
+    for spec in placing:
         if not (spec.shown and (table.run or spec.shown_alone)):
             table.docks[spec.key].hide()
-    for spec in table.specs.values():
+    for spec in placing:
         if spec.front:
             table.docks[spec.key].raise_()
+    if specs is not None:
+        return
     win.right_docks = [table.docks[s.key] for s in table.specs.values()
                        if s.front and s.area == RIGHT]
     # sizes until the window shows (default_dock_sizes then): the tree is
@@ -317,11 +313,51 @@ def dock_of(widget):
     return None
 
 
+def _put(win, table: DockTable, spec: DockSpec) -> None:
+    """Dock ``spec``'s dock at its default place (see :func:`place`)."""
+    dock = table.docks[spec.key]
+    how, _, other_name = spec.place.partition(":")
+    other = table.by_name(other_name) if other_name else None
+    win.addDockWidget(_AREAS[spec.area], dock)
+    if other is not None and how == "below":
+        win.splitDockWidget(other, dock, Qt.Orientation.Vertical)
+    elif other is not None:
+        win.tabifyDockWidget(other, dock)
+
+
+def names(win) -> list[str]:
+    """The object names of the window's docks (saved with its layout)."""
+    return [d.objectName() for d in win.dock_table.docks.values()]
+
+
 def restore_layout(win) -> None:
+    """The layout the window was last closed with. Docks that layout did not
+    have (the run docks of a window that had no controller) go to their
+    default places: left where Qt's restore puts them, each stood alone in
+    its area, and the window grew taller than the screen to hold them."""
     geom, state = win.settings.window_state()
     if geom is not None:
         win.restoreGeometry(geom)
+        fit_on_screen(win)
     win.layout_restored = state is not None and win.restoreState(state)
+    had = win.settings.window_docks() if win.layout_restored else None
+    if had is not None:
+        table = win.dock_table
+        new = [s for s in table.specs.values() if s.name not in had]
+        if new:
+            place(win, table, new)
+            # a dock whose default place is beside one of those (the Forces,
+            # tabbed with the Inputs) joins it; one shown by default only with
+            # a controller (the Forces again) was hidden for want of one: shown
+            added = {s.name for s in new}
+            for spec in table.specs.values():
+                if spec not in new and spec.place.partition(":")[2] in added:
+                    _put(win, table, spec)
+                    if table.run and spec.shown and not spec.shown_alone:
+                        table.docks[spec.key].show()
+            for spec in new:
+                if spec.front:
+                    table.docks[spec.key].raise_()
 
 
 def default_dock_sizes(win) -> None:
@@ -346,10 +382,33 @@ def default_dock_sizes(win) -> None:
                     Qt.Orientation.Vertical)
 
 
+def fit_on_screen(win) -> None:
+    """A window larger than its screen's free area (a layout that grew it, a
+    smaller screen than last time) made as large as that area at most, and
+    moved onto it."""
+    screen = win.screen()
+    if screen is None or win.isMaximized() or win.isFullScreen():
+        return
+    room = screen.availableGeometry()
+    frame = win.frameGeometry()
+    # (the window's frame: what the window manager adds around it)
+    extra_w, extra_h = frame.width() - win.width(), frame.height() - win.height()
+    w = min(win.width(), room.width() - extra_w)
+    h = min(win.height(), room.height() - extra_h)
+    if (w, h) != (win.width(), win.height()):
+        win.resize(w, h)
+        frame = win.frameGeometry()
+    x = min(max(frame.x(), room.x()), room.right() + 1 - frame.width())
+    y = min(max(frame.y(), room.y()), room.bottom() + 1 - frame.height())
+    if (x, y) != (frame.x(), frame.y()):
+        win.move(max(x, room.x()), max(y, room.y()))
+
+
 def reset_layout(win) -> None:
     """View › Reset Layout: the table's default layout (places, which docks
-    show, the front tabs) and its sizes."""
+    show, the front tabs) and its sizes, in a window that fits its screen."""
     win.restoreState(win.default_state)
+    fit_on_screen(win)
     apply = getattr(win, "tab_bars_apply", None)
     if apply is not None:
         QTimer.singleShot(0, apply)

@@ -949,7 +949,8 @@ class MainWindow(QMainWindow):
         self._closing = self.editor_stack.closing = True
         self._save_session()
         self.debug.save()
-        self.settings.save_window_state(self.saveGeometry(), self.saveState())
+        self.settings.save_window_state(self.saveGeometry(), self.saveState(),
+                                        docks.names(self))
         self.settings.save_frame_sketch(self._frame_sketch())
         self.settings.sync()
         self.shutdown()

@@ -159,6 +159,53 @@ def test_a_saved_layout_comes_back_by_the_rows_names(qtbot, tmp_path):
         assert w2.registers_dock.widget() is w2.workbench.registers
 
 
+def test_a_layout_saved_without_a_controller_gives_the_run_docks_their_places(qtbot, tmp_path):
+    """A window closed without a controller (``--no-controller``) saved a
+    layout with no run docks; the next window, with one, left each run dock
+    where Qt's restore put it, alone in the right area, and grew the window
+    far taller than its screen (1,475 px on a 1,000 px screen) to hold them.
+    Those docks now go to the table's places (tabbed), the Forces with the
+    Inputs and shown, as a new window has them; the rest is as saved."""
+    settings = Settings(str(tmp_path / "cfg" / "s.ini"))
+    with windows(qtbot, settings, (1360, 860)) as make:
+        w = make()                                   # no controller: no run docks
+        assert "outputs" not in w.dock_table.docks
+        w.addDockWidget(Qt.DockWidgetArea.LeftDockWidgetArea, w.problems_dock)   # the user's
+        w.close()
+    with windows(qtbot, Settings(settings.path), None) as make:
+        w2 = make(connection=FakeConnection(), start_controller=True)
+        assert w2.layout_restored
+        assert w2.dockWidgetArea(w2.problems_dock) == Qt.DockWidgetArea.LeftDockWidgetArea
+        t = w2.dock_table
+        for s in t.specs.values():
+            if (s.run or s.key == "forces") and s.key != "log":
+                assert w2.dockWidgetArea(t.dock(s.key)) == AREA[s.area], s.name
+        # the run log goes with the Problems, where the user put them
+        assert t.dock("log") in w2.tabifiedDockWidgets(w2.problems_dock)
+        assert {d.objectName() for d in w2.tabifiedDockWidgets(t.dock("outputs"))} == \
+            {"runProcDock", "runAnalogDock", "runAxesDock"}
+        assert {d.objectName() for d in w2.tabifiedDockWidgets(t.dock("inputs"))} == \
+            {"runWatchDock", "runCursorsDock", "forcesDock"}
+        assert not w2.forces_dock.isHidden()
+        # as tall as a new window's layout needs, not the sum of eight docks
+        assert w2.minimumSizeHint().height() < 900, w2.minimumSizeHint()
+        qtbot.waitUntil(lambda: on_screen(w2.inputs_dock) and on_screen(w2.outputs_dock))
+
+
+def test_reset_layout_fits_a_grown_window_on_its_screen(make, qtbot):
+    """A window a layout grew taller than its screen (see above) comes back on
+    the screen with Reset Layout."""
+    w = make(connection=FakeConnection(), start_controller=True)
+    room = w.screen().availableGeometry()
+    t = w.dock_table
+    for key in ("proc", "analog", "axes", "watch", "cursors"):  # each alone: stacked
+        w.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, t.dock(key))
+    w.resize(w.width(), room.height() + 400)
+    qtbot.waitUntil(lambda: w.frameGeometry().height() > room.height())
+    w.reset_layout()
+    qtbot.waitUntil(lambda: room.contains(w.frameGeometry()), timeout=3000)
+
+
 # ------------------------------------------------------------ adding a dock
 def notes_panel(win, key):
     """A dock's panel, as a part's module gives it (the row below names it)."""
