@@ -340,8 +340,8 @@ def restore_layout(win) -> None:
         win.restoreGeometry(geom)
         fit_on_screen(win)
     win.layout_restored = state is not None and win.restoreState(state)
-    had = win.settings.window_docks() if win.layout_restored else None
-    if had is not None:
+    if win.layout_restored:
+        had = _state_docks(win, state)
         table = win.dock_table
         new = [s for s in table.specs.values() if s.name not in had]
         if new:
@@ -358,6 +358,34 @@ def restore_layout(win) -> None:
             for spec in new:
                 if spec.front:
                     table.docks[spec.key].raise_()
+
+
+def _state_docks(win, state) -> set:
+    """The docks a saved layout has, by name: as saved with it, or for a
+    layout saved without the list (before it was kept), the names of the
+    table found in it (Qt keeps each dock's name in the state, as UTF-16)."""
+    had = win.settings.window_docks()
+    if had is not None:
+        return had
+    data = bytes(state)
+    return {s.name for s in win.dock_table.specs.values()
+            if s.name.encode("utf-16-be") in data}
+
+
+def fit_layout(win) -> bool:
+    """A restored layout whose docks, now that their panels are in them, need
+    more room than the screen has (a layout saved grown, before the rule of
+    :func:`restore_layout`): the default layout instead, the window fitted on
+    its screen. Returns whether it did so."""
+    screen = win.screen()
+    if screen is None or not win.layout_restored:
+        return False
+    room, least = screen.availableGeometry(), win.minimumSizeHint()
+    if least.width() <= room.width() and least.height() <= room.height():
+        return False
+    reset_layout(win)
+    win.layout_restored = False
+    return True
 
 
 def default_dock_sizes(win) -> None:

@@ -778,6 +778,9 @@ class MainWindow(QMainWindow):
         QTimer.singleShot(LIVE_WAIT_MS, self, once)
 
     def _after_panels(self) -> None:
+        if docks.fit_layout(self):               # (the panels are in their docks now)
+            self.statusBar().showMessage("The saved layout needed more room than the screen "
+                                         "has: the default layout is back", 15000)
         self.workbench.outline.release()         # (each of these once: then no-ops)
         self._guard_wheel()
         self.tree.release_descriptions()

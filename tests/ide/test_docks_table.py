@@ -159,19 +159,26 @@ def test_a_saved_layout_comes_back_by_the_rows_names(qtbot, tmp_path):
         assert w2.registers_dock.widget() is w2.workbench.registers
 
 
-def test_a_layout_saved_without_a_controller_gives_the_run_docks_their_places(qtbot, tmp_path):
+@pytest.mark.parametrize("named", [True, False])
+def test_a_layout_saved_without_a_controller_gives_the_run_docks_their_places(
+        qtbot, tmp_path, named):
     """A window closed without a controller (``--no-controller``) saved a
     layout with no run docks; the next window, with one, left each run dock
     where Qt's restore put it, alone in the right area, and grew the window
     far taller than its screen (1,475 px on a 1,000 px screen) to hold them.
     Those docks now go to the table's places (tabbed), the Forces with the
-    Inputs and shown, as a new window has them; the rest is as saved."""
+    Inputs and shown, as a new window has them; the rest is as saved. (Not
+    ``named``: saved before the layout's docks were kept with it, found by
+    their names in it.)"""
     settings = Settings(str(tmp_path / "cfg" / "s.ini"))
     with windows(qtbot, settings, (1360, 860)) as make:
         w = make()                                   # no controller: no run docks
         assert "outputs" not in w.dock_table.docks
         w.addDockWidget(Qt.DockWidgetArea.LeftDockWidgetArea, w.problems_dock)   # the user's
         w.close()
+    if not named:
+        settings.qs.remove("window/docks")
+        settings.sync()
     with windows(qtbot, Settings(settings.path), None) as make:
         w2 = make(connection=FakeConnection(), start_controller=True)
         assert w2.layout_restored
@@ -190,6 +197,34 @@ def test_a_layout_saved_without_a_controller_gives_the_run_docks_their_places(qt
         # as tall as a new window's layout needs, not the sum of eight docks
         assert w2.minimumSizeHint().height() < 900, w2.minimumSizeHint()
         qtbot.waitUntil(lambda: on_screen(w2.inputs_dock) and on_screen(w2.outputs_dock))
+
+
+def test_a_saved_layout_that_cannot_fit_on_the_screen_gives_way_to_the_default(
+        qtbot, tmp_path, monkeypatch):
+    """A layout saved grown (before the rule above: the run docks each alone,
+    taller together than the screen once their panels are in them; 1,391 px
+    on a 1,000 px screen) gives way to the default layout once the panels are
+    made, and the status bar says so: the window fits on its screen again."""
+    from PySide6.QtCore import QRect
+    from PySide6.QtGui import QScreen
+    settings = Settings(str(tmp_path / "cfg" / "s.ini"))
+    with windows(qtbot, settings, (1360, 860)) as make:
+        w = make(connection=FakeConnection(), start_controller=True)
+        for key in ("outputs", "proc", "analog", "axes", "inputs", "watch", "cursors"):
+            w.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, w.dock_table.dock(key))
+        w.close()
+    # a screen as tall as the default layout needs and less than the saved one
+    room = QRect(0, 0, 1600, 800)
+    monkeypatch.setattr(QScreen, "availableGeometry", lambda self: QRect(room))
+    with windows(qtbot, Settings(settings.path), None) as make:
+        w2 = make(connection=FakeConnection(), start_controller=True)
+        assert w2.layout_restored
+        qtbot.waitUntil(lambda: not w2.layout_restored, timeout=10000)
+        assert "the default layout is back" in w2.statusBar().currentMessage()
+        assert w2.minimumSizeHint().height() <= room.height()
+        qtbot.waitUntil(lambda: room.contains(w2.frameGeometry()), timeout=3000)
+        assert {d.objectName() for d in w2.tabifiedDockWidgets(w2.dock_table.dock("inputs"))} \
+            == {"runWatchDock", "runCursorsDock", "forcesDock"}
 
 
 def test_reset_layout_fits_a_grown_window_on_its_screen(make, qtbot):
