@@ -343,6 +343,13 @@ def restore_layout(win) -> None:
     if win.layout_restored:
         had = _state_docks(win, state)
         table = win.dock_table
+        if not table.run and any(s.run and s.name in had for s in DOCKS):
+            # saved with a controller, opened without: a dock shown by default
+            # only with one (the Forces: nothing can be forced) is hidden, as
+            # a new window without one has it
+            for spec in table.specs.values():
+                if spec.shown and not spec.shown_alone:
+                    table.docks[spec.key].hide()
         new = [s for s in table.specs.values() if s.name not in had]
         if new:
             place(win, table, new)

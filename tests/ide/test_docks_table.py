@@ -199,6 +199,20 @@ def test_a_layout_saved_without_a_controller_gives_the_run_docks_their_places(
         qtbot.waitUntil(lambda: on_screen(w2.inputs_dock) and on_screen(w2.outputs_dock))
 
 
+def test_a_layout_saved_with_a_controller_opened_without_one_hides_the_forces(qtbot, tmp_path):
+    """The other way round: a window without a controller (nothing can be
+    forced) restoring a layout saved with one keeps the Forces dock hidden,
+    as a new window without one has it, not shown and empty."""
+    settings = Settings(str(tmp_path / "cfg" / "s.ini"))
+    with windows(qtbot, settings, (1360, 860)) as make:
+        w = make(connection=FakeConnection(), start_controller=True)
+        assert not w.forces_dock.isHidden()
+        w.close()
+    with windows(qtbot, Settings(settings.path), None) as make:
+        w2 = make()
+        assert w2.layout_restored and w2.forces_dock.isHidden()
+
+
 def test_a_saved_layout_that_cannot_fit_on_the_screen_gives_way_to_the_default(
         qtbot, tmp_path, monkeypatch):
     """A layout saved grown (before the rule above: the run docks each alone,
