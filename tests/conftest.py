@@ -1,13 +1,17 @@
+import atexit
 import json
 import os
+import shutil
 import tempfile
 
 # CI has no display: every test (and every Qt import) runs offscreen, on a
 # screen of a desktop's size (Qt's offscreen screen is 800 x 800 unless told:
 # smaller than the windows the tests make, which a window fitted on its screen
-# would then shrink)
-if "QT_QPA_PLATFORM" not in os.environ:
-    _screen = os.path.join(tempfile.mkdtemp(prefix="plcb-tests-"), "screen.json")
+# would then shrink); scripts/test says "offscreen"
+if os.environ.get("QT_QPA_PLATFORM", "offscreen") == "offscreen":
+    _folder = tempfile.mkdtemp(prefix="plcb-tests-")
+    atexit.register(shutil.rmtree, _folder, True)
+    _screen = os.path.join(_folder, "screen.json")
     with open(_screen, "w", encoding="utf-8") as _f:
         json.dump({"screens": [{"name": "screen", "x": 0, "y": 0, "width": 1920,
                                 "height": 1200, "logicalDpi": 96, "dpr": 1}]}, _f)
