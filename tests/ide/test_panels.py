@@ -366,7 +366,8 @@ def test_searching_a_long_log_waits_for_a_pause_in_typing(qtbot, panels, fake):
     """Each key typed into the search of a long log filtered every row (60-120
     ms a key at 20,000 rows): past SEARCH_AT_ONCE_ROWS the search runs once
     typing pauses (or at Enter); a short log is searched at each key."""
-    from plcbuilder.ide.panels.log import SEARCH_AT_ONCE_ROWS, SEARCH_PAUSE_MS
+    from plcbuilder.ide.panels.log import SEARCH_AT_ONCE_ROWS
+    from plcbuilder.ide.typing_pause import PAUSE_MS as SEARCH_PAUSE_MS
     log = panels.log
     runs = []
     refilter = log._refilter

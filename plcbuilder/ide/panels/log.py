@@ -13,6 +13,7 @@ from plcbuilder.api import events as ev
 from plcbuilder.ide.panels import style
 from plcbuilder.ide.panels.model import decode_message
 from plcbuilder.ide.panels.tables import RowsModel
+from plcbuilder.ide.typing_pause import TypingPause
 
 Qt = QtCore.Qt
 Signal = QtCore.Signal
@@ -23,10 +24,8 @@ T, SRC, KIND_LABEL, TEXT, CATEGORY, COLOUR, FILE, LINE = range(8)
 
 KINDS = (("print", "Prints"), ("message", "Messages"), ("procedure", "Procedures"),
          ("job", "Job"), ("fault", "Faults"), ("log", "Logpoints"), ("note", "Notes"))
-#: a search of a long log (over SEARCH_AT_ONCE_ROWS rows) runs once typing
-#: pauses this long: each keystroke filtered every row (60-120 ms a key at
-#: 20,000); a short log is searched at once
-SEARCH_PAUSE_MS = 150
+#: a search of a log longer than this runs once typing pauses (each keystroke
+#: filtered every row: 60-120 ms a key at 20,000; see ide/typing_pause.py)
 SEARCH_AT_ONCE_ROWS = 2000
 _COLOURS = {"fault": style.FAULT_COLOUR, "error": style.FAULT_COLOUR, "warning": "#b35c00",
             "print": "#2f6db5", "link": "#808080", "message": "#8a52b8",
@@ -144,11 +143,8 @@ class LogPanel(QtWidgets.QWidget):
         self.search = QtWidgets.QLineEdit()
         self.search.setPlaceholderText("Search the log…")
         self.search.setClearButtonEnabled(True)
-        self.search.textChanged.connect(self._search)
-        self.search.returnPressed.connect(self._apply_search)
-        self._search_due = QtCore.QTimer(self)
-        self._search_due.setSingleShot(True)
-        self._search_due.timeout.connect(self._apply_search)
+        self.typing = TypingPause(self.search, self._apply_search,
+                                  lambda: self.rows.rowCount() > SEARCH_AT_ONCE_ROWS)
         bar.addWidget(self.search, 1)
         self.autoscroll = style.small_button("Scroll", "Keep the newest row in view", True)
         self.autoscroll.setChecked(True)
@@ -248,14 +244,7 @@ class LogPanel(QtWidgets.QWidget):
         kinds = self.proxy.kinds
         self._refilter(lambda: kinds.add(kind) if on else kinds.discard(kind))
 
-    def _search(self, _text: str) -> None:
-        if self.rows.rowCount() > SEARCH_AT_ONCE_ROWS:
-            self._search_due.start(SEARCH_PAUSE_MS)      # (Enter: at once)
-        else:
-            self._apply_search()
-
     def _apply_search(self) -> None:
-        self._search_due.stop()
         text = self.search.text().strip().lower()
         if text != self.proxy.text:
             self._refilter(lambda: setattr(self.proxy, "text", text))
