@@ -55,6 +55,10 @@ class DockSpec:
         """The window's attribute for the dock (``win.registers_dock``)."""
         return f"{self.key}_dock"
 
+    def shown_with(self, run: bool) -> bool:
+        """Whether the default layout shows it, with a controller (``run``) or without."""
+        return self.shown and (run or self.shown_alone)
+
 
 _RUN = "plcbuilder.ide.main_window:run_dock_panel"
 _WB = "plcbuilder.ide.workbench:dock_panel"
@@ -248,7 +252,7 @@ def place(win, table: DockTable, specs: Optional[Iterable[DockSpec]] = None) -> 
     for spec in sorted(placing, key=lambda s: s.place.startswith("tab:")):
         _put(win, table, spec)
     for spec in placing:
-        if not (spec.shown and (table.run or spec.shown_alone)):
+        if not spec.shown_with(table.run):
             table.docks[spec.key].hide()
     for spec in placing:
         if spec.front:
@@ -348,7 +352,7 @@ def restore_layout(win) -> None:
             # only with one (the Forces: nothing can be forced) is hidden, as
             # a new window without one has it
             for spec in table.specs.values():
-                if spec.shown and not spec.shown_alone:
+                if spec.shown_with(True) and not spec.shown_with(False):
                     table.docks[spec.key].hide()
         new = [s for s in table.specs.values() if s.name not in had]
         if new:
@@ -360,7 +364,7 @@ def restore_layout(win) -> None:
             for spec in table.specs.values():
                 if spec not in new and spec.place.partition(":")[2] in added:
                     _put(win, table, spec)
-                    if table.run and spec.shown and not spec.shown_alone:
+                    if table.run and spec.shown_with(True) and not spec.shown_with(False):
                         table.docks[spec.key].show()
             for spec in new:
                 if spec.front:
@@ -452,7 +456,7 @@ def reset_layout(win) -> None:
         dock = table.docks[spec.key]
         if dock.isFloating():
             dock.setFloating(False)
-        want = spec.shown and (table.run or spec.shown_alone)
+        want = spec.shown_with(table.run)
         if want == dock.isHidden():
             dock.setVisible(want)
     for spec in table.specs.values():
