@@ -107,16 +107,12 @@ class Settings:
         return (geom if isinstance(geom, QByteArray) else None,
                 state if isinstance(state, QByteArray) else None)
 
-    def save_window_state(self, geometry: QByteArray, state: QByteArray,
-                          docks: Optional[list] = None) -> None:
+    def save_window_state(self, geometry: QByteArray, state: QByteArray, docks: list) -> None:
         """The window's geometry and dock layout (``state``), with the names of
         the docks the layout has (``docks``: see :meth:`window_docks`)."""
         self.qs.setValue("window/geometry", geometry)
         self.qs.setValue("window/state", state)
-        if docks is None:
-            self.qs.remove("window/docks")
-        else:
-            self.qs.setValue("window/docks", " ".join(docks))
+        self.qs.setValue("window/docks", " ".join(docks))
 
     def window_docks(self) -> Optional[set]:
         """The object names of the docks the saved layout has (a window without
