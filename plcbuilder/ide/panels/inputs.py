@@ -114,9 +114,9 @@ class InputsPanel(QtWidgets.QWidget):
         super().__init__(parent)
         self.model = model
         self.pins = pins
-        self.names: dict[int, str] = dict(names or {})    # (see set_pin_names)
+        self.names: dict[int, str] = {}
         #: the bank whose bits the pins are (Huazhong: "X", pin 8n+b is X<n>.<b>), or None
-        self.bank: str | None = bank
+        self.bank: str | None = None
         #: the pins' toggles made so far: a pin's is made when it is first
         #: shown or asked for (:meth:`button`); most pins are never shown
         self.buttons: dict[int, PinToggle] = {}
@@ -138,7 +138,6 @@ class InputsPanel(QtWidgets.QWidget):
         self.filter.textChanged.connect(self._relayout)
         top.addWidget(self.filter, 1)
         top.addWidget(self.show_all)
-        self.show_all.setVisible(bank is None)
 
         self.grid_host = QtWidgets.QWidget()
         self.grid = QtWidgets.QGridLayout(self.grid_host)
@@ -210,7 +209,7 @@ class InputsPanel(QtWidgets.QWidget):
         lay = QtWidgets.QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
         lay.addWidget(scroll)
-        self._relayout()
+        self.set_pin_names(names or {}, bank)
 
     # ------------------------------------------------------------------ API
     def set_pin_names(self, inputs: dict[int, str], bank: str | None = None) -> None:
