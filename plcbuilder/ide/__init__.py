@@ -3,7 +3,8 @@
 PySide6's import hook reads the source of every module imported after it;
 :mod:`.pyside_imports` makes that quicker before anything else is imported;
 :mod:`.pyqtgraph_qt` spares pyqtgraph's import from making every Qt class's
-Python type.
+Python type, and :mod:`.pyqtgraph_parts` from loading the parts of pyqtgraph
+the run panels do not use.
 
 Start-up allocates tens of thousands of objects that live as long as the IDE
 (modules, classes, Qt's wrappers and enums); with the default thresholds the
@@ -20,11 +21,13 @@ import os as _os
 
 import PySide6 as _PySide6  # noqa: F401 - loads PySide's import hook, made quicker here
 
+from plcbuilder.ide.pyqtgraph_parts import install as _pyqtgraph_parts_on_demand
 from plcbuilder.ide.pyqtgraph_qt import install as _pyqtgraph_on_demand
 from plcbuilder.ide.pyside_imports import quick_source_check as _quick_source_check
 
 _quick_source_check()
 _pyqtgraph_on_demand()          # pyqtgraph's copy of Qt's names, made as it asks for them
+_pyqtgraph_parts_on_demand()    # and its parts the run panels do not use, when asked for
 
 # numpy (pyqtgraph's) starts OpenBLAS's threads at its import, one a core,
 # which then spin for a while: the IDE does no linear algebra, and on a

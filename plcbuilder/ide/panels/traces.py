@@ -16,7 +16,6 @@ from typing import Optional
 
 from PySide6 import QtCore, QtWidgets
 import pyqtgraph as pg  # noqa: I001 - after PySide6 (it takes the loaded binding)
-import pyqtgraph.exporters  # noqa: F401,E402 - pg.exporters
 
 from plcbuilder import api
 from plcbuilder.ide.docks import on_screen
@@ -436,6 +435,7 @@ class TraceTools(QtCore.QObject):
         tmp = path.with_name(f".{path.name}.tmp{path.suffix}")
         try:
             if suffix == ".png":
+                import pyqtgraph.exporters  # noqa: F401 - pg.exporters (when first asked for)
                 pg.exporters.ImageExporter(scene).export(str(tmp))
             else:
                 _svg(scene, tmp, panel)
