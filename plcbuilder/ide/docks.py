@@ -20,6 +20,7 @@ not even imported until then (:class:`DockTable`).
 from __future__ import annotations
 
 import importlib
+import time
 from dataclasses import dataclass
 from typing import Callable, Iterable, Optional
 
@@ -107,6 +108,11 @@ DOCKS: tuple[DockSpec, ...] = (
 )
 
 #: The run docks (key, title, objectName), as the run panels know them.
+#: How long the docks shown before the first paint may take to get their
+#: panels in one turn of the event loop (after the paint): the panels of a turn
+#: lay out and paint together, once, and the window answers between turns.
+TURN_MS = 25
+
 RUN_DOCKS = tuple((s.key, s.title, s.name) for s in DOCKS if s.run)
 
 
@@ -169,7 +175,8 @@ class DockTable:
 
     def release(self, then: Optional[Callable[[], None]] = None) -> None:
         """The window painted: the docks that showed meanwhile get their panel,
-        one per turn of the event loop (the window answers between them);
+        as many a turn of the event loop as fit in :data:`TURN_MS` (the
+        window answers between turns; each turn's panels paint together);
         ``then`` on the turn after the last (the panels redraw first)."""
         if not self.held:
             if then is not None:
@@ -182,14 +189,20 @@ class DockTable:
     def _make_due(self, due: list, then) -> None:
         if getattr(self.win, "_closing", False):
             return
+        began, made = time.perf_counter(), False
         while due:
+            if made and time.perf_counter() - began > TURN_MS / 1000:
+                QTimer.singleShot(0, lambda: self._make_due(due, then))
+                return
             key = due.pop(0)
             if key not in self.made and on_screen(self.docks[key]):
                 self.panel(key)
-                QTimer.singleShot(0, lambda: self._make_due(due, then))
-                return
+                made = True
         if then is not None:
-            then()
+            if made:
+                QTimer.singleShot(0, then)   # (after their paint)
+            else:
+                then()
 
     def _shown(self, key: str) -> None:
         if key in self.made:

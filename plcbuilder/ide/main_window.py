@@ -754,9 +754,8 @@ class MainWindow(QMainWindow):
         self._after_run_panels()
 
     def _after_run_panels(self) -> None:
-        """The rest of the start: the docks shown meanwhile get their panels,
-        one per turn of the event loop (the window answers between them);
-        then, once the panels are live, the checks and the other editors."""
+        """The rest of the start: the docks shown meanwhile get their panels
+        (a few a turn of the event loop: docks.DockTable.release); then, once the panels are live, the checks and the other editors."""
         self.dock_table.release(then=lambda: self._once_live(self._after_panels))
 
     def _once_live(self, then) -> None:

@@ -343,16 +343,20 @@ def test_the_checks_and_the_other_editors_wait_until_the_run_panels_are_live(
     qtbot.waitUntil(lambda: rested2 == [False], timeout=LIVE_WAIT_MS * 3)
 
 
-def test_the_run_panels_make_the_docks_on_screen_one_per_turn_and_the_others_when_shown(
-        qtbot, make_window, tmp_path):
+@pytest.mark.parametrize("turn_ms", [0, 60_000])
+def test_the_run_panels_make_the_docks_on_screen_a_turn_at_a_time_and_the_others_when_shown(
+        qtbot, make_window, tmp_path, monkeypatch, turn_ms):
     """Issue 26.5: after the paint only the run docks on screen get their
-    panel (and the log, which keeps every message), each on a turn of the
-    event loop of its own (the window answers between them); a dock hidden or
+    panel (and the log, which keeps every message), as many a turn of the
+    event loop as fit in docks.TURN_MS (the window answers between turns;
+    with 0, one a turn; with a minute, all in one); a dock hidden or
     tabbed away gets its panel when it first shows, and that panel shows what
     the others do (here a recorded run on show: its banner, link and marker)."""
     from PySide6.QtCore import QTimer
 
+    from plcbuilder.ide import docks
     from plcbuilder.ide.docks import on_screen
+    monkeypatch.setattr(docks, "TURN_MS", turn_ms)
     turn = [0]
     ticker = QTimer()
     ticker.timeout.connect(lambda: turn.__setitem__(0, turn[0] + 1))
@@ -383,7 +387,11 @@ def test_the_run_panels_make_the_docks_on_screen_one_per_turn_and_the_others_whe
     for key, dock in w.run_docks.items():
         assert (dock.widget() is not None) == (key in panels.made), key
     turns = [made_on[k] for k in shown if k != "log"]
-    assert len(set(turns)) == len(turns), made_on             # one a turn
+    assert len(turns) > 1
+    if turn_ms == 0:
+        assert len(set(turns)) == len(turns), made_on         # one a turn
+    else:
+        assert len(set(turns)) == 1, made_on                  # all in one
     assert rested == [shown | {"log"}]                        # once, after them
     # a recorded run on show; then the Axes dock shows: its panel shows it too
     panels.show_recorded("a test", [], [], failing_ms=100)

@@ -91,8 +91,8 @@ class RunPanels(QtCore.QObject):
         """``docks``: empty docks to fill (by key), made before the window
         showed; by default the panels make their own. ``lazy``: a dock's panel
         is made when it is first asked for (:meth:`panel`, or its attribute:
-        ``.lanes``), not now: the window makes those of the docks on screen,
-        one per turn of its event loop, and the others when their dock shows.
+        ``.lanes``), not now: the window makes those of the docks on screen
+        (docks.DockTable.release), and the others when their dock shows.
         The log is made at once either way (it keeps every message)."""
         super().__init__(main_window)
         self.connection = connection
