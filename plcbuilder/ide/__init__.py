@@ -9,9 +9,10 @@ the run panels do not use.
 Start-up allocates tens of thousands of objects that live as long as the IDE
 (modules, classes, Qt's wrappers and enums); with the default thresholds the
 cyclic garbage collector walks them some eighty times before the window first
-paints, which cost several percent of the start-up. Until the main window has
-painted (:func:`startup_done`), the youngest generation is collected less
-often; then the usual thresholds come back.
+paints, which cost several percent of the start-up, and as many times again
+(30 ms) while numpy and pyqtgraph load for the run panels. Until the run
+panels are live (:func:`startup_done`), the youngest generation is collected
+less often; then the usual thresholds come back.
 
 numpy's linear algebra runs on one thread (below).
 """

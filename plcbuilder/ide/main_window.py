@@ -740,7 +740,6 @@ class MainWindow(QMainWindow):
             return
         self._after_paint_done = True
         self._painted = True
-        startup_done()
         if self._controller_due and not self._closing:
             self._controller_due = False
             self.run_actions.start_controller_for_project()
@@ -777,6 +776,7 @@ class MainWindow(QMainWindow):
         QTimer.singleShot(LIVE_WAIT_MS, self, once)
 
     def _after_panels(self) -> None:
+        startup_done()                           # (the collector's usual pace from now)
         if docks.fit_layout(self):               # (the panels are in their docks now)
             self.statusBar().showMessage("The saved layout needed more room than the screen "
                                          "has: the default layout is back", 15000)

@@ -479,3 +479,33 @@ def test_numpy_in_the_ide_starts_no_threads_of_its_own_unless_the_user_asks(sett
         assert out == ["1", "1"]
     else:
         assert out[0] == setting            # (its threads: as many as OpenBLAS then makes)
+
+
+def test_the_collector_keeps_its_start_up_pace_until_the_run_panels_are_live(
+        qtbot, make_window, tmp_path):
+    """Issue 26.5: loading numpy and pyqtgraph for the run panels, after the
+    window's paint, allocates as much as the start before it: at the usual
+    thresholds the collector ran 64 times (30 ms) in between. The start-up
+    thresholds stay until the panels are live, then the usual ones come back."""
+    import gc
+
+    import plcbuilder.ide as ide
+    from plcbuilder.controller import events as ev
+    usual = gc.get_threshold()
+    gc.set_threshold(*ide._STARTUP_THRESHOLDS)           # as the IDE's import leaves them
+    try:
+        conn = _workbench.FakeConnection()
+        w = make_window(connection=conn, start_controller=True)
+        w.open_project(create_project(tmp_path / "example").root)
+        qtbot.waitUntil(lambda: w.run_panels is not None and not w.dock_table.held,
+                        timeout=10000)
+        assert w._painted and gc.get_threshold() == ide._STARTUP_THRESHOLDS
+        zeros = (0,) * 8
+        conn.sig_samples.emit([ev.Sample(t_ms=1, running="", proc=0, message=0, inputs=zeros,
+                                         outputs=zeros, pwm=zeros, dac=zeros, adc=zeros,
+                                         axes=(0,) * 9, velocities=(0,) * 9)])
+        qtbot.waitUntil(lambda: w.run_panels.live, timeout=5000)
+        qtbot.waitUntil(lambda: gc.get_threshold() == ide._THRESHOLDS, timeout=5000)
+        assert ide._THRESHOLDS[0] < ide._STARTUP_THRESHOLDS[0]
+    finally:
+        gc.set_threshold(*usual)
