@@ -91,6 +91,10 @@ def test_the_frame_shows_the_projects_tree_tabs_and_front_file_read_only(qtbot, 
     assert f.statusBar().currentMessage() == "Opening ex…"
     assert [a.text() for a in f.menuBar().actions()] == \
         ["&File", "&Edit", "&Go", "&View", "&Build", "&Run", "&Debug", "&Help"]
+    # no widget of its has a style sheet of its own: the start sets the light
+    # theme's palette without setting their sheets again (app.apply_theme)
+    from PySide6.QtWidgets import QWidget
+    assert [w for w in [f, *f.findChildren(QWidget)] if w.styleSheet()] == []
 
 
 def test_the_frames_menus_are_the_main_windows(qtbot, example, tmp_path, frames):
