@@ -95,7 +95,9 @@ def test_at_max_speed_a_lossless_subscriber_gets_every_edge():
     bits = model.bit_series("outputs", 6)
     first = int(np.argmax(bits))              # the first tick the output is on
     t, bits = t[first:], bits[first:]
-    assert len(t) > 10_000, len(t)            # it ran (thousands of ticks)
+    # it ran, thousands of ticks (alone 100,000 and more; in the suite's two
+    # workers once 7,047: the simulation and this subscriber share one interpreter)
+    assert len(t) > 2_000, len(t)
     assert np.all(np.diff(t) == 1)            # a point every tick: each one a change
     assert np.all(bits[1:] != bits[:-1])      # and every edge is there
     assert t[-1] == end - 1
