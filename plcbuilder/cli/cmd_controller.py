@@ -14,13 +14,16 @@ import argparse
 import os
 import signal
 import sys
-import threading
+import time
 from pathlib import Path
 
 from plcbuilder.cli._link_opts import EXIT_FAIL, EXIT_USAGE, add_project_option, image_target
 from plcbuilder.cli.common import int_in
 
 MAX_LATENCY_MS = 60_000
+#: How often the waiting controller looks whether a signal came (it answers
+#: Ctrl+C or SIGTERM within this; its parent and server every 0.5 s).
+SIGNAL_POLL_S = 0.1
 
 
 def parse_speed(text: str) -> tuple[str, float]:
@@ -183,13 +186,15 @@ def run(args: argparse.Namespace) -> int:
         pass
 
     ppid = os.getppid()
-    stop = threading.Event()
     received: list[int] = []
     status = 0
 
     def on_signal(signum, _frame):
+        # Only this: a handler runs in the main thread between two of its
+        # steps, so one that takes a lock (Event.set does) can interrupt that
+        # lock's own holder and wait for it forever: a controller whose IDE had
+        # gone hung so on its SIGTERM, and ran on
         received.append(signum)
-        stop.set()
 
     previous = {}
     for name in ("SIGINT", "SIGTERM", "SIGHUP"):
@@ -227,7 +232,12 @@ def run(args: argparse.Namespace) -> int:
             on = f", target {image_profile['name']}" if image_profile else ""
             say(f"plcbuilder controller: loaded {args.image} ({n} procedures{on})")
         say("plcbuilder controller: Ctrl+C or SIGTERM stops it")
-        while not stop.wait(0.5):
+        checked = time.monotonic()
+        while not received:
+            time.sleep(SIGNAL_POLL_S)             # (a signal's handler runs meanwhile)
+            if time.monotonic() - checked < 0.5:
+                continue
+            checked = time.monotonic()
             if args.parent is not None and (not runtime.pid_alive(args.parent) or
                                             (args.parent == ppid and os.getppid() != ppid)):
                 say(f"plcbuilder controller: process {args.parent} has ended", True)

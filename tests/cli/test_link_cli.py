@@ -230,3 +230,43 @@ def test_controller_stops_when_its_parent_has_ended(rt_file):
         if proc.poll() is None:
             proc.kill()
             proc.communicate()
+
+
+#: The controller with a SIGTERM that lands while its main thread holds the
+#: lock of the Event it used to wait on (as a signal can: the handler runs
+#: between any two steps of the main thread), then the IDE's SIGTERM after it.
+_LOCKED_SIGNAL = r"""
+import os, signal, sys, threading
+wait = threading.Condition.wait
+def wait_and_signal(self, timeout=None):
+    caller = sys._getframe(2).f_code
+    if caller.co_name == "run" and caller.co_filename.endswith("cmd_controller.py"):
+        os.kill(os.getpid(), signal.SIGTERM)      # (handled at this thread's next step)
+    return wait(self, timeout)
+threading.Condition.wait = wait_and_signal
+from plcbuilder.cli.main import main
+raise SystemExit(main(["controller", "--port", "0"]))
+"""
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_a_signal_that_comes_at_any_moment_stops_the_controller(rt_file):
+    """The controller's signal handler set an Event, which takes the Event's
+    lock: a SIGTERM that came while the main thread held it (waiting on that
+    Event, as it did every half second) left the controller waiting on itself
+    forever, still running the simulation with its IDE gone. The handler now
+    only notes the signal."""
+    env = dict(os.environ, PLCBUILDER_CONTROLLER_FILE=str(rt_file), PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, "-c", _LOCKED_SIGNAL], cwd=ROOT, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        wait_for(lambda: rt_file.exists() or proc.poll() is not None, timeout=30, interval=0.02)
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=20)
+        assert proc.returncode == 0, err
+        assert not rt_file.exists()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
