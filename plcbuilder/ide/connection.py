@@ -59,6 +59,15 @@ SPAWN_TIMEOUT = 20.0          # seconds a child gets to write its runtime file
 BACKOFF = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 STABLE_AFTER = 10.0           # a connection up this long resets the backoff
 MAX_SAMPLES_PER_EMIT = 60000  # samples in one sig_samples emission at most
+#: One drain of the worker's queue stops taking more once this long has gone
+#: (the rest comes after PUMP_INTERVAL_MS, the window answering meanwhile) ...
+DRAIN_BUDGET_S = 0.02
+#: ... looking at the time each time this many samples have been handed on.
+DRAIN_STEP_SAMPLES = 500
+#: Samples the client's reader may have handed the window and it has not taken
+#: yet; beyond them the reader waits, and so does a controller at Max speed
+#: (the IDE subscribes lossless) rather than the queue growing without end.
+MAX_PENDING_SAMPLES = 40000
 #: The debugger's requests (SPEC §6); after each the worker asks for the halted state.
 DEBUG_VERBS = frozenset({"debug_continue", "debug_pause", "debug_step", "debug_run_to",
                          "debug_state", "write", "force", "release", "release_all", "forces",
@@ -87,6 +96,30 @@ def _telemetry_queue(speed: Optional[tuple[str, Optional[float]]] = None) -> int
 
 # ===================================================================== worker
 
+class _Backlog:
+    """The samples the client's reader has handed the window (through the
+    worker's queue) and the window has not taken yet. At Max speed a
+    controller makes changes faster than the window can take them: without
+    a bound the queue grew by the second and one drain of it held the window
+    1.3 s. :meth:`add` (the reader) waits while more than
+    :data:`MAX_PENDING_SAMPLES` wait; :meth:`take` (the window) makes room."""
+
+    def __init__(self):
+        self._cond = threading.Condition()
+        self.samples = 0
+
+    def add(self, n: int, cancel: threading.Event) -> None:
+        with self._cond:
+            while self.samples > MAX_PENDING_SAMPLES and not cancel.is_set():
+                self._cond.wait(0.05)
+            self.samples += n
+
+    def take(self, n: int) -> None:
+        with self._cond:
+            self.samples -= n
+            self._cond.notify_all()
+
+
 class _Worker(threading.Thread):
     """Owns the client (and the child): connects, reconnects, runs requests."""
 
@@ -94,6 +127,7 @@ class _Worker(threading.Thread):
                  address: Optional[tuple[str, int, str]] = None, extra_args: Sequence[str] = ()):
         super().__init__(name="plcbuilder-ide-link", daemon=True)
         self.inbox = inbox
+        self.backlog = _Backlog()               # the samples in the inbox
         self.wake: Callable[[], None] = lambda: None   # tells the GUI thread there is mail
         self.woken = False                      # a wake is on its way, not drained yet
         self.embedded = embedded
@@ -262,6 +296,7 @@ class _Worker(threading.Thread):
     def _on_telemetry(self, batch: Telemetry) -> None:   # on the client's reader thread
         # changes -> the points to plot, here rather than on the GUI thread
         batch.samples = self.steps.feed(batch.samples, batch.t_ms)
+        self.backlog.add(len(batch.samples), self.stopping)
         self.post("telemetry", batch)
 
     def _serve(self) -> None:
@@ -499,6 +534,7 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
     def __init__(self, parent: Optional[QtCore.QObject] = None):
         super().__init__(parent)
         self._inbox: "queue.SimpleQueue" = queue.SimpleQueue()
+        self._carry: list = []                  # samples of a batch a drain has begun
         self._worker: Optional[_Worker] = None
         self._pump = QtCore.QTimer(self)        # a drain held back to keep ~15 ms apart
         self._pump.setSingleShot(True)
@@ -582,7 +618,7 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
             w.join(timeout)
             if w.is_alive() and w.child is not None:      # stuck: end the child anyway
                 w.child.stop(1.0)
-        self._drain()
+        self._drain(whole=True)
         self._pump.stop()
         if self.connected:
             self.connected = False
@@ -700,13 +736,16 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
         else:
             self._drain()
 
-    def _drain(self) -> None:
-        self._last_drain = time.monotonic()
+    def _drain(self, whole: bool = False) -> None:
+        """Hand on what the worker posted, in order: for at most
+        DRAIN_BUDGET_S (the rest at the next drain), or ``whole``."""
+        began = self._last_drain = time.monotonic()
         w = self._worker
         if w is not None:
             w.woken = False                     # what is posted from now on wakes us again
         samples: list = []
         events: list = []
+        handed = 0
 
         def flush():
             for i in range(0, len(samples), MAX_SAMPLES_PER_EMIT):   # all of them, in pieces
@@ -716,13 +755,29 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
                 self.sig_events.emit(list(events))
                 events.clear()
 
+        carry, self._carry = self._carry, []   # the rest of a batch the last drain began
         for _ in range(10000):
+            if handed >= DRAIN_STEP_SAMPLES:    # (handing samples on is what takes time)
+                handed = 0
+                flush()
+                if not whole and time.monotonic() - began > DRAIN_BUDGET_S:
+                    break
+            if carry:
+                n = DRAIN_STEP_SAMPLES - handed
+                samples.extend(carry[:n])
+                handed += len(carry[:n])
+                if w is not None:
+                    w.backlog.take(len(carry[:n]))
+                del carry[:n]
+                continue
             try:
                 kind, payload = self._inbox.get_nowait()
             except queue.Empty:
                 break
             if kind == "telemetry":
-                samples.extend(payload.samples)
+                # a batch is handed on a step at a time (one of Max speed's can
+                # hold 20,000 samples, 0.3 s of the window's time)
+                carry = list(payload.samples)
                 for e in payload.events:
                     etype = getattr(e, "type", None)
                     if etype == "log":
@@ -731,6 +786,7 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
                         self._on_forces(getattr(e, "forces", []))
                         continue
                     events.append(e)
+                handed += len(payload.events)
                 self.missed += payload.missed
                 continue
             flush()                     # keep the order of telemetry and the rest
@@ -738,7 +794,8 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
             if handler is not None:
                 handler(payload)
         flush()
-        if not self._inbox.empty():             # more than one drain's worth: the rest soon
+        self._carry = carry
+        if carry or not self._inbox.empty():    # more than one drain's worth: the rest soon
             self._pump.start(PUMP_INTERVAL_MS)
 
     # One method a kind of mail from the worker (its ``post(kind, payload)``).

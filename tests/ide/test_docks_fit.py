@@ -54,9 +54,10 @@ def test_a_long_status_never_widens_the_proc_dock(runwin, qtbot):
                                          proc=70, proc_name="plc_proc_spindle",
                                          software=["LUBE", "__HANDLER_INIT", "LOOP", "WATCHDOG",
                                                    "MORE"],
-                                         speed={"mode": "max"}), 0)
+                                         speed={"mode": "max"}), 1234)
     _settle(qtbot)
-    assert "plots thinned" in rp.proc.status.plain_text()
+    assert "max" in rp.proc.status.plain_text()
+    assert "telemetry behind: 1234 samples dropped" in rp.proc.status.plain_text()
     assert (proc_dock.width(), w.width(), w.centralWidget().width()) == before
     assert proc_dock.minimumSizeHint().width() < proc_dock.width()
     # every fact shows, on more lines: nothing is elided into the tooltip

@@ -730,16 +730,14 @@ class RunPanels(QtCore.QObject):
         # (no time here: the status bar shows it, in a label of fixed size; a
         # text that changed five times a second laid the whole window out again)
         speed = st.speed
-        fast = False
         if isinstance(speed, dict) and speed.get("mode"):
             mode = speed["mode"]
-            fast = mode == "max" or (mode == "factor" and (speed.get("factor") or 0) > 10)
             if mode == "factor":
                 mode = f"{speed.get('factor', 0):g}×"
             parts.append(mode)
-        if fast:
-            parts.append("plots thinned")
-        elif missed > self._missed:
+        # (at any speed: the IDE gets every change unless the controller had
+        # to drop some, and then says so; "plots thinned" at Max was not so)
+        if missed > self._missed:
             parts.append(f"<span style='color:#b35c00'>telemetry behind: "
                          f"{missed - self._missed} samples dropped</span>")
         self._missed = missed
