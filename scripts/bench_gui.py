@@ -21,9 +21,12 @@
   main window;
 - many lanes (point 7): one frame of the outputs plot with 8/32/64 lanes and
   the analog plot with 10 curves, 10k points each; floor: the same points as
-  one plain pyqtgraph curve per panel.
+  one plain pyqtgraph curve per panel;
+- Max speed: the window's longest pause while an embedded controller runs an
+  output that changes on every tick at Max, and while the plots catch up after
+  Pause; floor: the same connection idle.
 
-    python scripts/bench_gui.py cpu|startup|lanes   # one figure only
+    python scripts/bench_gui.py cpu|startup|lanes|maxspeed   # one figure only
     PLCB_BENCH_BEFORE=DIR python scripts/bench_gui.py startup   # and DIR's package beside
     PLCB_BENCH_X=display ...   # on the X server at $DISPLAY instead of an Xvfb of its own
     PLCB_BENCH_RUNS=15 ...     # start-up: rounds (default 7)
@@ -261,6 +264,7 @@ def run() -> list[str]:
     out.extend(startup_figures())
     out.extend(cpu_figures())
     out.extend(lane_figures())
+    out.extend(maxspeed_figures())
     fps = measure_fps(5.0)
     out.append(f"run panels, 16 signals x 10k points, controller in real time: {fps:.0f} fps "
                f"(goal >= 30 fps)")
@@ -1033,6 +1037,94 @@ def cpu_figures(seconds: float = 10.0, runs: int = 5, x: "XServer | None" = None
     return out
 
 
+#: The IDE's connection to an embedded controller of its own, an output that
+#: changes on every tick, the run model fed as the IDE feeds it, a 10 ms timer
+#: noting how late it comes (the window's pauses): argv 1 "idle" (connected,
+#: nothing runs) or "max" (Max speed for argv 2 seconds, then Pause). Prints
+#: JSON: the longest pause while running and after the Pause until every
+#: change is in, that catch-up's seconds, the ticks run, the changes dropped.
+_MAXSPEED_PROBE = r"""
+import json, sys, time
+from PySide6.QtCore import QTimer
+from plcbuilder.ide.app import create_application
+app = create_application()
+from plcbuilder.api import image_of
+from plcbuilder.ide.connection import ControllerConnection
+from plcbuilder.ide.panels.model import RunModel
+TOGGLE = "main(){ do{ if (t) { portclear(6); t = 0; } else { portset(6); t = 1; } }while(1); }"
+mode, secs = sys.argv[1], float(sys.argv[2])
+c = ControllerConnection()
+model = RunModel()
+c.sig_samples.connect(model.add_samples)
+late, last, out = [0.0], [None], {}
+def tick():
+    now = time.perf_counter()
+    if last[0] is not None:
+        late[0] = max(late[0], now - last[0] - 0.010)
+    last[0] = now
+ticker = QTimer(); ticker.timeout.connect(tick)
+def begin():
+    if not c.connected:
+        QTimer.singleShot(50, begin); return
+    c.upload(image_of({"TOGGLE": TOGGLE}))
+    if mode == "max":
+        c.start("TOGGLE", 0); c.set_speed("max")
+    QTimer.singleShot(500, lambda: (ticker.start(10), QTimer.singleShot(int(secs * 1000), pause)))
+def pause():
+    out["running_ms"] = late[0] * 1000
+    late[0] = 0.0
+    c.set_speed("pause")
+    out["paused"] = time.perf_counter()
+    QTimer.singleShot(200, settle)
+def settle():
+    st = c.last_state
+    end = getattr(st, "t_ms", None)
+    caught = mode == "idle" or (end and len(model) and model.t_end * 1000 >= end - 1
+                                and c._inbox.empty() and not c._carry)
+    if caught or time.perf_counter() - out["paused"] > 60:
+        out.update(after_ms=late[0] * 1000, catch_up_s=time.perf_counter() - out.pop("paused"),
+                   ticks=end or 0, missed=c.missed, caught=bool(caught))
+        print(json.dumps(out), flush=True)
+        c.shutdown(); app.quit(); return
+    QTimer.singleShot(50, settle)
+c.start_embedded()
+QTimer.singleShot(50, begin)
+app.exec()
+"""
+
+
+def maxspeed_figures(runs: int = 5, seconds: float = 3.0) -> list[str]:
+    """The window's longest pause while an embedded controller runs an output
+    that changes on every tick at Max speed, and after Pause while the plots
+    catch up; floor: the same connection idle (median of ``runs``, offscreen)."""
+    import json
+    import subprocess
+    import sys
+    env = dict(_STARTED_ENV, QT_QPA_PLATFORM="offscreen")
+    got: dict = {"idle": [], "max": []}
+    for _ in range(runs):
+        for mode in ("idle", "max"):
+            p = subprocess.run([sys.executable, "-c", _MAXSPEED_PROBE, mode, str(seconds)],
+                               capture_output=True, text=True, env=env, timeout=180,
+                               cwd=tempfile.gettempdir())
+            try:
+                got[mode].append(json.loads(p.stdout.strip().splitlines()[-1]))
+            except (ValueError, IndexError):
+                return [f"max speed: the probe failed: {(p.stderr or p.stdout)[-400:]}"]
+    med = statistics.median
+    idle = med(r["running_ms"] for r in got["idle"])
+    mx = got["max"]
+    return [f"Max speed, an output that changes on every tick, {seconds:g} s (median of "
+            f"{runs}, offscreen, the run model fed as the IDE feeds it):",
+            f"  the window's longest pause while it runs: {med(r['running_ms'] for r in mx):.0f} ms "
+            f"(floor: connected and idle, {idle:.0f} ms; each run: "
+            + ", ".join(f"{r['running_ms']:.0f}" for r in mx) + ")",
+            f"  after Pause: longest pause {med(r['after_ms'] for r in mx):.0f} ms, every change in "
+            f"{med(r['catch_up_s'] for r in mx):.1f} s; ticks run {med(r['ticks'] for r in mx):,.0f}, "
+            f"changes dropped {max(r['missed'] for r in mx)}"
+            + ("" if all(r["caught"] for r in mx) else "; NOT caught up within 60 s")]
+
+
 if __name__ == "__main__":
     import sys
     which = sys.argv[1:] or ["all"]
@@ -1047,6 +1139,8 @@ if __name__ == "__main__":
             lines += lane_figures()
         elif w == "diagnostics":
             lines += diagnostics_while_typing()
+        elif w == "maxspeed":
+            lines += maxspeed_figures(int(os.environ.get("PLCB_BENCH_RUNS") or 5))
         else:
             lines += run()
     for line in lines:

@@ -27,6 +27,8 @@ import re
 import sys
 import threading
 
+from plcbuilder.ide.pyqtgraph_qt import spec_once
+
 PACKAGE = "pyqtgraph"
 
 #: The package's modules whose imports run with it: what the run panels use
@@ -114,16 +116,8 @@ class _Finder:
     def find_spec(self, name, path, target=None):
         if name != PACKAGE:
             return None
-        if self in sys.meta_path:
-            sys.meta_path.remove(self)
-        if "PySide6" not in sys.modules:
-            return None                      # another binding: pyqtgraph as it comes
-        for finder in sys.meta_path:
-            find = getattr(finder, "find_spec", None)
-            spec = find(name, path, target) if find is not None else None
-            if spec is not None:
-                break
-        else:
+        spec = spec_once(self, name, path, target)
+        if spec is None:
             return None
         loader = spec.loader
         get_source = getattr(loader, "get_source", None)

@@ -39,22 +39,31 @@ class Mirror(types.ModuleType):
         return sorted(set(dir(self.__dict__["_mirror_of"])) | set(self.__dict__))
 
 
+def spec_once(finder, name, path, target):
+    """For an import finder that changes how one module of pyqtgraph runs,
+    asked for that module: the spec the other finders give it, the finder
+    taken off ``sys.meta_path`` (it acts once); None with another binding
+    than PySide6 (pyqtgraph as it comes) or when no finder knows the module."""
+    if finder in sys.meta_path:
+        sys.meta_path.remove(finder)
+    if "PySide6" not in sys.modules:
+        return None
+    for other in sys.meta_path:
+        find = getattr(other, "find_spec", None)
+        spec = find(name, path, target) if find is not None else None
+        if spec is not None:
+            return spec
+    return None
+
+
 class _Finder:
     """Runs ``pyqtgraph.Qt`` with the mirrors in place (once)."""
 
     def find_spec(self, name, path, target=None):
         if name != TARGET:
             return None
-        if self in sys.meta_path:
-            sys.meta_path.remove(self)
-        if "PySide6" not in sys.modules:
-            return None                      # another binding: pyqtgraph as it comes
-        for finder in sys.meta_path:
-            find = getattr(finder, "find_spec", None)
-            spec = find(name, path, target) if find is not None else None
-            if spec is not None:
-                break
-        else:
+        spec = spec_once(self, name, path, target)
+        if spec is None:
             return None
         run = spec.loader.exec_module
 
