@@ -114,3 +114,20 @@ def test_the_reader_waits_while_the_window_has_too_much_to_take():
     stop.set()
     assert stopped.wait(5)
     reader.join(5)
+
+
+def test_a_window_held_up_keeps_the_reader_waiting_only_so_long(monkeypatch):
+    """The controller waits for a lossless subscriber for at most a second,
+    then drops changes: the reader never waits longer than MAX_READER_WAIT_S
+    (the changes are then late, not lost)."""
+    monkeypatch.setattr(connection, "MAX_READER_WAIT_S", 0.3)
+    backlog = connection._Backlog()
+    stop = threading.Event()
+    backlog.add(connection.MAX_PENDING_SAMPLES + 1, stop)
+    done = threading.Event()
+    reader = threading.Thread(target=lambda: (backlog.add(10, stop), done.set()))
+    reader.start()
+    assert not done.wait(0.1)
+    assert done.wait(5)                             # nobody took any: in anyway
+    reader.join(5)
+    assert backlog.samples == connection.MAX_PENDING_SAMPLES + 11
