@@ -94,7 +94,8 @@ def test_closing_hands_on_everything_that_came(qtbot, flooded):
     assert not c._carry and c._inbox.empty()
 
 
-def test_the_reader_waits_while_the_window_has_too_much_to_take():
+def test_the_reader_waits_while_the_window_has_too_much_to_take(monkeypatch):
+    monkeypatch.setattr(connection, "MAX_READER_WAIT_S", 60.0)     # (see the next test)
     backlog = connection._Backlog()
     stop = threading.Event()
     backlog.add(connection.MAX_PENDING_SAMPLES + 1, stop)         # (the first never waits)
