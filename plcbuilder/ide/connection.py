@@ -772,12 +772,12 @@ class ControllerConnection(DebugRequests, QtCore.QObject):
                 if not whole and time.monotonic() - began > DRAIN_BUDGET_S:
                     break
             if carry:
-                n = DRAIN_STEP_SAMPLES - handed
-                samples.extend(carry[:n])
-                handed += len(carry[:n])
+                step = carry[:DRAIN_STEP_SAMPLES - handed]
+                del carry[:len(step)]
+                samples.extend(step)
+                handed += len(step)
                 if w is not None:
-                    w.backlog.take(len(carry[:n]))
-                del carry[:n]
+                    w.backlog.take(len(step))
                 continue
             try:
                 kind, payload = self._inbox.get_nowait()

@@ -107,12 +107,12 @@ DOCKS: tuple[DockSpec, ...] = (
              shown=False, then="plcbuilder.ide.workbench:dock_panel_made"),
 )
 
-#: The run docks (key, title, objectName), as the run panels know them.
 #: How long the docks shown before the first paint may take to get their
 #: panels in one turn of the event loop (after the paint): the panels of a turn
 #: lay out and paint together, once, and the window answers between turns.
 TURN_MS = 25
 
+#: The run docks (key, title, objectName), as the run panels know them.
 RUN_DOCKS = tuple((s.key, s.title, s.name) for s in DOCKS if s.run)
 
 

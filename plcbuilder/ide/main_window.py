@@ -754,7 +754,8 @@ class MainWindow(QMainWindow):
 
     def _after_run_panels(self) -> None:
         """The rest of the start: the docks shown meanwhile get their panels
-        (a few a turn of the event loop: docks.DockTable.release); then, once the panels are live, the checks and the other editors."""
+        (a few a turn of the event loop: docks.DockTable.release); then, once
+        the panels are live, the checks and the other editors."""
         self.dock_table.release(then=lambda: self._once_live(self._after_panels))
 
     def _once_live(self, then) -> None:
